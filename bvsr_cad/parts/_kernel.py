@@ -1,0 +1,49 @@
+"""Small build123d helpers shared by the part generators."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+
+import build123d as bd
+
+
+class GeometryError(RuntimeError):
+    """The CAD kernel could not make a valid solid from valid parameters."""
+
+
+def cylinder_between(p0: Sequence[float], p1: Sequence[float], diameter_mm: float) -> bd.Solid:
+    """A solid cylinder whose axis runs from p0 to p1 (mm)."""
+    d = bd.Vector(*p1) - bd.Vector(*p0)
+    length = d.length
+    if length <= 0:
+        raise GeometryError(f"zero-length cylinder at {tuple(p0)}")
+    return bd.Solid.make_cylinder(diameter_mm / 2.0, length, bd.Plane(origin=bd.Vector(*p0), z_dir=d))
+
+
+def single_solid(shape: bd.Shape, what: str) -> bd.Solid:
+    """Return the one valid solid in ``shape`` or raise with advice."""
+    solids = shape.solids()
+    if len(solids) != 1:
+        raise GeometryError(
+            f"{what}: the kernel produced {len(solids)} solids instead of one; "
+            "a feature probably cuts the part apart (check the layout webs)"
+        )
+    solid = solids[0]
+    if not solid.is_valid:
+        raise GeometryError(f"{what}: the kernel produced an invalid solid")
+    return solid
+
+
+def cut_all(base: bd.Shape, tools: Iterable[bd.Shape]) -> bd.Shape:
+    tools = list(tools)
+    return base.cut(*tools) if tools else base
+
+
+def fuse_all(base: bd.Shape, tools: Iterable[bd.Shape]) -> bd.Shape:
+    tools = list(tools)
+    return base.fuse(*tools) if tools else base
+
+
+def deg(angle_rad: float) -> float:
+    return math.degrees(angle_rad)

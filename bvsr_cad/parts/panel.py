@@ -1,0 +1,25 @@
+"""Panels: root mount, intermediate, segment boundary and tip (SPEC section 4).
+
+Every feature comes from :func:`bvsr_cad.spec.layout.panel_layout`, so the
+validated layout and the built solid cannot disagree. Frame: the panel's lower
+face at z = 0, Y dorsal; the rim is a frustum following the tail's taper.
+"""
+
+from __future__ import annotations
+
+import build123d as bd
+
+from ..spec.layout import PanelLayout
+from ._kernel import cut_all, cylinder_between, fuse_all, single_solid
+
+
+def panel(lay: PanelLayout) -> bd.Solid:
+    """The panel described by ``lay`` as one solid (mm).
+
+    Raises:
+        GeometryError: a feature split the panel or the kernel failed.
+    """
+    disc = bd.Solid.make_cone(lay.rim_radius_lower_mm, lay.rim_radius_upper_mm, lay.thickness_mm)
+    body = fuse_all(disc, (cylinder_between(b.p0, b.p1, b.diameter_mm) for b in lay.bosses))
+    tools = [cylinder_between(c.p0, c.p1, c.diameter_mm) for c in (*lay.cuts, *lay.passages)]
+    return single_solid(cut_all(body, tools), lay.name)

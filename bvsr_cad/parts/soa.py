@@ -1,0 +1,76 @@
+"""The soft origami actuator (SOA): a square bellows of PU rubber, open at both
+ends, with a round flange at each end (SPEC section 3, Table II).
+
+Frame: the SOA axis is +Z, the lower flange face at z = 0, the square's sides
+parallel to X and Y (the assembly turns it by ``soa.rotation_deg``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import build123d as bd
+
+from ..spec.tables import SoaTable
+from ._kernel import single_solid
+
+
+@dataclass(frozen=True)
+class BellowsProfile:
+    """Fold levels (z, mm) and square sides (mm) of the outer and inner surface."""
+
+    z_mm: tuple[float, ...]
+    outer_side_mm: tuple[float, ...]
+    inner_side_mm: tuple[float, ...]
+    corner_radius_mm: float
+    flange_thickness_mm: float
+    flange_diameter_mm: float
+    height_mm: float
+
+
+def bellows_profile(soa: SoaTable, flange_diameter_mm: float) -> BellowsProfile:
+    """Fold levels of the square bellows: mountain folds (side b) at both ends
+    and between pleats, valley folds (side a) in each pleat."""
+    f = soa.flange_thickness_mm
+    rise = soa.row_rise_mm
+    off = soa.wall_offset_mm
+    z, outer, inner = [], [], []
+    for m in range(soa.facet_rows + 1):
+        side = soa.long_side_mm if m % 2 == 0 else soa.short_side_mm
+        z.append(f + m * rise)
+        outer.append(side)
+        inner.append(side - 2.0 * off)
+    return BellowsProfile(tuple(z), tuple(outer), tuple(inner), soa.fillet_radius_mm, f,
+                          flange_diameter_mm, soa.built_height_mm)
+
+
+def _square(side_mm: float, radius_mm: float, z_mm: float) -> bd.Face:
+    plane = bd.Plane.XY.offset(z_mm)
+    if radius_mm > 1e-6:
+        sk = bd.RectangleRounded(side_mm, side_mm, radius_mm)
+    else:
+        sk = bd.Rectangle(side_mm, side_mm)
+    return plane * sk.face()
+
+
+def soa_body(soa: SoaTable, flange_diameter_mm: float) -> bd.Solid:
+    """The cast SOA as one solid (mm).
+
+    Args:
+        soa: Table II parameters.
+        flange_diameter_mm: the flange disc (D_b, the actuator base).
+
+    Raises:
+        GeometryError: the kernel did not produce one valid solid.
+    """
+    p = bellows_profile(soa, flange_diameter_mm)
+    outer = bd.loft([_square(s, p.corner_radius_mm, z) for s, z in zip(p.outer_side_mm, p.z_mm)], ruled=True)
+    # The interior runs straight through both flanges at the end size.
+    inner_z = (-0.01, *p.z_mm, p.height_mm + 0.01)
+    inner_s = (p.inner_side_mm[0], *p.inner_side_mm, p.inner_side_mm[-1])
+    inner = bd.loft([_square(s, 0.0, z) for s, z in zip(inner_s, inner_z)], ruled=True)
+    r = flange_diameter_mm / 2.0
+    lower = bd.Solid.make_cylinder(r, p.flange_thickness_mm)
+    upper = bd.Solid.make_cylinder(r, p.flange_thickness_mm, bd.Plane.XY.offset(p.height_mm - p.flange_thickness_mm))
+    body = lower.fuse(outer, upper).cut(inner)
+    return single_solid(body, "SOA body")

@@ -1,0 +1,457 @@
+"""Derived panel layout: where every hole, pocket and passage of every panel
+goes, in millimetres, computed from the spec alone (no CAD).
+
+Both the panel generator and the parameter validation read this one layout,
+so a combination that validates is exactly the one that gets built.
+
+Frames (SPEC section 2): Z along the tail from the root face (z = 0), Y dorsal,
+X lateral; SOA i sits at 90 + 72 (i - 1) deg from +X towards +Y. Panel k
+occupies z in [k H_j, k H_j + t_p]; in a panel's own frame its lower face is
+z = 0. The taper is one cone: pitch radius and rim radius both shrink by
+tan(half-angle) per millimetre of z.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import numpy as np
+
+from .tables import AUTO, TailSpec
+
+N_SOA = 5
+#: ISO coarse thread (diameter -> tap drill) for the threaded vertebra socket.
+ISO_TAP_DRILL_MM = {4.0: 3.3, 5.0: 4.2, 6.0: 5.0}
+ISO_PITCH_MM = {4.0: 0.7, 5.0: 0.8, 6.0: 1.0}
+
+
+def soa_angles_deg() -> np.ndarray:
+    """Angle of SOA i = 1..5 from +X towards +Y (soa1 dorsal, on +Y)."""
+    return 90.0 + 72.0 * np.arange(N_SOA)
+
+
+def mid_angles_deg() -> np.ndarray:
+    """Angles half-way between SOA i and SOA i+1."""
+    return soa_angles_deg() + 36.0
+
+
+def polar(radius_mm: float, angle_deg: float) -> tuple[float, float]:
+    a = math.radians(angle_deg)
+    return (radius_mm * math.cos(a), radius_mm * math.sin(a))
+
+
+@dataclass(frozen=True)
+class Cyl:
+    """A cylinder from p0 to p1 (panel frame, mm): a cut unless ``boss``."""
+
+    name: str
+    role: str  # pocket, channel, port, tube, tube_port, feed, rod, setscrew, insert, lightening, boss
+    p0: tuple[float, float, float]
+    p1: tuple[float, float, float]
+    diameter_mm: float
+
+    @property
+    def xy(self) -> tuple[float, float]:
+        return ((self.p0[0] + self.p1[0]) / 2.0, (self.p0[1] + self.p1[1]) / 2.0)
+
+    @property
+    def z_range(self) -> tuple[float, float]:
+        return (min(self.p0[2], self.p1[2]), max(self.p0[2], self.p1[2]))
+
+    @property
+    def vertical(self) -> bool:
+        return abs(self.p0[2] - self.p1[2]) > 1e-9 and math.hypot(
+            self.p1[0] - self.p0[0], self.p1[1] - self.p0[1]
+        ) < 0.2 * abs(self.p1[2] - self.p0[2])
+
+
+@dataclass(frozen=True)
+class PanelLayout:
+    index: int
+    kind: str  # root, intermediate, boundary, tip
+    z0_mm: float  # lower face in the tail frame
+    thickness_mm: float
+    rim_radius_lower_mm: float
+    rim_radius_upper_mm: float
+    pitch_radius_lower_mm: float
+    pitch_radius_upper_mm: float
+    pocket_depth_mm: float
+    lower_pockets: bool
+    upper_pockets: bool
+    cuts: tuple[Cyl, ...] = field(default=())
+    bosses: tuple[Cyl, ...] = field(default=())
+    passages: tuple[Cyl, ...] = field(default=())
+
+    @property
+    def name(self) -> str:
+        return f"panel{self.index}"
+
+    def pocket_centres(self, face: str) -> np.ndarray:
+        r = self.pitch_radius_lower_mm if face == "lower" else self.pitch_radius_upper_mm
+        return np.array([polar(r, a) for a in soa_angles_deg()])
+
+
+def half_angle_rad(spec: TailSpec) -> float:
+    """The taper half-angle actually used (resolving 'auto')."""
+    if spec.taper.half_angle_deg == AUTO:
+        return math.radians(max_feasible_taper_deg(spec))
+    return math.radians(float(spec.taper.half_angle_deg))
+
+
+def pocket_depth_mm(spec: TailSpec) -> float:
+    """Each flange sits (H - H_a) / 2 deep: the SOA is longer than the gap by design."""
+    return (spec.soa.built_height_mm - spec.joint.gap_mm) / 2.0
+
+
+def pocket_diameter_mm(spec: TailSpec) -> float:
+    return spec.joint.base_diameter_mm + spec.fabrication.pocket_clearance_mm
+
+
+def hole_d(spec: TailSpec, nominal_mm: float) -> float:
+    """Printed hole diameter with the MJF compensation."""
+    return nominal_mm + spec.fabrication.hole_compensation_mm
+
+
+def rod_bore_mm(spec: TailSpec) -> float:
+    d = spec.vertebra.diameter_mm
+    if spec.vertebra.socket == "threaded":
+        return hole_d(spec, ISO_TAP_DRILL_MM[d])
+    return hole_d(spec, d + spec.socket.rod_clearance_mm)
+
+
+def tube_hole_mm(spec: TailSpec) -> float:
+    return hole_d(spec, spec.tubes.outer_diameter_mm + spec.tubes.clearance_mm)
+
+
+def panel_kind(spec: TailSpec, k: int) -> str:
+    if k == 0:
+        return "root"
+    if k == spec.panels - 1:
+        return "tip"
+    if k % spec.joints_per_segment == 0:
+        return "boundary"
+    return "intermediate"
+
+
+def lightening_radius_mm(pitch_r: float, rim_r: float, pocket_r: float) -> tuple[float, float]:
+    """Centre radius on a mid-angle that balances the web to the pockets and
+    to the rim, and that web (for a hole of zero size)."""
+    lo, hi = pitch_r, rim_r
+    c36 = math.cos(math.radians(36.0))
+
+    def to_pocket(rho: float) -> float:
+        return math.sqrt(rho * rho + pitch_r * pitch_r - 2 * rho * pitch_r * c36) - pocket_r
+
+    for _ in range(60):
+        mid = (lo + hi) / 2.0
+        if to_pocket(mid) < rim_r - mid:
+            lo = mid
+        else:
+            hi = mid
+    rho = (lo + hi) / 2.0
+    return rho, rim_r - rho
+
+
+def panel_layout(spec: TailSpec, k: int, half_angle: float | None = None) -> PanelLayout:
+    """Every feature of panel k, in the panel's own frame (lower face z = 0)."""
+    beta = half_angle_rad(spec) if half_angle is None else half_angle
+    tan_b = math.tan(beta)
+    j = spec.joint
+    t = j.panel_thickness_mm
+    z0 = k * j.joint_height_mm
+    kind = panel_kind(spec, k)
+    depth = pocket_depth_mm(spec)
+    r_pitch_lo = j.pitch_diameter_mm / 2 - z0 * tan_b
+    r_pitch_hi = j.pitch_diameter_mm / 2 - (z0 + t) * tan_b
+    r_rim_lo = j.panel_diameter_mm / 2 - z0 * tan_b
+    r_rim_hi = j.panel_diameter_mm / 2 - (z0 + t) * tan_b
+    lower = kind != "root"
+    upper = kind != "tip"
+    d_pocket = pocket_diameter_mm(spec)
+    cuts: list[Cyl] = []
+    bosses: list[Cyl] = []
+    passages: list[Cyl] = []
+    angles = soa_angles_deg()
+    for i, a in enumerate(angles, start=1):
+        lo_xy = polar(r_pitch_lo, a)
+        hi_xy = polar(r_pitch_hi, a)
+        if lower:
+            cuts.append(Cyl(f"pocket_lower_{i}", "pocket", (*lo_xy, -1e-3), (*lo_xy, depth), d_pocket))
+        if upper:
+            cuts.append(Cyl(f"pocket_upper_{i}", "pocket", (*hi_xy, t - depth), (*hi_xy, t + 1e-3), d_pocket))
+        if kind == "intermediate":
+            # Oblique by the taper (a few hundredths of a mm) so both pockets stay concentric.
+            cuts.append(Cyl(f"channel_{i}", "channel", (*lo_xy, -1e-3), (*hi_xy, t + 1e-3),
+                            hole_d(spec, j.channel_diameter_mm)))
+        elif kind == "root":
+            cuts.append(Cyl(f"fitting_port_{i}", "port", (*hi_xy, -1e-3), (*hi_xy, t + 1e-3),
+                            hole_d(spec, spec.mount.fitting_tap_drill_mm)))
+
+    # Tubes of the distal segments: segment s >= 2 starts at boundary panel p_s.
+    d_tube = tube_hole_mm(spec)
+    rings = {2: (spec.tubes.inner_radius_mm, mid_angles_deg()),
+             3: (spec.tubes.second_radius_mm, angles)}
+    for s in range(2, spec.segments + 1):
+        p_s = spec.joints_per_segment * (s - 1)
+        if s not in rings:
+            continue  # reported by validate_layout: no room for a fourth tube ring
+        ring_r, ring_a = rings[s]
+        for i, a in enumerate(ring_a, start=1):
+            xy = polar(ring_r, a)
+            if k < p_s:
+                cuts.append(Cyl(f"tube_s{s}_{i}", "tube", (*xy, -1e-3), (*xy, t + 1e-3), d_tube))
+            elif k == p_s:
+                # Tube port on the lower face, a passage at mid-thickness to the
+                # axis of SOA i, and a feed hole up into its upper pocket.
+                zm = t / 2.0
+                cuts.append(Cyl(f"tube_port_s{s}_{i}", "tube_port", (*xy, -1e-3),
+                                (*xy, spec.tubes.port_depth_mm), hole_d(spec, spec.tubes.outer_diameter_mm)))
+                target = polar(r_pitch_hi, angles[i - 1])
+                d_pass = hole_d(spec, spec.tubes.passage_diameter_mm)
+                passages.append(Cyl(f"passage_s{s}_{i}", "passage", (*xy, zm), (*target, zm), d_pass))
+                cuts.append(Cyl(f"feed_s{s}_{i}", "feed", (*target, zm), (*target, t + 1e-3), d_pass))
+
+    # Vertebra socket.
+    d_rod = rod_bore_mm(spec)
+    cuts.append(Cyl("rod_bore", "rod", (0.0, 0.0, -1e-3), (0.0, 0.0, t + 1e-3), d_rod))
+    if spec.vertebra.socket == "set_screw":
+        boss_d = d_rod + 2 * spec.socket.boss_wall_mm
+        h = spec.socket.boss_height_mm
+        # Tip panel: the collar goes under the panel (its distal face carries the payload).
+        if kind == "tip":
+            bosses.append(Cyl("clamp_boss", "boss", (0.0, 0.0, -h), (0.0, 0.0, 1e-3), boss_d))
+            zc = -h / 2.0
+        else:
+            bosses.append(Cyl("clamp_boss", "boss", (0.0, 0.0, t - 1e-3), (0.0, 0.0, t + h), boss_d))
+            zc = t + h / 2.0
+        # Radial set screw along -Y (ventral midline, between SOA 3 and SOA 4).
+        cuts.append(Cyl("set_screw", "setscrew", (0.0, 0.0, zc), (0.0, -boss_d, zc),
+                        hole_d(spec, spec.socket.set_screw_tap_drill_mm)))
+        z_lo, z_hi = bosses[-1].z_range
+        cuts.append(Cyl("rod_bore_boss", "rod", (0.0, 0.0, z_lo - 1e-3), (0.0, 0.0, z_hi + 1e-3), d_rod))
+
+    if kind == "root":
+        for i, a in enumerate(mid_angles_deg(), start=1):
+            xy = polar(spec.mount.bolt_circle_diameter_mm / 2, a)
+            cuts.append(Cyl(f"mount_insert_{i}", "insert", (*xy, -1e-3), (*xy, spec.mount.insert_depth_mm),
+                            hole_d(spec, spec.mount.insert_diameter_mm)))
+    elif spec.lightening.hole_diameter_mm > 0:
+        rho, _ = lightening_radius_mm(r_pitch_hi, r_rim_hi, d_pocket / 2)
+        for i, a in enumerate(mid_angles_deg(), start=1):
+            xy = polar(rho, a)
+            cuts.append(Cyl(f"lightening_{i}", "lightening", (*xy, -1e-3), (*xy, t + 1e-3),
+                            spec.lightening.hole_diameter_mm))
+    if kind == "tip":
+        n = spec.payload.insert_count
+        for i in range(n):
+            xy = polar(spec.payload.insert_circle_diameter_mm / 2, 90.0 + 360.0 * i / n + 180.0 / n)
+            cuts.append(Cyl(f"payload_insert_{i + 1}", "insert", (*xy, t - spec.payload.insert_depth_mm),
+                            (*xy, t + 1e-3), hole_d(spec, spec.payload.insert_diameter_mm)))
+    return PanelLayout(
+        index=k, kind=kind, z0_mm=z0, thickness_mm=t,
+        rim_radius_lower_mm=r_rim_lo, rim_radius_upper_mm=r_rim_hi,
+        pitch_radius_lower_mm=r_pitch_lo, pitch_radius_upper_mm=r_pitch_hi,
+        pocket_depth_mm=depth, lower_pockets=lower, upper_pockets=upper,
+        cuts=tuple(cuts), bosses=tuple(bosses), passages=tuple(passages),
+    )
+
+
+def rounded_square_support(side_mm: float, radius_mm: float, psi: np.ndarray) -> np.ndarray:
+    """Support function of a square (corners rounded at R) at angle psi from a side normal."""
+    return (side_mm / 2 - radius_mm) * (np.abs(np.cos(psi)) + np.abs(np.sin(psi))) + radius_mm
+
+
+def soa_neighbour_gap_mm(spec: TailSpec, pitch_r: float) -> float:
+    """Smallest gap between the bellows of two neighbouring SOAs (separating axis)."""
+    s, rr = spec.soa.long_side_mm, spec.soa.fillet_radius_mm
+    a1, a2 = math.radians(90.0), math.radians(162.0)
+    c1 = np.array(polar(pitch_r, 90.0))
+    c2 = np.array(polar(pitch_r, 162.0))
+    u = np.linspace(0, 2 * math.pi, 7200, endpoint=False)
+    dirs = np.stack([np.cos(u), np.sin(u)], axis=1)
+    rot = math.radians(spec.soa.rotation_deg)
+    h1 = rounded_square_support(s, rr, u - (a1 + rot))
+    h2 = rounded_square_support(s, rr, u + math.pi - (a2 + rot))
+    return float(np.max(dirs @ (c2 - c1) - h1 - h2))
+
+
+def soa_radial_extent_mm(spec: TailSpec) -> tuple[float, float]:
+    """(outward, inward) extent of the bellows from its axis along the radial line."""
+    rot = math.radians(spec.soa.rotation_deg)
+    h = rounded_square_support(spec.soa.long_side_mm, spec.soa.fillet_radius_mm, np.array([-rot]))
+    return float(h[0]), float(h[0])
+
+
+def _circle_gap(a: Cyl, b: Cyl) -> tuple[float, bool]:
+    (xa, ya), (xb, yb) = a.xy, b.xy
+    dist = math.hypot(xa - xb, ya - yb)
+    ra, rb = a.diameter_mm / 2, b.diameter_mm / 2
+    nested = dist + min(ra, rb) <= max(ra, rb) + 1e-6
+    return dist - ra - rb, nested
+
+
+def _z_overlap(a: Cyl, b: Cyl) -> bool:
+    (a0, a1), (b0, b1) = a.z_range, b.z_range
+    return min(a1, b1) - max(a0, b0) > 1e-6
+
+
+def _segment_point_distance(p0, p1, q) -> float:
+    p0, p1, q = (np.asarray(v[:2], float) for v in (p0, p1, q))
+    d = p1 - p0
+    t = float(np.clip(np.dot(q - p0, d) / max(np.dot(d, d), 1e-12), 0.0, 1.0))
+    return float(np.linalg.norm(p0 + t * d - q))
+
+
+def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[tuple[str, float, float]]:
+    """(description, measured web mm, required web mm) for every violated rule."""
+    fab = spec.fabrication
+    out: list[tuple[str, float, float]] = []
+    t = lay.thickness_mm
+    # Pockets from both faces plus a floor must fit in the panel.
+    depth_total = lay.pocket_depth_mm * (int(lay.lower_pockets) + int(lay.upper_pockets))
+    if depth_total + fab.socket_floor_mm > t + 1e-9:
+        out.append((f"{lay.name}: flange pockets ({lay.pocket_depth_mm:.3f} mm per face) deeper than the "
+                    f"panel allows (thickness {t:.2f} mm, floor {fab.socket_floor_mm} mm)",
+                    t - depth_total, fab.socket_floor_mm))
+    if lay.pocket_depth_mm < 0:
+        out.append((f"{lay.name}: the SOA ({spec.soa.built_height_mm:.2f} mm) is shorter than the gap "
+                    f"H_a ({spec.joint.gap_mm} mm)", lay.pocket_depth_mm, 0.0))
+    cuts = list(lay.cuts)
+    for i, a in enumerate(cuts):
+        ra = a.diameter_mm / 2
+        rho = math.hypot(*a.xy)
+        # The rim shrinks upwards: the narrowest rim a feature meets is at its top.
+        z_top = min(max(a.z_range[1], 0.0), t) / t
+        rim = lay.rim_radius_lower_mm + (lay.rim_radius_upper_mm - lay.rim_radius_lower_mm) * z_top
+        lip = rim - rho - ra
+        need = fab.min_rim_lip_mm if a.role == "pocket" else fab.min_wall_mm
+        if a.role not in ("setscrew",) and lip < need - 1e-9:
+            out.append((f"{lay.name}: {a.name} is {lip:.2f} mm from the rim", lip, need))
+        for b in cuts[i + 1:]:
+            if not _z_overlap(a, b) or "setscrew" in (a.role, b.role):
+                continue
+            gap, nested = _circle_gap(a, b)
+            if nested:
+                continue
+            need = fab.min_pocket_gap_mm if a.role == b.role == "pocket" else fab.min_wall_mm
+            if gap < need - 1e-9:
+                out.append((f"{lay.name}: {a.name} and {b.name} leave a {gap:.2f} mm web", gap, need))
+    for boss in lay.bosses:
+        for b in cuts:
+            if b.role in ("rod", "setscrew"):
+                continue
+            if b.role == "pocket" and not _z_overlap(
+                Cyl("", "", (0, 0, boss.z_range[0] - 1), (0, 0, boss.z_range[1] + 1), 0), b
+            ):
+                continue
+            gap, nested = _circle_gap(boss, b)
+            if not nested and gap < fab.min_wall_mm - 1e-9:
+                out.append((f"{lay.name}: set-screw collar and {b.name} leave {gap:.2f} mm", gap, fab.min_wall_mm))
+    for p in lay.passages:
+        line = p.name.split("_", 1)[1]
+        for b in cuts:
+            if b.name.endswith(line) and b.role in ("tube_port", "feed"):
+                continue
+            if b.role == "pocket":
+                continue  # pockets are shallow; the floor rule above keeps them apart
+            lo, hi = b.z_range
+            if hi < p.p0[2] - p.diameter_mm / 2 or lo > p.p0[2] + p.diameter_mm / 2:
+                continue
+            web = _segment_point_distance(p.p0, p.p1, b.xy) - b.diameter_mm / 2 - p.diameter_mm / 2
+            if web < fab.min_wall_mm - 1e-9:
+                out.append((f"{lay.name}: {p.name} passes {web:.2f} mm from {b.name}", web, fab.min_wall_mm))
+    return out
+
+
+def _problems_at(spec: TailSpec, beta: float) -> list[tuple[str, float, float]]:
+    out = []
+    for k in range(spec.panels):
+        out.extend(panel_problems(spec, panel_layout(spec, k, beta)))
+    # Bellows of neighbouring SOAs at the smallest pitch radius.
+    r_min = spec.joint.pitch_diameter_mm / 2 - (spec.panels - 1) * spec.joint.joint_height_mm * math.tan(beta)
+    gap = soa_neighbour_gap_mm(spec, r_min)
+    if gap < spec.fabrication.min_pocket_gap_mm - 1e-9:
+        out.append((f"SOA bellows of neighbouring actuators leave {gap:.2f} mm at the tip", gap,
+                    spec.fabrication.min_pocket_gap_mm))
+    return out
+
+
+@lru_cache(maxsize=64)
+def max_feasible_taper_deg(spec: TailSpec) -> float:
+    """Largest cone half-angle for which every panel keeps its webs
+    (found by bisection over the same rules the validation applies)."""
+    if _problems_at(spec, 0.0):
+        return 0.0
+    lo, hi = 0.0, math.radians(10.0)
+    for _ in range(40):
+        mid = (lo + hi) / 2
+        if _problems_at(spec, mid):
+            hi = mid
+        else:
+            lo = mid
+    return math.degrees(lo)
+
+
+def binding_constraint(spec: TailSpec) -> str:
+    """What stops a larger taper: the first rule broken just past the feasible cone."""
+    beta = math.radians(max_feasible_taper_deg(spec) + 0.01)
+    probs = _problems_at(spec, beta)
+    return probs[0][0] if probs else "none"
+
+
+def validate_layout(spec: TailSpec) -> list[str]:
+    """Every geometric impossibility, as messages that name the parameter to change."""
+    problems: list[str] = []
+    j = spec.joint
+    if j.gap_mm >= j.joint_height_mm:
+        problems.append(f"joint.gap_mm = {j.gap_mm}: must be below joint.joint_height_mm = {j.joint_height_mm} "
+                        "(the difference is the panel thickness)")
+        return problems
+    if spec.soa.long_side_mm <= spec.soa.short_side_mm:
+        problems.append(f"soa.long_side_mm = {spec.soa.long_side_mm}: must exceed soa.short_side_mm = "
+                        f"{spec.soa.short_side_mm}")
+        return problems
+    if spec.soa.origami_height_mm >= spec.soa.height_mm:
+        problems.append(f"soa.origami_height_mm = {spec.soa.origami_height_mm}: must be below soa.height_mm "
+                        f"= {spec.soa.height_mm} (the rest is the two flanges)")
+        return problems
+    inner = spec.soa.short_side_mm - 2 * spec.soa.wall_offset_mm
+    if inner <= 0.5:
+        problems.append(f"soa.facet_thickness_mm = {spec.soa.facet_thickness_mm}: leaves {inner:.2f} mm of "
+                        f"interior at the valleys (soa.short_side_mm = {spec.soa.short_side_mm}); allowed: > 0.5 mm")
+    if 2 * spec.soa.fillet_radius_mm >= spec.soa.short_side_mm:
+        problems.append(f"soa.fillet_radius_mm = {spec.soa.fillet_radius_mm}: must be below half of "
+                        f"soa.short_side_mm = {spec.soa.short_side_mm}")
+    if spec.segments > 3:
+        problems.append(f"segments = {spec.segments}: tube rings exist for the distal tubes of at most 3 "
+                        "segments; allowed: 1 to 3")
+    if spec.tubes.port_depth_mm < j.panel_thickness_mm / 2 or \
+            spec.tubes.port_depth_mm > j.panel_thickness_mm - spec.fabrication.socket_floor_mm:
+        problems.append(f"tubes.port_depth_mm = {spec.tubes.port_depth_mm}: must reach the mid-plane passage and "
+                        f"keep a floor: allowed {j.panel_thickness_mm / 2:.2f} to "
+                        f"{j.panel_thickness_mm - spec.fabrication.socket_floor_mm:.2f} mm")
+    if problems:
+        return problems
+    radial_out, _ = soa_radial_extent_mm(spec)
+    if j.pitch_diameter_mm / 2 + radial_out > j.panel_diameter_mm / 2 + 1e-9:
+        problems.append(
+            f"joint.panel_diameter_mm = {j.panel_diameter_mm}: the rim lies inside the SOA envelope "
+            f"(pitch radius {j.pitch_diameter_mm / 2:.2f} + bellows {radial_out:.2f} mm = "
+            f"{j.pitch_diameter_mm / 2 + radial_out:.2f} mm > rim {j.panel_diameter_mm / 2:.2f} mm)")
+    if spec.taper.half_angle_deg != AUTO:
+        beta_max = max_feasible_taper_deg(spec)
+        if float(spec.taper.half_angle_deg) > beta_max + 1e-9:
+            problems.append(
+                f"taper.half_angle_deg = {spec.taper.half_angle_deg}: beyond the feasible cone; allowed: 0 to "
+                f"{beta_max:.4f} deg ('auto' picks it); limited by: {binding_constraint(spec)}")
+            return problems
+    for desc, measured, need in _problems_at(spec, half_angle_rad(spec)):
+        problems.append(f"{desc} (allowed: >= {need:g} mm; see [fabrication], [tubes], [lightening], [mount])")
+    return problems
+
+
+def replace_taper(spec: TailSpec, half_angle_deg: float | str) -> TailSpec:
+    return dataclasses.replace(spec, taper=dataclasses.replace(spec.taper, half_angle_deg=half_angle_deg))

@@ -1,0 +1,167 @@
+"""TOML parameter file -> validated :class:`TailSpec`.
+
+Every problem is collected before reporting, and each names the file, the
+key, the value and what is allowed. Geometric feasibility (pockets that
+overlap, a taper beyond the feasible one, ...) is checked afterwards by
+:func:`bvsr_cad.spec.layout.validate_layout`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import re
+import tomllib
+import typing
+from pathlib import Path
+from typing import Any
+
+from .tables import AUTO, Material, TailSpec
+
+
+class ParamError(ValueError):
+    """A parameter file that cannot describe a buildable tail."""
+
+    def __init__(self, path: str | Path, problems: list[str]):
+        self.path = str(path)
+        self.problems = list(problems)
+        lines = "\n".join(f"  - {p}" for p in self.problems)
+        super().__init__(f"{self.path}: {len(self.problems)} problem(s) in the parameters:\n{lines}")
+
+
+def _allowed(meta: dict[str, Any]) -> str:
+    if meta.get("choices"):
+        return "one of " + ", ".join(repr(c) for c in meta["choices"])
+    bounds = []
+    for key, sym in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<=")):
+        if meta.get(key) is not None:
+            bounds.append(f"{sym} {meta[key]:g}")
+    return " and ".join(bounds) if bounds else "any value"
+
+
+def _check_value(key: str, value: Any, typ: Any, meta: dict[str, Any], problems: list[str]) -> Any:
+    """Type- and range-check one scalar; returns the converted value or None."""
+    if typ is Any:  # float or "auto"
+        if value == AUTO:
+            return AUTO
+        typ = float
+    if typ is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            problems.append(f"{key} = {value!r}: expected a number ({_allowed(meta)})")
+            return None
+        value = float(value)
+    elif typ is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            problems.append(f"{key} = {value!r}: expected an integer ({_allowed(meta)})")
+            return None
+    elif typ is str:
+        if not isinstance(value, str):
+            problems.append(f"{key} = {value!r}: expected a string")
+            return None
+    choices = meta.get("choices")
+    if choices is not None and value not in choices:
+        problems.append(f"{key} = {value!r}: not allowed; allowed: {_allowed(meta)}")
+        return None
+    if isinstance(value, (int, float)):
+        ok = True
+        ok &= meta.get("gt") is None or value > meta["gt"]
+        ok &= meta.get("ge") is None or value >= meta["ge"]
+        ok &= meta.get("lt") is None or value < meta["lt"]
+        ok &= meta.get("le") is None or value <= meta["le"]
+        if not ok:
+            problems.append(f"{key} = {value!r}: out of range; allowed: {_allowed(meta)}")
+            return None
+    return value
+
+
+def _build(cls: type, data: Any, prefix: str, problems: list[str]) -> Any:
+    if not isinstance(data, dict):
+        problems.append(f"{prefix or 'file'} = {data!r}: expected a table [{prefix}]")
+        return None
+    hints = typing.get_type_hints(cls)
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    for key in data:
+        if key not in fields:
+            where = f"{prefix}.{key}" if prefix else key
+            problems.append(
+                f"{where}: unknown key; allowed keys in [{prefix or 'top level'}]: {', '.join(fields)}"
+            )
+    values: dict[str, Any] = {}
+    for name, f in fields.items():
+        key = f"{prefix}.{name}" if prefix else name
+        typ = hints[name]
+        if name not in data:
+            if f.default is not dataclasses.MISSING:
+                values[name] = f.default
+            else:
+                problems.append(f"{key}: missing ({f.metadata.get('doc', '')})")
+            continue
+        raw = data[name]
+        if dataclasses.is_dataclass(typ):
+            values[name] = _build(typ, raw, key, problems)
+        elif typing.get_origin(typ) is dict:
+            if not isinstance(raw, dict) or not raw:
+                problems.append(f"{key}: expected a non-empty table of [{key}.<name>] entries")
+                values[name] = None
+                continue
+            values[name] = {k: _build(Material, v, f"{key}.{k}", problems) for k, v in raw.items()}
+        else:
+            values[name] = _check_value(key, raw, typ, dict(f.metadata), problems)
+    if any(v is None for v in values.values()):
+        return None
+    return cls(**values)
+
+
+def spec_from_dict(data: dict[str, Any], source: str | Path = "<dict>") -> TailSpec:
+    """Validate a parsed parameter mapping and return the frozen spec.
+
+    Raises:
+        ParamError: naming every bad key, its value and what is allowed.
+    """
+    from .layout import validate_layout  # layout depends on tables only
+
+    problems: list[str] = []
+    spec = _build(TailSpec, data, "", problems)
+    if spec is not None:
+        if not re.fullmatch(r"[A-Za-z0-9_-]+", spec.name):
+            problems.append(f"name = {spec.name!r}: only letters, digits, '_' and '-' are allowed")
+        for key, value in (("use.panel", spec.use.panel), ("use.soa", spec.use.soa),
+                           ("vertebra.material", spec.vertebra.material)):
+            if value not in spec.materials:
+                problems.append(
+                    f"{key} = {value!r}: not a material in [materials]; allowed: {', '.join(spec.materials)}"
+                )
+    if problems:
+        raise ParamError(source, problems)
+    problems = validate_layout(spec)
+    if problems:
+        raise ParamError(source, problems)
+    return spec
+
+
+def load_spec(path: str | Path) -> TailSpec:
+    """Read and validate a TOML parameter file.
+
+    Raises:
+        ParamError: the file is missing, is not valid TOML, or describes an
+            impossible tail.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ParamError(path, ["file not found"]) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ParamError(path, [f"cannot read the file: {exc}"]) from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ParamError(path, [f"not valid TOML: {exc}"]) from None
+    return spec_from_dict(data, path)
+
+
+def params_sha256(path: str | Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+__all__ = ["ParamError", "load_spec", "spec_from_dict", "params_sha256"]

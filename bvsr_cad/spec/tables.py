@@ -1,0 +1,244 @@
+"""Frozen dataclasses for the tail's parameters (the paper's Tables I and II,
+materials, the vertebra choice, the taper and fabrication allowances).
+
+Each field carries its validation rule in ``metadata`` (see :func:`rule`), so
+the loader in :mod:`bvsr_cad.spec.load` validates every file the same way and
+every error names the key, the value and what is allowed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+AUTO = "auto"
+
+
+def rule(
+    doc: str,
+    *,
+    gt: float | None = None,
+    ge: float | None = None,
+    le: float | None = None,
+    lt: float | None = None,
+    choices: tuple[Any, ...] | None = None,
+    default: Any = dataclass,  # sentinel: no default
+    hash: bool = True,
+) -> Any:
+    """A dataclass field with a documented validation rule."""
+    meta = {"doc": doc, "gt": gt, "ge": ge, "le": le, "lt": lt, "choices": choices}
+    if default is dataclass:
+        return field(metadata=meta, hash=hash)
+    return field(default=default, metadata=meta, hash=hash)
+
+
+@dataclass(frozen=True)
+class JointTable:
+    """Table I of the paper: one joint (one layer of five SOAs between two panels)."""
+
+    joint_height_mm: float = rule("H_j, joint pitch along the tail (panel + gap)", gt=0, le=200)
+    gap_mm: float = rule("H_a, initial gap between two panels = arc length L", gt=0, le=200)
+    pitch_diameter_mm: float = rule("D_a, diameter of the SOA pitch circle at the root", gt=0, le=500)
+    panel_diameter_mm: float = rule("D_p, panel diameter at the root", gt=0, le=500)
+    base_diameter_mm: float = rule("D_b, diameter of the SOA flange (actuator base)", gt=0, le=200)
+    channel_diameter_mm: float = rule("D_c, air channel through intermediate panels", gt=0, le=100)
+    actuator_spacing_deg: float = rule(
+        "alpha_1, angular spacing of the five SOAs (a regular pentagon)", choices=(72.0,)
+    )
+    segment_tilt_deg: float = rule(
+        "alpha_2, 'tilt angle of segment 1' (informational, see [taper])", gt=90, lt=135
+    )
+
+    @property
+    def panel_thickness_mm(self) -> float:
+        return self.joint_height_mm - self.gap_mm
+
+
+@dataclass(frozen=True)
+class SoaTable:
+    """Table II of the paper: the soft origami actuator (a square bellows)."""
+
+    height_mm: float = rule("H, overall SOA height", gt=0, le=200)
+    origami_height_mm: float = rule("H_o, height of the pleated (origami) section", gt=0, le=200)
+    facet_thickness_mm: float = rule("t, wall thickness of the facets", gt=0.2, le=5)
+    dihedral_deg: float = rule("alpha, V-angle at a fold between two facet rows", gt=10, lt=170)
+    fillet_radius_mm: float = rule("R, fillet radius of the vertical corners", ge=0, le=20)
+    circumcircle_mm: float = rule("D, circumcircle (checked against b and R, not used)", gt=0, le=200)
+    short_side_mm: float = rule("a, square side at the inner (valley) folds", gt=0, le=100)
+    long_side_mm: float = rule("b, square side at the outer (mountain) folds", gt=0, le=100)
+    pleats: int = rule("number of pleats (each pleat = two facet rows)", ge=1, le=10)
+    fold_height_from: str = rule(
+        "which table value sets the rise of a facet row", choices=("origami_height", "dihedral")
+    )
+    rotation_deg: float = rule(
+        "rotation of the square in its pocket: 0 = a side faces the tail axis, 45 = a corner does",
+        ge=0,
+        le=90,
+    )
+
+    @property
+    def flange_thickness_mm(self) -> float:
+        """Each open end carries a flange; the two share H - H_o."""
+        return (self.height_mm - self.origami_height_mm) / 2.0
+
+    @property
+    def facet_rows(self) -> int:
+        return 2 * self.pleats
+
+    @property
+    def pleat_depth_mm(self) -> float:
+        return (self.long_side_mm - self.short_side_mm) / 2.0
+
+    @property
+    def row_rise_from_dihedral_mm(self) -> float:
+        return self.pleat_depth_mm / math.tan(math.radians(self.dihedral_deg) / 2.0)
+
+    @property
+    def row_rise_mm(self) -> float:
+        """Rise of one facet row as built, per ``fold_height_from``."""
+        if self.fold_height_from == "dihedral":
+            return self.row_rise_from_dihedral_mm
+        return self.origami_height_mm / self.facet_rows
+
+    @property
+    def built_origami_height_mm(self) -> float:
+        return self.row_rise_mm * self.facet_rows
+
+    @property
+    def built_height_mm(self) -> float:
+        return self.built_origami_height_mm + 2.0 * self.flange_thickness_mm
+
+    @property
+    def computed_circumcircle_mm(self) -> float:
+        """Diagonal extent of a square of side b with corners rounded at R."""
+        half = self.long_side_mm / 2.0 - self.fillet_radius_mm
+        return 2.0 * (half * math.sqrt(2.0) + self.fillet_radius_mm)
+
+    @property
+    def implied_dihedral_deg(self) -> float:
+        """The dihedral that would make the facet rows fill H_o exactly."""
+        rise = self.origami_height_mm / self.facet_rows
+        return math.degrees(2.0 * math.atan(self.pleat_depth_mm / rise))
+
+    @property
+    def wall_offset_mm(self) -> float:
+        """Horizontal offset between outer and inner facet planes for a normal thickness t."""
+        return self.facet_thickness_mm / math.cos(math.atan(self.pleat_depth_mm / self.row_rise_mm))
+
+
+@dataclass(frozen=True)
+class Material:
+    name: str = rule("display name")
+    density_g_cm3: float = rule("density", gt=0.1, le=25)
+    youngs_modulus_mpa: float = rule("Young's modulus", gt=0, le=500_000)
+    source: str = rule("where density and modulus come from")
+
+
+@dataclass(frozen=True)
+class MaterialUse:
+    panel: str = rule("material key of the printed panels")
+    soa: str = rule("material key of the cast SOAs")
+
+
+@dataclass(frozen=True)
+class Vertebra:
+    material: str = rule("material key of the elastic rod")
+    diameter_mm: float = rule("D_e, rod diameter", choices=(4.0, 5.0, 6.0))
+    socket: str = rule("how the rod is held in each panel", choices=("threaded", "set_screw"))
+
+
+@dataclass(frozen=True)
+class Taper:
+    half_angle_deg: Any = rule(
+        "half-angle of the cone followed by the panel rims and pitch circle; 'auto' = largest feasible",
+        ge=0,
+        le=10,
+    )
+
+
+@dataclass(frozen=True)
+class Fabrication:
+    pocket_clearance_mm: float = rule("diametral clearance of a flange pocket for the bonding layer", ge=0, le=2)
+    hole_compensation_mm: float = rule("added to the diameter of every printed hole (MJF shrink)", ge=0, le=1)
+    min_pocket_gap_mm: float = rule("smallest web allowed between neighbouring flange pockets", gt=0, le=20)
+    min_wall_mm: float = rule("smallest web allowed between any two other panel features", gt=0, le=20)
+    min_rim_lip_mm: float = rule("smallest lip allowed between a flange pocket and the panel rim", ge=0, le=20)
+    socket_floor_mm: float = rule("material kept under a pocket or channel end inside a panel", gt=0, le=5)
+
+
+@dataclass(frozen=True)
+class Tubes:
+    outer_diameter_mm: float = rule("pneumatic tube outer diameter", gt=1, le=12)
+    clearance_mm: float = rule("diametral clearance of a tube pass-through hole", ge=0, le=2)
+    port_depth_mm: float = rule("depth of the bonded tube port in a segment-boundary panel", gt=0.5, le=6)
+    passage_diameter_mm: float = rule("internal feed passage in a segment-boundary panel", gt=0.5, le=5)
+    inner_radius_mm: float = rule("radius of the tube holes between pockets (first distal segment)", gt=0, le=100)
+    second_radius_mm: float = rule("radius of the tube holes on the pocket axes (second distal segment)", gt=0, le=100)
+
+
+@dataclass(frozen=True)
+class Socket:
+    set_screw_tap_drill_mm: float = rule("tap drill of the radial set screw (M3: 2.5)", gt=0.5, le=6)
+    boss_height_mm: float = rule("height of the set-screw collar above the panel face", gt=1, le=20)
+    boss_wall_mm: float = rule("radial wall of the set-screw collar", gt=0.5, le=10)
+    rod_clearance_mm: float = rule("diametral clearance of the rod in a set-screw bore", ge=0, le=1)
+
+
+@dataclass(frozen=True)
+class Mount:
+    bolt_circle_diameter_mm: float = rule("robot bolt circle (five bolts between the pockets)", gt=0, le=500)
+    insert_diameter_mm: float = rule("bore of an M3 heat-set insert", gt=1, le=10)
+    insert_depth_mm: float = rule("depth of an insert bore from the robot face", gt=0.5, le=20)
+    fitting_tap_drill_mm: float = rule("tap drill of a push-in fitting port (M5: 4.2)", gt=1, le=10)
+
+
+@dataclass(frozen=True)
+class Payload:
+    insert_circle_diameter_mm: float = rule("circle of the tip payload inserts", gt=0, le=500)
+    insert_count: int = rule("number of payload inserts", ge=2, le=12)
+    insert_diameter_mm: float = rule("bore of a payload heat-set insert", gt=1, le=10)
+    insert_depth_mm: float = rule("depth of a payload insert bore", gt=0.5, le=20)
+
+
+@dataclass(frozen=True)
+class Lightening:
+    hole_diameter_mm: float = rule(
+        "through holes between the pockets near the rim; 0 = none", ge=0, le=50
+    )
+
+
+@dataclass(frozen=True)
+class TailSpec:
+    """The whole tail: what a parameter file describes."""
+
+    name: str = rule("export name (letters, digits, _ and -)")
+    segments: int = rule("number of segments", ge=1, le=6)
+    joints_per_segment: int = rule("joints per segment (three joints share five lines)", ge=1, le=6)
+    joint: JointTable = rule("Table I")
+    soa: SoaTable = rule("Table II")
+    materials: dict[str, Material] = rule("material table", hash=False)
+    use: MaterialUse = rule("which material each part family is made of")
+    vertebra: Vertebra = rule("the elastic rod")
+    taper: Taper = rule("taper interpretation")
+    fabrication: Fabrication = rule("fabrication allowances")
+    tubes: Tubes = rule("pneumatic tubes")
+    socket: Socket = rule("vertebra socket details")
+    mount: Mount = rule("root mount")
+    payload: Payload = rule("tip payload mount")
+    lightening: Lightening = rule("panel lightening")
+
+    @property
+    def joints(self) -> int:
+        return self.segments * self.joints_per_segment
+
+    @property
+    def panels(self) -> int:
+        return self.joints + 1
+
+    @property
+    def length_mm(self) -> float:
+        return self.joints * self.joint.gap_mm + self.panels * self.joint.panel_thickness_mm
+
+    def material(self, key: str) -> Material:
+        return self.materials[key]

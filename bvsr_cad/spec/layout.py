@@ -199,6 +199,8 @@ def panel_layout(spec: TailSpec, k: int, half_angle: float | None = None) -> Pan
         if s not in rings:
             continue  # reported by validate_layout: no room for a fourth tube ring
         ring_r, ring_a = rings[s]
+        # The rings move inwards with the pockets, keeping their webs along the cone.
+        ring_r -= j.pitch_diameter_mm / 2 - (r_pitch_lo + r_pitch_hi) / 2
         for i, a in enumerate(ring_a, start=1):
             xy = polar(ring_r, a)
             if k < p_s:

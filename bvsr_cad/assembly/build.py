@@ -1,0 +1,237 @@
+"""The tail at rest: unique parts, named instances and their placements (mm).
+
+Instances are named as SPEC section 2 says (``panel0`` .. ``panelN``,
+``jk_soa1`` .. ``jk_soa5``, ``rod_s1`` ..). Parts that are geometrically
+identical are built once and shared: a part is named ``soa`` for the SOAs and
+after its first instance otherwise.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import build123d as bd
+import numpy as np
+from OCP.gp import gp_Trsf
+from OCP.TopLoc import TopLoc_Location
+
+from .. import units
+from ..parts.panel import panel
+from ..parts.soa import soa_body
+from ..parts.vertebra import rod
+from ..spec.layout import PanelLayout, half_angle_rad, panel_layout, polar, soa_angles_deg
+from ..spec.tables import TailSpec
+
+Progress = Callable[[str], None]
+
+COLORS = {"panel": (0.55, 0.60, 0.68), "soa": (0.95, 0.55, 0.15), "rod": (0.92, 0.92, 0.88)}
+
+
+@dataclass(frozen=True)
+class PartDef:
+    """One unique part: its solid in the part frame and in print orientation."""
+
+    name: str
+    kind: str  # panel, soa, rod
+    material: str  # key into spec.materials
+    process: str  # MJF, cast, cut
+    solid: bd.Solid
+    print_transform: tuple[tuple[float, ...], ...]  # 4x4, part frame -> print frame (mm)
+    info: dict = field(default_factory=dict, hash=False, compare=False)
+
+    @property
+    def print_solid(self) -> bd.Solid:
+        return self.solid.moved(location(self.print_transform))
+
+
+@dataclass(frozen=True)
+class Instance:
+    name: str
+    part: str
+    transform: tuple[tuple[float, ...], ...]  # 4x4, part frame -> tail frame (mm)
+    segment: int | None  # 1-based; None for a panel shared by two segments or the root
+    segments: tuple[int, ...]  # every segment this instance belongs to (standalone builds)
+
+
+@dataclass
+class Assembly:
+    spec: TailSpec
+    parts: dict[str, PartDef]
+    instances: list[Instance]
+    panel_layouts: list[PanelLayout]
+    taper_half_angle_deg: float
+
+    def part_of(self, inst: Instance) -> PartDef:
+        return self.parts[inst.part]
+
+    def instances_of(self, part: str) -> list[Instance]:
+        return [i for i in self.instances if i.part == part]
+
+    def volume_mm3(self, part: str) -> float:
+        return self.parts[part].solid.volume
+
+    def mass_g(self, part: str) -> float:
+        p = self.parts[part]
+        return units.mass_g(p.solid.volume, self.spec.material(p.material).density_g_cm3)
+
+
+def location(t: tuple[tuple[float, ...], ...]) -> bd.Location:
+    """A rigid 4x4 transform (rows) as a build123d Location."""
+    trsf = gp_Trsf()
+    trsf.SetValues(*t[0], *t[1], *t[2])
+    return bd.Location(TopLoc_Location(trsf))
+
+
+def _as_tuple(m: np.ndarray) -> tuple[tuple[float, ...], ...]:
+    return tuple(tuple(float(v) for v in row) for row in m)
+
+
+def frame(origin, x_dir, z_dir) -> np.ndarray:
+    """4x4 transform whose columns are the unit axes and the origin."""
+    z = np.asarray(z_dir, float)
+    z /= np.linalg.norm(z)
+    x = np.asarray(x_dir, float)
+    x = x - np.dot(x, z) * z
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x, y, z, origin
+    return m
+
+
+def translation(x: float = 0.0, y: float = 0.0, z: float = 0.0) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, 3] = (x, y, z)
+    return m
+
+
+def _panel_key(lay: PanelLayout) -> tuple:
+    def r(v: float) -> float:
+        return round(v, 6)
+
+    def cyl(c) -> tuple:
+        return (c.role, tuple(map(r, c.p0)), tuple(map(r, c.p1)), r(c.diameter_mm))
+
+    return (lay.kind, r(lay.rim_radius_lower_mm), r(lay.rim_radius_upper_mm),
+            tuple(map(cyl, lay.cuts)), tuple(map(cyl, lay.bosses)), tuple(map(cyl, lay.passages)))
+
+
+def rod_span_mm(spec: TailSpec, s: int) -> tuple[float, float]:
+    """z range of segment s's rod: through the root panel, to the tip face, and
+    to the mid-plane of a boundary panel shared with the next segment."""
+    j = spec.joint
+    t = j.panel_thickness_mm
+    p0, p1 = spec.joints_per_segment * (s - 1), spec.joints_per_segment * s
+    z_start = 0.0 if p0 == 0 else p0 * j.joint_height_mm + t / 2
+    z_end = p1 * j.joint_height_mm + (t if p1 == spec.panels - 1 else t / 2)
+    return z_start, z_end
+
+
+def _print_transform_panel(lay: PanelLayout) -> np.ndarray:
+    """Lower face on the bed, unless a collar hangs below it (then flipped)."""
+    below = [b for b in lay.bosses if b.z_range[0] < 0]
+    if not below:
+        return np.eye(4)
+    flip = np.diag([1.0, -1.0, -1.0, 1.0])
+    return translation(z=lay.thickness_mm) @ flip
+
+
+def build_assembly(spec: TailSpec, progress: Progress | None = None) -> Assembly:
+    """Make every unique part and place every instance of the tail at rest.
+
+    Args:
+        spec: a validated tail spec.
+        progress: called with a short message before each slow step.
+    """
+    say = progress or (lambda _msg: None)
+    beta = half_angle_rad(spec)
+    j = spec.joint
+    parts: dict[str, PartDef] = {}
+    instances: list[Instance] = []
+    layouts = [panel_layout(spec, k, beta) for k in range(spec.panels)]
+    J = spec.joints_per_segment
+
+    def segments_of_panel(k: int) -> tuple[int, ...]:
+        segs = {s for s in range(1, spec.segments + 1) if J * (s - 1) <= k <= J * s}
+        return tuple(sorted(segs))
+
+    by_key: dict[tuple, str] = {}
+    for lay in layouts:
+        key = _panel_key(lay)
+        if key not in by_key:
+            say(f"panel {lay.name} ({lay.kind})")
+            by_key[key] = lay.name
+            parts[lay.name] = PartDef(
+                name=lay.name, kind="panel", material=spec.use.panel, process="MJF",
+                solid=panel(lay), print_transform=_as_tuple(_print_transform_panel(lay)),
+                info={"panel_kind": lay.kind, "thickness_mm": lay.thickness_mm,
+                      "pocket_depth_mm": lay.pocket_depth_mm,
+                      "pocket_faces": [f for f, on in (("lower", lay.lower_pockets),
+                                                       ("upper", lay.upper_pockets)) if on],
+                      "pitch_radius_lower_mm": lay.pitch_radius_lower_mm,
+                      "pitch_radius_upper_mm": lay.pitch_radius_upper_mm,
+                      "pocket_diameter_mm": lay.cuts[0].diameter_mm,
+                      "rod_socket": spec.vertebra.socket},
+            )
+        segs = segments_of_panel(lay.index)
+        instances.append(Instance(lay.name, by_key[key], _as_tuple(translation(z=lay.z0_mm)),
+                                  segs[0] if len(segs) == 1 else None, segs))
+
+    say("SOA body")
+    parts["soa"] = PartDef(
+        name="soa", kind="soa", material=spec.use.soa, process="cast",
+        solid=soa_body(spec.soa, j.base_diameter_mm), print_transform=_as_tuple(np.eye(4)),
+        info={"height_mm": spec.soa.built_height_mm, "fold_residual_mm":
+              spec.soa.built_origami_height_mm - spec.soa.origami_height_mm},
+    )
+    rot = spec.soa.rotation_deg
+    for k in range(1, spec.panels):
+        lo, hi = layouts[k - 1], layouts[k]
+        s = (k - 1) // J + 1
+        for i, a in enumerate(soa_angles_deg(), start=1):
+            b = np.array([*polar(lo.pitch_radius_upper_mm, a), lo.z0_mm + lo.thickness_mm - lo.pocket_depth_mm])
+            m = np.array([*polar(hi.pitch_radius_lower_mm, a), hi.z0_mm + hi.pocket_depth_mm])
+            x_dir = np.array([math.cos(math.radians(a + rot)), math.sin(math.radians(a + rot)), 0.0])
+            instances.append(Instance(f"j{k}_soa{i}", "soa", _as_tuple(frame(b, x_dir, m - b)), s, (s,)))
+
+    rods: dict[float, str] = {}
+    for s in range(1, spec.segments + 1):
+        z0, z1 = rod_span_mm(spec, s)
+        length = round(z1 - z0, 6)
+        if length not in rods:
+            name = f"rod_s{s}"
+            rods[length] = name
+            parts[name] = PartDef(
+                name=name, kind="rod", material=spec.vertebra.material, process="cut",
+                solid=rod(spec.vertebra.diameter_mm, length), print_transform=_as_tuple(np.eye(4)),
+                info={"cut_length_mm": length, "diameter_mm": spec.vertebra.diameter_mm},
+            )
+        instances.append(Instance(f"rod_s{s}", rods[length], _as_tuple(translation(z=z0)), s, (s,)))
+
+    return Assembly(spec=spec, parts=parts, instances=instances, panel_layouts=layouts,
+                    taper_half_angle_deg=math.degrees(beta))
+
+
+def instance_solid(asm: Assembly, inst: Instance) -> bd.Solid:
+    """The instance's solid in the tail frame."""
+    return asm.part_of(inst).solid.moved(location(inst.transform))
+
+
+def segment_masses_g(asm: Assembly) -> tuple[list[float], list[float]]:
+    """(in-tail masses, standalone masses) per segment.
+
+    In the tail a panel shared by two segments counts half to each and the
+    root mount to segment 1, so the in-tail masses add up to the tail; a
+    standalone segment has all four of its panels, its SOAs and its rod.
+    """
+    n = asm.spec.segments
+    in_tail = [0.0] * n
+    standalone = [0.0] * n
+    for inst in asm.instances:
+        m = asm.mass_g(inst.part)
+        for s in inst.segments:
+            standalone[s - 1] += m
+            in_tail[s - 1] += m / len(inst.segments)
+    return in_tail, standalone

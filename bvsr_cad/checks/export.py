@@ -1,0 +1,68 @@
+"""Reading an export folder: the manifest and the meshes it names."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import trimesh
+
+
+class ExportError(ValueError):
+    """The folder is not a readable bvsr export."""
+
+
+@dataclass
+class Export:
+    root: Path
+    manifest: dict[str, Any]
+
+    @classmethod
+    def open(cls, root: str | Path) -> "Export":
+        root = Path(root)
+        path = root / "manifest.json"
+        if not root.is_dir():
+            raise ExportError(f"{root}: not a folder; expected an export made by `bvsr build`")
+        if not path.is_file():
+            raise ExportError(f"{root}: no manifest.json; expected an export made by `bvsr build`")
+        try:
+            manifest = json.loads(path.read_text())
+        except json.JSONDecodeError as exc:
+            raise ExportError(f"{path}: not valid JSON ({exc})") from None
+        for key in ("name", "parts", "mass_g"):
+            if key not in manifest:
+                raise ExportError(f"{path}: missing key {key!r}")
+        return cls(root, manifest)
+
+    @cached_property
+    def parts(self) -> list[dict[str, Any]]:
+        return list(self.manifest["parts"])
+
+    def mesh(self, rel: str) -> trimesh.Trimesh:
+        return _load(str(self.root / rel))
+
+    def part_frame_mesh(self, part: dict[str, Any]) -> trimesh.Trimesh:
+        """The part's STL moved back from print orientation into the part frame."""
+        mesh = self.mesh(part["files"]["stl"]).copy()
+        mesh.apply_transform(np.linalg.inv(np.asarray(part["print_transform"], float)))
+        return mesh
+
+
+_CACHE: dict[str, trimesh.Trimesh] = {}
+
+
+def _load(path: str) -> trimesh.Trimesh:
+    if path not in _CACHE:
+        # process=False keeps the file's own vertices: a check must see what a slicer sees.
+        mesh = trimesh.load(path, file_type="stl", force="mesh", process=False)
+        mesh.merge_vertices()
+        _CACHE[path] = mesh
+    return _CACHE[path]
+
+
+def clear_cache() -> None:
+    _CACHE.clear()

@@ -18,8 +18,10 @@ from pathlib import Path
 from .assembly.build import build_assembly
 from .checks.result import CheckResult
 from .checks.run import run_checks
+from .exporters.analysis_files import write_analyses
 from .exporters.cad import write_assembly_step, write_part_step, write_part_stl
 from .exporters.manifest import manifest_dict, write_manifest
+from .exporters.mold_files import write_molds
 from .spec.load import load_spec, params_sha256
 
 Progress = Callable[[str], None]
@@ -92,6 +94,8 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         write_assembly_step(asm, tmp / "step" / "assembly.step")
         shutil.copyfile(params, tmp / "params.toml")
         manifest = manifest_dict(asm, params_sha256(params), files, "step/assembly.step")
+        manifest.update(write_analyses(asm, tmp, say))
+        manifest.update(write_molds(asm, tmp, say))
         write_manifest(tmp, manifest)
         say("checks")
         results = run_checks(tmp, say)

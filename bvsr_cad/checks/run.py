@@ -9,6 +9,8 @@ from .export import Export, clear_cache
 from .layout import check_layout
 from .mass import check_masses
 from .mesh import check_part_mesh
+from .analyses import check_analyses
+from .molds import check_molds
 from .paper import check_paper
 from .result import CheckResult
 
@@ -30,5 +32,9 @@ def run_checks(root: str | Path, progress: Callable[[str], None] | None = None) 
     say("pentagon layout")
     results.extend(check_layout(exp))
     results.extend(check_paper(exp))
+    say("analyses")
+    results.extend(check_analyses(exp))
+    say("molds")
+    results.extend(check_molds(exp))
     clear_cache()
     return results

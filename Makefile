@@ -1,22 +1,26 @@
 # Quick start: `make exports` builds the default tail, `make test` runs the tests.
 # Both create .venv on first use (Python 3.11 and the package registries only).
-PYTHON ?= python3.11
+PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: exports test check clean
+.PHONY: exports test check-l clean
 
 $(STAMP): pyproject.toml
-	@command -v $(PYTHON) >/dev/null || { echo "needs $(PYTHON) on PATH (set PYTHON=...)"; exit 2; }
+	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))' || \
+		{ echo "needs Python 3.11 (found $(PYTHON)); run: make PYTHON=/path/to/python3.11"; exit 2; }
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet -e '.[test]'
 	touch $(STAMP)
 
 exports: $(STAMP)
 	$(BIN)/bvsr build params/bvsr.toml -o exports/bvsr
 	$(BIN)/bvsr check exports/bvsr
+
+check-l: $(STAMP)
+	$(BIN)/bvsr build params/bvsr_l.toml -o exports/bvsr_l -q
+	$(BIN)/bvsr check exports/bvsr_l -q
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q

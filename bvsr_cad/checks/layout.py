@@ -28,7 +28,7 @@ def pocket_centres(mesh, z_mm: float, pocket_diameter_mm: float) -> np.ndarray:
         return np.zeros((0, 2))
     to_2d = np.eye(4)
     to_2d[2, 3] = -z_mm
-    planar, _ = section.to_planar(to_2D=to_2d, check=False)
+    planar, _ = section.to_2D(to_2D=to_2d, check=False)
     target = math.pi * pocket_diameter_mm ** 2 / 4
     centres = []
     for poly in planar.polygons_full:

@@ -345,10 +345,8 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[tuple[str, float, f
         for b in cuts:
             if b.role in ("rod", "setscrew"):
                 continue
-            if b.role == "pocket" and not _z_overlap(
-                Cyl("", "", (0, 0, boss.z_range[0] - 1), (0, 0, boss.z_range[1] + 1), 0), b
-            ):
-                continue
+            if not _z_overlap(boss, b):
+                continue  # e.g. blind inserts on the face away from the collar
             gap, nested = _circle_gap(boss, b)
             if not nested and gap < fab.min_wall_mm - 1e-9:
                 out.append((f"{lay.name}: set-screw collar and {b.name} leave {gap:.2f} mm", gap, fab.min_wall_mm))
@@ -427,6 +425,15 @@ def validate_layout(spec: TailSpec) -> list[str]:
     if 2 * spec.soa.fillet_radius_mm >= spec.soa.short_side_mm:
         problems.append(f"soa.fillet_radius_mm = {spec.soa.fillet_radius_mm}: must be below half of "
                         f"soa.short_side_mm = {spec.soa.short_side_mm}")
+    depth = pocket_depth_mm(spec)
+    floor = spec.fabrication.socket_floor_mm
+    if 2 * depth + floor > j.panel_thickness_mm + 1e-9:
+        problems.append(
+            f"joint.joint_height_mm = {j.joint_height_mm}: flange pockets deeper than the panel: two pockets of "
+            f"(H - H_a) / 2 = {depth:.3f} mm plus a {floor} mm floor need {2 * depth + floor:.3f} mm, the panel "
+            f"is H_j - H_a = {j.panel_thickness_mm:.3f} mm (change joint.joint_height_mm, joint.gap_mm, "
+            "soa.height_mm or fabrication.socket_floor_mm)")
+        return problems
     if spec.segments > 3:
         problems.append(f"segments = {spec.segments}: tube rings exist for the distal tubes of at most 3 "
                         "segments; allowed: 1 to 3")

@@ -95,6 +95,7 @@ def _build(cls: type, data: Any, prefix: str, problems: list[str]) -> Any:
                 values[name] = f.default
             else:
                 problems.append(f"{key}: missing ({f.metadata.get('doc', '')})")
+                values[name] = None
             continue
         raw = data[name]
         if dataclasses.is_dataclass(typ):

@@ -1,0 +1,66 @@
+from __future__ import annotations
+
+import copy
+import tomllib
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PARAMS = ROOT / "params"
+
+
+@pytest.fixture(scope="session")
+def bvsr_data() -> dict:
+    return tomllib.loads((PARAMS / "bvsr.toml").read_text())
+
+
+@pytest.fixture()
+def data(bvsr_data) -> dict:
+    """A fresh, mutable copy of the default parameters."""
+    return copy.deepcopy(bvsr_data)
+
+
+@pytest.fixture(scope="session")
+def bvsr_spec():
+    from bvsr_cad.spec.load import load_spec
+
+    return load_spec(PARAMS / "bvsr.toml")
+
+
+@pytest.fixture(scope="session")
+def bvsr_export(tmp_path_factory) -> Path:
+    """One full default build shared by the export tests."""
+    from bvsr_cad.pipeline import build_export
+
+    out = tmp_path_factory.mktemp("exp") / "bvsr"
+    build_export(PARAMS / "bvsr.toml", out)
+    return out
+
+
+def write_toml(path: Path, data: dict) -> Path:
+    """Minimal TOML writer for the test fixtures (tables of scalars, one level of nesting)."""
+
+    def scalar(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, str):
+            return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        return repr(v)
+
+    lines = []
+    tables = []
+    for k, v in data.items():
+        if isinstance(v, dict):
+            tables.append((k, v))
+        else:
+            lines.append(f"{k} = {scalar(v)}")
+    for name, table in tables:
+        sub = [(k, v) for k, v in table.items() if isinstance(v, dict)]
+        lines.append(f"[{name}]")
+        lines += [f"{k} = {scalar(v)}" for k, v in table.items() if not isinstance(v, dict)]
+        for k, v in sub:
+            lines.append(f"[{name}.{k}]")
+            lines += [f"{kk} = {scalar(vv)}" for kk, vv in v.items()]
+    path.write_text("\n".join(lines) + "\n")
+    return path

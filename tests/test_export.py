@@ -1,0 +1,165 @@
+"""`bvsr build` and `bvsr check` end to end: manifest, checks, atomic publish."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from bvsr_cad.assembly.build import build_assembly
+from bvsr_cad.cli import main
+from bvsr_cad.spec import paper
+
+from .conftest import PARAMS, write_toml
+
+pytestmark = pytest.mark.slow
+
+
+def _tree_digest(root: Path) -> str:
+    h = hashlib.sha256()
+    for p in sorted(root.rglob("*")):
+        h.update(str(p.relative_to(root)).encode())
+        if p.is_file():
+            h.update(p.read_bytes())
+    return h.hexdigest()
+
+
+def test_manifest_round_trips(bvsr_export, bvsr_spec):
+    m = json.loads((bvsr_export / "manifest.json").read_text())
+    assert m["name"] == "bvsr" and m["version"] == "0.1.0"
+    assert m["params_sha256"] == hashlib.sha256((PARAMS / "bvsr.toml").read_bytes()).hexdigest()
+    assert (bvsr_export / m["params_file"]).read_bytes() == (PARAMS / "bvsr.toml").read_bytes()
+    asm = build_assembly(bvsr_spec)
+    by_name = {p["name"]: p for p in m["parts"]}
+    assert set(by_name) == set(asm.parts)
+    for name, part in by_name.items():
+        for rel in part["files"].values():
+            assert (bvsr_export / rel).is_file(), rel
+        assert part["count"] == len(part["instances"]) == len(asm.instances_of(name))
+        assert part["mass_g"] == pytest.approx(asm.mass_g(name), rel=1e-9)
+    assert by_name["soa"]["count"] == 30
+    # Tail mass = sum of instance masses; segments (shared panel split) add up to it.
+    assert m["mass_g"]["tail"] == pytest.approx(sum(p["count"] * p["mass_g"] for p in m["parts"]), rel=1e-12)
+    assert sum(m["mass_g"]["segments"]) == pytest.approx(m["mass_g"]["tail"], rel=1e-12)
+    # Standalone segment 1: panels 0-3, 15 SOAs, rod_s1.
+    standalone = sum(by_name[f"panel{k}"]["mass_g"] for k in range(4)) + 15 * by_name["soa"]["mass_g"] \
+        + by_name["rod_s1"]["mass_g"]
+    assert m["mass_g"]["segment_standalone"] == pytest.approx(standalone, rel=1e-12)
+    # Measured length equals Table I's N H_a + (N + 1) t.
+    assert m["length_mm"] == pytest.approx(bvsr_spec.length_mm, abs=1e-6)
+    assert all(c["passed"] is not False for c in m["checks"])
+
+
+def test_default_segment_within_ten_percent_of_paper(bvsr_export):
+    m = json.loads((bvsr_export / "manifest.json").read_text())
+    ref = paper.SEGMENT_STANDALONE_MASS.value
+    assert abs(m["mass_g"]["segment_standalone"] - ref) <= paper.SEGMENT_MASS_TOLERANCE * ref
+
+
+def test_print_stls_lie_on_the_bed(bvsr_export):
+    m = json.loads((bvsr_export / "manifest.json").read_text())
+    for part in m["parts"]:
+        mesh = trimesh.load(bvsr_export / part["files"]["stl"])
+        assert mesh.bounds[0][2] == pytest.approx(0.0, abs=1e-9), part["name"]
+
+
+def test_assembly_step_names_every_instance(bvsr_export):
+    text = (bvsr_export / "step" / "assembly.step").read_text(errors="replace")
+    m = json.loads((bvsr_export / "manifest.json").read_text())
+    for inst in m["assembly"]["instances"]:
+        assert f"'{inst['name']}'" in text, inst["name"]
+    assert "COLOUR_RGB" in text
+    assert "SI_UNIT(.MILLI.,.METRE.)" in text
+
+
+def test_check_json_passes(bvsr_export, capsys):
+    assert main(["check", str(bvsr_export), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["passed"] is True
+    names = {c["name"] for c in out["checks"]}
+    assert {"stl_watertight:soa", "mass_parts_sum_to_tail", "pentagon_spacing:panel1:upper",
+            "paper:segment_standalone_mass"} <= names
+    info = [c for c in out["checks"] if c["name"].startswith("paper:")]
+    assert info and all(c["passed"] is None for c in info)
+    for c in out["checks"]:
+        assert set(c) >= {"name", "passed", "value", "limit", "unit", "where"}
+
+
+def test_check_fails_on_a_broken_stl(bvsr_export, tmp_path, capsys):
+    broken = tmp_path / "broken"
+    shutil.copytree(bvsr_export, broken)
+    mesh = trimesh.load(broken / "stl" / "soa.stl")
+    mesh.update_faces(np.arange(len(mesh.faces)) % 50 != 0)  # punch holes
+    mesh.export(broken / "stl" / "soa.stl")
+    assert main(["check", str(broken), "--json"]) == 1
+    out = json.loads(capsys.readouterr().out)
+    failed = {c["name"] for c in out["checks"] if c["passed"] is False}
+    assert "stl_watertight:soa" in failed and "stl_volume:soa" in failed
+
+
+def test_check_moved_pocket_fails_the_pentagon(bvsr_export, tmp_path, capsys):
+    moved = tmp_path / "moved"
+    shutil.copytree(bvsr_export, moved)
+    m = json.loads((moved / "manifest.json").read_text())
+    part = next(p for p in m["parts"] if p["name"] == "panel1")
+    mesh = trimesh.load(moved / part["files"]["stl"])
+    mesh.apply_transform(trimesh.transformations.rotation_matrix(np.radians(2.0), [0, 0, 1]))
+    mesh.export(moved / part["files"]["stl"])
+    assert main(["check", str(moved), "--json"]) == 1
+    failed = {c["name"] for c in json.loads(capsys.readouterr().out)["checks"] if c["passed"] is False}
+    assert "pentagon_soa1_dorsal:panel1:upper" in failed and "pentagon_mirror_yz:panel1:lower" in failed
+
+
+def test_check_bad_folder_exit_2(tmp_path, capsys):
+    assert main(["check", str(tmp_path)]) == 2
+    assert "no manifest.json" in capsys.readouterr().err
+
+
+def test_failed_build_leaves_earlier_export_untouched(bvsr_export, tmp_path, data, monkeypatch):
+    out = tmp_path / "exports" / "bvsr"
+    shutil.copytree(bvsr_export, out)
+    before = _tree_digest(out)
+    # Bad parameters: exit 2, nothing written.
+    data["joint"]["pitch_diameter_mm"] = 40.0
+    assert main(["build", str(write_toml(tmp_path / "bad.toml", data)), "-o", str(out), "-q"]) == 2
+    assert _tree_digest(out) == before
+    # A failure half-way through writing: the earlier export survives, no temp folder is left.
+    import bvsr_cad.pipeline as pipeline
+
+    calls = {"n": 0}
+    real = pipeline.write_part_stl
+
+    def flaky(part, path):
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise OSError("disk full (simulated)")
+        real(part, path)
+
+    monkeypatch.setattr(pipeline, "write_part_stl", flaky)
+    with pytest.raises(OSError, match="simulated"):
+        pipeline.build_export(PARAMS / "bvsr.toml", out)
+    assert _tree_digest(out) == before
+    assert sorted(p.name for p in out.parent.iterdir()) == ["bvsr"]
+
+
+def test_build_refuses_to_replace_a_foreign_folder(tmp_path, capsys):
+    foreign = tmp_path / "mine"
+    foreign.mkdir()
+    (foreign / "thesis.tex").write_text("precious")
+    assert main(["build", str(PARAMS / "bvsr.toml"), "-o", str(foreign), "-q"]) == 2
+    assert (foreign / "thesis.tex").read_text() == "precious"
+    assert "refusing" in capsys.readouterr().err
+
+
+def test_bvsr_l_builds_and_checks(tmp_path, capsys):
+    out = tmp_path / "bvsr_l"
+    assert main(["build", str(PARAMS / "bvsr_l.toml"), "-o", str(out), "-q"]) == 0
+    assert main(["check", str(out), "--json", "-q"]) == 0
+    m = json.loads((out / "manifest.json").read_text())
+    assert next(p for p in m["parts"] if p["name"] == "soa")["count"] == 45
+    assert m["length_mm"] == pytest.approx(388.59, abs=1e-6)

@@ -1,0 +1,124 @@
+"""Part generators against closed forms and independent computations."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import pytest
+
+from bvsr_cad.assembly.build import build_assembly
+from bvsr_cad.parts.panel import panel
+from bvsr_cad.parts.soa import bellows_profile, soa_body
+from bvsr_cad.parts.vertebra import rod
+from bvsr_cad.spec import layout
+from bvsr_cad.spec.load import load_spec, spec_from_dict
+
+from .conftest import PARAMS
+
+
+def test_featureless_panel_is_a_frustum(bvsr_spec):
+    lay = dataclasses.replace(layout.panel_layout(bvsr_spec, 2), cuts=(), bosses=(), passages=())
+    solid = panel(lay)
+    r1, r2, h = lay.rim_radius_lower_mm, lay.rim_radius_upper_mm, lay.thickness_mm
+    assert r1 > r2  # the taper narrows towards the tip
+    assert solid.volume == pytest.approx(math.pi * h * (r1 * r1 + r1 * r2 + r2 * r2) / 3, rel=1e-9)
+    # With no taper it is pi r^2 h.
+    flat = dataclasses.replace(lay, rim_radius_upper_mm=r1)
+    assert panel(flat).volume == pytest.approx(math.pi * r1 * r1 * h, rel=1e-9)
+
+
+def _bellows_volume_closed_form(soa, flange_d):
+    """Independent of the CAD kernel: rounded-square frustums and flat flanges.
+
+    A ruled loft between two squares rounded at the same R has rounded-square
+    sections all along, so each facet row holds integral (s(z)^2 - (4 - pi) R^2) dz
+    with s linear in z; the inside is a sharp square offset by t / cos(facet slope).
+    """
+    R = soa.fillet_radius_mm
+    rise = soa.row_rise_mm
+    depth = (soa.long_side_mm - soa.short_side_mm) / 2
+    off = soa.facet_thickness_mm / math.cos(math.atan(depth / rise))
+    vol = 0.0
+    for m in range(2 * soa.pleats):
+        s0, s1 = (soa.long_side_mm, soa.short_side_mm) if m % 2 == 0 else (soa.short_side_mm, soa.long_side_mm)
+        outer = rise * (s0 * s0 + s0 * s1 + s1 * s1) / 3 - (4 - math.pi) * R * R * rise
+        i0, i1 = s0 - 2 * off, s1 - 2 * off
+        inner = rise * (i0 * i0 + i0 * i1 + i1 * i1) / 3
+        vol += outer - inner
+    f = (soa.height_mm - soa.origami_height_mm) / 2
+    end_inner = soa.long_side_mm - 2 * off
+    vol += 2 * f * (math.pi * flange_d ** 2 / 4 - end_inner ** 2)
+    return vol
+
+
+@pytest.mark.parametrize("pleats,t", [(2, 1.0), (3, 0.8)])
+def test_soa_volume_matches_closed_form(bvsr_spec, pleats, t):
+    soa = dataclasses.replace(bvsr_spec.soa, pleats=pleats, facet_thickness_mm=t)
+    solid = soa_body(soa, bvsr_spec.joint.base_diameter_mm)
+    assert solid.is_valid
+    assert solid.volume == pytest.approx(_bellows_volume_closed_form(soa, bvsr_spec.joint.base_diameter_mm),
+                                         rel=1e-6)
+    box = solid.bounding_box()
+    assert box.max.Z - box.min.Z == pytest.approx(soa.built_height_mm, abs=1e-6)
+
+
+def test_soa_profile_has_mountains_at_the_ends(bvsr_spec):
+    p = bellows_profile(bvsr_spec.soa, bvsr_spec.joint.base_diameter_mm)
+    assert p.outer_side_mm[0] == p.outer_side_mm[-1] == bvsr_spec.soa.long_side_mm
+    assert min(p.outer_side_mm) == bvsr_spec.soa.short_side_mm
+    assert p.z_mm[-1] - p.z_mm[0] == pytest.approx(bvsr_spec.soa.origami_height_mm)
+
+
+def test_rod_volume():
+    assert rod(6.0, 130.53).volume == pytest.approx(math.pi * 9.0 * 130.53, rel=1e-9)
+    with pytest.raises(ValueError, match="diameter_mm"):
+        rod(0.0, 10.0)
+
+
+@pytest.mark.parametrize("name,n_soa,n_panels,n_rods", [("bvsr", 30, 7, 2), ("bvsr_l", 45, 10, 3)])
+def test_assemblies_are_valid_solids_with_spec_names(name, n_soa, n_panels, n_rods):
+    spec = load_spec(PARAMS / f"{name}.toml")
+    asm = build_assembly(spec)
+    for part in asm.parts.values():
+        assert part.solid.is_valid and len(part.solid.solids()) == 1, part.name
+    names = [i.name for i in asm.instances]
+    assert len(names) == len(set(names))
+    assert sum(n.startswith("j") and "_soa" in n for n in names) == n_soa
+    assert [n for n in names if n.startswith("panel")] == [f"panel{k}" for k in range(n_panels)]
+    assert [n for n in names if n.startswith("rod_")] == [f"rod_s{s}" for s in range(1, n_rods + 1)]
+    assert f"j{n_panels - 1}_soa5" in names
+    assert asm.instances_of("soa") and len(asm.instances_of("soa")) == n_soa
+
+
+def _panel_kinds(spec):
+    return {layout.panel_kind(spec, k): k for k in range(spec.panels)}
+
+
+@pytest.mark.parametrize("socket", ["threaded", "set_screw"])
+@pytest.mark.parametrize("diameter", [4.0, 5.0, 6.0])
+def test_every_rod_diameter_and_socket_gives_valid_panels(bvsr_spec, diameter, socket):
+    spec = dataclasses.replace(bvsr_spec, vertebra=dataclasses.replace(
+        bvsr_spec.vertebra, diameter_mm=diameter, socket=socket))
+    spec = spec_from_dict(dataclasses.asdict(spec))  # goes through validation
+    for kind, k in _panel_kinds(spec).items():
+        lay = layout.panel_layout(spec, k)
+        solid = panel(lay)
+        assert solid.is_valid, (kind, diameter, socket)
+        # The bore is a through hole inside solid material: removing it adds
+        # exactly its cylinder back (over the panel and any collar).
+        plain = dataclasses.replace(lay, cuts=tuple(c for c in lay.cuts if c.role != "rod"))
+        z_lo = min([0.0] + [b.z_range[0] for b in lay.bosses])
+        z_hi = max([lay.thickness_mm] + [b.z_range[1] for b in lay.bosses])
+        bore = layout.rod_bore_mm(spec)
+        expected = math.pi * bore ** 2 / 4 * (z_hi - z_lo)
+        if socket == "set_screw":
+            continue  # the set screw crosses the bore: checked by validity above
+        assert panel(plain).volume - solid.volume == pytest.approx(expected, rel=1e-6), kind
+
+
+def test_rod_material_changes_mass_not_geometry(bvsr_spec):
+    pvc = dataclasses.replace(bvsr_spec, vertebra=dataclasses.replace(bvsr_spec.vertebra, material="PVC"))
+    a = layout.panel_layout(bvsr_spec, 1)
+    b = layout.panel_layout(pvc, 1)
+    assert a == b

@@ -1,0 +1,115 @@
+"""Parameter files: both defaults load; every kind of bad file is refused with
+exit code 2 and a message naming the file, the key and what is allowed."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from bvsr_cad.cli import main
+from bvsr_cad.spec import layout
+from bvsr_cad.spec.load import ParamError, load_spec, spec_from_dict
+
+from .conftest import PARAMS, write_toml
+
+
+@pytest.mark.parametrize("name,segments,panels", [("bvsr", 2, 7), ("bvsr_l", 3, 10)])
+def test_defaults_load(name, segments, panels):
+    spec = load_spec(PARAMS / f"{name}.toml")
+    assert spec.name == name and spec.segments == segments and spec.panels == panels
+    assert spec.joint.panel_thickness_mm == pytest.approx(6.0)
+    # Table I length: N H_a + (N + 1) x 6 mm.
+    assert spec.length_mm == pytest.approx({2: 261.06, 3: 388.59}[segments])
+
+
+def test_auto_taper_is_the_largest_feasible_cone(bvsr_spec):
+    beta = layout.max_feasible_taper_deg(bvsr_spec)
+    # Independent closed form for the binding rule (pocket webs at the tip panel):
+    # 2 r_tip sin 36 - d_pocket = min gap, r_tip = D_a/2 - z_tip tan(beta).
+    j, fab = bvsr_spec.joint, bvsr_spec.fabrication
+    d_pocket = j.base_diameter_mm + fab.pocket_clearance_mm
+    r_tip = (fab.min_pocket_gap_mm + d_pocket) / (2 * math.sin(math.radians(36)))
+    z_tip = (bvsr_spec.panels - 1) * j.joint_height_mm
+    expected = math.degrees(math.atan((j.pitch_diameter_mm / 2 - r_tip) / z_tip))
+    assert beta == pytest.approx(expected, abs=1e-6)
+    assert "pocket_lower" in layout.binding_constraint(bvsr_spec)
+    # Just past it, validation refuses a fixed taper.
+    with pytest.raises(ParamError, match="taper.half_angle_deg"):
+        spec_from_dict({**_as_dict(bvsr_spec), "taper": {"half_angle_deg": beta + 0.01}})
+
+
+def _as_dict(spec):
+    import dataclasses
+
+    return dataclasses.asdict(spec)
+
+
+def test_soa_fold_residual_is_computed_not_forced(bvsr_spec):
+    soa = bvsr_spec.soa
+    rise = (soa.long_side_mm - soa.short_side_mm) / 2 / math.tan(math.radians(soa.dihedral_deg / 2))
+    assert rise * 4 == pytest.approx(34.370, abs=1e-3)
+    assert soa.built_origami_height_mm == pytest.approx(35.0)  # fold_height_from = origami_height
+    assert soa.implied_dihedral_deg == pytest.approx(72.83, abs=0.01)
+    shorter = spec_from_dict({**_as_dict(bvsr_spec), "soa": {**_as_dict(bvsr_spec)["soa"],
+                                                             "fold_height_from": "dihedral"}})
+    assert shorter.soa.built_height_mm == pytest.approx(34.370 + 2.6, abs=1e-3)
+
+
+BAD = [
+    # (description, mutate(data), key expected in the message)
+    ("unknown key", lambda d: d["joint"].__setitem__("gap_mmm", 36.5), "joint.gap_mmm"),
+    ("unknown table", lambda d: d.__setitem__("extras", {"x": 1}), "extras"),
+    ("wrong type", lambda d: d["joint"].__setitem__("gap_mm", "36.51"), "joint.gap_mm"),
+    ("out of range", lambda d: d["soa"].__setitem__("pleats", 0), "soa.pleats"),
+    ("not a choice", lambda d: d["vertebra"].__setitem__("diameter_mm", 7.0), "vertebra.diameter_mm"),
+    ("missing key", lambda d: d["soa"].pop("long_side_mm"), "soa.long_side_mm"),
+    ("unknown material", lambda d: d["vertebra"].__setitem__("material", "steel"), "vertebra.material"),
+    ("pockets overlap on the pitch circle", lambda d: d["joint"].__setitem__("pitch_diameter_mm", 40.0),
+     "pocket_upper_1 and pocket_upper_2"),
+    ("rim inside the SOA envelope", lambda d: d["joint"].__setitem__("panel_diameter_mm", 68.0),
+     "joint.panel_diameter_mm"),
+    ("pockets deeper than the panel", lambda d: d["joint"].__setitem__("joint_height_mm", 38.0),
+     "deeper than the panel"),
+    ("taper beyond the feasible one", lambda d: d["taper"].__setitem__("half_angle_deg", 1.23),
+     "taper.half_angle_deg"),
+    ("set-screw collar into the tube holes", lambda d: (d["vertebra"].__setitem__("socket", "set_screw"),
+                                                        d["socket"].__setitem__("boss_wall_mm", 5.5)),
+     "set-screw collar"),
+    ("tube holes into the rod bore", lambda d: d["tubes"].__setitem__("inner_radius_mm", 4.0), "rod_bore"),
+]
+
+
+@pytest.mark.parametrize("desc,mutate,key", BAD, ids=[b[0] for b in BAD])
+def test_bad_parameters_exit_2_and_name_the_key(tmp_path, data, desc, mutate, key, capsys):
+    mutate(data)
+    path = write_toml(tmp_path / "bad.toml", data)
+    with pytest.raises(ParamError) as err:
+        load_spec(path)
+    assert key in str(err.value) and str(path) in str(err.value)
+    out = tmp_path / "out"
+    assert main(["build", str(path), "-o", str(out), "-q"]) == 2
+    msg = capsys.readouterr().err
+    assert key in msg and "bad.toml" in msg
+    assert not out.exists()
+
+
+def test_broken_toml_exit_2(tmp_path, capsys):
+    path = tmp_path / "broken.toml"
+    path.write_text('name = "bvsr"\n[joint\ngap_mm = 36.51\n')
+    assert main(["build", str(path), "-o", str(tmp_path / "o"), "-q"]) == 2
+    assert "not valid TOML" in capsys.readouterr().err
+
+
+def test_missing_file_exit_2(tmp_path, capsys):
+    assert main(["build", str(tmp_path / "nope.toml"), "-q"]) == 2
+    assert "file not found" in capsys.readouterr().err
+
+
+def test_every_error_is_collected(tmp_path, data):
+    data["joint"]["gap_mm"] = -1.0
+    data["soa"]["pleats"] = 2.5
+    data["lightening"]["colour"] = "red"
+    with pytest.raises(ParamError) as err:
+        load_spec(write_toml(tmp_path / "bad.toml", data))
+    assert len(err.value.problems) == 3

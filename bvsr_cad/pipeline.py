@@ -22,6 +22,7 @@ from .exporters.analysis_files import write_analyses
 from .exporters.cad import write_assembly_step, write_part_step, write_part_stl
 from .exporters.manifest import manifest_dict, write_manifest
 from .exporters.mold_files import write_molds
+from .exporters.render import render_previews
 from .spec.load import load_spec, params_sha256
 
 Progress = Callable[[str], None]
@@ -94,6 +95,8 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         write_assembly_step(asm, tmp / "step" / "assembly.step")
         shutil.copyfile(params, tmp / "params.toml")
         manifest = manifest_dict(asm, params_sha256(params), files, "step/assembly.step")
+        say("previews (off-screen renders)")
+        manifest["previews"] = render_previews(asm, tmp)
         manifest.update(write_analyses(asm, tmp, say))
         manifest.update(write_molds(asm, tmp, say))
         write_manifest(tmp, manifest)

@@ -21,7 +21,8 @@ from .. import units
 from ..parts.panel import panel
 from ..parts.soa import soa_body
 from ..parts.vertebra import rod
-from ..spec.layout import PanelLayout, half_angle_rad, panel_layout, polar, soa_angles_deg
+from ..spec.layout import (ISO_PITCH_MM, PanelLayout, half_angle_rad, panel_layout, polar, rod_bore_mm,
+                           soa_angles_deg)
 from ..spec.tables import TailSpec
 
 Progress = Callable[[str], None]
@@ -173,7 +174,10 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None) -> Assembly
                       "pitch_radius_lower_mm": lay.pitch_radius_lower_mm,
                       "pitch_radius_upper_mm": lay.pitch_radius_upper_mm,
                       "pocket_diameter_mm": lay.cuts[0].diameter_mm,
-                      "rod_socket": spec.vertebra.socket},
+                      "rod_socket": spec.vertebra.socket,
+                      "rod_bore_mm": rod_bore_mm(spec),
+                      "rod_thread": (f"M{spec.vertebra.diameter_mm:g}x{ISO_PITCH_MM[spec.vertebra.diameter_mm]:g}, "
+                                     "tap after printing" if spec.vertebra.socket == "threaded" else None)},
             )
         segs = segments_of_panel(lay.index)
         instances.append(Instance(lay.name, by_key[key], _as_tuple(translation(z=lay.z0_mm)),

@@ -1,0 +1,69 @@
+"""Off-screen pictures of an export (pyvista): the assembly at rest and a sheet of parts."""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..assembly.build import COLORS, Assembly
+
+
+def _pyvista():
+    os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+    import pyvista as pv
+    import vtk
+
+    vtk.vtkLogger.SetStderrVerbosity(vtk.vtkLogger.VERBOSITY_OFF)  # no "bad X server" noise without a display
+    pv.OFF_SCREEN = True
+    return pv
+
+
+def _polydata(pv, vertices: np.ndarray, faces: np.ndarray):
+    cells = np.hstack([np.full((len(faces), 1), 3), faces]).astype(np.int64).ravel()
+    return pv.PolyData(vertices, cells)
+
+
+def _tessellate(solid, tolerance_mm: float = 0.05):
+    verts, tris = solid.tessellate(tolerance_mm, 0.3)
+    return np.array([(v.X, v.Y, v.Z) for v in verts]), np.array(tris)
+
+
+def render_previews(asm: Assembly, root: Path) -> dict[str, str]:
+    """Write ``previews/assembly.png`` and ``previews/parts.png``; returns their paths."""
+    pv = _pyvista()
+    out = root / "previews"
+    out.mkdir(exist_ok=True)
+    meshes = {name: _tessellate(p.solid) for name, p in asm.parts.items()}
+
+    plotter = pv.Plotter(off_screen=True, window_size=(1400, 700))
+    for inst in asm.instances:
+        v, f = meshes[inst.part]
+        t = np.asarray(inst.transform)
+        placed = v @ t[:3, :3].T + t[:3, 3]
+        kind = asm.part_of(inst).kind
+        plotter.add_mesh(_polydata(pv, placed, f), color=COLORS[kind], smooth_shading=False,
+                         opacity=0.55 if kind == "soa" else 1.0)
+    plotter.add_axes()
+    plotter.camera_position = [(-260.0, 170.0, -60.0), (0.0, 0.0, 130.0), (0.0, 1.0, 0.0)]
+    plotter.camera.zoom(1.0)
+    plotter.add_text(f"{asm.spec.name}: {asm.spec.segments} segments, {asm.spec.joints} joints, "
+                     f"taper {asm.taper_half_angle_deg:.3f} deg", font_size=10)
+    plotter.screenshot(str(out / "assembly.png"))
+    plotter.close()
+
+    names = list(asm.parts)
+    cols = min(4, len(names))
+    rows = math.ceil(len(names) / cols)
+    plotter = pv.Plotter(off_screen=True, shape=(rows, cols), window_size=(300 * cols, 280 * rows))
+    for i, name in enumerate(names):
+        plotter.subplot(i // cols, i % cols)
+        v, f = meshes[name]
+        plotter.add_mesh(_polydata(pv, v, f), color=COLORS[asm.parts[name].kind], smooth_shading=False)
+        plotter.add_text(name, font_size=9)
+        plotter.view_isometric()
+    plotter.screenshot(str(out / "parts.png"))
+    plotter.close()
+    return {"assembly": "previews/assembly.png", "parts": "previews/parts.png"}

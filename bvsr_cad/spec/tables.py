@@ -209,6 +209,72 @@ class Lightening:
 
 
 @dataclass(frozen=True)
+class Casting:
+    """Allowances of the SOA casting mold set (PU rubber cast in printed molds)."""
+
+    cavity_wall_mm: float = rule("mold material around the cavity, sideways and beyond both flanges", ge=3, le=30)
+    core_print_mm: float = rule("length of the core's end prints in their sockets in bottom plate and lid",
+                                gt=0.5, le=20)
+    pin_diameter_mm: float = rule("registration pin diameter", ge=1, le=10)
+    pin_length_mm: float = rule("registration pin length out of its face", ge=1, le=20)
+    pin_clearance_mm: float = rule("diametral clearance of a pin in its socket", ge=0, le=1)
+    bolt_hole_diameter_mm: float = rule("clamping bolt through-hole diameter (M3: 3.4)", ge=1, le=10)
+    gate_diameter_mm: float = rule("gate (fill channel) diameter", ge=0.5, le=10)
+    vent_diameter_mm: float = rule("vent channel diameter", ge=0.3, le=5)
+    shrinkage_percent: float = rule("linear shrinkage of the cured PU; the cavity is the SOA scaled by 1 + this",
+                                    ge=0, le=5)
+    min_print_wall_mm: float = rule("smallest wall a printed mold part may have", gt=0.2, le=5)
+
+
+@dataclass(frozen=True)
+class Actuation:
+    """The SOA force model of Eq 3-4 and the pressures it is driven with.
+
+    Eq 4's fit k = 9.4 P + 2918 is read with P as gauge pressure in kPa and k in
+    N/m: an SOA of about 1.4 cm^2 then pushes 14 N at 100 kPa and loses 2.9 N
+    per mm of stretch, the magnitudes of the paper's blocked forces; P in Pa or
+    k in N/mm would make the SOA 1000 times stiffer or softer than its force.
+    """
+
+    effective_area_mm2: float = rule(
+        "A of Eq 3; no table gives it: default ((a + b) / 2)^2, the bellows' mean square", gt=0, le=2000
+    )
+    stiffness_slope_n_per_m_per_kpa: float = rule("m_a of Eq 4 (paper 9.4)", ge=0, le=1000)
+    stiffness_offset_n_per_m: float = rule("n_a of Eq 4 (paper 2918)", gt=0, le=1e6)
+    damping_n_s_per_m: float = rule("c of Eq 11, per SOA (paper 52)", ge=0, le=1e4)
+    pressure_max_kpa: float = rule("highest sustained gauge pressure of a line", gt=0, le=600)
+    pressure_min_kpa: float = rule("lowest gauge pressure of a line (vacuum)", ge=-101.325, lt=0)
+    atmospheric_kpa: float = rule("absolute pressure of an inactive line (workspace protocol)", gt=50, le=120)
+    workspace_pressurised_max_kpa_abs: float = rule(
+        "workspace protocol: a pressurised line draws uniformly from atmospheric to this", gt=50, le=800)
+    workspace_depressurised_min_kpa_abs: float = rule(
+        "workspace protocol: a depressurised line draws uniformly from this to atmospheric", ge=0, le=120)
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """How the kinematic analyses of `bvsr build` are run and judged."""
+
+    min_clearance_mm: float = rule("smallest clearance allowed between solids that must not touch", ge=0, le=10)
+    build_workspace_samples: int = rule("workspace samples drawn during `bvsr build`", ge=100, le=1_000_000)
+    build_clearance_poses: int = rule("clearance poses screened during `bvsr build`", ge=100, le=1_000_000)
+    seed: int = rule("random seed of the workspace and clearance samples", ge=0, le=2**31 - 1)
+
+
+@dataclass(frozen=True)
+class RobotDescription:
+    """Settings of the URDF/MJCF robot descriptions."""
+
+    segment_velocity_deg_s: float = rule(
+        "peak bending rate of a segment the velocity limits are built from (paper: 678.6 measured at 6 bar)",
+        gt=0, le=10_000)
+    velocity_margin: float = rule("factor on that rate for the joint velocity limits", ge=1, le=10)
+    pulse_pressure_max_kpa: float = rule("highest gauge pressure of a pulse (actuator control range)",
+                                         gt=0, le=1000)
+    timestep_s: float = rule("MJCF integration step", gt=1e-6, le=0.01)
+
+
+@dataclass(frozen=True)
 class TailSpec:
     """The whole tail: what a parameter file describes."""
 
@@ -227,6 +293,10 @@ class TailSpec:
     mount: Mount = rule("root mount")
     payload: Payload = rule("tip payload mount")
     lightening: Lightening = rule("panel lightening")
+    actuation: Actuation = rule("SOA force model and pressures (Eq 3-5, workspace protocol)")
+    analysis: Analysis = rule("workspace, clearance and joint-limit analyses")
+    casting: Casting = rule("SOA casting mold allowances")
+    robot: RobotDescription = rule("URDF/MJCF settings")
 
     @property
     def joints(self) -> int:

@@ -1,0 +1,266 @@
+"""Constant-curvature kinematics of the BVSR joints and of the whole tail (mm).
+
+Eq 2 of the paper, T_s(theta, phi), is evaluated through the bending vector
+w = (u, v) = theta (cos phi, sin phi): the rotation is exp of the skew matrix
+of (-v, u, 0) and every entry is a smooth function of (u, v), so theta -> 0
+needs no special case beyond the series of sin(theta)/theta and
+(1 - cos theta)/theta^2 (and their derivatives) near zero. The solvers of
+:mod:`bvsr_cad.models.statics` work in w for the same reason: phi is undefined
+at a straight joint, w is not.
+
+Frames (SPEC section 2): Z along the tail, Y dorsal, X lateral. Joint k
+(1-based) runs from the upper face centre of panel k-1 (its base frame) to
+the lower face centre of panel k (its moving frame) along an arc of length
+L = H_a; the panels are rigid slabs of thickness H_j - H_a. Everything is
+vectorised over leading axes: a pose batch has shape (n_poses, n_joints).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..spec.layout import half_angle_rad, panel_layout, soa_angles_deg
+from ..spec.tables import TailSpec
+
+#: Below this bending angle the closed forms lose digits; the series are exact to ~1e-17.
+SERIES_BELOW_RAD = 1e-2
+
+
+def _series_coefficients(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """S = sin t / t, C = (1 - cos t) / t^2, S1 = S'(t) / t, C1 = C'(t) / t."""
+    t = np.asarray(theta, float)
+    t2 = t * t
+    small = t < SERIES_BELOW_RAD
+    ts = np.where(small, 1.0, t)  # keeps the closed forms finite where the series is used
+    s, c = np.sin(ts), np.cos(ts)
+    S = np.where(small, 1 - t2 / 6 + t2 * t2 / 120 - t2**3 / 5040, s / ts)
+    C = np.where(small, 0.5 - t2 / 24 + t2 * t2 / 720 - t2**3 / 40320, (1 - c) / ts**2)
+    S1 = np.where(small, -1 / 3 + t2 / 30 - t2 * t2 / 840, (ts * c - s) / ts**3)
+    C1 = np.where(small, -1 / 12 + t2 / 180 - t2 * t2 / 6720, (ts * s - 2 * (1 - c)) / ts**4)
+    return S, C, S1, C1
+
+
+def _hat(x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
+    zero = np.zeros_like(x)
+    return np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1),
+                     np.stack([-y, x, zero], -1)], -2)
+
+
+_EX = _hat(np.array(1.0), np.array(0.0), np.array(0.0))
+_EY = _hat(np.array(0.0), np.array(1.0), np.array(0.0))
+
+
+def joint_rotation_translation(u: np.ndarray, v: np.ndarray, length_mm: float
+                               ) -> tuple[np.ndarray, np.ndarray]:
+    """Rotation (..., 3, 3) and translation (..., 3) of Eq 2 at bending vector (u, v)."""
+    u, v = np.broadcast_arrays(np.asarray(u, float), np.asarray(v, float))
+    theta = np.hypot(u, v)
+    S, C, _, _ = _series_coefficients(theta)
+    om = _hat(-v, u, np.zeros_like(u))
+    rot = np.eye(3) + S[..., None, None] * om + C[..., None, None] * (om @ om)
+    trans = length_mm * np.stack([u * C, v * C, S], -1)
+    return rot, trans
+
+
+def joint_transform_uv(u: np.ndarray, v: np.ndarray, length_mm: float) -> np.ndarray:
+    """Eq 2 as a (..., 4, 4) homogeneous transform, base frame -> moving frame."""
+    rot, trans = joint_rotation_translation(u, v, length_mm)
+    out = np.zeros(rot.shape[:-2] + (4, 4))
+    out[..., :3, :3] = rot
+    out[..., :3, 3] = trans
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def joint_transform(theta_rad: np.ndarray, phi_rad: np.ndarray, length_mm: float) -> np.ndarray:
+    """Eq 2, T_s(theta, phi): the moving frame of a joint in its base frame."""
+    theta_rad = np.asarray(theta_rad, float)
+    return joint_transform_uv(theta_rad * np.cos(phi_rad), theta_rad * np.sin(phi_rad), length_mm)
+
+
+def joint_transform_derivatives(u: np.ndarray, v: np.ndarray, length_mm: float
+                                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """dR/du, dR/dv (..., 3, 3) and dp/du, dp/dv (..., 3), analytic."""
+    u, v = np.broadcast_arrays(np.asarray(u, float), np.asarray(v, float))
+    theta = np.hypot(u, v)
+    S, C, S1, C1 = _series_coefficients(theta)
+    om = _hat(-v, u, np.zeros_like(u))
+    om2 = om @ om
+    e = (..., None, None)
+    # d(Omega)/du = hat(0, 1, 0), d(Omega)/dv = hat(-1, 0, 0).
+    d_om_u, d_om_v = _EY, -_EX
+    dR_u = (S1 * u)[e] * om + S[e] * d_om_u + (C1 * u)[e] * om2 + C[e] * (d_om_u @ om + om @ d_om_u)
+    dR_v = (S1 * v)[e] * om + S[e] * d_om_v + (C1 * v)[e] * om2 + C[e] * (d_om_v @ om + om @ d_om_v)
+    dp_u = length_mm * np.stack([C + u * u * C1, u * v * C1, u * S1], -1)
+    dp_v = length_mm * np.stack([u * v * C1, C + v * v * C1, v * S1], -1)
+    return dR_u, dR_v, dp_u, dp_v
+
+
+def _rz(a: np.ndarray) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    m = np.zeros(np.shape(a) + (4, 4))
+    m[..., 0, 0], m[..., 0, 1], m[..., 1, 0], m[..., 1, 1] = c, -s, s, c
+    m[..., 2, 2] = m[..., 3, 3] = 1.0
+    return m
+
+
+def _ry(a: np.ndarray) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    m = np.zeros(np.shape(a) + (4, 4))
+    m[..., 0, 0], m[..., 0, 2], m[..., 2, 0], m[..., 2, 2] = c, s, -s, c
+    m[..., 1, 1] = m[..., 3, 3] = 1.0
+    return m
+
+
+def chord_length_mm(theta_rad: np.ndarray, length_mm: float) -> np.ndarray:
+    """c = 2 L sin(theta/2) / theta, the arc's chord (L at theta = 0)."""
+    S, _, _, _ = _series_coefficients(np.asarray(theta_rad, float) / 2)
+    return length_mm * S
+
+
+def joint_transform_chain(theta_rad: np.ndarray, phi_rad: np.ndarray, length_mm: float) -> np.ndarray:
+    """Rz(phi) Ry(theta/2) Tz(c) Ry(theta/2) Rz(-phi): the URDF realisation of Eq 2."""
+    theta_rad = np.asarray(theta_rad, float)
+    phi_rad = np.broadcast_to(np.asarray(phi_rad, float), theta_rad.shape)
+    tz = np.zeros(theta_rad.shape + (4, 4))
+    tz[...] = np.eye(4)
+    tz[..., 2, 3] = chord_length_mm(theta_rad, length_mm)
+    return _rz(phi_rad) @ _ry(theta_rad / 2) @ tz @ _ry(theta_rad / 2) @ _rz(-phi_rad)
+
+
+@dataclass(frozen=True)
+class JointGeometry:
+    """One joint: arc length and the SOA socket centres (Eq 1), taper included.
+
+    ``base_mm`` are the centres of the SOAs' lower flange seats in the joint's
+    base frame (upper face centre of panel k-1, so z = -pocket depth),
+    ``moving_mm`` the upper seats in the moving frame (z = +pocket depth).
+    """
+
+    index: int  # 1-based joint number
+    length_mm: float
+    base_mm: np.ndarray  # (5, 3)
+    moving_mm: np.ndarray  # (5, 3)
+
+    @property
+    def rest_lengths_mm(self) -> np.ndarray:
+        return soa_lengths_mm(self, np.zeros(1), np.zeros(1))[0]
+
+
+def joint_geometries(spec: TailSpec) -> tuple[JointGeometry, ...]:
+    """Socket centres of every joint from the panel layout (pitch radii of the cone, pocket depth)."""
+    beta = half_angle_rad(spec)
+    lays = [panel_layout(spec, k, beta) for k in range(spec.panels)]
+    a = np.radians(soa_angles_deg())
+    out = []
+    for k in range(1, spec.panels):
+        lo, hi = lays[k - 1], lays[k]
+        r_b, r_m = lo.pitch_radius_upper_mm, hi.pitch_radius_lower_mm
+        base = np.stack([r_b * np.cos(a), r_b * np.sin(a), np.full(5, -lo.pocket_depth_mm)], -1)
+        moving = np.stack([r_m * np.cos(a), r_m * np.sin(a), np.full(5, hi.pocket_depth_mm)], -1)
+        out.append(JointGeometry(k, spec.joint.gap_mm, base, moving))
+    return tuple(out)
+
+
+def soa_lengths_mm(geom: JointGeometry, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Eq 1: l_i = |T_s m_i - b_i| for the five SOAs, shape (..., 5)."""
+    rot, trans = joint_rotation_translation(u, v, geom.length_mm)
+    d = np.einsum("...ij,sj->...si", rot, geom.moving_mm) + trans[..., None, :] - geom.base_mm
+    return np.linalg.norm(d, axis=-1)
+
+
+def soa_lengths_and_jacobian(geom: JointGeometry, u: np.ndarray, v: np.ndarray
+                             ) -> tuple[np.ndarray, np.ndarray]:
+    """(l (..., 5), dl/dw (..., 5, 2)) with w = (u, v)."""
+    rot, trans = joint_rotation_translation(u, v, geom.length_mm)
+    dR_u, dR_v, dp_u, dp_v = joint_transform_derivatives(u, v, geom.length_mm)
+    d = np.einsum("...ij,sj->...si", rot, geom.moving_mm) + trans[..., None, :] - geom.base_mm
+    length = np.linalg.norm(d, axis=-1)
+    e = d / length[..., None]
+    dd_u = np.einsum("...ij,sj->...si", dR_u, geom.moving_mm) + dp_u[..., None, :]
+    dd_v = np.einsum("...ij,sj->...si", dR_v, geom.moving_mm) + dp_v[..., None, :]
+    jac = np.stack([np.sum(e * dd_u, -1), np.sum(e * dd_v, -1)], -1)
+    return length, jac
+
+
+def uv_from_theta_phi(theta_rad: np.ndarray, phi_rad: np.ndarray) -> np.ndarray:
+    """Bending vectors (..., 2) from (theta, phi)."""
+    theta_rad = np.asarray(theta_rad, float)
+    return np.stack([theta_rad * np.cos(phi_rad), theta_rad * np.sin(phi_rad)], -1)
+
+
+def theta_phi_from_uv(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(theta, phi) from bending vectors (..., 2); phi = 0 where theta = 0."""
+    w = np.asarray(w, float)
+    return np.hypot(w[..., 0], w[..., 1]), np.arctan2(w[..., 1], w[..., 0])
+
+
+@dataclass(frozen=True)
+class TailKinematics:
+    """The chain of rigid panels and constant-curvature joints of one tail."""
+
+    joints: tuple[JointGeometry, ...]
+    panel_thickness_mm: float
+    joints_per_segment: int
+
+    @classmethod
+    def from_spec(cls, spec: TailSpec) -> "TailKinematics":
+        return cls(joint_geometries(spec), spec.joint.panel_thickness_mm, spec.joints_per_segment)
+
+    @property
+    def n_joints(self) -> int:
+        return len(self.joints)
+
+    @property
+    def n_segments(self) -> int:
+        return self.n_joints // self.joints_per_segment
+
+    @property
+    def length_mm(self) -> float:
+        return self.joints[0].length_mm
+
+    def segment_of_joint(self) -> np.ndarray:
+        """0-based segment index of every joint."""
+        return np.arange(self.n_joints) // self.joints_per_segment
+
+    def expand_segments(self, w_segment: np.ndarray) -> np.ndarray:
+        """Per-segment bending vectors (..., n_segments, 2) -> per joint (..., n_joints, 2)."""
+        return np.repeat(np.asarray(w_segment, float), self.joints_per_segment, axis=-2)
+
+    def frames(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Base frames of every joint and lower-face frames of every panel.
+
+        Args:
+            w: bending vectors, shape (..., n_joints, 2).
+
+        Returns:
+            (base (..., n_joints, 4, 4): upper face of panel k-1 for joint k,
+            panel (..., n_joints + 1, 4, 4): lower face of panel k), tail frame, mm.
+        """
+        w = np.asarray(w, float)
+        lead = w.shape[:-2]
+        tz = np.eye(4)
+        tz[2, 3] = self.panel_thickness_mm
+        panel = np.empty(lead + (self.n_joints + 1, 4, 4))
+        base = np.empty(lead + (self.n_joints, 4, 4))
+        panel[..., 0, :, :] = np.eye(4)
+        for k, g in enumerate(self.joints):
+            base[..., k, :, :] = panel[..., k, :, :] @ tz
+            panel[..., k + 1, :, :] = base[..., k, :, :] @ joint_transform_uv(w[..., k, 0], w[..., k, 1],
+                                                                             g.length_mm)
+        return base, panel
+
+    def tip_point_mm(self, w: np.ndarray) -> np.ndarray:
+        """Centre of the tip panel's distal face in the root frame, (..., 3)."""
+        _, panel = self.frames(w)
+        tip = panel[..., -1, :, :]
+        return tip[..., :3, 3] + self.panel_thickness_mm * tip[..., :3, 2]
+
+    def tip_point_theta_phi_mm(self, theta_rad: np.ndarray, phi_rad: np.ndarray) -> np.ndarray:
+        """Tip point from per-joint (theta, phi) arrays of shape (..., n_joints)."""
+        return self.tip_point_mm(uv_from_theta_phi(theta_rad, phi_rad))
+
+    def rest_tip_mm(self) -> np.ndarray:
+        return self.tip_point_mm(np.zeros((self.n_joints, 2)))

@@ -1,10 +1,349 @@
-"""Checks on the SOA mold set saved in an export (filled in by the molds issue)."""
+"""Checks on the SOA mold set saved in an export: is the set castable?
+
+Everything here works on meshes (the files the export names, or meshes a
+test builds in memory), never on CAD geometry:
+
+* cavity: the closed mold's void (bounding box minus the union of every mold
+  part, manifold3d booleans) minus the gate and vent channels equals the cast
+  part within 0.5 % in volume; no mold part intrudes into the cast and no two
+  mold parts overlap; every bit of the cast surface is formed by a part or
+  opens into a channel;
+* demoldability: each rigid part withdrawn along its pull direction: the
+  draft of every cast facet the part forms (from the facet normals) and the
+  fraction of that surface whose ray along the pull hits the cast (blocked);
+* printability: every mold part watertight, one body, on the bed in its print
+  orientation, walls at least ``min_print_wall_mm`` thick;
+* channels: the gate and every vent open onto the cavity, reach the outside of
+  the closed mold and hold no mold material;
+* PU volume and mass per casting (informational, for the BOM).
+"""
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import manifold3d
+import numpy as np
+import trimesh
+
 from .export import Export
-from .result import CheckResult
+from .result import CheckResult as _CheckResult
+
+CAVITY_VOLUME_TOLERANCE = 0.005  # 0.5 % of the cast volume
+#: Tessellation leaves slivers where two meshes of one surface meet; real
+#: intrusions or overlaps are orders of magnitude larger than this.
+INTRUSION_TOLERANCE = 0.0005  # 0.05 % of the cast volume
+#: Cast facets are resampled to this edge length so that draft, blocked area
+#: and ownership are measured on small pieces, not on whole tessellation facets.
+SAMPLE_EDGE_MM = 1.0
+#: Sample points sit this far off the cast surface, in the mold, for ownership and rays.
+SURFACE_OFFSET_MM = 0.02
+#: A tessellated fillet or cylinder can show a slightly negative draft where the
+#: true surface has none; anything steeper is an undercut.
+DRAFT_TOLERANCE_DEG = -0.5
+BLOCKED_LIMIT = 0.001  # 0.1 % of the surface a part forms
+#: Two faces are opposite walls of one web when their normals are within this of anti-parallel.
+WALL_OPPOSITION_DEG = 45.0
+WALL_SAMPLE_EDGE_MM = 1.0
+CHANNEL_OPENING_MIN = 0.5  # of the nominal cross-section
+
+
+def _plain(v: Any) -> Any:
+    """numpy scalars as Python ones, so every result serialises to JSON."""
+    return v.item() if isinstance(v, np.generic) else v
+
+
+def CheckResult(name: str, passed: Any, value: Any, limit: Any, unit: str, where: str,  # noqa: N802
+                note: str = "") -> _CheckResult:
+    """A :class:`~bvsr_cad.checks.result.CheckResult` with plain Python values."""
+    return _CheckResult(name, None if passed is None else bool(passed), _plain(value), _plain(limit), unit, where,
+                        note)
+
+
+@dataclass(frozen=True)
+class MoldMesh:
+    """One mold part as the checks see it."""
+
+    name: str
+    assembled: trimesh.Trimesh  # cast frame
+    pull_direction: np.ndarray | None  # None: sacrificial
+    parting_planes: tuple[tuple[np.ndarray, np.ndarray], ...] = ()
+    printed: trimesh.Trimesh | None = None  # print orientation
+    where: str = ""
+
+
+@dataclass(frozen=True)
+class CastSamples:
+    """The cast surface cut into small pieces, each with the part that forms it."""
+
+    centres: np.ndarray  # (n, 3)
+    normals: np.ndarray  # (n, 3) outward from the cast
+    areas: np.ndarray  # (n,)
+    owner: np.ndarray  # (n,) index into the part list, -1 none, -2 several
+
+
+def to_manifold(mesh: trimesh.Trimesh) -> manifold3d.Manifold:
+    """A watertight trimesh as a manifold3d solid (raises on a broken mesh)."""
+    m = manifold3d.Manifold(manifold3d.Mesh64(vert_properties=np.asarray(mesh.vertices, np.float64),
+                                              tri_verts=np.asarray(mesh.faces, np.uint32)))
+    if m.status() != manifold3d.Error.NoError:
+        raise ValueError(f"not a closed manifold mesh ({m.status()})")
+    return m
+
+
+def _union(meshes: list[manifold3d.Manifold]) -> manifold3d.Manifold:
+    return manifold3d.Manifold.batch_boolean(meshes, manifold3d.OpType.Add)
+
+
+def cast_samples(cast: trimesh.Trimesh, parts: list[MoldMesh], channels: list[trimesh.Trimesh]) -> CastSamples:
+    """Resample the cast surface and find, for each piece, the part it touches.
+
+    A piece belongs to the part that contains a point just outside the cast
+    there; a piece outside every part must open into a channel.
+    """
+    v, f = trimesh.remesh.subdivide_to_size(cast.vertices, cast.faces, max_edge=SAMPLE_EDGE_MM)
+    fine = trimesh.Trimesh(v, f, process=False)
+    centres = fine.triangles_center
+    normals = fine.face_normals
+    probe = centres + SURFACE_OFFSET_MM * normals
+    hits = np.zeros((len(parts), len(probe)), bool)
+    for i, part in enumerate(parts):
+        lo, hi = part.assembled.bounds
+        near = np.all((probe >= lo - 1e-6) & (probe <= hi + 1e-6), axis=1)
+        if near.any():
+            hits[i, near] = part.assembled.contains(probe[near])
+    count = hits.sum(axis=0)
+    owner = np.where(count == 1, hits.argmax(axis=0), np.where(count == 0, -1, -2))
+    return CastSamples(centres, normals, fine.area_faces, owner)
+
+
+def check_cavity(cast: trimesh.Trimesh, parts: list[MoldMesh], channels: list[trimesh.Trimesh],
+                 samples: CastSamples, where: str = "molds") -> list[CheckResult]:
+    """The closed mold's void, minus the channels, is the cast part."""
+    cast_m = to_manifold(cast)
+    part_m = [to_manifold(p.assembled) for p in parts]
+    closed = _union(part_m)
+    lo, hi = closed.bounding_box()[:3], closed.bounding_box()[3:]
+    box = manifold3d.Manifold.cube(tuple(float(b - a) for a, b in zip(lo, hi))).translate(tuple(map(float, lo)))
+    # The void also holds bolt holes and pin clearances; the cavity is the
+    # part of it that meets the cast (the cast with its gate and vents).
+    regions = (box - closed).decompose()
+    touching = [r for r in regions if (r ^ cast_m).volume() > 0.5 * cast_m.volume()]
+    others = [r for r in regions if not any(r is t for t in touching)]
+    void = _union(touching) if touching else manifold3d.Manifold()
+    cavity = void - _union([to_manifold(c) for c in channels]) if channels else void
+    cast_v = cast_m.volume()
+    cavity_v = cavity.volume()
+    rel = (cavity_v - cast_v) / cast_v
+    out = [CheckResult("mold_cavity_volume", abs(rel) <= CAVITY_VOLUME_TOLERANCE, 100.0 * rel,
+                       100.0 * CAVITY_VOLUME_TOLERANCE, "% of cast volume", where,
+                       f"void minus channels {cavity_v:.1f} mm3 against the cast {cast_v:.1f} mm3; "
+                       f"{len(touching)} cavity region(s); {len(others)} other void(s) (around the rotated block, bolt holes, pin clearances) "
+                       f"of {sum(r.volume() for r in others):.1f} mm3 do not reach the cast")]
+    intrusions = {p.name: (m ^ cast_m).volume() for p, m in zip(parts, part_m)}
+    worst = max(intrusions, key=intrusions.get)
+    limit = INTRUSION_TOLERANCE * cast_v
+    out.append(CheckResult("mold_intrusion", intrusions[worst] <= limit, intrusions[worst], limit, "mm3",
+                           f"{where}:{worst}", "largest volume of mold material inside the cast: "
+                           + ", ".join(f"{k} {v:.3f}" for k, v in intrusions.items())))
+    overlap, pair = 0.0, "-"
+    for i in range(len(parts)):
+        for j in range(i + 1, len(parts)):
+            vol = (part_m[i] ^ part_m[j]).volume()
+            if vol > overlap:
+                overlap, pair = vol, f"{parts[i].name}/{parts[j].name}"
+    out.append(CheckResult("mold_parts_overlap", overlap <= limit, overlap, limit, "mm3", f"{where}:{pair}",
+                           "largest volume shared by two mold parts of the closed mold"))
+    total = float(samples.areas.sum())
+    several = float(samples.areas[samples.owner == -2].sum())
+    free = samples.owner == -1
+    if channels and free.any():
+        probe = samples.centres[free] + SURFACE_OFFSET_MM * samples.normals[free]
+        in_channel = np.zeros(len(probe), bool)
+        for ch in channels:
+            in_channel |= ch.contains(probe)
+        uncovered = float(samples.areas[free][~in_channel].sum())
+    else:
+        uncovered = float(samples.areas[free].sum())
+    bad = (uncovered + several) / total
+    out.append(CheckResult("mold_cast_surface_formed", bad <= BLOCKED_LIMIT, 100.0 * bad, 100.0 * BLOCKED_LIMIT,
+                           "% of cast surface", where,
+                           f"{uncovered:.3f} mm2 touch no part and no channel, {several:.3f} mm2 touch two parts"))
+    return out
+
+
+def draft_and_blocking(cast: trimesh.Trimesh, part: MoldMesh, index: int, samples: CastSamples,
+                       parting_margin_mm: float) -> dict[str, float]:
+    """Draft and ray-cast blocking of the cast surface one part forms.
+
+    Returns:
+        ``area_mm2`` formed by the part, ``min_draft_deg`` over the pieces
+        farther than ``parting_margin_mm`` from the part's parting planes,
+        ``min_draft_all_deg`` over every piece, ``blocked_fraction`` of the
+        area whose ray along the pull hits the cast.
+    """
+    mine = samples.owner == index
+    pull = np.asarray(part.pull_direction, float)
+    pull = pull / np.linalg.norm(pull)
+    centres, normals, areas = samples.centres[mine], samples.normals[mine], samples.areas[mine]
+    if not mine.any():
+        return {"area_mm2": 0.0, "min_draft_deg": math.nan, "min_draft_all_deg": math.nan, "blocked_fraction": 0.0}
+    draft = np.degrees(np.arcsin(np.clip(normals @ pull, -1.0, 1.0)))
+    away = np.ones(len(centres), bool)
+    for point, normal in part.parting_planes:
+        n = normal / np.linalg.norm(normal)
+        away &= np.abs((centres - point) @ n) > parting_margin_mm
+    origins = centres + SURFACE_OFFSET_MM * normals
+    blocked = cast.ray.intersects_any(origins, np.repeat(pull[None, :], len(origins), axis=0))
+    return {"area_mm2": float(areas.sum()),
+            "min_draft_deg": float(draft[away].min()) if away.any() else math.nan,
+            "min_draft_all_deg": float(draft.min()),
+            "blocked_fraction": float(areas[blocked].sum() / areas.sum())}
+
+
+def check_demolding(cast: trimesh.Trimesh, parts: list[MoldMesh], samples: CastSamples,
+                    parting_margin_mm: float) -> list[CheckResult]:
+    """Every rigid part comes off along its pull direction (SPEC 4: halves about 34 deg)."""
+    out = []
+    for i, part in enumerate(parts):
+        if part.pull_direction is None:
+            out.append(CheckResult(f"mold_demold:{part.name}", None, "sacrificial", "-", "", part.where,
+                                   "dissolved or melted out: no pull direction"))
+            continue
+        r = draft_and_blocking(cast, part, i, samples, parting_margin_mm)
+        ok = r["blocked_fraction"] <= BLOCKED_LIMIT and r["min_draft_all_deg"] >= DRAFT_TOLERANCE_DEG
+        pull = ", ".join(f"{v:.4f}" for v in part.pull_direction)
+        out.append(CheckResult(
+            f"mold_demold:{part.name}", ok, 100.0 * r["blocked_fraction"], 100.0 * BLOCKED_LIMIT,
+            "% of formed surface blocked", part.where,
+            f"pulled along ({pull}): {'demoldable' if ok else 'NOT demoldable'}; forms {r['area_mm2']:.1f} mm2, "
+            f"draft >= {r['min_draft_all_deg']:.2f} deg everywhere (limit {DRAFT_TOLERANCE_DEG:g})"))
+        out.append(CheckResult(f"mold_draft:{part.name}", None, r["min_draft_deg"], 0.0, "deg", part.where,
+                               f"minimum draft over the surface it forms farther than {parting_margin_mm:.2f} mm "
+                               "from its parting planes"))
+    return out
+
+
+def min_wall_mm(mesh: trimesh.Trimesh) -> tuple[float, np.ndarray]:
+    """Thinnest web of a solid: from each (resampled) face into the material
+    to the opposite face, counting only faces within WALL_OPPOSITION_DEG of
+    anti-parallel (the ridge of a V-groove is not a thin wall).
+
+    Returns:
+        (thickness, location of the thinnest point).
+    """
+    v, f = trimesh.remesh.subdivide_to_size(mesh.vertices, mesh.faces, max_edge=WALL_SAMPLE_EDGE_MM)
+    fine = trimesh.Trimesh(v, f, process=False)
+    normals = fine.face_normals
+    origins = fine.triangles_center - 1e-4 * normals
+    locs, ray_idx, tri_idx = mesh.ray.intersects_location(origins, -normals, multiple_hits=False)
+    if len(ray_idx) == 0:
+        return math.inf, np.zeros(3)
+    dist = np.linalg.norm(locs - origins[ray_idx], axis=1)
+    opposite = (mesh.face_normals[tri_idx] * normals[ray_idx]).sum(axis=1) <= -math.cos(
+        math.radians(WALL_OPPOSITION_DEG))
+    if not opposite.any():
+        return math.inf, np.zeros(3)
+    k = int(np.argmin(np.where(opposite, dist, np.inf)))
+    return float(dist[k]), origins[ray_idx[k]]
+
+
+def check_printable(part: MoldMesh, min_wall_limit_mm: float) -> list[CheckResult]:
+    mesh = part.printed if part.printed is not None else part.assembled
+    where = part.where
+    out = [CheckResult(f"mold_watertight:{part.name}", bool(mesh.is_watertight and mesh.is_winding_consistent),
+                       int(mesh.is_watertight and mesh.is_winding_consistent), 1, "", where)]
+    bodies = int(mesh.body_count)
+    out.append(CheckResult(f"mold_one_body:{part.name}", bodies == 1, bodies, 1, "bodies", where))
+    zmin = float(mesh.bounds[0][2])
+    down = (mesh.face_normals[:, 2] < -0.9999) & (np.abs(mesh.triangles[:, :, 2] - zmin).max(axis=1) < 1e-6)
+    bed = float(mesh.area_faces[down].sum())
+    out.append(CheckResult(f"mold_on_bed:{part.name}", abs(zmin) < 1e-6 and bed > 0, bed, "> 0 at z = 0", "mm2",
+                           where, f"lowest z {zmin:.6f} mm"))
+    wall, at = min_wall_mm(mesh)
+    out.append(CheckResult(f"mold_min_wall:{part.name}", wall >= min_wall_limit_mm, wall, min_wall_limit_mm, "mm",
+                           where, "thinnest web at (" + ", ".join(f"{c:.2f}" for c in at) + ") in print frame"))
+    return out
+
+
+def check_channels(channels: list[tuple[str, float, trimesh.Trimesh]], parts: list[MoldMesh],
+                   samples: CastSamples, where: str = "molds") -> list[CheckResult]:
+    """Each gate and vent opens onto the cavity, is empty and reaches the outside."""
+    closed = _union([to_manifold(p.assembled) for p in parts])
+    bb = np.asarray(closed.bounding_box())
+    lo, hi = bb[:3], bb[3:]
+    free = samples.owner == -1
+    probe = samples.centres[free] + SURFACE_OFFSET_MM * samples.normals[free]
+    out = []
+    for name, diameter_mm, mesh in channels:
+        opening = float(samples.areas[free][mesh.contains(probe)].sum()) if free.any() else 0.0
+        nominal = math.pi * diameter_mm ** 2 / 4.0
+        blocked = (to_manifold(mesh) ^ closed).volume()
+        outside = bool(np.any(np.abs(mesh.bounds - lo).min(axis=0) < 1e-3)
+                       or np.any(np.abs(mesh.bounds - hi).min(axis=0) < 1e-3))
+        ok = opening >= CHANNEL_OPENING_MIN * nominal and outside and blocked <= 1e-3 * mesh.volume
+        out.append(CheckResult(f"mold_channel:{name}", ok, opening, CHANNEL_OPENING_MIN * nominal, "mm2", where,
+                               f"opening onto the cavity (nominal {nominal:.2f} mm2); reaches the outside: "
+                               f"{outside}; mold material inside it {blocked:.4f} mm3"))
+    return out
+
+
+def check_pu(cast: trimesh.Trimesh, channels: list[trimesh.Trimesh], density_g_cm3: float,
+             soa_volume_mm3: float | None, where: str = "molds") -> list[CheckResult]:
+    """PU per casting (for the BOM): the part, and the part with its gate and vents full."""
+    part_v = float(cast.volume)
+    shot_v = part_v + float(sum(c.volume for c in channels))
+    out = [CheckResult("mold_pu_part", None, part_v, "-", "mm3", where,
+                       f"{part_v / 1000.0 * density_g_cm3:.3f} g of PU in the part at {density_g_cm3} g/cm3"),
+           CheckResult("mold_pu_shot", None, shot_v, "-", "mm3", where,
+                       f"{shot_v / 1000.0 * density_g_cm3:.3f} g per casting with gate and vents full")]
+    if soa_volume_mm3:
+        out.append(CheckResult("mold_cavity_vs_soa", None, 100.0 * (part_v / soa_volume_mm3 - 1.0), "-",
+                               "% of SOA volume", where,
+                               f"cast part {part_v:.1f} mm3 (shrinkage allowance) against the SOA {soa_volume_mm3:.1f} mm3"))
+    return out
+
+
+def check_mold_set(cast: trimesh.Trimesh, parts: list[MoldMesh],
+                   channels: list[tuple[str, float, trimesh.Trimesh]], *, parting_margin_mm: float,
+                   min_wall_limit_mm: float, density_g_cm3: float, soa_volume_mm3: float | None = None,
+                   where: str = "molds") -> list[CheckResult]:
+    """Every mold check on meshes (the entry point tests use with their own meshes)."""
+    channel_meshes = [m for _, _, m in channels]
+    samples = cast_samples(cast, parts, channel_meshes)
+    out = check_cavity(cast, parts, channel_meshes, samples, where)
+    out += check_demolding(cast, parts, samples, parting_margin_mm)
+    for part in parts:
+        out += check_printable(part, min_wall_limit_mm)
+    out += check_channels(channels, parts, samples, where)
+    out += check_pu(cast, channel_meshes, density_g_cm3, soa_volume_mm3, where)
+    return out
+
+
+def mold_meshes(exp: Export) -> tuple[trimesh.Trimesh, list[MoldMesh], list[tuple[str, float, trimesh.Trimesh]]]:
+    """The cast, the mold parts and the channels an export's manifest names."""
+    molds = exp.manifest["molds"]
+    parts = []
+    for p in molds["parts"]:
+        pull = p.get("pull_direction")
+        planes = tuple((np.asarray(pl["point"], float), np.asarray(pl["normal"], float))
+                       for pl in p.get("parting_planes", []))
+        parts.append(MoldMesh(p["name"], exp.mesh(p["files"]["assembled_stl"]),
+                              None if pull is None else np.asarray(pull, float), planes,
+                              exp.mesh(p["files"]["stl"]), p["files"]["stl"]))
+    channels = [(c["name"], float(c["diameter_mm"]), exp.mesh(c["files"]["stl"])) for c in molds.get("channels", [])]
+    return exp.mesh(molds["cast_part"]), parts, channels
 
 
 def check_molds(exp: Export) -> list[CheckResult]:
-    return []
+    """Every mold check on an export (none when the export has no mold set)."""
+    molds: dict[str, Any] | None = exp.manifest.get("molds")
+    if not molds:
+        return []
+    cast, parts, channels = mold_meshes(exp)
+    return check_mold_set(cast, parts, channels, parting_margin_mm=float(molds["parting_margin_mm"]),
+                          min_wall_limit_mm=float(molds["min_print_wall_mm"]),
+                          density_g_cm3=float(molds["density_g_cm3"]),
+                          soa_volume_mm3=molds.get("soa_volume_mm3"), where=molds["cast_part"])

@@ -1,15 +1,102 @@
-"""Writes the SOA casting mold set into an export.
+"""Writes the SOA casting mold set into an export (``molds/``).
 
-Filled in by the molds issue; returns the manifest fragment to merge.
+Layout (paths relative to the export root, as SPEC section 7 names them):
+
+* ``molds/soa_cast.stl``: the cast part as it sits in the closed mold
+  (the SOA scaled by 1 + shrinkage), in the cast frame;
+* ``molds/<part>.stl``: each mold part in print orientation (on z = 0);
+* ``molds/assembled/<part>.stl``: the same part in the cast frame;
+* ``molds/step/<part>.step``: the part in the cast frame (B-rep);
+* ``molds/channels/<name>.stl``: the empty gate and vent channels of the
+  closed mold, in the cast frame (the checks subtract them from the void);
+* ``molds/exploded.png``: an exploded view of the set.
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import build123d as bd
+import numpy as np
+
 from ..assembly.build import Assembly
+from ..parts.mold import MoldPart, MoldSet, mold_set
+
+#: Mold meshes: fine enough that the cavity (closed mold minus channels) and
+#: the cast agree far inside the 0.5 % the cavity check allows.
+MOLD_STL_LINEAR_TOLERANCE_MM = 0.005
+MOLD_STL_ANGULAR_TOLERANCE_RAD = 0.1
+
+COLORS = {"shell": (0.45, 0.62, 0.85), "bottom_plate": (0.55, 0.60, 0.68), "lid": (0.55, 0.60, 0.68),
+          "core": (0.35, 0.75, 0.45), "cast": (0.95, 0.55, 0.15)}
+#: How far each part moves along its pull direction in the exploded view (mm).
+EXPLODE_MM = {"half_a": 34.0, "half_b": 34.0, "bottom_plate": 30.0, "lid": 30.0}
+
+
+def _stl(shape: bd.Shape, path: Path) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if not bd.export_stl(shape, path, tolerance=MOLD_STL_LINEAR_TOLERANCE_MM,
+                         angular_tolerance=MOLD_STL_ANGULAR_TOLERANCE_RAD, ascii_format=False):
+        raise OSError(f"STL export failed: {path}")
+
+
+def _step(part: MoldPart, path: Path) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    solid = part.solid
+    solid.label = part.name
+    solid.color = bd.Color(*COLORS[part.role])
+    if not bd.export_step(solid, path, unit=bd.Unit.MM):
+        raise OSError(f"STEP export failed: {path}")
+
+
+def _render_exploded(molds: MoldSet, path: Path) -> None:
+    """Exploded view: every rigid part moved out along its pull direction,
+    the core in place with the cast (translucent) around it."""
+    os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+    import pyvista as pv
+    import vtk
+
+    vtk.vtkLogger.SetStderrVerbosity(vtk.vtkLogger.VERBOSITY_OFF)
+    pv.OFF_SCREEN = True
+
+    def poly(solid: bd.Shape, offset: np.ndarray) -> Any:
+        verts, tris = solid.tessellate(0.05, 0.3)
+        v = np.array([(p.X, p.Y, p.Z) for p in verts]) + offset
+        cells = np.hstack([np.full((len(tris), 1), 3), np.asarray(tris)]).astype(np.int64).ravel()
+        return pv.PolyData(v, cells)
+
+    plotter = pv.Plotter(off_screen=True, window_size=(1300, 1000))
+    labels, label_points = [], []
+    for part in molds.parts.values():
+        pull = np.zeros(3) if part.sacrificial else np.asarray(part.pull_direction)
+        offset = pull * EXPLODE_MM.get(part.name, 0.0)
+        plotter.add_mesh(poly(part.solid, offset), color=COLORS[part.role], smooth_shading=False,
+                         opacity=0.6 if part.role == "core" else 1.0, show_edges=False)
+        box = part.solid.bounding_box()
+        centre = np.array([(box.min.X + box.max.X) / 2, (box.min.Y + box.max.Y) / 2, box.max.Z]) + offset
+        tag = part.name + (" (sacrificial)" if part.sacrificial else "")
+        labels.append(tag)
+        label_points.append(centre)
+    plotter.add_mesh(poly(molds.cast, np.zeros(3)), color=COLORS["cast"], opacity=0.55, smooth_shading=False)
+    for ch in molds.channels:
+        plotter.add_mesh(poly(ch.solid, np.zeros(3)), color=(0.85, 0.15, 0.15))
+    plotter.add_point_labels(np.array(label_points), labels, font_size=14, point_size=1, shape_opacity=0.6,
+                             always_visible=True)
+    plotter.add_text(f"SOA mold set: cast x{molds.scale:.4f} (shrinkage), halves split on x = y, "
+                     "gate (red) from below, vents (red) through the lid", font_size=10)
+    # Look along the parting plane so both halves, the lid and the plate show.
+    d = np.array(molds.parts["half_a"].pull_direction)
+    along = np.cross([0.0, 0.0, 1.0], d)
+    eye = 170.0 * along + 60.0 * np.array([0.0, 0.0, 1.0]) + 40.0 * d
+    centre = np.array([0.0, 0.0, molds.info["cast_height_mm"] / 2.0])
+    plotter.camera_position = [tuple(centre + eye), tuple(centre), (0.0, 0.0, 1.0)]
+    plotter.reset_camera()  # keep the view direction, fit every exploded part
+    plotter.add_axes()
+    plotter.screenshot(str(path))
+    plotter.close()
 
 
 def write_molds(asm: Assembly, root: Path, progress: Callable[[str], None]) -> dict[str, Any]:
@@ -18,4 +105,46 @@ def write_molds(asm: Assembly, root: Path, progress: Callable[[str], None]) -> d
     Returns:
         Keys to merge into the manifest (``{"molds": {...}}``).
     """
-    return {}
+    spec = asm.spec
+    progress("SOA mold set")
+    molds = mold_set(spec.soa, spec.joint.base_diameter_mm, spec.casting)
+    out = root / "molds"
+    out.mkdir(exist_ok=True)
+    cast_rel = "molds/soa_cast.stl"
+    _stl(molds.cast, root / cast_rel)
+    parts = []
+    for name, part in molds.parts.items():
+        progress(f"export mold {name} (STL, STEP)")
+        files = {"stl": f"molds/{name}.stl", "assembled_stl": f"molds/assembled/{name}.stl",
+                 "step": f"molds/step/{name}.step"}
+        _stl(part.print_solid, root / files["stl"])
+        _stl(part.solid, root / files["assembled_stl"])
+        _step(part, root / files["step"])
+        entry: dict[str, Any] = {
+            "name": name, "role": part.role,
+            "pull_direction": None if part.sacrificial else list(part.pull_direction),
+            "volume_mm3": part.solid.volume,
+            "print_transform": [list(r) for r in part.print_transform],
+            "parting_planes": [{"point": list(p), "normal": list(n)} for p, n in part.parting_planes],
+            "note": part.note, "files": files,
+        }
+        if part.sacrificial:
+            entry["sacrificial"] = True
+        parts.append(entry)
+    channels = []
+    for ch in molds.channels:
+        rel = f"molds/channels/{ch.name}.stl"
+        _stl(ch.solid, root / rel)
+        channels.append({"name": ch.name, "kind": ch.kind, "diameter_mm": ch.diameter_mm,
+                         "opening_mm": list(ch.opening_mm), "volume_mm3": ch.solid.volume, "files": {"stl": rel}})
+    progress("mold exploded view")
+    _render_exploded(molds, out / "exploded.png")
+    material = spec.material(spec.use.soa)
+    return {"molds": {
+        "cast_part": cast_rel, "cast_frame": "SOA frame (axis +Z, lower flange face z = 0) scaled by 'scale'",
+        "scale": molds.scale, "shrinkage_percent": spec.casting.shrinkage_percent,
+        "cast_volume_mm3": molds.cast.volume, "soa_volume_mm3": molds.soa_volume_mm3,
+        "material": spec.use.soa, "density_g_cm3": material.density_g_cm3,
+        "min_print_wall_mm": spec.casting.min_print_wall_mm, "parting_margin_mm": molds.parting_margin_mm,
+        "parts": parts, "channels": channels, "exploded_png": "molds/exploded.png", "info": molds.info,
+    }}

@@ -1,0 +1,315 @@
+"""The SOA casting mold set: printed rigid parts around a sacrificial core.
+
+The SOA (a 1 mm square bellows with a round flange at both ends, see
+:mod:`bvsr_cad.parts.soa`) is cast in PU rubber. Its interior narrows to
+about 2.8 mm at the valley folds, so no rigid or silicone core can be pulled
+out of it: the core is sacrificial (printed in a soluble material such as
+PVA/BVOH, or cast in wax) and is located by square core prints in sockets at
+both ends, so it can neither shift nor turn while the PU flows.
+
+Split strategy (SPEC section 4, with the reasons):
+
+* Two shell halves split on the diagonal plane x = y through two opposite
+  corners of the square. Pulled along +/-(1, -1, 0)/sqrt(2), every facet of the
+  bellows has the same draft, asin(cos(45 deg) cos(facet tilt)), about 35 deg:
+  the diagonal is the pull that maximises the smallest draft of the four facet
+  families (a split through the middle of two sides would leave those two
+  sides with no draft at all). Only the corner fillets on the parting line
+  have none, and there the flash follows a corner crease where it does no harm.
+* The bottom plate and the lid each form one whole flange (end face and rim)
+  as a single round pocket, so the two bonded surfaces of the SOA (flange face
+  and rim, glued into the panel pockets) are free of parting lines, come out
+  round and coaxial, and carry no flash. The flange's inner annulus lies in the
+  plane where the halves meet the plate or lid: a flat shut-off face.
+* Bottom fill: the gate rises through the bottom plate into the lower flange
+  face; the cavity's wall rises monotonically from the lower to the upper
+  flange (each facet row only moves in or out as it rises), so the only place
+  air can gather is the upper flange's end face, the cavity's high point.
+  Four vents leave it through the lid.
+* Registration: half_a carries two pins into half_b on the parting plane;
+  the bottom plate and the lid each carry one pin into each half. Four
+  clamping bolts run through lid, halves and bottom plate at the corners.
+
+Frames: the *cast frame* is the SOA frame (axis +Z, lower flange face at
+z = 0, the square's sides along X and Y) in which the cast part is the SOA
+scaled about the origin by 1 + shrinkage. Every solid here is in that frame;
+``print_transform`` moves a part onto the print bed (z = 0, a flat face down).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import build123d as bd
+import numpy as np
+
+from ..spec.tables import Casting, SoaTable
+from ._kernel import GeometryError, cut_all, cylinder_between, fuse_all, single_solid
+from .soa import bellows_profile, soa_body
+
+#: Pull direction of half_a (the side x - y > 0); half_b is pulled the other way.
+DIAGONAL_PULL = (1.0 / math.sqrt(2.0), -1.0 / math.sqrt(2.0), 0.0)
+#: In-plane direction of the parting plane x = y (towards the +X+Y corner).
+DIAGONAL_ALONG = (1.0 / math.sqrt(2.0), 1.0 / math.sqrt(2.0), 0.0)
+#: Sockets are this much deeper than their pins so a pin never bottoms out.
+SOCKET_EXTRA_DEPTH_MM = 0.5
+#: Pins are fused this deep into their own part so the fuse makes one solid.
+PIN_ROOT_MM = 0.5
+
+Matrix = tuple[tuple[float, ...], ...]
+
+
+@dataclass(frozen=True)
+class MoldPart:
+    """One printed (or cast) part of the mold set, in the cast frame (mm)."""
+
+    name: str
+    role: str  # shell, bottom_plate, lid, core
+    solid: bd.Solid
+    pull_direction: tuple[float, float, float] | None  # None: sacrificial
+    print_transform: Matrix  # 4x4, cast frame -> print frame
+    parting_planes: tuple[tuple[tuple[float, float, float], tuple[float, float, float]], ...]  # (point, normal)
+    note: str = ""
+
+    @property
+    def sacrificial(self) -> bool:
+        return self.pull_direction is None
+
+    @property
+    def print_solid(self) -> bd.Solid:
+        return self.solid.moved(_location(self.print_transform))
+
+
+@dataclass(frozen=True)
+class Channel:
+    """An empty channel of the closed mold (gate or vent), in the cast frame."""
+
+    name: str
+    kind: str  # gate, vent
+    diameter_mm: float
+    solid: bd.Solid
+    opening_mm: tuple[float, float, float]  # where it meets the cavity
+
+
+@dataclass(frozen=True)
+class MoldSet:
+    """The closed mold around the cast part, everything in the cast frame (mm)."""
+
+    cast: bd.Solid
+    parts: dict[str, MoldPart]
+    channels: tuple[Channel, ...]
+    scale: float  # cast = SOA scaled by this about the origin
+    soa_volume_mm3: float
+    parting_margin_mm: float
+    info: dict = field(default_factory=dict, hash=False, compare=False)
+
+
+def _location(t: Matrix) -> bd.Location:
+    from OCP.gp import gp_Trsf
+    from OCP.TopLoc import TopLoc_Location
+
+    trsf = gp_Trsf()
+    trsf.SetValues(*t[0], *t[1], *t[2])
+    return bd.Location(TopLoc_Location(trsf))
+
+
+def _as_matrix(m: np.ndarray) -> Matrix:
+    return tuple(tuple(float(v) for v in row) for row in m)
+
+
+def _print_transform(x_dir: np.ndarray, z_dir: np.ndarray, solid: bd.Solid) -> np.ndarray:
+    """Rotation taking x_dir, z_dir (cast frame) to the print X and Z axes, then
+    a shift that puts the part on the bed (z = 0) centred on the origin in X, Y."""
+    x = np.asarray(x_dir, float) / np.linalg.norm(x_dir)
+    z = np.asarray(z_dir, float) / np.linalg.norm(z_dir)
+    y = np.cross(z, x)
+    m = np.eye(4)
+    m[0, :3], m[1, :3], m[2, :3] = x, y, z
+    box = solid.moved(_location(_as_matrix(m))).bounding_box()
+    m[:3, 3] = (-(box.min.X + box.max.X) / 2.0, -(box.min.Y + box.max.Y) / 2.0, -box.min.Z)
+    return m
+
+
+def _rounded_square(side_mm: float, radius_mm: float, z_mm: float) -> bd.Face:
+    sk = bd.RectangleRounded(side_mm, side_mm, radius_mm) if radius_mm > 1e-6 else bd.Rectangle(side_mm, side_mm)
+    return bd.Plane.XY.offset(z_mm) * sk.face()
+
+
+def _uez(u: float, e: float, z: float) -> tuple[float, float, float]:
+    """A point given along the pull (u), along the parting plane (e) and z."""
+    d, a = DIAGONAL_PULL, DIAGONAL_ALONG
+    return (u * d[0] + e * a[0], u * d[1] + e * a[1], z)
+
+
+def _uez_box(u0: float, u1: float, e0: float, e1: float, z0: float, z1: float) -> bd.Solid:
+    plane = bd.Plane(origin=_uez(u0, e0, z0), x_dir=DIAGONAL_PULL, z_dir=(0, 0, 1))
+    return bd.Solid.make_box(u1 - u0, e1 - e0, z1 - z0, plane)
+
+
+def _require(ok: bool, message: str) -> None:
+    if not ok:
+        raise ValueError(message)
+
+
+def mold_set(soa: SoaTable, flange_diameter_mm: float, casting: Casting) -> MoldSet:
+    """Build the mold set that casts the SOA described by ``soa``.
+
+    Args:
+        soa: Table II parameters (the part to cast).
+        flange_diameter_mm: the SOA flange disc (D_b).
+        casting: mold allowances (walls, pins, bolts, gate, vents, shrinkage).
+
+    Returns:
+        The cast part and the mold parts in the cast frame, with pull
+        directions, print orientations and the gate and vent channels.
+
+    Raises:
+        ValueError: the allowances do not fit around this SOA (names the field).
+        GeometryError: the kernel did not produce one valid solid per part.
+    """
+    c = casting
+    k = 1.0 + c.shrinkage_percent / 100.0
+    prof = bellows_profile(soa, flange_diameter_mm)
+
+    # --- The cast and the envelope it fills, in the SOA frame, then scaled.
+    soa_solid = soa_body(soa, flange_diameter_mm)
+    cast = single_solid(soa_solid.scale(k), "cast part")
+    f = prof.flange_thickness_mm
+    height = prof.height_mm
+    loft = bd.loft([_rounded_square(s, prof.corner_radius_mm, z) for s, z in zip(prof.outer_side_mm, prof.z_mm)],
+                   ruled=True)
+    r_flange = flange_diameter_mm / 2.0
+    envelope = bd.Solid.make_cylinder(r_flange, f).fuse(
+        loft, bd.Solid.make_cylinder(r_flange, f, bd.Plane.XY.offset(height - f)))
+    envelope = single_solid(envelope.scale(k), "cast envelope")
+    # The core is the SOA's interior, prolonged at the end size into the core
+    # prints (the same ruled sections the SOA cuts, so it fits exactly).
+    print_soa_mm = c.core_print_mm / k
+    core_z = (-print_soa_mm, *prof.z_mm, height + print_soa_mm)
+    core_s = (prof.inner_side_mm[0], *prof.inner_side_mm, prof.inner_side_mm[-1])
+    core = bd.loft([_rounded_square(s, 0.0, z) for s, z in zip(core_s, core_z)], ruled=True)
+    core = single_solid(core.scale(k), "core")
+
+    # --- Dimensions in the cast frame.
+    h = k * height
+    fk = k * f
+    z_lo, z_hi = fk, h - fk  # halves between the flanges
+    r_fl = k * r_flange
+    rho_max = k * max(r_flange, soa.computed_circumcircle_mm / 2.0)  # corners may stand proud of the flange
+    core_half = k * prof.inner_side_mm[0] / 2.0
+    wall = c.cavity_wall_mm
+    w = rho_max + wall  # half-width of the square block along u and e
+    t = wall  # plate and lid thickness beyond the flange faces
+    mw = c.min_print_wall_mm
+    socket_d = c.pin_diameter_mm + c.pin_clearance_mm
+    rho_pin = rho_max + wall / 2.0
+    _require(rho_pin - socket_d / 2.0 - rho_max >= mw and w - rho_pin - socket_d / 2.0 >= mw,
+             f"casting.cavity_wall_mm = {wall:g}: too thin for a {socket_d:g} mm pin socket with "
+             f"{mw:g} mm walls on both sides (need >= {2 * (socket_d + 2 * mw):g} mm)")
+    _require(c.core_print_mm <= t - mw,
+             f"casting.core_print_mm = {c.core_print_mm:g}: leaves less than casting.min_print_wall_mm = {mw:g} "
+             f"under the core socket in a {t:g} mm plate (casting.cavity_wall_mm)")
+    _require(c.pin_length_mm + SOCKET_EXTRA_DEPTH_MM + mw <= (z_hi - z_lo) / 2.0,
+             f"casting.pin_length_mm = {c.pin_length_mm:g}: sockets from both ends would meet in the halves")
+    bolt_c = c.bolt_hole_diameter_mm / 2.0 + 2.0 * mw  # bolt axis to the block edges
+    bolt_uv = w - bolt_c
+    _require(math.hypot(bolt_uv, bolt_uv) - c.bolt_hole_diameter_mm / 2.0 - rho_max >= wall
+             and math.hypot(bolt_uv - rho_pin, bolt_uv) >= c.bolt_hole_diameter_mm / 2.0 + socket_d / 2.0 + mw,
+             f"casting.bolt_hole_diameter_mm = {c.bolt_hole_diameter_mm:g}: the bolts do not fit in the block corners")
+
+    def channel_radius(d_mm: float, what: str) -> float:
+        """Radius on the +X/+Y axes where a channel lands fully on the flange
+        face and keeps a printable wall to the square core print."""
+        lo, hi = core_half + mw + d_mm / 2.0, r_fl - d_mm / 2.0
+        _require(lo <= hi, f"casting.{what}_diameter_mm = {d_mm:g}: does not fit on the flange face between "
+                           f"the core print ({2 * core_half:.2f} mm square) and the rim (D {2 * r_fl:.2f} mm)")
+        return (lo + hi) / 2.0
+
+    r_gate = channel_radius(c.gate_diameter_mm, "gate")
+    r_vent = channel_radius(c.vent_diameter_mm, "vent")
+
+    # --- Features shared by several parts.
+    z_bot, z_top = -t, h + t
+    bolts = [cylinder_between(_uez(su * bolt_uv, se * bolt_uv, z_bot - 1.0), _uez(su * bolt_uv, se * bolt_uv,
+                                                                                     z_top + 1.0),
+                              c.bolt_hole_diameter_mm)
+             for su in (1, -1) for se in (1, -1)]
+    pin_len, sock_len = c.pin_length_mm, c.pin_length_mm + SOCKET_EXTRA_DEPTH_MM
+    z_mid = (z_lo + z_hi) / 2.0
+    # half_a -> half_b pins on the parting plane, either side of the cavity.
+    ab_pins = [cylinder_between(_uez(PIN_ROOT_MM, se * rho_pin, z_mid), _uez(-pin_len, se * rho_pin, z_mid),
+                                c.pin_diameter_mm) for se in (1, -1)]
+    ab_sockets = [cylinder_between(_uez(0.1, se * rho_pin, z_mid), _uez(-sock_len, se * rho_pin, z_mid), socket_d)
+                  for se in (1, -1)]
+    # Bottom plate and lid pins, one into each half on the pull axis.
+    plate_pins = [cylinder_between(_uez(su * rho_pin, 0, z_lo - PIN_ROOT_MM), _uez(su * rho_pin, 0, z_lo + pin_len),
+                                   c.pin_diameter_mm) for su in (1, -1)]
+    lid_pins = [cylinder_between(_uez(su * rho_pin, 0, z_hi + PIN_ROOT_MM), _uez(su * rho_pin, 0, z_hi - pin_len),
+                                 c.pin_diameter_mm) for su in (1, -1)]
+    plate_sockets = [cylinder_between(_uez(su * rho_pin, 0, z_lo - 0.1), _uez(su * rho_pin, 0, z_lo + sock_len),
+                                      socket_d) for su in (1, -1)]
+    lid_sockets = [cylinder_between(_uez(su * rho_pin, 0, z_hi + 0.1), _uez(su * rho_pin, 0, z_hi - sock_len),
+                                    socket_d) for su in (1, -1)]
+
+    gate = cylinder_between((r_gate, 0.0, z_bot - 1.0), (r_gate, 0.0, 0.0), c.gate_diameter_mm)
+    vents_xy = [(r_vent, 0.0), (0.0, r_vent), (-r_vent, 0.0), (0.0, -r_vent)]
+    vents = [cylinder_between((x, y, h), (x, y, z_top + 1.0), c.vent_diameter_mm) for x, y in vents_xy]
+    block = _uez_box(-w, w, -w, w, z_bot, z_top)
+
+    # --- The parts.
+    z_axis = np.array([0.0, 0.0, 1.0])
+    pull_a = np.array(DIAGONAL_PULL)
+    plane_diag = ((0.0, 0.0, 0.0), tuple(DIAGONAL_PULL))
+    plane_lo = ((0.0, 0.0, z_lo), (0.0, 0.0, 1.0))
+    plane_hi = ((0.0, 0.0, z_hi), (0.0, 0.0, 1.0))
+
+    def shell(side: int) -> bd.Solid:
+        u0, u1 = (0.0, w) if side > 0 else (-w, 0.0)
+        body = _uez_box(u0, u1, -w, w, z_lo, z_hi).cut(envelope)
+        mine = [s for s, su in zip(plate_sockets + lid_sockets, (1, -1, 1, -1)) if su == side]
+        body = cut_all(body, mine + [b for b, (su, _) in zip(bolts, ((1, 1), (1, -1), (-1, 1), (-1, -1)))
+                                     if su == side])
+        body = fuse_all(body, ab_pins) if side > 0 else cut_all(body, ab_sockets)
+        return single_solid(body, f"mold half_{'a' if side > 0 else 'b'}")
+
+    half_a, half_b = shell(1), shell(-1)
+    plate = _uez_box(-w, w, -w, w, z_bot, z_lo).cut(envelope, core, gate, *bolts)
+    plate = single_solid(fuse_all(plate, plate_pins), "mold bottom_plate")
+    lid = _uez_box(-w, w, -w, w, z_hi, z_top).cut(envelope, core, *vents, *bolts)
+    lid = single_solid(fuse_all(lid, lid_pins), "mold lid")
+
+    parts = {
+        "half_a": MoldPart("half_a", "shell", half_a, tuple(float(v) for v in pull_a),
+                           _as_matrix(_print_transform(z_axis, -pull_a, half_a)),
+                           (plane_diag, plane_lo, plane_hi), "printed lying on its back face, pins up"),
+        "half_b": MoldPart("half_b", "shell", half_b, tuple(float(v) for v in -pull_a),
+                           _as_matrix(_print_transform(z_axis, pull_a, half_b)),
+                           (plane_diag, plane_lo, plane_hi), "printed lying on its back face"),
+        "bottom_plate": MoldPart("bottom_plate", "bottom_plate", plate, (0.0, 0.0, -1.0),
+                                 _as_matrix(_print_transform(pull_a, z_axis, plate)),
+                                 (plane_lo,), "forms the lower flange; gate from below"),
+        "lid": MoldPart("lid", "lid", lid, (0.0, 0.0, 1.0),
+                        _as_matrix(_print_transform(pull_a, -z_axis, lid)),
+                        (plane_hi,), "forms the upper flange; printed upside down"),
+        "core": MoldPart("core", "core", core, None,
+                         _as_matrix(_print_transform(np.array([1.0, 0, 0]), z_axis, core)),
+                         (), "sacrificial: print in PVA/BVOH and dissolve, or cast in wax and melt out"),
+    }
+    channels = (Channel("gate", "gate", c.gate_diameter_mm,
+                        single_solid(gate.intersect(block), "gate channel"), (r_gate, 0.0, 0.0)),
+                *(Channel(f"vent_{i}", "vent", c.vent_diameter_mm,
+                          single_solid(v.intersect(block), f"vent {i}"), (x, y, h))
+                  for i, (v, (x, y)) in enumerate(zip(vents, vents_xy), start=1)))
+    for p in parts.values():
+        if not p.solid.is_valid:
+            raise GeometryError(f"mold {p.name}: invalid solid")
+    info = {"block_mm": [2 * w, 2 * w, z_top - z_bot], "cast_height_mm": h, "flange_diameter_mm": 2 * r_fl,
+            "gate_radius_mm": r_gate, "vent_radius_mm": r_vent, "pin_radius_mm": rho_pin,
+            "bolt_positions_mm": [list(_uez(su * bolt_uv, se * bolt_uv, 0.0)[:2]) for su in (1, -1) for se in (1, -1)],
+            "bolt_length_mm": z_top - z_bot,
+            "corner_proud_of_flange_mm": k * soa.computed_circumcircle_mm / 2.0 - r_fl,
+            "valley_core_width_mm": k * min(prof.inner_side_mm),
+            "demolding_order": ["lid", "bottom_plate", "half_a", "half_b", "core"]}
+    return MoldSet(cast=cast, parts=parts, channels=channels, scale=k, soa_volume_mm3=soa_solid.volume,
+                   parting_margin_mm=k * soa.fillet_radius_mm, info=info)

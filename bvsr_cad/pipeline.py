@@ -8,6 +8,7 @@ partial one.
 
 from __future__ import annotations
 
+import json
 import shutil
 import tempfile
 import time
@@ -23,6 +24,7 @@ from .exporters.cad import write_assembly_step, write_part_step, write_part_stl
 from .exporters.manifest import manifest_dict, write_manifest
 from .exporters.mold_files import write_molds
 from .exporters.render import render_previews
+from .exporters.robot_files import theta_max_from_limits, write_robot
 from .spec.load import load_spec, params_sha256
 
 Progress = Callable[[str], None]
@@ -98,6 +100,10 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         say("previews (off-screen renders)")
         manifest["previews"] = render_previews(asm, tmp)
         manifest.update(write_analyses(asm, tmp, say))
+        limits = manifest.get("analysis", {}).get("limits")
+        if limits:
+            theta_max = theta_max_from_limits(json.loads((tmp / limits).read_text()), spec.joints)
+            manifest.update(write_robot(asm, tmp, theta_max, say))
         manifest.update(write_molds(asm, tmp, say))
         write_manifest(tmp, manifest)
         say("checks")

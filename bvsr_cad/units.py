@@ -39,3 +39,12 @@ def mass_g(volume_mm3: float, density_g_cm3: float) -> float:
 
 def g_to_kg(value_g: float) -> float:
     return value_g / G_PER_KG
+
+
+def g_mm2_to_kg_m2(value_g_mm2: float):
+    """Moment of inertia: g mm^2 -> kg m^2 (works on arrays too)."""
+    return value_g_mm2 / G_PER_KG / (MM_PER_M * MM_PER_M)
+
+
+def deg_s_to_rad_s(value_deg_s: float) -> float:
+    return math.radians(value_deg_s)

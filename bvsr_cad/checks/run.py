@@ -13,6 +13,7 @@ from .analyses import check_analyses
 from .molds import check_molds
 from .paper import check_paper
 from .result import CheckResult
+from .robot import check_robot
 
 
 def run_checks(root: str | Path, progress: Callable[[str], None] | None = None) -> list[CheckResult]:
@@ -34,6 +35,8 @@ def run_checks(root: str | Path, progress: Callable[[str], None] | None = None) 
     results.extend(check_paper(exp))
     say("analyses")
     results.extend(check_analyses(exp))
+    say("robot descriptions (URDF, MJCF, MuJoCo, PyBullet)")
+    results.extend(check_robot(exp))
     say("molds")
     results.extend(check_molds(exp))
     clear_cache()

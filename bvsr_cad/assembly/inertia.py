@@ -1,0 +1,113 @@
+"""Rigid-body inertials in SI and their composition (parallel-axis theorem).
+
+An :class:`Inertial` is a mass, a centre of mass and an inertia tensor about
+that centre, all expressed in one frame. :func:`compose` is the one function
+that moves and adds them; every link inertia of the robot description goes
+through it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import build123d as bd
+import numpy as np
+
+from .. import units
+
+
+@dataclass(frozen=True)
+class Inertial:
+    mass_kg: float
+    com_m: tuple[float, float, float]
+    inertia_kg_m2: tuple[tuple[float, float, float], ...]  # about the CoM, frame axes
+
+    @property
+    def com(self) -> np.ndarray:
+        return np.asarray(self.com_m, float)
+
+    @property
+    def inertia(self) -> np.ndarray:
+        return np.asarray(self.inertia_kg_m2, float)
+
+    def transformed(self, T_frame_self: np.ndarray) -> "Inertial":
+        """The same body expressed in another frame (T maps self-frame points there, metres)."""
+        T = np.asarray(T_frame_self, float)
+        R, p = T[:3, :3], T[:3, 3]
+        return Inertial.make(self.mass_kg, R @ self.com + p, R @ self.inertia @ R.T)
+
+    @staticmethod
+    def make(mass_kg: float, com_m, inertia_kg_m2) -> "Inertial":
+        I = np.asarray(inertia_kg_m2, float)
+        I = (I + I.T) / 2.0
+        return Inertial(float(mass_kg), tuple(float(v) for v in com_m),
+                        tuple(tuple(float(v) for v in row) for row in I))
+
+    @staticmethod
+    def point(mass_kg: float, inertia_kg_m2: float) -> "Inertial":
+        """A tiny valid inertial at the frame origin (virtual links)."""
+        return Inertial.make(mass_kg, (0.0, 0.0, 0.0), np.eye(3) * inertia_kg_m2)
+
+
+def compose(items: Iterable[Inertial]) -> Inertial:
+    """Sum of bodies given in one frame: total mass, combined CoM, and the
+    inertia about that CoM by the parallel-axis theorem."""
+    items = list(items)
+    if not items:
+        raise ValueError("compose: nothing to compose")
+    m = sum(i.mass_kg for i in items)
+    if m <= 0:
+        raise ValueError(f"compose: total mass {m} kg is not positive")
+    c = sum(i.mass_kg * i.com for i in items) / m
+    I = np.zeros((3, 3))
+    for i in items:
+        d = i.com - c
+        I += i.inertia + i.mass_kg * (np.dot(d, d) * np.eye(3) - np.outer(d, d))
+    return Inertial.make(m, c, I)
+
+
+def shift_inertia(inertia_kg_m2: np.ndarray, mass_kg: float, offset_m: np.ndarray) -> np.ndarray:
+    """Inertia about a point ``offset_m`` away from the CoM (parallel-axis theorem)."""
+    d = np.asarray(offset_m, float)
+    return np.asarray(inertia_kg_m2, float) + mass_kg * (np.dot(d, d) * np.eye(3) - np.outer(d, d))
+
+
+def from_solid(solid, density_g_cm3: float, T_frame_part_mm: np.ndarray | None = None) -> Inertial:
+    """Exact B-rep mass properties of a build123d solid (mm) at a density, in SI.
+
+    ``T_frame_part_mm`` places the solid's own frame in the target frame (mm).
+    """
+    vol_mm3 = solid.volume
+    density_g_mm3 = density_g_cm3 / units.MM3_PER_CM3
+    com_mm = np.array(tuple(solid.center(bd.CenterOf.MASS)))
+    I_g_mm2 = np.asarray(solid.matrix_of_inertia, float) * density_g_mm3
+    own = Inertial.make(units.g_to_kg(vol_mm3 * density_g_mm3), com_mm / units.MM_PER_M,
+                        units.g_mm2_to_kg_m2(I_g_mm2))
+    if T_frame_part_mm is None:
+        return own
+    T = np.asarray(T_frame_part_mm, float).copy()
+    T[:3, 3] /= units.MM_PER_M
+    return own.transformed(T)
+
+
+def principal(inertial: Inertial) -> tuple[np.ndarray, np.ndarray]:
+    """(principal moments ascending, rotation whose columns are the principal axes)."""
+    w, v = np.linalg.eigh(inertial.inertia)
+    if np.linalg.det(v) < 0:
+        v[:, 0] *= -1
+    return w, v
+
+
+def validity_problems(inertial: Inertial, rel_tol: float = 1e-9) -> list[str]:
+    """Positive mass, positive-definite inertia, triangle inequality of the principal moments."""
+    out = []
+    if not inertial.mass_kg > 0:
+        out.append(f"mass {inertial.mass_kg} kg is not positive")
+    w, _ = principal(inertial)
+    if not np.all(w > 0):
+        out.append(f"principal moments {w} are not all positive")
+    a, b, c = sorted(w)
+    if a + b < c * (1 - rel_tol):
+        out.append(f"principal moments {a:.3e} + {b:.3e} < {c:.3e} (triangle inequality)")
+    return out

@@ -1,0 +1,345 @@
+"""The robot model between the assembly and the URDF/MJCF writers, in SI.
+
+Links, joints, inertials, visuals, collisions and SOA actuators, as plain
+data. Each bending joint ``jk`` is the exact chain (SPEC section 7)
+
+    Rz(phi) Ry(theta/2) Tz(chord) Ry(theta/2) Rz(-phi),  chord = 2 L sin(theta/2) / theta
+
+realised by five joints ``jk_phi``, ``jk_theta_a``, ``jk_chord``,
+``jk_theta_b``, ``jk_phi_b`` and four virtual links. The first joint's origin
+is the arc's start (the centre of panel k-1's distal face); the last joint's
+child is ``panel{k}``, whose frame (its proximal face centre) is the arc's
+end. The chord joint carries ``chord - L`` so that every joint is 0 at rest.
+
+Deformable mass (the five SOAs and the rod piece in the gap) follows the
+paper's model, a body whose centre of mass is the chord's midpoint: it is
+split into two equal halves carried by the links after ``jk_theta_a`` and
+after ``jk_chord`` (see :func:`split_deformable`). Their centre of mass is the
+chord midpoint at every theta, and at rest the pair reproduces the exact
+B-rep inertia of the SOAs and the rod piece.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import build123d as bd
+import numpy as np
+
+from .. import units
+from ..parts.vertebra import rod
+from .build import Assembly, instance_solid, rod_span_mm
+from .inertia import Inertial, compose, from_solid
+
+VIRTUAL_MASS_KG = 1e-7  # 0.1 mg: valid for every simulator, negligible, and counted in the totals
+VIRTUAL_INERTIA_KG_M2 = 1e-12
+
+RGBA = {"panel": (0.55, 0.60, 0.68, 1.0), "soa": (0.95, 0.55, 0.15, 0.8), "rod": (0.92, 0.92, 0.88, 1.0)}
+
+
+def chord_m(theta_rad, arc_length_m: float):
+    """Chord of an arc of length L bent by theta, with the theta -> 0 limit (vectorised)."""
+    th = np.asarray(theta_rad, float)
+    half = th / 2.0
+    small = np.abs(half) < 1e-4
+    safe = np.where(small, 1.0, half)
+    sinc = np.where(small, 1.0 - half * half / 6.0 + half ** 4 / 120.0, np.sin(safe) / safe)
+    return arc_length_m * sinc
+
+
+def chord_joint_value(theta_rad, arc_length_m: float):
+    """Value of the ``jk_chord`` prismatic joint for a bending angle theta: chord - L (0 at rest)."""
+    return chord_m(theta_rad, arc_length_m) - arc_length_m
+
+
+def translation_m(x: float = 0.0, y: float = 0.0, z: float = 0.0) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, 3] = (x, y, z)
+    return T
+
+
+def mm_to_m_transform(T_mm) -> np.ndarray:
+    T = np.array(T_mm, float)
+    T[:3, 3] = T[:3, 3] / units.MM_PER_M
+    return T
+
+
+@dataclass
+class Visual:
+    """A mesh already in its link's frame (identity origin); written by the exporters."""
+
+    name: str  # file stem, unique within the robot
+    material: str
+    density_g_cm3: float
+    rgba: tuple[float, float, float, float]
+    solid: bd.Shape  # in the link frame, millimetres
+
+
+@dataclass(frozen=True)
+class Collision:
+    kind: str  # cylinder
+    radius_m: float
+    length_m: float
+    T_link_geom: tuple[tuple[float, ...], ...]
+
+
+@dataclass
+class Link:
+    name: str
+    inertial: Inertial
+    visuals: list[Visual] = field(default_factory=list)
+    collisions: list[Collision] = field(default_factory=list)
+    virtual: bool = False
+
+
+@dataclass(frozen=True)
+class Mimic:
+    joint: str
+    multiplier: float
+    offset: float = 0.0
+
+
+@dataclass(frozen=True)
+class Joint:
+    name: str
+    type: str  # revolute, continuous, prismatic
+    parent: str
+    child: str
+    T_parent_joint: tuple[tuple[float, ...], ...]  # metres
+    axis: tuple[float, float, float]
+    lower: float | None = None
+    upper: float | None = None
+    velocity: float | None = None
+    effort: float | None = None
+    mimic: Mimic | None = None
+    stiffness: float = 0.0  # N m/rad or N/m (MJCF only)
+    damping: float = 0.0
+
+
+@dataclass(frozen=True)
+class Site:
+    name: str
+    link: str
+    pos_m: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class SoaActuator:
+    """One SOA between two sockets: force P A along it, stiffness k = m_a P + n_a."""
+
+    name: str  # jk_soai
+    joint: int
+    line: str  # s{segment}_line{i}
+    bottom_site: str
+    top_site: str
+    rest_length_m: float
+
+
+@dataclass(frozen=True)
+class BendingJoint:
+    name: str
+    arc_length_m: float
+    urdf_joints: tuple[str, str, str, str, str]
+    base_link: str
+    tip_link: str
+    theta_max_rad: float
+    segment: int
+
+
+@dataclass
+class RobotModel:
+    name: str
+    links: dict[str, Link]
+    joints: list[Joint]
+    bending: list[BendingJoint]
+    sites: list[Site]
+    soas: list[SoaActuator]
+    root: str = "panel0"
+
+    @property
+    def mass_kg(self) -> float:
+        return sum(link.inertial.mass_kg for link in self.links.values())
+
+
+def _as_tuple(m: np.ndarray) -> tuple[tuple[float, ...], ...]:
+    return tuple(tuple(float(v) for v in row) for row in np.asarray(m))
+
+
+def _rod_pieces(asm: Assembly) -> tuple[dict[int, list[tuple[float, float]]], dict[int, list[tuple[float, float]]]]:
+    """z ranges (tail frame, mm) of rod inside each panel and inside each gap."""
+    spec = asm.spec
+    in_panel: dict[int, list[tuple[float, float]]] = {k: [] for k in range(spec.panels)}
+    in_gap: dict[int, list[tuple[float, float]]] = {k: [] for k in range(1, spec.panels)}
+    t = spec.joint.panel_thickness_mm
+    for s in range(1, spec.segments + 1):
+        z0, z1 = rod_span_mm(spec, s)
+        for lay in asm.panel_layouts:
+            lo, hi = max(z0, lay.z0_mm), min(z1, lay.z0_mm + t)
+            if hi - lo > 1e-9:
+                in_panel[lay.index].append((lo, hi))
+        for k in range(1, spec.panels):
+            g0, g1 = asm.panel_layouts[k - 1].z0_mm + t, asm.panel_layouts[k].z0_mm
+            lo, hi = max(z0, g0), min(z1, g1)
+            if hi - lo > 1e-9:
+                in_gap[k].append((lo, hi))
+    return in_panel, in_gap
+
+
+def _rod_solid(ranges: list[tuple[float, float]], diameter_mm: float, z_frame_mm: float) -> bd.Shape | None:
+    pieces = [rod(diameter_mm, hi - lo).moved(bd.Location((0, 0, lo - z_frame_mm))) for lo, hi in ranges]
+    if not pieces:
+        return None
+    return pieces[0] if len(pieces) == 1 else bd.Compound(pieces)
+
+
+def build_robot(asm: Assembly, theta_max_rad: list[float], velocity_limit_rad_s: float,
+                effort_limit_nm: float, chord_effort_n: float) -> RobotModel:
+    """The robot model of the tail at rest.
+
+    Args:
+        asm: the assembly (mm).
+        theta_max_rad: collision-free bending limit of each joint (the minimum over phi).
+        velocity_limit_rad_s: limit of a whole joint's bending rate (each half-angle joint gets half).
+        effort_limit_nm: torque limit of a bending joint.
+        chord_effort_n: force limit of the chord joints.
+    """
+    spec = asm.spec
+    if len(theta_max_rad) != spec.joints:
+        raise ValueError(f"theta_max_rad: {len(theta_max_rad)} values for {spec.joints} joints")
+    t_mm = spec.joint.panel_thickness_mm
+    L_mm = spec.joint.gap_mm
+    L = units.mm_to_m(L_mm)
+    t = units.mm_to_m(t_mm)
+    rod_mat = spec.material(spec.vertebra.material)
+    panel_mat = spec.material(spec.use.panel)
+    soa_mat = spec.material(spec.use.soa)
+    in_panel, in_gap = _rod_pieces(asm)
+    links: dict[str, Link] = {}
+    joints: list[Joint] = []
+    sites: list[Site] = []
+    soas: list[SoaActuator] = []
+    bending: list[BendingJoint] = []
+
+    for lay in asm.panel_layouts:
+        name = f"panel{lay.index}"
+        inst = next(i for i in asm.instances if i.name == name)
+        part = asm.part_of(inst)
+        visuals = [Visual(part.name, part.material, panel_mat.density_g_cm3, RGBA["panel"], part.solid)]
+        inertials = [from_solid(part.solid, panel_mat.density_g_cm3)]
+        rod_piece = _rod_solid(in_panel[lay.index], spec.vertebra.diameter_mm, lay.z0_mm)
+        if rod_piece is not None:
+            visuals.append(Visual(f"rod_in_{name}", spec.vertebra.material, rod_mat.density_g_cm3, RGBA["rod"],
+                                  rod_piece))
+            inertials.append(from_solid(rod_piece, rod_mat.density_g_cm3))
+        collision = Collision("cylinder", units.mm_to_m(lay.rim_radius_lower_mm), t,
+                              _as_tuple(translation_m(z=t / 2)))
+        links[name] = Link(name, compose(inertials), visuals, [collision])
+
+    for k in range(1, spec.panels):
+        j = f"j{k}"
+        seg = (k - 1) // spec.joints_per_segment + 1
+        lo, hi = asm.panel_layouts[k - 1], asm.panel_layouts[k]
+        z_start_mm = lo.z0_mm + t_mm
+        T_start_inv = np.eye(4)
+        T_start_inv[2, 3] = -z_start_mm
+        # Deformable body at rest in the arc-start frame: five SOAs and the rod in the gap.
+        soa_solids = []
+        soa_inertials = []
+        for inst in asm.instances:
+            if inst.name.startswith(f"{j}_soa"):
+                T = T_start_inv @ np.asarray(inst.transform)
+                soa_solids.append(asm.part_of(inst).solid.moved(_location(T)))
+                soa_inertials.append(from_solid(asm.part_of(inst).solid, soa_mat.density_g_cm3, T))
+        rod_gap = _rod_solid(in_gap[k], spec.vertebra.diameter_mm, z_start_mm)
+        parts = list(soa_inertials)
+        visuals = [Visual(f"{j}_soas", spec.use.soa, soa_mat.density_g_cm3, RGBA["soa"], bd.Compound(soa_solids))]
+        if rod_gap is not None:
+            parts.append(from_solid(rod_gap, rod_mat.density_g_cm3))
+            visuals.append(Visual(f"{j}_rod", spec.vertebra.material, rod_mat.density_g_cm3, RGBA["rod"], rod_gap))
+        soft = compose(parts)
+        half_a, half_b = split_deformable(soft, L)
+        names = (f"{j}_after_phi", f"{j}_after_theta_a", f"{j}_after_chord", f"{j}_after_theta_b")
+        links[names[0]] = Link(names[0], Inertial.point(VIRTUAL_MASS_KG, VIRTUAL_INERTIA_KG_M2), virtual=True)
+        links[names[1]] = Link(names[1], half_a, visuals, virtual=True)
+        links[names[2]] = Link(names[2], half_b, virtual=True)
+        links[names[3]] = Link(names[3], Inertial.point(VIRTUAL_MASS_KG, VIRTUAL_INERTIA_KG_M2), virtual=True)
+        th = float(theta_max_rad[k - 1])
+        half_lim = th / 2.0
+        v_half = velocity_limit_rad_s / 2.0
+        chord_lo = float(chord_joint_value(th, L))
+        joints += [
+            Joint(f"{j}_phi", "continuous", f"panel{k - 1}", names[0], _as_tuple(translation_m(z=t)), (0, 0, 1),
+                  velocity=velocity_limit_rad_s * 4, effort=effort_limit_nm),
+            Joint(f"{j}_theta_a", "revolute", names[0], names[1], _as_tuple(np.eye(4)), (0, 1, 0),
+                  -half_lim, half_lim, v_half, effort_limit_nm),
+            Joint(f"{j}_chord", "prismatic", names[1], names[2], _as_tuple(translation_m(z=L)), (0, 0, 1),
+                  chord_lo - 1e-4, 1e-4, velocity_limit_rad_s * L, chord_effort_n,
+                  mimic=Mimic(f"{j}_theta_a", 0.0, 0.0)),
+            Joint(f"{j}_theta_b", "revolute", names[2], names[3], _as_tuple(np.eye(4)), (0, 1, 0),
+                  -half_lim, half_lim, v_half, effort_limit_nm, mimic=Mimic(f"{j}_theta_a", 1.0)),
+            Joint(f"{j}_phi_b", "continuous", names[3], f"panel{k}", _as_tuple(np.eye(4)), (0, 0, 1),
+                  velocity=velocity_limit_rad_s * 4, effort=effort_limit_nm, mimic=Mimic(f"{j}_phi", -1.0)),
+        ]
+        bending.append(BendingJoint(j, L, tuple(f"{j}_{n}" for n in ("phi", "theta_a", "chord", "theta_b", "phi_b")),
+                                    f"panel{k - 1}", f"panel{k}", th, seg))
+        # SOA sockets: the centres of the pocket floors the flanges sit on.
+        i_line = 0
+        for inst in asm.instances:
+            if not inst.name.startswith(f"{j}_soa"):
+                continue
+            i_line += 1
+            T = np.asarray(inst.transform)
+            bottom_mm = T[:3, 3]
+            top_mm = bottom_mm + _top_socket(asm, k, i_line)
+            b_site = Site(f"{inst.name}_bottom", f"panel{k - 1}",
+                          tuple(units.mm_to_m(v) for v in (bottom_mm - [0, 0, lo.z0_mm])))
+            t_site = Site(f"{inst.name}_top", f"panel{k}", tuple(units.mm_to_m(v) for v in (top_mm - [0, 0, hi.z0_mm])))
+            sites += [b_site, t_site]
+            rest = units.mm_to_m(float(np.linalg.norm(top_mm - bottom_mm)))
+            soas.append(SoaActuator(inst.name, k, f"s{seg}_line{i_line}", b_site.name, t_site.name, rest))
+    return RobotModel(spec.name, links, joints, bending, sites, soas)
+
+
+def _top_socket(asm: Assembly, k: int, i: int) -> np.ndarray:
+    """Offset from the bottom socket of jk_soai to its top socket (tail frame, mm)."""
+    inst = next(x for x in asm.instances if x.name == f"j{k}_soa{i}")
+    T = np.asarray(inst.transform)
+    hi = asm.panel_layouts[k]
+    # The top socket is where the SOA axis meets panel k's lower pocket floor.
+    z_top = hi.z0_mm + hi.pocket_depth_mm
+    s = (z_top - T[2, 3]) / T[2, 2]
+    return T[:3, 2] * s
+
+
+def _location(T_mm: np.ndarray) -> bd.Location:
+    from .build import location
+
+    return location(_as_tuple(T_mm))
+
+
+def split_deformable(soft: Inertial, arc_length_m: float) -> tuple[Inertial, Inertial]:
+    """Two equal halves, one carried by each end of the chord, equal to ``soft`` at rest.
+
+    ``soft`` is given in the arc-start frame at rest. The first half hangs from
+    the chord's start at the body's CoM (about L/2 along the chord); the second
+    hangs from the chord's end at the same point seen from there (L/2 back).
+    Both lie on the chord, at distances L/2 and c - L/2 from its start, so
+    the pair's centre of mass is the chord midpoint c/2 at every bending angle
+    (the paper's d = (L/theta) sin(theta/2)); at rest they coincide and their
+    inertias (each half of the exact one) add up to the B-rep inertia. Bent,
+    they separate by L - c (under 0.2 mm at the joint limits).
+    """
+    half_I = soft.inertia / 2.0
+    a = Inertial.make(soft.mass_kg / 2, soft.com, half_I)
+    b = Inertial.make(soft.mass_kg / 2, soft.com - [0.0, 0.0, arc_length_m], half_I)
+    return a, b
+
+
+def rest_pair(half_a: Inertial, half_b: Inertial, arc_length_m: float) -> Inertial:
+    """The two halves composed at rest in the arc-start frame (for checks and tests)."""
+    return compose([half_a, half_b.transformed(translation_m(z=arc_length_m))])
+
+
+def velocity_limit_rad_s(segment_deg_s: float, margin: float, joints_per_segment: int) -> float:
+    """Per bending joint: the segment's peak rate shared by its joints, times a margin."""
+    return units.deg_s_to_rad_s(segment_deg_s) / joints_per_segment * margin

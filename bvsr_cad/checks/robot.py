@@ -1,0 +1,280 @@
+"""Checks on the robot descriptions of an export, in real simulators.
+
+Everything here reads files: the manifest's ``robot`` section, the URDF, the
+MJCF scenes and the meshes. Nothing is clamped or balanced: a failing check
+names the link or the file and by how much.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from .. import units
+from ..models.kinematics import TailKinematics, chord_length_mm, uv_from_theta_phi
+from ..spec.load import load_spec
+from .export import Export
+from .result import CheckResult
+
+MASS_TOLERANCE = 0.001  # robot mass vs the manifest's tail mass
+INERTIA_TOLERANCE = 0.01  # link inertia vs an independent computation from its meshes
+FK_TOLERANCE_M = 1e-6
+FK_POSES = 200
+SETTLE_QVEL_RAD_S = 0.05  # after 1 s from rest under gravity the tail has settled
+#: Mimic / chord couplings held while stepping (rad or m). MuJoCo's equality
+#: constraints are soft; released under gravity the residual stays below this.
+EQUALITY_TOLERANCE = 1e-3
+VIRTUAL_MASS_LIMIT_KG = 1e-6
+
+
+def _inertia_problems(mass: float, I: np.ndarray) -> tuple[bool, str]:
+    w = np.linalg.eigvalsh(I)
+    a, b, c = sorted(w)
+    ok = mass > 0 and a > 0 and a + b >= c * (1 - 1e-9)
+    return ok, f"mass {mass:.3e} kg, principal moments {a:.3e} {b:.3e} {c:.3e} kg m2"
+
+
+def _mesh_inertial(exp: Export, visuals: list[dict]) -> tuple[float, np.ndarray, np.ndarray]:
+    """Mass, CoM and inertia about the CoM of a link's meshes (trimesh, SI)."""
+    masses, coms, inertias = [], [], []
+    for v in visuals:
+        mesh = trimesh.load(exp.root / v["mesh"], force="mesh")
+        mesh.density = v["density_g_cm3"] * 1000.0  # kg/m^3
+        masses.append(mesh.mass)
+        coms.append(mesh.center_mass)
+        inertias.append(mesh.moment_inertia)  # about the mesh's CoM, frame axes
+    m = float(sum(masses))
+    c = sum(mi * ci for mi, ci in zip(masses, coms)) / m
+    I = np.zeros((3, 3))
+    for mi, ci, Ii in zip(masses, coms, inertias):
+        d = ci - c
+        I += Ii + mi * (np.dot(d, d) * np.eye(3) - np.outer(d, d))
+    return m, c, I
+
+
+def _compose_manifest(entries: list[tuple[dict, np.ndarray]]) -> tuple[float, np.ndarray, np.ndarray]:
+    """Mass, CoM, inertia of manifest links placed by translations (parallel-axis theorem)."""
+    m = sum(e["mass_kg"] for e, _ in entries)
+    c = sum(e["mass_kg"] * (np.asarray(e["com_m"]) + off) for e, off in entries) / m
+    I = np.zeros((3, 3))
+    for e, off in entries:
+        d = np.asarray(e["com_m"]) + off - c
+        I += np.asarray(e["inertia_kg_m2"]) + e["mass_kg"] * (np.dot(d, d) * np.eye(3) - np.outer(d, d))
+    return m, c, I
+
+
+def check_inertias(exp: Export) -> list[CheckResult]:
+    robot = exp.manifest["robot"]
+    links = {l["name"]: l for l in robot["links"]}
+    out = []
+    for link in robot["links"]:
+        ok, text = _inertia_problems(link["mass_kg"], np.asarray(link["inertia_kg_m2"]))
+        out.append(CheckResult(f"robot_inertia_valid:{link['name']}", ok, int(ok), 1, "", robot["urdf"], text))
+        if link["virtual"] and not link["visuals"]:
+            out.append(CheckResult(f"robot_virtual_mass:{link['name']}", link["mass_kg"] < VIRTUAL_MASS_LIMIT_KG,
+                                   link["mass_kg"] * 1e6, VIRTUAL_MASS_LIMIT_KG * 1e6, "mg", robot["urdf"]))
+    total_kg = sum(l["mass_kg"] for l in robot["links"])
+    tail_kg = units.g_to_kg(exp.manifest["mass_g"]["tail"])
+    rel = abs(total_kg - tail_kg) / tail_kg
+    out.append(CheckResult("robot_mass_matches_tail", rel <= MASS_TOLERANCE, 100 * rel, 100 * MASS_TOLERANCE,
+                           "%", robot["urdf"], f"links {total_kg * 1000:.4f} g (virtual links included), "
+                           f"parts {tail_kg * 1000:.4f} g"))
+    # Each link with meshes against its meshes; a joint's two deformable halves together at rest.
+    for b in robot["bending_joints"]:
+        j = b["name"]
+        a, c = links[f"{j}_after_theta_a"], links[f"{j}_after_chord"]
+        mine = _compose_manifest([(a, np.zeros(3)), (c, np.array([0.0, 0.0, b["arc_length_m"]]))])
+        out.append(_compare(exp, f"{j}_soft(at rest)", mine, a["visuals"], robot["urdf"]))
+    for link in robot["links"]:
+        if not link["virtual"]:
+            mine = (link["mass_kg"], np.asarray(link["com_m"]), np.asarray(link["inertia_kg_m2"]))
+            out.append(_compare(exp, link["name"], mine, link["visuals"], robot["urdf"]))
+    return out
+
+
+def _compare(exp: Export, name: str, mine, visuals, where: str) -> CheckResult:
+    m0, c0, I0 = mine
+    m1, c1, I1 = _mesh_inertial(exp, visuals)
+    # Relative differences; the CoM is judged against the body's radius of gyration.
+    gyr = math.sqrt(np.trace(I1) / m1)
+    err = max(abs(m0 - m1) / m1, np.linalg.norm(c0 - c1) / gyr, np.linalg.norm(I0 - I1) / np.linalg.norm(I1))
+    return CheckResult(f"robot_inertia_vs_mesh:{name}", err <= INERTIA_TOLERANCE, 100 * err, 100 * INERTIA_TOLERANCE,
+                       "%", where, f"B-rep {m0 * 1000:.3f} g vs meshes {m1 * 1000:.3f} g; largest relative "
+                       "difference of mass, CoM (per radius of gyration) and inertia tensor")
+
+
+def check_urdf_tools(exp: Export) -> list[CheckResult]:
+    urdf = exp.root / exp.manifest["robot"]["urdf"]
+    out = []
+    tool = shutil.which("check_urdf")
+    if tool:
+        res = subprocess.run([tool, str(urdf)], capture_output=True, text=True)
+        out.append(CheckResult("urdf_check_urdf", res.returncode == 0, res.returncode, 0, "exit code", str(urdf),
+                               (res.stderr or res.stdout).strip().splitlines()[-1] if res.returncode else ""))
+    else:
+        out.append(CheckResult("urdf_check_urdf", None, None, 0, "exit code", str(urdf),
+                               "check_urdf not installed (Debian: liburdfdom-tools)"))
+    import yourdfpy
+
+    try:
+        model = yourdfpy.URDF.load(str(urdf), build_scene_graph=True, load_meshes=False)
+        ok = bool(model.validate())
+        note = f"{len(model.robot.links)} links, {len(model.robot.joints)} joints"
+    except Exception as exc:  # noqa: BLE001 - report what the tool said
+        ok, note = False, f"{type(exc).__name__}: {exc}"
+    out.append(CheckResult("urdf_yourdfpy", ok, int(ok), 1, "", str(urdf), note))
+    return out
+
+
+def _equality_residual(m, d) -> float:
+    worst = 0.0
+    for e in range(m.neq):
+        q1 = d.qpos[m.jnt_qposadr[m.eq_obj1id[e]]] - m.qpos0[m.jnt_qposadr[m.eq_obj1id[e]]]
+        q2 = d.qpos[m.jnt_qposadr[m.eq_obj2id[e]]] - m.qpos0[m.jnt_qposadr[m.eq_obj2id[e]]]
+        c = m.eq_data[e, :5]
+        worst = max(worst, abs(q1 - (c[0] + c[1] * q2 + c[2] * q2 ** 2 + c[3] * q2 ** 3 + c[4] * q2 ** 4)))
+    return float(worst)
+
+
+def _step(path: Path, gravity: bool, seconds: float = 1.0):
+    import mujoco
+
+    m = mujoco.MjModel.from_xml_path(str(path))
+    if not gravity:
+        m.opt.gravity[:] = 0.0
+    d = mujoco.MjData(m)
+    worst_eq = 0.0
+    steps = int(round(seconds / m.opt.timestep))
+    for i in range(steps):
+        mujoco.mj_step(m, d)
+        if i % 10 == 0:
+            worst_eq = max(worst_eq, _equality_residual(m, d))
+    warnings = int(sum(w.number for w in d.warning))
+    at_limit = []
+    for j in range(m.njnt):
+        if m.jnt_limited[j]:
+            q = d.qpos[m.jnt_qposadr[j]]
+            lo, hi = m.jnt_range[j]
+            if q <= lo + 1e-9 or q >= hi - 1e-9:
+                at_limit.append(mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j))
+    drift = float(np.max(np.abs(d.qpos - m.qpos0))) if m.nq else 0.0
+    return m, d, warnings, worst_eq, at_limit, drift
+
+
+@contextlib.contextmanager
+def _quiet_cwd(path: Path):
+    """MuJoCo writes MUJOCO_LOG.TXT into the working folder on a warning: keep it out of the user's."""
+    old = os.getcwd()
+    os.chdir(path)
+    try:
+        yield
+    finally:
+        os.chdir(old)
+
+
+def check_mujoco(exp: Export) -> list[CheckResult]:
+    robot = exp.manifest["robot"]
+    out = []
+    with _quiet_cwd(exp.root):
+        for key in ("urdf", "mjcf", "mjcf_per_segment"):
+            rel = robot[key]
+            path = exp.root / rel
+            # A URDF cannot carry the rod's springs, so under gravity it would fold onto its
+            # limits: it is stepped without gravity and must not move at all.
+            gravity = key != "urdf"
+            try:
+                m, d, warn, eq, at_limit, drift = _step(path, gravity=gravity)
+            except Exception as exc:  # noqa: BLE001 - the compiler's message is the result
+                out.append(CheckResult(f"mujoco_compile:{key}", False, 0, 1, "", rel, str(exc)))
+                continue
+            out.append(CheckResult(f"mujoco_compile:{key}", True, 1, 1, "", rel,
+                                   f"{m.nbody} bodies, {m.njnt} joints, {m.neq} equalities, {m.nu} actuators"))
+            out.append(CheckResult(f"mujoco_warnings_1s:{key}", warn == 0, warn, 0, "warnings", rel,
+                                   "1 s from rest " + ("under gravity" if gravity else "without gravity")))
+            out.append(CheckResult(f"mujoco_couplings_held:{key}", eq <= EQUALITY_TOLERANCE, eq, EQUALITY_TOLERANCE,
+                                   "rad or m", rel, "largest mimic/chord equality residual while stepping"))
+            out.append(CheckResult(f"mujoco_no_joint_at_limit:{key}", not at_limit, len(at_limit), 0, "joints", rel,
+                                   ", ".join(at_limit)))
+            if not gravity:
+                out.append(CheckResult(f"mujoco_no_drift:{key}", drift <= 1e-9, drift, 1e-9, "rad or m", rel,
+                                       "largest joint displacement after 1 s at rest without gravity"))
+            else:
+                qvel = float(np.max(np.abs(d.qvel)))
+                out.append(CheckResult(f"mujoco_settled_1s:{key}", qvel <= SETTLE_QVEL_RAD_S, qvel, SETTLE_QVEL_RAD_S,
+                                       "rad/s or m/s", rel, "largest joint speed 1 s after release under gravity"))
+    return out
+
+
+def check_pybullet(exp: Export) -> list[CheckResult]:
+    import pybullet as pb
+
+    urdf = exp.root / exp.manifest["robot"]["urdf"]
+    expected = {l["name"]: l["mass_kg"] for l in exp.manifest["robot"]["links"]}
+    with contextlib.redirect_stdout(io.StringIO()):
+        cid = pb.connect(pb.DIRECT)
+    try:
+        # A fixed base would report the root's mass as 0: load it free to read every mass.
+        body = pb.loadURDF(str(urdf), useFixedBase=False, flags=pb.URDF_USE_INERTIA_FROM_FILE, physicsClientId=cid)
+        masses = {pb.getBodyInfo(body, physicsClientId=cid)[0].decode(): pb.getDynamicsInfo(body, -1,
+                                                                                             physicsClientId=cid)[0]}
+        for j in range(pb.getNumJoints(body, physicsClientId=cid)):
+            name = pb.getJointInfo(body, j, physicsClientId=cid)[12].decode()
+            masses[name] = pb.getDynamicsInfo(body, j, physicsClientId=cid)[0]
+    finally:
+        pb.disconnect(cid)
+    worst = max(abs(masses.get(n, -1.0) - m) / max(m, 1e-12) for n, m in expected.items())
+    return [CheckResult("pybullet_masses", worst <= 1e-6, worst, 1e-6, "relative", str(urdf),
+                        f"{len(masses)} links loaded with URDF_USE_INERTIA_FROM_FILE")]
+
+
+def check_fk(exp: Export) -> list[CheckResult]:
+    """MuJoCo's forward kinematics of the MJCF against the kinematics module at random poses."""
+    import mujoco
+
+    robot = exp.manifest["robot"]
+    spec = load_spec(exp.root / exp.manifest["params_file"])
+    kin = TailKinematics.from_spec(spec)
+    rng = np.random.default_rng(0)
+    n = spec.joints
+    limits = np.array([b["theta_max_rad"] for b in robot["bending_joints"]])
+    theta = rng.uniform(0, 1, (FK_POSES, n)) * limits
+    phi = rng.uniform(-math.pi, math.pi, (FK_POSES, n))
+    _, frames = kin.frames(uv_from_theta_phi(theta, phi))
+    L_mm = spec.joint.gap_mm
+
+    with _quiet_cwd(exp.root):
+        m = mujoco.MjModel.from_xml_path(str(exp.root / robot["mjcf"]))
+    d = mujoco.MjData(m)
+    mount = m.body("bvsr_mount").id
+    worst = 0.0
+    for p in range(FK_POSES):
+        d.qpos[:] = m.qpos0
+        for k in range(n):
+            j = f"j{k + 1}"
+            d.joint(f"{j}_phi").qpos = phi[p, k]
+            d.joint(f"{j}_theta_a").qpos = theta[p, k] / 2
+            d.joint(f"{j}_chord").qpos = units.mm_to_m(float(chord_length_mm(theta[p, k], L_mm)) - L_mm)
+            d.joint(f"{j}_theta_b").qpos = theta[p, k] / 2
+            d.joint(f"{j}_phi_b").qpos = -phi[p, k]
+        mujoco.mj_kinematics(m, d)
+        R0, p0 = d.xmat[mount].reshape(3, 3), d.xpos[mount]
+        for k in range(1, n + 1):
+            pos_tail_m = R0.T @ (d.xpos[m.body(f"panel{k}").id] - p0)
+            ref_m = frames[p, k, :3, 3] / units.MM_PER_M
+            worst = max(worst, float(np.linalg.norm(pos_tail_m - ref_m)))
+    return [CheckResult("fk_mujoco_vs_kinematics", worst <= FK_TOLERANCE_M, worst, FK_TOLERANCE_M, "m",
+                        robot["mjcf"], f"{FK_POSES} random poses within the joint limits, every panel origin")]
+
+
+def check_robot(exp: Export) -> list[CheckResult]:
+    if "robot" not in exp.manifest:
+        return []
+    return [*check_inertias(exp), *check_urdf_tools(exp), *check_mujoco(exp), *check_pybullet(exp), *check_fk(exp)]

@@ -1,0 +1,263 @@
+"""MJCF writer: the tail for MuJoCo, driven by pressures, plus a scene.
+
+The chain of every bending joint is the URDF's, with equality constraints:
+``jk_theta_b`` = ``jk_theta_a``, ``jk_phi_b`` = -``jk_phi``, and ``jk_chord``
+following ``jk_theta_a`` through an even quartic fitted to
+L (sin(theta_a) / theta_a - 1) (its largest error over the joint range is
+returned and recorded). The rod's bending stiffness E I / L sits on the two
+half-angle hinges as 2 E I / L each (in series their energies add up to
+(1/2)(E I / L) theta^2); the phi hinges carry none.
+
+Each SOA is a spatial tendon between its two sockets, and the pressure drives
+it through a general actuator whose control is the gauge pressure in Pa:
+
+    force = (A + m_a l0 - m_a l) P  +  n_a (l0 - l)  -  c dl/dt
+          = P A - (m_a P + n_a)(l - l0) - c dl/dt          (Eq 3-4 and the SOA damper)
+
+so the SOA's stiffness and damping live in the actuator alone and are not
+counted again on the joints. In the per-segment model the three joints of a
+segment share theta and phi (equality constraints) and one actuator drives
+each line's tendon through its three SOAs, whose stiffness and damping are
+divided by three (the three SOAs of a line stretch alike, so the series
+tendon's energy 1/2 (k/3) (3 dl)^2 equals their sum 3 (1/2) k dl^2).
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..assembly.robot import RobotModel, chord_joint_value
+
+#: Tail frame (Z along the tail, Y dorsal) mounted horizontally in MuJoCo's
+#: world (gravity -Z): tail Z -> world +X, tail Y -> world +Z, tail X -> world +Y.
+R_WORLD_TAIL = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+MOUNT_HEIGHT_M = 0.45
+#: The chord moves less than half a millimetre over the joint range, so a rotor-like
+#: armature along it adds no measurable energy; it keeps the rod's axial spring
+#: (E A / L, about 2e6 N/m) stable at the step and the chord equality stiff.
+CHORD_ARMATURE_KG = 0.1
+#: At theta = 0 the bending-plane angle is undefined (the chain's one singularity);
+#: this small damping on phi stops numerical noise spinning it. It is 1e-3 of the
+#: SOA dampers' bending damping c 5 r^2 / 2 and is the only damping on the joints.
+PHI_DAMPING_NMS = 1e-4
+#: The chain's rest pose puts every bending plane in the sagittal plane (phi =
+#: 90 deg, the same straight tail): extension and flexion, the tail's main
+#: motions, start without passing the singularity.
+PHI_REST_RAD = 1.5707963267948966
+
+
+@dataclass(frozen=True)
+class ActuationSI:
+    area_m2: float
+    stiffness_slope_n_m_per_pa: float  # m_a
+    stiffness_offset_n_m: float  # n_a
+    damping_n_s_m: float  # c, per SOA
+    pressure_min_pa: float
+    pressure_max_pa: float
+    rod_bending_stiffness_nm_rad: float  # E I / L of one joint
+    rod_axial_stiffness_n_m: float  # E A / L of one joint's rod piece
+    timestep_s: float
+
+
+def _f(v: float) -> str:
+    return f"{float(v):.10g}"
+
+
+def _vec(values) -> str:
+    return " ".join(_f(v) for v in values)
+
+
+def _quat(R: np.ndarray) -> str:
+    x, y, z, w = Rotation.from_matrix(R).as_quat()
+    return _vec((w, x, y, z))
+
+
+def chord_polynomial(arc_length_m: float, theta_a_max_rad: float) -> tuple[np.ndarray, float]:
+    """Even quartic in theta_a fitted to the chord joint value; (polycoef[5], max |error| m)."""
+    x = np.linspace(-theta_a_max_rad, theta_a_max_rad, 2001)
+    y = chord_joint_value(2.0 * x, arc_length_m)
+    A = np.stack([x ** 2, x ** 4], axis=1)
+    (a2, a4), *_ = np.linalg.lstsq(A, y, rcond=None)
+    coef = np.array([0.0, 0.0, a2, 0.0, a4])
+    err = float(np.max(np.abs(A @ np.array([a2, a4]) - y)))
+    return coef, err
+
+
+def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], act: ActuationSI, per_segment: bool,
+              mesh_dir: str = "meshes") -> tuple[ET.ElementTree, dict]:
+    """The model as an element tree, and facts to record (chord error, counts)."""
+    model = f"{robot.name}_segments" if per_segment else robot.name
+    root = ET.Element("mujoco", model=f"{robot.name}{'_per_segment' if per_segment else ''}")
+    ET.SubElement(root, "compiler", angle="radian", meshdir=mesh_dir, autolimits="true")
+    ET.SubElement(root, "option", timestep=_f(act.timestep_s), integrator="implicitfast")
+    default = ET.SubElement(root, "default")
+    top = ET.SubElement(default, "default", {"class": model})
+    ET.SubElement(top, "joint", armature="1e-7")
+    vis = ET.SubElement(top, "default", {"class": "visual"})
+    ET.SubElement(vis, "geom", type="mesh", contype="0", conaffinity="0", group="2", density="0")
+    col = ET.SubElement(top, "default", {"class": "collision"})
+    ET.SubElement(col, "geom", group="3", density="0", rgba="0.5 0.5 0.5 0.3")
+    ET.SubElement(top, "site", size="0.001", rgba="1 0 0 1", group="4")
+    asset = ET.SubElement(root, "asset")
+    mats = {}
+    for link in robot.links.values():
+        for v in link.visuals:
+            mats.setdefault(v.material, v.rgba)
+            if not any(m.get("name") == v.name for m in asset.findall("mesh")):
+                ET.SubElement(asset, "mesh", name=v.name, file=mesh_files[v.name])
+    for name, rgba in mats.items():
+        ET.SubElement(asset, "material", name=name, rgba=_vec(rgba))
+
+    world = ET.SubElement(root, "worldbody")
+    mount = ET.SubElement(world, "body", name="bvsr_mount", pos=_vec((0, 0, MOUNT_HEIGHT_M)),
+                          quat=_quat(R_WORLD_TAIL), childclass=model)
+    children: dict[str, list] = {}
+    for j in robot.joints:
+        children.setdefault(j.parent, []).append(j)
+    sites_by_link: dict[str, list] = {}
+    for s in robot.sites:
+        sites_by_link.setdefault(s.link, []).append(s)
+    theta_lim = {b.name: b.theta_max_rad / 2 for b in robot.bending}
+    stiff_half = 2.0 * act.rod_bending_stiffness_nm_rad
+
+    def add_body(parent_el, link_name: str, joint=None):
+        link = robot.links[link_name]
+        attrs = {"name": link_name}
+        if joint is not None:
+            T = np.asarray(joint.T_parent_joint)
+            if np.linalg.norm(T[:3, 3]) > 0:
+                attrs["pos"] = _vec(T[:3, 3])
+            # The rest pose is written at phi = PHI_REST_RAD (see there); `ref` keeps qpos = phi.
+            rest = {"phi": PHI_REST_RAD, "phi_b": -PHI_REST_RAD}.get(joint.name.split("_", 1)[1])
+            if rest is not None:
+                attrs["quat"] = _quat(Rotation.from_euler("z", rest).as_matrix())
+        body = ET.SubElement(parent_el, "body", attrs)
+        if joint is not None:
+            jattrs = {"name": joint.name, "axis": _vec(joint.axis)}
+            bj = joint.name.split("_", 1)
+            kind = bj[1]
+            if joint.type == "prismatic":
+                # The rod's axial stiffness carries the SOAs' thrust; the equality only bends it to the arc.
+                jattrs.update(type="slide", range=_vec((joint.lower, joint.upper)),
+                              stiffness=_f(act.rod_axial_stiffness_n_m), armature=_f(CHORD_ARMATURE_KG))
+            else:
+                jattrs["type"] = "hinge"
+                if kind == "phi":
+                    jattrs.update(ref=_f(PHI_REST_RAD), damping=_f(PHI_DAMPING_NMS))
+                elif kind == "phi_b":
+                    jattrs.update(ref=_f(-PHI_REST_RAD))
+                if kind in ("theta_a", "theta_b"):
+                    lim = theta_lim[bj[0]]
+                    jattrs.update(range=_vec((-lim, lim)), stiffness=_f(stiff_half))
+            ET.SubElement(body, "joint", jattrs)
+        I = link.inertial.inertia
+        ET.SubElement(body, "inertial", pos=_vec(link.inertial.com), mass=_f(link.inertial.mass_kg),
+                      fullinertia=_vec((I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])))
+        for v in link.visuals:
+            ET.SubElement(body, "geom", {"class": "visual", "mesh": v.name, "material": v.material,
+                                         "name": f"{link_name}_{v.name}_visual"})
+        for i, c in enumerate(link.collisions):
+            T = np.asarray(c.T_link_geom)
+            ET.SubElement(body, "geom", {"class": "collision", "type": "cylinder", "name": f"{link_name}_collision{i}",
+                                         "size": _vec((c.radius_m, c.length_m / 2)), "pos": _vec(T[:3, 3])})
+        for s in sites_by_link.get(link_name, []):
+            ET.SubElement(body, "site", name=s.name, pos=_vec(s.pos_m))
+        for j in children.get(link_name, []):
+            add_body(body, j.child, j)
+
+    add_body(mount, robot.root)
+
+    eq = ET.SubElement(root, "equality")
+    # As stiff as the step allows (MuJoCo needs a time constant of at least two steps).
+    solref = _vec((2.0 * act.timestep_s, 1.0))
+    chord_err = 0.0
+    for b in robot.bending:
+        phi, tha, chord, thb, phib = b.urdf_joints
+        coef, err = chord_polynomial(b.arc_length_m, b.theta_max_rad / 2)
+        chord_err = max(chord_err, err)
+        ET.SubElement(eq, "joint", name=f"{b.name}_theta_b_eq", joint1=thb, joint2=tha, polycoef="0 1 0 0 0",
+                      solref=solref)
+        ET.SubElement(eq, "joint", name=f"{b.name}_phi_b_eq", joint1=phib, joint2=phi, polycoef="0 -1 0 0 0",
+                      solref=solref)
+        ET.SubElement(eq, "joint", name=f"{b.name}_chord_eq", joint1=chord, joint2=tha, polycoef=_vec(coef),
+                      solref=solref)
+    if per_segment:
+        first: dict[int, str] = {}
+        for b in robot.bending:
+            if b.segment not in first:
+                first[b.segment] = b.name
+                continue
+            lead = first[b.segment]
+            ET.SubElement(eq, "joint", name=f"{b.name}_theta_seg", joint1=f"{b.name}_theta_a",
+                          joint2=f"{lead}_theta_a", polycoef="0 1 0 0 0", solref=solref)
+            ET.SubElement(eq, "joint", name=f"{b.name}_phi_seg", joint1=f"{b.name}_phi",
+                          joint2=f"{lead}_phi", polycoef="0 1 0 0 0", solref=solref)
+
+    tendon = ET.SubElement(root, "tendon")
+    actuator = ET.SubElement(root, "actuator")
+    ctrl = _vec((act.pressure_min_pa, act.pressure_max_pa))
+    groups: dict[str, list] = {}
+    for s in robot.soas:
+        groups.setdefault(s.line if per_segment else s.name, []).append(s)
+    for name, soas in groups.items():
+        sp = ET.SubElement(tendon, "spatial", name=f"{name}_tendon", width="0.0005")
+        # Sockets in chain order: between two SOAs the path crosses a rigid panel (constant length).
+        for s in soas:
+            ET.SubElement(sp, "site", site=s.bottom_site)
+            ET.SubElement(sp, "site", site=s.top_site)
+        n = len(soas)
+        l0 = sum(s.rest_length_m for s in soas) + _panel_spans(robot, soas)
+        k_share = 1.0 / n  # series tendon of n SOAs that stretch alike
+        m_a = act.stiffness_slope_n_m_per_pa * k_share
+        n_a = act.stiffness_offset_n_m * k_share
+        c = act.damping_n_s_m * k_share
+        ET.SubElement(actuator, "general", name=name, tendon=f"{name}_tendon", ctrllimited="true", ctrlrange=ctrl,
+                      gaintype="affine", gainprm=_vec((act.area_m2 + m_a * l0, -m_a, 0.0)),
+                      biastype="affine", biasprm=_vec((n_a * l0, -n_a, -c)))
+    ET.indent(root)
+    facts = {"chord_polynomial_max_error_m": chord_err, "actuators": len(groups),
+             "actuator_control": "gauge pressure, Pa", "per_segment": per_segment}
+    return ET.ElementTree(root), facts
+
+
+def _panel_spans(robot: RobotModel, soas) -> float:
+    """Length of the tendon path inside panels between consecutive SOAs of a line (rigid)."""
+    if len(soas) < 2:
+        return 0.0
+    pos = {s.name: np.asarray(s.pos_m) for s in robot.sites}
+    total = 0.0
+    for a, b in zip(soas, soas[1:]):
+        # top socket of a (panel k frame) to bottom socket of b (same panel's frame)
+        total += float(np.linalg.norm(pos[b.bottom_site] - pos[a.top_site]))
+    return total
+
+
+def scene_tree(model_file: str, name: str) -> ET.ElementTree:
+    """A menagerie-style scene: the model, a floor, light and a mount block."""
+    root = ET.Element("mujoco", model=f"{name} scene")
+    ET.SubElement(root, "include", file=model_file)
+    ET.SubElement(root, "statistic", center="0.15 0 0.4", extent="0.5")
+    visual = ET.SubElement(root, "visual")
+    ET.SubElement(visual, "headlight", diffuse="0.6 0.6 0.6", ambient="0.3 0.3 0.3", specular="0 0 0")
+    ET.SubElement(visual, "global", azimuth="120", elevation="-20")
+    asset = ET.SubElement(root, "asset")
+    ET.SubElement(asset, "texture", type="2d", name="groundplane", builtin="checker", mark="edge",
+                  rgb1="0.2 0.3 0.4", rgb2="0.1 0.2 0.3", markrgb="0.8 0.8 0.8", width="300", height="300")
+    ET.SubElement(asset, "material", name="groundplane", texture="groundplane", texuniform="true",
+                  texrepeat="5 5", reflectance="0.2")
+    world = ET.SubElement(root, "worldbody")
+    ET.SubElement(world, "light", pos="0 0 1.5", dir="0 0 -1", directional="true")
+    ET.SubElement(world, "geom", name="floor", size="0 0 0.05", type="plane", material="groundplane")
+    ET.SubElement(world, "geom", name="mount_block", type="box", size="0.03 0.05 0.225",
+                  pos=_vec((-0.03, 0.0, MOUNT_HEIGHT_M / 2)), rgba="0.3 0.3 0.3 1", contype="0", conaffinity="0")
+    ET.indent(root)
+    return ET.ElementTree(root)
+
+
+def write_mjcf(path: Path, tree: ET.ElementTree) -> None:
+    tree.write(path, encoding="utf-8")

@@ -1,0 +1,88 @@
+"""URDF writer (element tree, SI units) for the robot model.
+
+Mimic joints couple each bending joint's second half-angle to the first (x1)
+and the counter-rotation to phi (x-1). The chord joint mimics ``jk_theta_a``
+with multiplier 0: it stays at the rest chord L in tools that enforce mimic
+(MuJoCo turns mimic into equality constraints, so nothing slides), an error of
+L - chord(theta) = L theta^2 / 24 + O(theta^4) at most at the joint limit
+(reported in the manifest). Kinematic users who want the exact arc set it
+with :func:`bvsr_cad.assembly.robot.chord_joint_value`.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..assembly.robot import RobotModel
+
+
+def _f(v: float) -> str:
+    return f"{float(v):.10g}"
+
+
+def _vec(values) -> str:
+    return " ".join(_f(v) for v in values)
+
+
+def origin_attrs(T) -> dict[str, str]:
+    T = np.asarray(T, float)
+    rpy = Rotation.from_matrix(T[:3, :3]).as_euler("xyz")
+    return {"xyz": _vec(T[:3, 3]), "rpy": _vec(rpy)}
+
+
+def urdf_tree(robot: RobotModel, mesh_files: dict[str, str], mesh_prefix: str = "meshes/") -> ET.ElementTree:
+    root = ET.Element("robot", name=robot.name)
+    mj = ET.SubElement(root, "mujoco")
+    ET.SubElement(mj, "compiler", balanceinertia="false",
+                  discardvisual="false", fusestatic="false", strippath="false")
+    materials = {}
+    for link in robot.links.values():
+        for vis in link.visuals:
+            materials.setdefault(vis.material, vis.rgba)
+    for name, rgba in materials.items():
+        m = ET.SubElement(root, "material", name=name)
+        ET.SubElement(m, "color", rgba=_vec(rgba))
+    for link in robot.links.values():
+        el = ET.SubElement(root, "link", name=link.name)
+        inertial = ET.SubElement(el, "inertial")
+        ET.SubElement(inertial, "origin", xyz=_vec(link.inertial.com), rpy="0 0 0")
+        ET.SubElement(inertial, "mass", value=_f(link.inertial.mass_kg))
+        I = link.inertial.inertia
+        ET.SubElement(inertial, "inertia", ixx=_f(I[0, 0]), ixy=_f(I[0, 1]), ixz=_f(I[0, 2]),
+                      iyy=_f(I[1, 1]), iyz=_f(I[1, 2]), izz=_f(I[2, 2]))
+        for vis in link.visuals:
+            v = ET.SubElement(el, "visual", name=vis.name)
+            ET.SubElement(v, "origin", xyz="0 0 0", rpy="0 0 0")
+            g = ET.SubElement(v, "geometry")
+            ET.SubElement(g, "mesh", filename=mesh_prefix + mesh_files[vis.name])
+            ET.SubElement(v, "material", name=vis.material)
+        for i, col in enumerate(link.collisions):
+            c = ET.SubElement(el, "collision", name=f"{link.name}_collision{i}")
+            ET.SubElement(c, "origin", **origin_attrs(col.T_link_geom))
+            g = ET.SubElement(c, "geometry")
+            ET.SubElement(g, "cylinder", radius=_f(col.radius_m), length=_f(col.length_m))
+    for j in robot.joints:
+        el = ET.SubElement(root, "joint", name=j.name, type=j.type)
+        ET.SubElement(el, "origin", **origin_attrs(j.T_parent_joint))
+        ET.SubElement(el, "parent", link=j.parent)
+        ET.SubElement(el, "child", link=j.child)
+        ET.SubElement(el, "axis", xyz=_vec(j.axis))
+        lim = {"effort": _f(j.effort or 0.0), "velocity": _f(j.velocity or 0.0)}
+        if j.type != "continuous":
+            lim.update(lower=_f(j.lower), upper=_f(j.upper))
+        ET.SubElement(el, "limit", **lim)
+        if j.damping:
+            ET.SubElement(el, "dynamics", damping=_f(j.damping))
+        if j.mimic is not None:
+            ET.SubElement(el, "mimic", joint=j.mimic.joint, multiplier=_f(j.mimic.multiplier),
+                          offset=_f(j.mimic.offset))
+    ET.indent(root)
+    return ET.ElementTree(root)
+
+
+def write_urdf(robot: RobotModel, path: Path, mesh_files: dict[str, str], mesh_prefix: str = "meshes/") -> None:
+    urdf_tree(robot, mesh_files, mesh_prefix).write(path, encoding="utf-8", xml_declaration=True)

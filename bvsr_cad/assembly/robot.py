@@ -89,7 +89,11 @@ class Link:
     inertial: Inertial
     visuals: list[Visual] = field(default_factory=list)
     collisions: list[Collision] = field(default_factory=list)
-    virtual: bool = False
+    role: str = "rigid"  # rigid (a panel), deformable (half of a joint's SOAs and rod), virtual (massless frame)
+
+    @property
+    def virtual(self) -> bool:
+        return self.role == "virtual"
 
 
 @dataclass(frozen=True)
@@ -259,10 +263,10 @@ def build_robot(asm: Assembly, theta_max_rad: list[float], velocity_limit_rad_s:
         soft = compose(parts)
         half_a, half_b = split_deformable(soft, L)
         names = (f"{j}_after_phi", f"{j}_after_theta_a", f"{j}_after_chord", f"{j}_after_theta_b")
-        links[names[0]] = Link(names[0], Inertial.point(VIRTUAL_MASS_KG, VIRTUAL_INERTIA_KG_M2), virtual=True)
-        links[names[1]] = Link(names[1], half_a, visuals, virtual=True)
-        links[names[2]] = Link(names[2], half_b, virtual=True)
-        links[names[3]] = Link(names[3], Inertial.point(VIRTUAL_MASS_KG, VIRTUAL_INERTIA_KG_M2), virtual=True)
+        links[names[0]] = Link(names[0], Inertial.point(VIRTUAL_MASS_KG, VIRTUAL_INERTIA_KG_M2), role="virtual")
+        links[names[1]] = Link(names[1], half_a, visuals, role="deformable")
+        links[names[2]] = Link(names[2], half_b, role="deformable")
+        links[names[3]] = Link(names[3], Inertial.point(VIRTUAL_MASS_KG, VIRTUAL_INERTIA_KG_M2), role="virtual")
         th = float(theta_max_rad[k - 1])
         half_lim = th / 2.0
         v_half = velocity_limit_rad_s / 2.0

@@ -78,7 +78,7 @@ def check_inertias(exp: Export) -> list[CheckResult]:
     for link in robot["links"]:
         ok, text = _inertia_problems(link["mass_kg"], np.asarray(link["inertia_kg_m2"]))
         out.append(CheckResult(f"robot_inertia_valid:{link['name']}", ok, int(ok), 1, "", robot["urdf"], text))
-        if link["virtual"] and not link["visuals"]:
+        if link["role"] == "virtual":
             out.append(CheckResult(f"robot_virtual_mass:{link['name']}", link["mass_kg"] < VIRTUAL_MASS_LIMIT_KG,
                                    link["mass_kg"] * 1e6, VIRTUAL_MASS_LIMIT_KG * 1e6, "mg", robot["urdf"]))
     total_kg = sum(l["mass_kg"] for l in robot["links"])
@@ -94,7 +94,7 @@ def check_inertias(exp: Export) -> list[CheckResult]:
         mine = _compose_manifest([(a, np.zeros(3)), (c, np.array([0.0, 0.0, b["arc_length_m"]]))])
         out.append(_compare(exp, f"{j}_soft(at rest)", mine, a["visuals"], robot["urdf"]))
     for link in robot["links"]:
-        if not link["virtual"]:
+        if link["role"] == "rigid":
             mine = (link["mass_kg"], np.asarray(link["com_m"]), np.asarray(link["inertia_kg_m2"]))
             out.append(_compare(exp, link["name"], mine, link["visuals"], robot["urdf"]))
     return out

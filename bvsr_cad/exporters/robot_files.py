@@ -10,11 +10,11 @@
 from __future__ import annotations
 
 import math
-
-import numpy as np
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from .. import units
 from ..assembly.build import Assembly
@@ -77,7 +77,7 @@ def write_robot(asm: Assembly, root: Path, theta_max_rad: list[float],
     for link in robot.links.values():
         I = link.inertial.inertia
         links.append({
-            "name": link.name, "virtual": link.virtual, "mass_kg": link.inertial.mass_kg,
+            "name": link.name, "role": link.role, "mass_kg": link.inertial.mass_kg,
             "com_m": list(link.inertial.com_m), "inertia_kg_m2": I.tolist(),
             "visuals": [{"mesh": f"robot/meshes/{mesh_files[v.name]}", "material": v.material,
                          "density_g_cm3": v.density_g_cm3} for v in link.visuals],
@@ -87,8 +87,7 @@ def write_robot(asm: Assembly, root: Path, theta_max_rad: list[float],
         "mjcf_per_segment": "robot/scene_segments.xml", "mjcf_per_segment_model": f"robot/{name}_segments.xml",
         "units": "SI (m, kg, s, rad); actuator control: gauge pressure in Pa",
         "mass_kg": robot.mass_kg,
-        "virtual_link_mass_kg": sum(l.inertial.mass_kg for l in robot.links.values()
-                                    if l.virtual and not l.visuals and l.inertial.mass_kg < 1e-6),
+        "virtual_link_mass_kg": sum(l.inertial.mass_kg for l in robot.links.values() if l.virtual),
         "bending_joints": [{"name": b.name, "arc_length_m": b.arc_length_m, "urdf_joints": list(b.urdf_joints),
                             "base_link": b.base_link, "tip_link": b.tip_link, "theta_max_rad": b.theta_max_rad,
                             "segment": b.segment, "chord_joint": "value = chord - L (0 at rest); "

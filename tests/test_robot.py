@@ -1,0 +1,158 @@
+"""Robot descriptions: inertia composition, the deformable-mass split, the
+chord coupling, and the exported URDF/MJCF checked in MuJoCo and PyBullet."""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+
+import mujoco
+import numpy as np
+import pytest
+
+from bvsr_cad.assembly.build import build_assembly
+from bvsr_cad.assembly.inertia import Inertial, compose, from_solid, validity_problems
+from bvsr_cad.assembly.robot import chord_joint_value, chord_m, rest_pair, split_deformable, translation_m
+from bvsr_cad.checks.export import Export
+from bvsr_cad.checks.robot import check_robot
+from bvsr_cad.exporters.mjcf import chord_polynomial
+from bvsr_cad.exporters.robot_files import actuation_si, write_robot
+from bvsr_cad.models.coupling import couple_mimic_joints, mimic_joints
+from bvsr_cad.parts.vertebra import rod
+
+THETA_MAX = 0.5  # a fixed joint limit, so these tests do not depend on the clearance analysis
+
+
+def test_compose_matches_closed_form_for_two_rods():
+    # Two thin-ish rods (B-rep) side by side: the composed inertia about the common CoM
+    # equals the closed form m (3 r^2 + h^2) / 12 + m d^2 for each.
+    r, h, d = 3.0, 40.0, 10.0
+    solid = rod(2 * r, h)
+    T1, T2 = np.eye(4), np.eye(4)
+    T1[:3, 3] = (d, 0, -h / 2)
+    T2[:3, 3] = (-d, 0, -h / 2)
+    both = compose([from_solid(solid, 1.0, T1), from_solid(solid, 1.0, T2)])
+    m_each = math.pi * r * r * h * 1e-3 * 1e-3  # g -> kg
+    r_m, h_m, d_m = r / 1000, h / 1000, d / 1000
+    ixx = 2 * m_each * (3 * r_m ** 2 + h_m ** 2) / 12
+    iyy = ixx + 2 * m_each * d_m ** 2
+    izz = 2 * (m_each * r_m ** 2 / 2 + m_each * d_m ** 2)
+    assert both.mass_kg == pytest.approx(2 * m_each, rel=1e-9)
+    assert np.allclose(both.com, 0.0, atol=1e-12)
+    assert np.allclose(np.diag(both.inertia), [ixx, iyy, izz], rtol=1e-6)
+
+
+def test_deformable_halves_keep_the_chord_midpoint(bvsr_spec):
+    soft = Inertial.make(0.0135, (0.0, 0.0, 0.018255), np.diag([5.8e-6, 5.8e-6, 7.2e-6]))
+    L = 0.03651
+    a, b = split_deformable(soft, L)
+    pair = rest_pair(a, b, L)
+    assert pair.mass_kg == pytest.approx(soft.mass_kg)
+    assert np.allclose(pair.com, soft.com, atol=1e-15)
+    assert np.allclose(pair.inertia, soft.inertia, rtol=1e-12)
+    assert not validity_problems(a) and not validity_problems(b)
+    # Bent: half a rides the chord's start frame, half b its end frame; the CoM is c/2 along the chord.
+    for theta in (0.1, 0.3, 0.6):
+        c = float(chord_m(theta, L))
+        pa = a.com  # in the frame after theta_a (z along the chord)
+        pb = b.com + [0, 0, c]
+        mid = (pa + pb) / 2
+        assert mid[2] == pytest.approx(c / 2 + (soft.com[2] - L / 2), abs=1e-12)
+        assert c / 2 == pytest.approx(L / theta * math.sin(theta / 2), rel=1e-12)  # the paper's d
+
+
+def test_chord_polynomial_and_limit():
+    L = 0.03651
+    coef, err = chord_polynomial(L, THETA_MAX / 2)
+    assert err < 1e-8
+    assert chord_joint_value(0.0, L) == 0.0
+    th = np.linspace(1e-6, 1.0, 50)
+    assert np.allclose(chord_m(th, L), 2 * L * np.sin(th / 2) / th, rtol=1e-12)
+
+
+@pytest.fixture(scope="module")
+def robot_export(tmp_path_factory, bvsr_spec):
+    root = tmp_path_factory.mktemp("robot")
+    asm = build_assembly(bvsr_spec)
+    frag = write_robot(asm, root, [THETA_MAX] * bvsr_spec.joints, lambda _m: None)
+    shutil.copy(__import__("tests.conftest", fromlist=["PARAMS"]).PARAMS / "bvsr.toml", root / "params.toml")
+    manifest = {"name": "bvsr", "parts": [], "params_file": "params.toml",
+                "mass_g": {"tail": sum(asm.mass_g(i.part) for i in asm.instances)}, **frag}
+    (root / "manifest.json").write_text(json.dumps(manifest))
+    return root
+
+
+def test_every_robot_check_passes(robot_export):
+    results = check_robot(Export.open(robot_export))
+    failed = [r.line() for r in results if r.passed is False]
+    assert not failed, failed
+    names = {r.name for r in results}
+    assert {"fk_mujoco_vs_kinematics", "pybullet_masses", "urdf_yourdfpy", "mujoco_settled_1s:mjcf",
+            "mujoco_no_drift:urdf", "robot_inertia_vs_mesh:panel3", "robot_inertia_vs_mesh:j1_soft(at rest)"} <= names
+
+
+def test_mjcf_rod_springs_add_up_to_ei_over_l(robot_export, bvsr_spec):
+    m = mujoco.MjModel.from_xml_path(str(robot_export / "robot" / "bvsr.xml"))
+    ei_l = actuation_si(build_assembly(bvsr_spec)).rod_bending_stiffness_nm_rad
+    k_a = m.jnt_stiffness[m.joint("j1_theta_a").id]
+    k_b = m.jnt_stiffness[m.joint("j1_theta_b").id]
+    theta = 0.2
+    assert 0.5 * k_a * (theta / 2) ** 2 + 0.5 * k_b * (theta / 2) ** 2 == pytest.approx(0.5 * ei_l * theta ** 2)
+    assert m.jnt_stiffness[m.joint("j1_phi").id] == 0.0
+
+
+def _tip_world(path, pressures: dict[str, float], seconds=0.6):
+    m = mujoco.MjModel.from_xml_path(str(path))
+    d = mujoco.MjData(m)
+    for i in range(m.nu):
+        name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, i)
+        d.ctrl[i] = pressures.get(name[-1], 0.0)
+    for _ in range(int(seconds / m.opt.timestep)):
+        mujoco.mj_step(m, d)
+    return d.body(f"panel{len([n for n in range(m.nbody) if mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, n).startswith('panel')]) - 1}").xpos.copy()
+
+
+@pytest.mark.parametrize("model", ["scene.xml", "scene_segments.xml"])
+def test_pressures_bend_the_tail_the_right_way(robot_export, model):
+    path = robot_export / "robot" / model
+    rest = _tip_world(path, {})
+    ext = _tip_world(path, {"3": 1e5, "4": 1e5})  # the two ventral SOAs push: extension, up (+Y tail = +Z world)
+    flex = _tip_world(path, {"1": 1e5})
+    left = _tip_world(path, {"2": 1e5})  # soa2 sits at 162 deg (-X): it bends the tail towards +X (world +Y)
+    right = _tip_world(path, {"5": 1e5})
+    assert ext[2] > rest[2] + 0.01 and flex[2] < rest[2] - 0.005
+    assert left[1] > 0.005 and right[1] < -0.005
+    assert left[1] == pytest.approx(-right[1], rel=1e-3)  # mirror symmetry about the sagittal plane
+    assert left[2] == pytest.approx(right[2], abs=1e-6)
+
+
+def test_pybullet_helper_couples_mimic_joints(robot_export):
+    import pybullet as pb
+
+    urdf = robot_export / "robot" / "bvsr.urdf"
+    cid = pb.connect(pb.DIRECT)
+    try:
+        body = pb.loadURDF(str(urdf), useFixedBase=True, flags=pb.URDF_USE_INERTIA_FROM_FILE, physicsClientId=cid)
+        mimics = mimic_joints(urdf)
+        assert len(mimics) == 18
+        idx = {pb.getJointInfo(body, i, physicsClientId=cid)[1].decode(): i
+               for i in range(pb.getNumJoints(body, physicsClientId=cid))}
+        worst = 0.0
+        for step in range(240):
+            for k in range(1, 7):
+                pb.setJointMotorControl2(body, idx[f"j{k}_theta_a"], pb.POSITION_CONTROL,
+                                         targetPosition=0.08 * math.sin(2 * math.pi * step / 240), force=20,
+                                         physicsClientId=cid)
+                pb.setJointMotorControl2(body, idx[f"j{k}_phi"], pb.POSITION_CONTROL, targetPosition=step / 240,
+                                         force=20, physicsClientId=cid)
+            couple_mimic_joints(pb, body, mimics, physics_client=cid)
+            pb.stepSimulation(physicsClientId=cid)
+            worst = max(worst, max(abs(pb.getJointState(body, idx[m.joint], physicsClientId=cid)[0]
+                                       - (m.multiplier * pb.getJointState(body, idx[m.master], physicsClientId=cid)[0]
+                                          + m.offset)) for m in mimics))
+        moved = abs(pb.getJointState(body, idx["j3_theta_a"], physicsClientId=cid)[0])
+    finally:
+        pb.disconnect(cid)
+    assert moved > 1e-3
+    assert worst < 0.02

@@ -250,6 +250,31 @@ def min_wall_mm(mesh: trimesh.Trimesh) -> tuple[float, np.ndarray]:
     return float(dist[k]), origins[ray_idx[k]]
 
 
+def min_section_width_mm(mesh: trimesh.Trimesh, step_mm: float = 0.05) -> tuple[float, float]:
+    """Narrowest cross-section of a bar-like part along its print Z: the short
+    side of the smallest rectangle around each slice. The face-to-face rays of
+    :func:`min_wall_mm` cannot see a neck between two V-shaped faces (a core's
+    valley), which is where a sacrificial core breaks.
+
+    Returns:
+        (width, height of that slice).
+    """
+    from shapely.geometry import Polygon
+
+    solid = to_manifold(mesh)
+    lo, hi = mesh.bounds[0][2], mesh.bounds[1][2]
+    best, at = math.inf, lo
+    for z in np.arange(lo + step_mm / 2.0, hi, step_mm):
+        for ring in solid.slice(float(z)).to_polygons():
+            if len(ring) < 3:
+                continue
+            rect = np.asarray(Polygon(ring).minimum_rotated_rectangle.exterior.coords)
+            sides = np.linalg.norm(np.diff(rect[:3], axis=0), axis=1)
+            if sides.min() < best:
+                best, at = float(sides.min()), float(z)
+    return best, at
+
+
 def check_printable(part: MoldMesh, min_wall_limit_mm: float) -> list[CheckResult]:
     mesh = part.printed if part.printed is not None else part.assembled
     where = part.where
@@ -263,8 +288,13 @@ def check_printable(part: MoldMesh, min_wall_limit_mm: float) -> list[CheckResul
     out.append(CheckResult(f"mold_on_bed:{part.name}", abs(zmin) < 1e-6 and bed > 0, bed, "> 0 at z = 0", "mm2",
                            where, f"lowest z {zmin:.6f} mm"))
     wall, at = min_wall_mm(mesh)
+    note = "thinnest web at (" + ", ".join(f"{c:.2f}" for c in at) + ") in print frame"
+    if part.pull_direction is None:
+        neck, z = min_section_width_mm(mesh)
+        note += f"; narrowest cross-section {neck:.3f} mm at print z {z:.2f} mm"
+        wall = min(wall, neck)
     out.append(CheckResult(f"mold_min_wall:{part.name}", wall >= min_wall_limit_mm, wall, min_wall_limit_mm, "mm",
-                           where, "thinnest web at (" + ", ".join(f"{c:.2f}" for c in at) + ") in print frame"))
+                           where, note))
     return out
 
 

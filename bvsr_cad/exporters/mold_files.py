@@ -94,6 +94,7 @@ def _render_exploded(molds: MoldSet, path: Path) -> None:
     centre = np.array([0.0, 0.0, molds.info["cast_height_mm"] / 2.0])
     plotter.camera_position = [tuple(centre + eye), tuple(centre), (0.0, 0.0, 1.0)]
     plotter.reset_camera()  # keep the view direction, fit every exploded part
+    plotter.camera.zoom(1.5)
     plotter.add_axes()
     plotter.screenshot(str(path))
     plotter.close()

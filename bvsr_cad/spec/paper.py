@@ -32,3 +32,20 @@ def paper_tail_mass(segments: int) -> PaperFigure | None:
 
 def paper_length(segments: int) -> PaperFigure:
     return TAIL_LENGTH_BVSR_L if segments == 3 else TAIL_LENGTH_BVSR
+
+
+SEGMENT_PEAK_VELOCITY_EXTENSION = PaperFigure(678.6, "deg/s", "one segment, extension, 6 bar, up to 38 deg",
+                                              "Sec. IV-A-3")
+TAIL_PEAK_TORQUE_NO_PAYLOAD = PaperFigure(1.21, "N m", "whole tail, 6 bar, no payload", "Sec. IV-A-4")
+TAIL_PEAK_TORQUE_100G = PaperFigure(1.88, "N m", "whole tail, 6 bar, 100 g tip", "Sec. IV-A-4")
+TAIL_PEAK_FORCE_NO_PAYLOAD = PaperFigure(5.58, "N", "whole tail, 6 bar, no payload", "Sec. IV-A-4")
+TAIL_PEAK_FORCE_100G = PaperFigure(8.06, "N", "whole tail, 6 bar, 100 g tip", "Sec. IV-A-4")
+TAIL_PEAK_500G = (PaperFigure(23.6, "N", "whole tail on the quadruped, 500 g tip", "Abstract"),
+                  PaperFigure(2.48, "N m", "whole tail on the quadruped, 500 g tip", "Abstract"))
+
+
+def paper_root_peaks(payload_g: float) -> tuple[PaperFigure, PaperFigure] | None:
+    """(force, torque) the paper reports at 6 bar for this payload, if any."""
+    table = {0.0: (TAIL_PEAK_FORCE_NO_PAYLOAD, TAIL_PEAK_TORQUE_NO_PAYLOAD),
+             100.0: (TAIL_PEAK_FORCE_100G, TAIL_PEAK_TORQUE_100G), 500.0: TAIL_PEAK_500G}
+    return table.get(float(payload_g))

@@ -23,7 +23,9 @@ from .exporters.analysis_files import write_analyses
 from .exporters.cad import write_assembly_step, write_part_step, write_part_stl
 from .exporters.manifest import manifest_dict, write_manifest
 from .exporters.mold_files import write_molds
+from .exporters.fabrication_files import write_fabrication
 from .exporters.render import render_previews
+from .exporters.report import write_report
 from .exporters.robot_files import theta_max_from_limits, write_robot
 from .spec.load import load_spec, params_sha256
 
@@ -105,10 +107,13 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
             theta_max = theta_max_from_limits(json.loads((tmp / limits).read_text()), spec.joints)
             manifest.update(write_robot(asm, tmp, theta_max, say))
         manifest.update(write_molds(asm, tmp, say))
+        manifest.update(write_fabrication(asm, tmp, manifest, say))
         write_manifest(tmp, manifest)
         say("checks")
         results = run_checks(tmp, say)
         manifest["checks"] = [r.to_json() for r in results]
+        say("report")
+        manifest.update(write_report(tmp, manifest))
         manifest["build_seconds"] = time.perf_counter() - t0
         write_manifest(tmp, manifest)
         _publish(tmp, out)

@@ -12,6 +12,7 @@ from .mesh import check_part_mesh
 from .analyses import check_analyses
 from .molds import check_molds
 from .paper import check_paper
+from .printability import check_printability
 from .result import CheckResult
 from .robot import check_robot
 
@@ -37,6 +38,8 @@ def run_checks(root: str | Path, progress: Callable[[str], None] | None = None) 
     results.extend(check_analyses(exp))
     say("robot descriptions (URDF, MJCF, MuJoCo, PyBullet)")
     results.extend(check_robot(exp))
+    say("printability")
+    results.extend(check_printability(exp))
     say("molds")
     results.extend(check_molds(exp))
     clear_cache()

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
+import build123d as bd
 import trimesh
 
 from .. import units
@@ -12,14 +12,6 @@ from ..assembly.robot import RobotModel
 
 #: Fine enough that link inertias from these meshes match the B-rep within 0.1 %.
 MESH_TOLERANCE_MM = 0.01
-
-
-def tessellate_m(shape, tolerance_mm: float = MESH_TOLERANCE_MM) -> trimesh.Trimesh:
-    verts, tris = shape.tessellate(tolerance_mm, 0.1)
-    v = np.array([(p.X, p.Y, p.Z) for p in verts]) / units.MM_PER_M
-    mesh = trimesh.Trimesh(v, np.asarray(tris), process=True)
-    mesh.fix_normals()
-    return mesh
 
 
 def write_robot_meshes(robot: RobotModel, mesh_dir: Path) -> dict[str, str]:
@@ -31,6 +23,17 @@ def write_robot_meshes(robot: RobotModel, mesh_dir: Path) -> dict[str, str]:
             if vis.name in files:
                 continue
             name = f"{vis.name}.stl"
-            tessellate_m(vis.solid).export(mesh_dir / name)
+            _write_m(vis.solid, mesh_dir / name)
             files[vis.name] = name
     return files
+
+
+def _write_m(shape, path: Path, tolerance_mm: float = MESH_TOLERANCE_MM) -> None:
+    """Tessellate in millimetres with OCCT (fast), then scale the mesh to metres."""
+    tmp = path.with_suffix(".mm.stl")
+    if not bd.export_stl(shape, tmp, tolerance=tolerance_mm, angular_tolerance=0.1):
+        raise OSError(f"STL export failed: {tmp}")
+    mesh = trimesh.load(tmp, force="mesh")
+    tmp.unlink()
+    mesh.apply_scale(1.0 / units.MM_PER_M)
+    mesh.export(path)

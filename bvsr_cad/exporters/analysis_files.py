@@ -1,21 +1,62 @@
-"""Writes the kinematic analyses (workspace, clearance, joint limits) into an export.
-
-Filled in by the kinematics issue; returns the manifest fragment to merge.
-"""
+"""Writes the kinematic analyses (workspace, quasi-static table, clearance, joint limits) into an export."""
 
 from __future__ import annotations
 
+import json
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from ..analysis.clearance import clearance_map, clearance_over, plot_clearance_map, posed_tail
+from ..analysis.limits import joint_limits_bound
+from ..analysis.workspace import plot_workspace, quasi_static_table, run_workspace
 from ..assembly.build import Assembly
+
+#: Limits in the build: 36 bending planes, 1 mrad steps, from the conservative stage-1 bound
+#: (exact bisection, `analysis.limits.joint_limits`, takes minutes: it is a library call).
+BUILD_LIMIT_PHIS = 36
 
 
 def write_analyses(asm: Assembly, root: Path, progress: Callable[[str], None]) -> dict[str, Any]:
     """Run the analyses on ``asm`` and write them under ``root/analysis``.
 
     Returns:
-        Keys to merge into the manifest (for example ``{"analysis": {...}}``).
+        ``{"analysis": {...}}``: paths relative to the manifest.
     """
-    return {}
+    spec = asm.spec
+    cfg = spec.analysis
+    out = root / "analysis"
+    out.mkdir(exist_ok=True)
+    t0 = time.perf_counter()
+    progress("analysis: workspace")
+    ws = run_workspace(asm, cfg.build_workspace_samples, cfg.seed, progress)
+    plot_workspace(ws, out / "workspace.png", spec.name)
+    quasi = quasi_static_table(asm, (1.0, 2.0))
+    ws_json = {"samples": ws.samples, "seed": ws.seed, "tip_extent_mm": ws.extent_mm(),
+               "max_theta_rad": ws.max_theta_rad, "quasi_static_segment": quasi}
+    (out / "workspace.json").write_text(json.dumps(ws_json, indent=1))
+    progress("analysis: clearance")
+    pt = posed_tail(asm, progress)
+    import numpy as np
+
+    rng = np.random.default_rng(cfg.seed)
+    idx = rng.integers(0, ws.samples, cfg.build_clearance_poses)
+    res = clearance_over(pt, ws.w[idx])
+    cl_json = res.to_json() | {"required_mm": cfg.min_clearance_mm,
+                               "note": "poses resampled from the build's workspace samples"}
+    (out / "clearance.json").write_text(json.dumps(cl_json, indent=1))
+    th, ph, bound = clearance_map(pt, spec.joints - 1, 1.0)
+    plot_clearance_map(th, ph, bound, out / "clearance_map.png",
+                       f"{spec.name}: j{spec.joints} bending alone (stage-1 bound)", ws.max_theta_rad,
+                       cfg.min_clearance_mm)
+    progress("analysis: joint limits")
+    lims = joint_limits_bound(pt, cfg.min_clearance_mm, BUILD_LIMIT_PHIS)
+    lim_json = {"required_clearance_mm": cfg.min_clearance_mm, "theta_search_max_rad": 1.0,
+                "resolution_rad": 1e-3, "method": "stage-1 bound (conservative: exact limits are not lower)",
+                "joints": [vars(lim) for lim in lims], "workspace_max_theta_rad": ws.max_theta_rad}
+    (out / "limits.json").write_text(json.dumps(lim_json, indent=1))
+    progress(f"analysis: {time.perf_counter() - t0:.1f} s")
+    return {"analysis": {"limits": "analysis/limits.json", "workspace": "analysis/workspace.json",
+                         "clearance": "analysis/clearance.json", "workspace_png": "analysis/workspace.png",
+                         "clearance_map_png": "analysis/clearance_map.png"}}

@@ -49,3 +49,17 @@ def paper_root_peaks(payload_g: float) -> tuple[PaperFigure, PaperFigure] | None
     table = {0.0: (TAIL_PEAK_FORCE_NO_PAYLOAD, TAIL_PEAK_TORQUE_NO_PAYLOAD),
              100.0: (TAIL_PEAK_FORCE_100G, TAIL_PEAK_TORQUE_100G), 500.0: TAIL_PEAK_500G}
     return table.get(float(payload_g))
+
+# Kinematics issue: Table III (one segment, quasi-static) and the workspace (Sec. IV-A-4).
+QS_MAX_ANGLE_DEG = {"extension": PaperFigure(51.9, "deg", "one segment", "Table III"),
+                    "flexion": PaperFigure(46.5, "deg", "one segment", "Table III"),
+                    "waggle": PaperFigure(46.1, "deg", "one segment", "Table III")}
+QS_BLOCKED_FORCE_N = {"extension": PaperFigure(19.7, "N", "one segment", "Table III"),
+                      "flexion": PaperFigure(17.8, "N", "one segment", "Table III"),
+                      "waggle": PaperFigure(16.8, "N", "one segment", "Table III")}
+WORKSPACE_HALF_WIDTH_BVSR = PaperFigure(100.0, "mm", "tip workspace, BVSR", "Sec. IV-A-4 ('about +/-100 mm')")
+WORKSPACE_HALF_WIDTH_BVSR_L = PaperFigure(300.0, "mm", "tip workspace, BVSR_L", "Sec. IV-A-4 ('about +/-300 mm')")
+
+
+def paper_workspace_half_width(segments: int) -> PaperFigure:
+    return WORKSPACE_HALF_WIDTH_BVSR_L if segments == 3 else WORKSPACE_HALF_WIDTH_BVSR

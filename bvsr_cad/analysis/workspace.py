@@ -1,0 +1,114 @@
+"""The paper's workspace protocol (Sec. IV-A-4, SPEC section 5) on the static model.
+
+Each of the 5 x n_segments lines is, with equal probability, pressurised
+(uniform from atmospheric to the protocol's maximum), depressurised (uniform
+from the minimum to atmospheric) or inactive (atmospheric); the tail is
+mounted horizontally (gravity along -Y). The forward statics give every
+joint's pose and the tip point (centre of the tip panel's distal face).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import units
+from ..assembly.build import Assembly
+from ..models.statics import LumpedMasses, TailStatics, quasi_static_segment
+from ..spec.tables import TailSpec
+
+Progress = Callable[[str], None]
+
+
+def lumped_masses(asm: Assembly) -> LumpedMasses:
+    """Panel masses (with the rod inside them) and joint masses (five SOAs and the rod in the gap), kg."""
+    spec = asm.spec
+    rod = spec.materials[spec.vertebra.material]
+    rod_g_per_mm = units.mass_g(math.pi * spec.vertebra.diameter_mm**2 / 4.0, rod.density_g_cm3)
+    t = spec.joint.panel_thickness_mm
+    by_name = {i.name: i for i in asm.instances}
+    panel_g = np.array([asm.mass_g(by_name[f"panel{k}"].part) for k in range(spec.panels)]) + rod_g_per_mm * t
+    joint_g = np.full(spec.joints, 5 * asm.mass_g("soa") + rod_g_per_mm * spec.joint.gap_mm)
+    return LumpedMasses(panel_g / units.G_PER_KG, joint_g / units.G_PER_KG)
+
+
+def sample_line_pressures_kpa(spec: TailSpec, n: int, rng: np.random.Generator) -> np.ndarray:
+    """Gauge pressures (n, n_segments, 5) drawn by the paper's protocol."""
+    a = spec.actuation
+    shape = (n, spec.segments, 5)
+    state = rng.integers(0, 3, size=shape)  # 0 inactive, 1 pressurised, 2 depressurised
+    up = rng.uniform(a.atmospheric_kpa, a.workspace_pressurised_max_kpa_abs, size=shape)
+    down = rng.uniform(a.workspace_depressurised_min_kpa_abs, a.atmospheric_kpa, size=shape)
+    absolute = np.where(state == 1, up, np.where(state == 2, down, a.atmospheric_kpa))
+    return absolute - a.atmospheric_kpa
+
+
+@dataclass(frozen=True)
+class Workspace:
+    samples: int
+    seed: int
+    tip_mm: np.ndarray  # (n, 3)
+    w: np.ndarray  # (n, n_joints, 2)
+    line_kpa: np.ndarray  # (n, n_segments, 5)
+
+    def extent_mm(self) -> dict[str, list[float]]:
+        return {ax: [float(self.tip_mm[:, i].min()), float(self.tip_mm[:, i].max())] for i, ax in enumerate("xyz")}
+
+    @property
+    def max_theta_rad(self) -> float:
+        return float(np.max(np.hypot(self.w[..., 0], self.w[..., 1])))
+
+
+def tail_statics(asm: Assembly, gravity: bool = True) -> TailStatics:
+    return TailStatics.from_spec(asm.spec, lumped_masses(asm) if gravity else None)
+
+
+def run_workspace(asm: Assembly, samples: int, seed: int, progress: Progress | None = None,
+                  chunk: int = 2000) -> Workspace:
+    """Sample the protocol and solve the forward statics of every sample."""
+    say = progress or (lambda _m: None)
+    st = tail_statics(asm)
+    rng = np.random.default_rng(seed)
+    p = sample_line_pressures_kpa(asm.spec, samples, rng)
+    ws = []
+    for i in range(0, samples, chunk):
+        say(f"workspace: forward statics {i}..{min(samples, i + chunk)} of {samples}")
+        ws.append(st.forward(p[i:i + chunk]))
+    w = np.concatenate(ws)
+    return Workspace(samples, seed, st.kin.tip_point_mm(w), w, p)
+
+
+def quasi_static_table(asm: Assembly, area_scale: tuple[float, ...] = (1.0,)) -> list[dict]:
+    """Table III from the model: one segment at the pressure limits (with gravity, mounted horizontally)."""
+    rows = []
+    for scale in area_scale:
+        st = TailStatics.from_spec(asm.spec, lumped_masses(asm),
+                                   area_mm2=asm.spec.actuation.effective_area_mm2 * scale).first_segment()
+        for motion in ("extension", "flexion", "waggle"):
+            q = quasi_static_segment(st, motion)
+            rows.append({"motion": motion, "area_mm2": st.act.area_mm2, "max_angle_deg": q.max_angle_deg,
+                         "blocked_force_n": q.blocked_force_n, "line_kpa": list(q.line_kpa)})
+    return rows
+
+
+def plot_workspace(ws: Workspace, path, title: str) -> None:
+    """The tip cloud in the XY, XZ and YZ planes (PNG)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4.4))
+    for ax, (i, j) in zip(axes, ((0, 1), (0, 2), (1, 2))):
+        ax.scatter(ws.tip_mm[:, i], ws.tip_mm[:, j], s=1, alpha=0.3)
+        ax.set_xlabel(f"{'xyz'[i]} (mm)")
+        ax.set_ylabel(f"{'xyz'[j]} (mm)")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.grid(True, lw=0.3)
+    fig.suptitle(f"{title}: tip workspace, {ws.samples} samples (tail horizontal, gravity -Y)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

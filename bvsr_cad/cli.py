@@ -73,6 +73,105 @@ def cmd_check(args) -> int:
     return _print_results(results, args.json)
 
 
+def cmd_simulate(args) -> int:
+    from .exporters.plots import plot_simulation
+    from .sim import check_inputs, joint_limits_rad, simulate
+    from .spec import paper
+    from .spec.load import load_spec
+
+    say = _progress(args.quiet or args.json)
+    spec = load_spec(args.params)
+    check_inputs(spec, args.pressure_bar, args.payload_g)
+    limits = joint_limits_rad(spec, say)
+    res = simulate(spec, limits, args.pressure_bar, args.payload_g, progress=say)
+    out = Path(args.output) if args.output else Path("exports") / spec.name / "simulate"
+    out.mkdir(parents=True, exist_ok=True)
+    png = out / f"simulate_{args.pressure_bar:g}bar_{args.payload_g:g}g.png"
+    plot_simulation(res, png, f"{spec.name}: {args.pressure_bar:g} bar pulse (Eq 13 ramp, t0 = 40 ms)")
+    v_ref = paper.SEGMENT_PEAK_VELOCITY_EXTENSION
+    peaks = paper.paper_root_peaks(args.payload_g) if args.pressure_bar == 6 else None
+    comparison = {
+        "peak_velocity_deg_s": {"computed": res.peak_velocity_deg_s, "paper": v_ref.value,
+                                "paper_at": v_ref.measured_on},
+        "peak_root_force_n": {"computed": res.peak_root_force_n, "paper": peaks[0].value if peaks else None},
+        "peak_root_torque_nm": {"computed": res.peak_root_torque_nm, "paper": peaks[1].value if peaks else None},
+    }
+    payload = {"pressure_bar": res.pressure_bar, "payload_g": res.payload_g,
+               "peak_velocity_deg_s": res.peak_velocity_deg_s, "segment_angle_reached_deg": res.angle_reached_deg,
+               "peak_root_torque_nm": res.peak_root_torque_nm, "peak_root_force_n": res.peak_root_force_n,
+               "joint_limits_rad": limits, "plot": str(png), "paper": comparison}
+    if args.json:
+        print(json.dumps(payload))
+    else:
+        for key, c in comparison.items():
+            ref = "not reported at this pressure/payload" if c["paper"] is None else \
+                f"paper {c['paper']:g} ({100 * (c['computed'] - c['paper']) / c['paper']:+.0f} %)"
+            print(f"{key}: {c['computed']:.3g}  {ref}")
+        print(f"segment reached {res.angle_reached_deg:.1f} deg; plot: {png}")
+    return EXIT_OK
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: must be > 0")
+    return value
+
+
+def _non_negative(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: must be >= 0")
+    return value
+
+
+def cmd_workspace(args) -> int:
+    from .analysis.workspace import run_workspace
+    from .assembly.build import build_assembly
+    from .spec.load import ParamError, load_spec
+
+    if args.samples < 1:
+        raise ParamError("--samples", [f"--samples {args.samples}: must be at least 1"])
+    spec = load_spec(args.params)
+    say = _progress(args.quiet)
+    ws = run_workspace(build_assembly(spec, say), args.samples, args.seed, say)
+    out = {"samples": ws.samples, "seed": ws.seed, "tip_extent_mm": ws.extent_mm(),
+           "max_theta_rad": ws.max_theta_rad}
+    print(json.dumps(out) if args.json else
+          "\n".join(f"{k}: {v}" for k, v in out.items()))
+    return EXIT_OK
+
+
+def cmd_clearance(args) -> int:
+    from .analysis.clearance import clearance_over, posed_tail
+    from .analysis.workspace import run_workspace
+    from .assembly.build import build_assembly
+    from .spec.load import ParamError, load_spec
+
+    if args.poses < 1:
+        raise ParamError("--poses", [f"--poses {args.poses}: must be at least 1"])
+    spec = load_spec(args.params)
+    say = _progress(args.quiet)
+    asm = build_assembly(spec, say)
+    ws = run_workspace(asm, args.poses, spec.analysis.seed, say)
+    pt = posed_tail(asm, say)
+    say(f"clearance over {args.poses} workspace poses")
+    res = clearance_over(pt, ws.w)
+    out = res.to_json() | {"required_mm": spec.analysis.min_clearance_mm}
+    ok = res.min_clearance_mm >= spec.analysis.min_clearance_mm
+    print(json.dumps(out) if args.json else
+          f"min clearance {res.min_clearance_mm:.4f} mm between {res.pair[0]} and {res.pair[1]} over "
+          f"{res.poses} poses ({res.poses_per_s:.0f} poses/s; bound {res.lower_bound_mm:.4f} mm, "
+          f"certified {res.certified}); required {spec.analysis.min_clearance_mm} mm")
+    return EXIT_OK if ok else EXIT_FAILED
+
+
 def make_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="bvsr", description="Parametric CAD and fabrication pipeline for the BVSR soft robotic tail.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -87,6 +186,27 @@ def make_parser() -> argparse.ArgumentParser:
     c.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     c.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     c.set_defaults(func=cmd_check)
+    sm = sub.add_parser("simulate", help="drive the MJCF with a pressure pulse; peak velocity and root torque")
+    sm.add_argument("params", help="parameter file")
+    sm.add_argument("--pressure-bar", type=_positive, default=6.0, help="pulse gauge pressure in bar (default 6)")
+    sm.add_argument("--payload-g", type=_non_negative, default=0.0, help="tip payload in grams (default 0)")
+    sm.add_argument("-o", "--output", help="folder for the plot (default exports/<name>/simulate/)")
+    sm.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    sm.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    sm.set_defaults(func=cmd_simulate)
+    wk = sub.add_parser("workspace", help="tip workspace by the paper's random chamber-state protocol")
+    wk.add_argument("params", help="parameter file")
+    wk.add_argument("--samples", type=int, default=20000)
+    wk.add_argument("--seed", type=int, default=1)
+    wk.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    wk.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    wk.set_defaults(func=cmd_workspace)
+    cl = sub.add_parser("clearance", help="minimum clearance between solids over the workspace")
+    cl.add_argument("params", help="parameter file")
+    cl.add_argument("--poses", type=int, default=20000)
+    cl.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    cl.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    cl.set_defaults(func=cmd_clearance)
     return p
 
 
@@ -95,11 +215,12 @@ def main(argv: list[str] | None = None) -> int:
     from .checks.export import ExportError
     from .parts._kernel import GeometryError
     from .pipeline import OutputError
+    from .sim import SimulationInputError
     from .spec.load import ParamError
 
     try:
         return args.func(args)
-    except (ParamError, OutputError, ExportError) as exc:
+    except (ParamError, OutputError, ExportError, SimulationInputError) as exc:
         print(f"bvsr: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except GeometryError as exc:

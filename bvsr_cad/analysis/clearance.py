@@ -240,7 +240,7 @@ class ClearanceResult:
                 "certified": bool(self.certified), "seconds": self.seconds, "poses_per_s": self.poses_per_s}
 
 
-def clearance_over(pt: PosedTail, w: np.ndarray, max_exact: int = 12) -> ClearanceResult:
+def clearance_over(pt: PosedTail, w: np.ndarray, max_exact: int = 4) -> ClearanceResult:
     """Two-stage minimum clearance over poses w (n, n_joints, 2).
 
     Candidates are confirmed in increasing order of their bound until the next

@@ -1,0 +1,63 @@
+"""Eq 1-2 and the tail chain: closed forms and two independent computations."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bvsr_cad.models.kinematics import (TailKinematics, joint_transform, joint_transform_chain, soa_lengths_and_jacobian,
+                                        soa_lengths_mm, uv_from_theta_phi)
+
+L = 36.51
+
+
+def test_eq2_equals_the_urdf_chain_including_the_straight_limit():
+    rng = np.random.default_rng(0)
+    theta = np.r_[0.0, 1e-12, 1e-6, 5e-3, rng.uniform(0, 1.5, 200)]
+    phi = rng.uniform(-np.pi, np.pi, theta.size)
+    assert np.abs(joint_transform(theta, phi, L) - joint_transform_chain(theta, phi, L)).max() < 1e-12
+
+
+def test_eq2_closed_form_entries():
+    th, ph = 0.7, 0.4
+    t = joint_transform(th, ph, L)
+    c, s = np.cos(ph), np.sin(ph)
+    assert t[0, 0] == pytest.approx(c * c * np.cos(th) + s * s, abs=1e-14)
+    assert t[0, 3] == pytest.approx(L * c * (1 - np.cos(th)) / th, abs=1e-12)
+    assert t[2, 3] == pytest.approx(L * np.sin(th) / th, abs=1e-12)
+    np.testing.assert_allclose(joint_transform(0.0, 1.0, L), np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, L],
+                                                                      [0, 0, 0, 1.0]]), atol=1e-15)
+
+
+def test_soa_lengths_and_jacobian(bvsr_spec):
+    kin = TailKinematics.from_spec(bvsr_spec)
+    g = kin.joints[-1]
+    # At rest: H_a + 2 pocket depths along z plus the taper's radial step.
+    dz = L + 2 * 0.545
+    dr = np.linalg.norm(g.moving_mm[0, :2]) - np.linalg.norm(g.base_mm[0, :2])
+    np.testing.assert_allclose(g.rest_lengths_mm, np.hypot(dz, dr), rtol=1e-12)
+    u, v, h = 0.21, -0.13, 1e-6
+    _, jac = soa_lengths_and_jacobian(g, np.array(u), np.array(v))
+    fd_u = (soa_lengths_mm(g, np.array(u + h), np.array(v)) - soa_lengths_mm(g, np.array(u - h), np.array(v))) / 2 / h
+    fd_v = (soa_lengths_mm(g, np.array(u), np.array(v + h)) - soa_lengths_mm(g, np.array(u), np.array(v - h))) / 2 / h
+    np.testing.assert_allclose(jac, np.stack([fd_u, fd_v], -1), atol=1e-7)
+
+
+def test_tail_tip_uniform_bend_closed_form(bvsr_spec):
+    kin = TailKinematics.from_spec(bvsr_spec)
+    assert kin.rest_tip_mm() == pytest.approx([0, 0, bvsr_spec.length_mm])
+    # Every joint bent by theta in the YZ plane: the tip is a planar chain of arcs and slabs.
+    th, n, t = 0.1, kin.n_joints, kin.panel_thickness_mm
+    w = np.tile(uv_from_theta_phi(th, np.pi / 2), (n, 1))
+    pos, ang = np.zeros(2), 0.0  # (y, z), angle of the local z axis from +Z towards +Y
+    for _ in range(n):
+        pos = pos + t * np.array([np.sin(ang), np.cos(ang)])
+        chord = 2 * L * np.sin(th / 2) / th
+        pos = pos + chord * np.array([np.sin(ang + th / 2), np.cos(ang + th / 2)])
+        ang += th
+    pos = pos + t * np.array([np.sin(ang), np.cos(ang)])
+    tip = kin.tip_point_mm(w)
+    assert tip == pytest.approx([0.0, pos[0], pos[1]], abs=1e-9)
+    # Batched poses give the same as one by one.
+    batch = np.stack([w, 0.5 * w])
+    np.testing.assert_allclose(kin.tip_point_mm(batch)[0], tip, atol=1e-12)

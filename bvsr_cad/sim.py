@@ -44,6 +44,10 @@ def ramp_pa(t_s: np.ndarray | float, p0_pa: float, t0_s: float = RAMP_T0_S):
     return p0_pa * t * t * (3.0 / t0_s ** 2 - 2.0 * t / t0_s ** 3)
 
 
+class SimulationInputError(ValueError):
+    """A simulation argument outside what the model allows (exit code 2)."""
+
+
 @dataclass
 class SimResult:
     pressure_bar: float
@@ -119,19 +123,36 @@ def _run(path: Path, spec: TailSpec, p0_pa: float, seconds: float, stop_angle_de
     return t[:steps], angle[:steps], force[:steps], torque[:steps]
 
 
+def check_inputs(spec: TailSpec, pressure_bar: float, payload_g: float) -> None:
+    """Raises SimulationInputError naming the argument and what is allowed."""
+    p_max = spec.robot.pulse_pressure_max_kpa * units.PA_PER_KPA / units.PA_PER_BAR
+    if not 0 < pressure_bar <= p_max:
+        raise SimulationInputError(f"--pressure-bar {pressure_bar:g}: allowed 0 < P <= {p_max:g} bar "
+                                   "(robot.pulse_pressure_max_kpa)")
+    if payload_g < 0:
+        raise SimulationInputError(f"--payload-g {payload_g:g}: must be >= 0")
+
+
+def joint_limits_rad(spec: TailSpec, progress: Callable[[str], None] | None = None) -> list[float]:
+    """Collision-free theta_max of every joint (minimum over phi), as the build's limits analysis gives."""
+    from .analysis.clearance import posed_tail
+    from .analysis.limits import joint_limits_bound
+
+    say = progress or (lambda _m: None)
+    say("joint limits from the clearance analysis")
+    pt = posed_tail(build_assembly(spec))
+    return [min(j.theta_max_rad) for j in joint_limits_bound(pt, spec.analysis.min_clearance_mm)]
+
+
 def simulate(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float, payload_g: float = 0.0,
              seconds: float = 0.5, progress: Callable[[str], None] | None = None) -> SimResult:
     """Run the two experiments at a pulse pressure (gauge, bar).
 
     Raises:
-        ValueError: a pressure outside the actuators' control range or a negative payload.
+        SimulationInputError: a pressure outside the actuators' control range or a negative payload.
     """
     say = progress or (lambda _m: None)
-    p_max = spec.robot.pulse_pressure_max_kpa / 100.0
-    if not 0 < pressure_bar <= p_max:
-        raise ValueError(f"--pressure-bar {pressure_bar}: allowed 0 < P <= {p_max:g} bar (robot.pulse_pressure_max_kpa)")
-    if payload_g < 0:
-        raise ValueError(f"--payload-g {payload_g}: must be >= 0")
+    check_inputs(spec, pressure_bar, payload_g)
     p0 = pressure_bar * units.PA_PER_BAR
     one = dataclasses.replace(spec, name=f"{spec.name}_segment", segments=1)
     with tempfile.TemporaryDirectory() as tmp:

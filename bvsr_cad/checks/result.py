@@ -18,6 +18,13 @@ class CheckResult:
     where: str
     note: str = ""
 
+    def __post_init__(self) -> None:
+        # Checks compute with numpy; the JSON contract wants plain bools and numbers.
+        for key in ("passed", "value", "limit"):
+            v = getattr(self, key)
+            if hasattr(v, "item") and getattr(v, "ndim", 0) == 0:
+                object.__setattr__(self, key, v.item())
+
     def to_json(self) -> dict[str, Any]:
         return asdict(self)
 

@@ -1,18 +1,284 @@
 """Fabrication package of an export: rigid comparison tail, print files per process, BOM.
 
-Filled in by the fabrication issue; returns the manifest fragment to merge.
+Writes, beside what the pipeline already wrote:
+
+* ``step/<piece>.step``, ``stl/<piece>.stl`` (print orientation) and
+  ``rigid_tail/assembled/<piece>.stl`` (tail frame) for every piece of the
+  rigid PLA twin (:mod:`bvsr_cad.parts.rigid_tail`); the pieces join the
+  manifest's ``parts`` with kind ``rigid_tail`` and process ``FDM``;
+* ``robot/<name>_rigid.urdf`` and ``robot/<name>_rigid.xml``: the twin as one
+  rigid body (SI units, inertia from its meshes at solid PLA density);
+* ``print/<PROCESS>_<MATERIAL>/``: every printed part's STL lying on z = 0 in
+  print orientation, one 3MF per job (named objects, millimetres) and a
+  ``quantities.csv``; the manifest's ``print_jobs`` lists them;
+* ``bom.csv`` and ``bom.md`` (:mod:`bvsr_cad.exporters.bom`).
 """
 
 from __future__ import annotations
 
+import csv
+import shutil
+import xml.etree.ElementTree as ET
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import build123d as bd
+import numpy as np
+import trimesh
+
+from .. import units
 from ..assembly.build import Assembly
+from ..parts.rigid_tail import (RigidPiece, nut_pocket_depth_mm, pin_hole_mm, rigid_tail_pieces, tie_rod_hole_mm,
+                                tie_rod_length_mm)
+from ..spec.load import ParamError
+from .bom import bom_rows, write_bom
+from .cad import STL_ANGULAR_TOLERANCE_RAD, STL_LINEAR_TOLERANCE_MM
+from .urdf import _f, _vec
+
+RIGID_COLOR = (0.80, 0.80, 0.74)
+#: Gap between objects laid out side by side in a job's 3MF (mm).
+PLATE_GAP_MM = 5.0
+
+
+def _check_keys(asm: Assembly) -> None:
+    spec = asm.spec
+    fp = spec.fabrication_package
+    problems = [f"fabrication_package.{key} = {value!r}: not a material in [materials]; allowed: "
+                f"{', '.join(spec.materials)}"
+                for key, value in (("core_material", fp.core_material), ("mold_material", fp.mold_material),
+                                   ("rigid tail material 'PLA'", "PLA"))
+                if value not in spec.materials]
+    if problems:
+        raise ParamError("parameters", problems)
+
+
+def _soa_transforms(asm: Assembly) -> dict[int, list[np.ndarray]]:
+    out: dict[int, list[np.ndarray]] = {}
+    for k in range(1, asm.spec.panels):
+        out[k] = [np.asarray(i.transform) for i in asm.instances if i.name.startswith(f"j{k}_soa")]
+    return out
+
+
+def _write_stl(solid: bd.Shape, path: Path) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if not bd.export_stl(solid, path, tolerance=STL_LINEAR_TOLERANCE_MM, angular_tolerance=STL_ANGULAR_TOLERANCE_RAD,
+                         ascii_format=False):
+        raise OSError(f"STL export failed: {path}")
+
+
+def _write_step(solid: bd.Solid, name: str, path: Path) -> None:
+    solid.label = name
+    solid.color = bd.Color(*RIGID_COLOR)
+    if not bd.export_step(solid, path, unit=bd.Unit.MM):
+        raise OSError(f"STEP export failed: {path}")
+
+
+def _rigid_parts(asm: Assembly, pieces: list[RigidPiece], root: Path) -> list[dict[str, Any]]:
+    spec = asm.spec
+    mat = spec.material("PLA")
+    entries = []
+    for p in pieces:
+        files = {"step": f"step/{p.name}.step", "stl": f"stl/{p.name}.stl",
+                 "assembled_stl": f"rigid_tail/assembled/{p.name}.stl"}
+        _write_step(p.solid, p.name, root / files["step"])
+        _write_stl(p.solid, root / files["stl"])
+        _write_stl(p.solid.moved(bd.Location((0.0, 0.0, p.z0_mm))), root / files["assembled_stl"])
+        transform = np.eye(4)
+        transform[2, 3] = p.z0_mm
+        entries.append({
+            "name": p.name, "kind": "rigid_tail", "material": "PLA", "material_name": mat.name,
+            "density_g_cm3": mat.density_g_cm3, "process": "FDM", "count": 1,
+            "volume_mm3": p.solid.volume, "mass_g": units.mass_g(p.solid.volume, mat.density_g_cm3),
+            "instances": [p.name], "files": files,
+            # The part frame is the print frame; the instance sits at the piece's bed face in the tail.
+            "print_transform": np.eye(4).tolist(), "tail_transform": transform.tolist(),
+            "info": {"size_mm": list(p.size_mm), "z0_mm": p.z0_mm,
+                     "joint": p.index if p.name != "rigid_tip" else None,
+                     "print_features": [{"name": f.name, "kind": f.kind, "p0_mm": list(f.p0), "p1_mm": list(f.p1),
+                                         "diameter_mm": f.diameter_mm} for f in p.features]},
+        })
+    return entries
+
+
+def _rigid_robot(asm: Assembly, root: Path, parts: list[dict[str, Any]]) -> dict[str, Any]:
+    """URDF and MJCF of the rigid twin: one body fixed to the robot's mount."""
+    spec = asm.spec
+    name = f"{spec.name}_rigid"
+    meshes = [trimesh.load(root / p["files"]["assembled_stl"], file_type="stl", force="mesh") for p in parts]
+    mesh = trimesh.util.concatenate(meshes)
+    mesh.apply_scale(units.mm_to_m(1.0))
+    density_kg_m3 = spec.material("PLA").density_g_cm3 * 1000.0
+    mesh.density = density_kg_m3
+    mass_kg = float(mesh.mass)
+    com = np.asarray(mesh.center_mass, float)
+    inertia = np.asarray(mesh.moment_inertia, float)  # about the centre of mass, tail axes
+    folder = root / "robot"
+    (folder / "meshes").mkdir(parents=True, exist_ok=True)
+    mesh_rel = f"meshes/{name}.stl"
+    mesh.export(folder / mesh_rel)
+
+    robot = ET.Element("robot", name=name)
+    m = ET.SubElement(robot, "material", name="PLA")
+    ET.SubElement(m, "color", rgba=_vec((*RIGID_COLOR, 1.0)))
+    link = ET.SubElement(robot, "link", name="rigid_tail")
+    inertial = ET.SubElement(link, "inertial")
+    ET.SubElement(inertial, "origin", xyz=_vec(com), rpy="0 0 0")
+    ET.SubElement(inertial, "mass", value=_f(mass_kg))
+    ET.SubElement(inertial, "inertia", ixx=_f(inertia[0, 0]), ixy=_f(inertia[0, 1]), ixz=_f(inertia[0, 2]),
+                  iyy=_f(inertia[1, 1]), iyz=_f(inertia[1, 2]), izz=_f(inertia[2, 2]))
+    for tag in ("visual", "collision"):
+        el = ET.SubElement(link, tag, name=f"rigid_tail_{tag}")
+        ET.SubElement(el, "origin", xyz="0 0 0", rpy="0 0 0")
+        g = ET.SubElement(el, "geometry")
+        ET.SubElement(g, "mesh", filename=mesh_rel)
+        if tag == "visual":
+            ET.SubElement(el, "material", name="PLA")
+    ET.indent(robot)
+    urdf_rel = f"robot/{name}.urdf"
+    ET.ElementTree(robot).write(root / urdf_rel, encoding="utf-8", xml_declaration=True)
+
+    mj = ET.Element("mujoco", model=name)
+    ET.SubElement(mj, "compiler", angle="radian", meshdir="meshes")
+    ET.SubElement(mj, "option", timestep=_f(spec.robot.timestep_s), gravity="0 -9.81 0")
+    asset = ET.SubElement(mj, "asset")
+    ET.SubElement(asset, "mesh", name="rigid_tail", file=f"{name}.stl")
+    world = ET.SubElement(mj, "worldbody")
+    ET.SubElement(world, "light", pos="0 0.5 0.3", dir="0 -1 0")
+    body = ET.SubElement(world, "body", name="rigid_tail", pos="0 0 0")  # no joint: welded to the mount
+    ET.SubElement(body, "inertial", pos=_vec(com), mass=_f(mass_kg),
+                  fullinertia=_vec((inertia[0, 0], inertia[1, 1], inertia[2, 2],
+                                    inertia[0, 1], inertia[0, 2], inertia[1, 2])))
+    ET.SubElement(body, "geom", type="mesh", mesh="rigid_tail", rgba=_vec((*RIGID_COLOR, 1.0)),
+                  contype="0", conaffinity="0")
+    ET.indent(mj)
+    mjcf_rel = f"robot/{name}.xml"
+    ET.ElementTree(mj).write(root / mjcf_rel, encoding="utf-8", xml_declaration=True)
+    return {"urdf": urdf_rel, "mjcf": mjcf_rel, "mesh": f"robot/{mesh_rel}", "mass_kg": mass_kg,
+            "com_m": com.tolist(), "inertia_kg_m2": inertia.tolist(),
+            "note": "one rigid body fixed to the mount; solid PLA density (the printed infill lowers the mass: "
+                    "weigh the print and scale)"}
+
+
+def _layout_3mf(items: list[tuple[str, Path]], path: Path) -> None:
+    """Each STL once as a named object, side by side in a row of rows (mm)."""
+    scene = trimesh.Scene()
+    x = y = row_depth = 0.0
+    row_limit = 400.0
+    for name, stl in items:
+        mesh = trimesh.load(stl, file_type="stl", force="mesh")
+        lo, hi = mesh.bounds
+        w, d = hi[0] - lo[0], hi[1] - lo[1]
+        if x > 0 and x + w > row_limit:
+            x, y, row_depth = 0.0, y + row_depth + PLATE_GAP_MM, 0.0
+        t = trimesh.transformations.translation_matrix((x - lo[0], y - lo[1], -lo[2]))
+        scene.add_geometry(mesh, node_name=name, geom_name=name, transform=t)
+        x += w + PLATE_GAP_MM
+        row_depth = max(row_depth, d)
+    path.write_bytes(scene.export(file_type="3mf"))
+
+
+def _print_jobs(asm: Assembly, root: Path, manifest: dict[str, Any], rigid: list[dict[str, Any]]) -> list[dict]:
+    spec = asm.spec
+    fp = spec.fabrication_package
+    jobs: dict[tuple[str, str], list[dict[str, Any]]] = {}
+
+    def add(process: str, material: str, name: str, kind: str, stl: str, quantity: int, volume_mm3: float) -> None:
+        dens = spec.material(material).density_g_cm3
+        jobs.setdefault((process, material), []).append(
+            {"part": name, "kind": kind, "source": stl, "quantity": quantity, "volume_mm3": volume_mm3,
+             "mass_g": units.mass_g(volume_mm3, dens)})
+
+    for p in manifest["parts"]:
+        if p["process"] == "MJF":
+            add("MJF", p["material"], p["name"], p["kind"], p["files"]["stl"], p["count"], p["volume_mm3"])
+    for p in rigid:
+        add("FDM", "PLA", p["name"], p["kind"], p["files"]["stl"], p["count"], p["volume_mm3"])
+    soa_count = sum(p["count"] for p in manifest["parts"] if p["kind"] == "soa")
+    for mp in manifest.get("molds", {}).get("parts", []):
+        if mp.get("sacrificial"):
+            add("FDM", fp.core_material, f"mold_{mp['name']}", "mold_core", mp["files"]["stl"], soa_count,
+                mp["volume_mm3"])
+        else:
+            add("FDM", fp.mold_material, f"mold_{mp['name']}", "mold", mp["files"]["stl"], fp.mold_sets,
+                mp["volume_mm3"])
+    out = []
+    volumes = {"FDM": (fp.printer_x_mm, fp.printer_y_mm, fp.printer_z_mm),
+               "MJF": (fp.mjf_x_mm, fp.mjf_y_mm, fp.mjf_z_mm)}
+    for (process, material), items in jobs.items():
+        job = f"{process}_{material.split('_')[0]}"
+        folder = root / "print" / job
+        folder.mkdir(parents=True, exist_ok=True)
+        for it in items:
+            rel = f"print/{job}/{it['part']}.stl"
+            shutil.copyfile(root / it["source"], root / rel)
+            it["stl"] = rel
+            lo, hi = trimesh.load(root / rel, file_type="stl", force="mesh").bounds
+            it["size_mm"] = (hi - lo).tolist()
+        three_mf = f"print/{job}/{job}.3mf"
+        _layout_3mf([(it["part"], root / it["stl"]) for it in items], root / three_mf)
+        with (root / f"print/{job}/quantities.csv").open("w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(["part", "quantity", "stl", "mass_each_g"])
+            for it in items:
+                w.writerow([it["part"], it["quantity"], Path(it["stl"]).name, f"{it['mass_g']:.2f}"])
+        out.append({"name": job, "process": process, "material": material,
+                    "material_name": spec.material(material).name, "build_volume_mm": list(volumes[process]),
+                    "files": {"3mf": three_mf, "quantities": f"print/{job}/quantities.csv"},
+                    "items": items,
+                    "total_parts": sum(it["quantity"] for it in items),
+                    "total_mass_g": sum(it["quantity"] * it["mass_g"] for it in items)})
+    return out
 
 
 def write_fabrication(asm: Assembly, root: Path, manifest: dict[str, Any],
                       progress: Callable[[str], None]) -> dict[str, Any]:
-    """Write print files, the rigid tail and the BOM under ``root``; returns keys to merge into the manifest."""
-    return {}
+    """Write the rigid tail, print files and the BOM under ``root``; returns keys to merge into the manifest.
+
+    Raises:
+        ParamError: ``[fabrication_package]`` names a material that is not in ``[materials]``.
+        GeometryError: a rigid-tail piece does not fit the printer or the kernel failed.
+    """
+    spec = asm.spec
+    fp = spec.fabrication_package
+    _check_keys(asm)
+    progress("rigid comparison tail (PLA pieces)")
+    pieces = rigid_tail_pieces(spec, asm.panel_layouts, _soa_transforms(asm))
+    (root / "rigid_tail" / "assembled").mkdir(parents=True, exist_ok=True)
+    rigid = _rigid_parts(asm, pieces, root)
+    progress("rigid tail robot description")
+    robot_rigid = _rigid_robot(asm, root, rigid)
+    progress("print files (STL, 3MF per process and material)")
+    jobs = _print_jobs(asm, root, manifest, rigid)
+    rigid_section = {
+        "pieces": [p["name"] for p in rigid],
+        "printer_volume_mm": [fp.printer_x_mm, fp.printer_y_mm, fp.printer_z_mm],
+        "split": "one piece per joint at each panel's lower face (panel on the bed, SOA columns and rod on it); "
+                 "the tip panel alone",
+        "joining": {"pins": {"designation": f"ISO 2338 {fp.pin_diameter_mm:g} m6 x {fp.pin_length_mm:g}",
+                             "count": 5 * (spec.panels - 1), "hole_mm": pin_hole_mm(spec)},
+                    "tie_rod": {"designation": f"DIN 976-1 M{fp.tie_rod_thread:g}",
+                                "cut_length_mm": tie_rod_length_mm(spec), "hole_mm": tie_rod_hole_mm(spec)},
+                    "nuts": {"designation": f"ISO 4032 M{fp.tie_rod_thread:g}", "count": 2,
+                             "pocket_depth_mm": nut_pocket_depth_mm(spec)}},
+        "simplified": "SOA pockets, air channels, fitting and tube ports, feed passages and the rod socket are "
+                      "filled; lightening holes, tube pass-throughs and mount/payload insert bores are kept",
+        "envelope_tolerance_mm": fp.envelope_tolerance_mm,
+        "mass_g_solid": sum(p["mass_g"] for p in rigid),
+        "robot": robot_rigid,
+    }
+    fragment: dict[str, Any] = {
+        "parts": list(manifest["parts"]) + rigid,
+        "rigid_tail": rigid_section,
+        "print_jobs": jobs,
+        "fabrication": {"max_overhang_deg": fp.max_overhang_deg, "max_bridge_mm": fp.max_bridge_mm,
+                        "fdm_min_wall_mm": fp.fdm_min_wall_mm, "fdm_min_hole_mm": fp.fdm_min_hole_mm,
+                        "mjf_min_hole_mm": fp.mjf_min_hole_mm, "mjf_min_wall_mm": spec.fabrication.min_wall_mm,
+                        "mold_min_wall_mm": spec.casting.min_print_wall_mm,
+                        "slicer_timeout_s": fp.slicer_timeout_s},
+    }
+    progress("bill of materials")
+    merged = {**manifest, **fragment}
+    rows = bom_rows(asm, merged)
+    fragment["bom"] = write_bom(root, rows)
+    return fragment

@@ -275,6 +275,54 @@ class RobotDescription:
 
 
 @dataclass(frozen=True)
+class FabricationPackage:
+    """The fabrication package: printer, FDM limits, the rigid comparison tail, BOM items.
+
+    Every field has a default so older parameter files still load; the
+    parameter files spell them out with comments.
+    """
+
+    printer_x_mm: float = rule("FDM printer build volume, X", gt=20, le=2000, default=250.0)
+    printer_y_mm: float = rule("FDM printer build volume, Y", gt=20, le=2000, default=210.0)
+    printer_z_mm: float = rule("FDM printer build volume, Z (height)", gt=20, le=2000, default=210.0)
+    mjf_x_mm: float = rule("MJF build volume, X (HP 5200: 380)", gt=20, le=2000, default=380.0)
+    mjf_y_mm: float = rule("MJF build volume, Y (HP 5200: 284)", gt=20, le=2000, default=284.0)
+    mjf_z_mm: float = rule("MJF build volume, Z (HP 5200: 380)", gt=20, le=2000, default=380.0)
+    max_overhang_deg: float = rule("steepest overhang printed without support, from vertical", gt=0, lt=90,
+                                   default=45.0)
+    max_bridge_mm: float = rule("widest flat downward region (bridge or short ledge) printed without support",
+                                ge=0, le=50, default=10.0)
+    fdm_min_wall_mm: float = rule("thinnest wall an FDM part may have (two 0.4 mm perimeters)", gt=0.2, le=10,
+                                  default=0.8)
+    fdm_min_hole_mm: float = rule("smallest hole an FDM part may have", gt=0.2, le=10, default=1.5)
+    mjf_min_hole_mm: float = rule("smallest hole an MJF part may have (powder removal)", gt=0.2, le=10,
+                                  default=1.5)
+    envelope_tolerance_mm: float = rule("rigid tail vs the BVSR at rest: largest allowed surface deviation",
+                                        gt=0, le=2, default=0.1)
+    pin_diameter_mm: float = rule("rigid tail: dowel pin diameter (ISO 2338, one per SOA column end)",
+                                  ge=1.5, le=6, default=3.0)
+    pin_length_mm: float = rule("rigid tail: dowel pin length", ge=4, le=30, default=10.0)
+    pin_hole_clearance_mm: float = rule("rigid tail: diametral clearance of a pin hole (FDM holes print small)",
+                                        ge=0, le=1, default=0.2)
+    tie_rod_thread: float = rule("rigid tail: metric size of the central threaded tie rod (DIN 976-1 M3)",
+                                 choices=(2.0, 2.5, 3.0), default=3.0)
+    tie_rod_clearance_mm: float = rule("rigid tail: diametral clearance of the tie-rod hole", ge=0, le=1,
+                                       default=0.4)
+    core_material: str = rule("material key of the sacrificial mold cores (printed soluble)", default="PVA")
+    mold_material: str = rule("material key of the rigid mold parts", default="PLA")
+    mold_sets: int = rule("rigid mold sets printed (casts run in parallel; one core per cast)", ge=1, le=30,
+                          default=2)
+    tube_lead_mm: float = rule("tube length per line from the root mount to its valve pair", ge=0, le=5000,
+                               default=500.0)
+    tube_bend_allowance: float = rule("extra tube per line inside the tail for bending (fraction of its length)",
+                                      ge=0, le=1, default=0.1)
+    valves_per_line: int = rule("solenoid valves per pressure line (paper: pressure + vacuum = 2)", ge=1, le=4,
+                                default=2)
+    slicer_timeout_s: float = rule("time allowed to slice one STL in the printability check", gt=1, le=600,
+                                   default=60.0)
+
+
+@dataclass(frozen=True)
 class TailSpec:
     """The whole tail: what a parameter file describes."""
 
@@ -297,6 +345,8 @@ class TailSpec:
     analysis: Analysis = rule("workspace, clearance and joint-limit analyses")
     casting: Casting = rule("SOA casting mold allowances")
     robot: RobotDescription = rule("URDF/MJCF settings")
+    fabrication_package: FabricationPackage = rule(
+        "printer, FDM limits, rigid comparison tail, BOM items", default=FabricationPackage())
 
     @property
     def joints(self) -> int:

@@ -1,0 +1,250 @@
+"""Bill of materials: ``bom.csv`` and ``bom.md`` with a quantity column.
+
+Every row is computed from the assembly and the manifest: parts with their
+counts, materials, processes and masses; rods with cut lengths; fasteners by
+standard designation; pneumatic items with the tube length of every line
+from the panel layout (the tube rings) and the tail length; valves per the
+paper's system (pressure and vacuum per line); totals per product.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..assembly.build import Assembly
+
+#: Metric thread by tap drill (ISO coarse) and by clearance hole (ISO 273 medium), mm.
+THREAD_BY_TAP_DRILL = {1.6: 2.0, 2.05: 2.5, 2.5: 3.0, 3.3: 4.0, 4.2: 5.0, 5.0: 6.0}
+THREAD_BY_CLEARANCE = {2.4: 2.0, 2.9: 2.5, 3.4: 3.0, 4.5: 4.0, 5.5: 5.0, 6.6: 6.0}
+#: Preferred lengths of ISO 4762 socket head cap screws, mm.
+ISO_4762_LENGTHS_MM = (6, 8, 10, 12, 16, 20, 25, 30, 35, 40, 45, 50, 55, 60, 65, 70, 80, 90, 100)
+NUT_HEIGHT_MM = {2.0: 1.6, 2.5: 2.0, 3.0: 2.4, 4.0: 3.2, 5.0: 4.7, 6.0: 5.2}
+
+FIELDS = ("product", "category", "item", "designation", "quantity", "unit", "material", "process",
+          "mass_each_g", "mass_total_g", "notes")
+
+
+@dataclass(frozen=True)
+class BomRow:
+    product: str  # BVSR, rigid tail, molds, pneumatics
+    category: str  # part, rod, fastener, pneumatic, total
+    item: str
+    designation: str
+    quantity: float
+    unit: str  # pcs, mm
+    material: str
+    process: str
+    mass_each_g: float | None
+    mass_total_g: float | None
+    notes: str = ""
+
+
+def _nearest(table: dict[float, float], d_mm: float) -> float:
+    return table[min(table, key=lambda k: abs(k - d_mm))]
+
+
+def tube_routes_mm(asm: Assembly) -> dict[str, float]:
+    """Tube length inside the tail per pressure line at rest (mm), from the panel layouts.
+
+    Segment 1's lines start at the push-in fittings on the root mount (no tube
+    inside the tail). A line of segment s >= 2 runs from the root face through
+    the tube holes of every panel before boundary panel p_s into its bonded
+    port: the polyline through the hole centres at each panel's lower face,
+    ending at the port's bottom.
+    """
+    spec = asm.spec
+    routes: dict[str, float] = {}
+    for s in range(1, spec.segments + 1):
+        for i in range(1, 6):
+            line = f"s{s}_line{i}"
+            if s == 1:
+                routes[line] = 0.0
+                continue
+            pts = []
+            for lay in asm.panel_layouts:
+                for c in lay.cuts:
+                    if c.name == f"tube_s{s}_{i}":
+                        pts.append((c.p0[0], c.p0[1], lay.z0_mm))
+                    elif c.name == f"tube_port_s{s}_{i}":
+                        pts.append((c.p1[0], c.p1[1], lay.z0_mm + c.p1[2]))
+            p = np.asarray(pts, float)
+            routes[line] = float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) > 1 else 0.0
+    return routes
+
+
+def _mold_bolt_length_mm(manifest: dict[str, Any], thread: float) -> tuple[int, float]:
+    block = manifest.get("molds", {}).get("info", {}).get("block_mm")
+    grip = float(block[2]) if block else 0.0
+    need = grip + NUT_HEIGHT_MM.get(thread, 0.8 * thread) + 1.0
+    for length in ISO_4762_LENGTHS_MM:
+        if length >= need:
+            return length, grip
+    return int(math.ceil(need / 5.0) * 5), grip
+
+
+def bom_rows(asm: Assembly, manifest: dict[str, Any]) -> list[BomRow]:
+    """Every BOM row of an export (parts, rods, fasteners, pneumatics, totals)."""
+    spec = asm.spec
+    fp = spec.fabrication_package
+    rows: list[BomRow] = []
+    bvsr_mass = 0.0
+    for p in manifest["parts"]:
+        if p["kind"] == "rigid_tail":
+            continue
+        m_each = float(p["mass_g"])
+        bvsr_mass += p["count"] * m_each
+        if p["kind"] == "rod":
+            info = p["info"]
+            rows.append(BomRow("BVSR", "rod", p["name"], f"{p['material_name']} rod, D {info['diameter_mm']:g} mm, "
+                               f"cut to {info['cut_length_mm']:.2f} mm", p["count"], "pcs", p["material"], "cut",
+                               m_each, p["count"] * m_each,
+                               "thread both ends to match the panel sockets" if spec.vertebra.socket == "threaded"
+                               else "held by set screws"))
+        else:
+            rows.append(BomRow("BVSR", "part", p["name"], p["kind"] + (f" ({p['info']['panel_kind']})"
+                                                                         if p["kind"] == "panel" else ""),
+                               p["count"], "pcs", p["material"], p["process"], m_each, p["count"] * m_each,
+                               ", ".join(p["instances"][:3]) + (" ..." if len(p["instances"]) > 3 else "")))
+
+    # Fasteners of the BVSR, counted from the panel layouts (what the panels are built with).
+    roles: dict[str, int] = {}
+    for lay in asm.panel_layouts:
+        for c in lay.cuts:
+            roles[c.role] = roles.get(c.role, 0) + 1
+    mount_inserts = sum(1 for lay in asm.panel_layouts for c in lay.cuts if c.name.startswith("mount_insert"))
+    payload_inserts = sum(1 for lay in asm.panel_layouts for c in lay.cuts if c.name.startswith("payload_insert"))
+    if mount_inserts:
+        rows.append(BomRow("BVSR", "fastener", "mount insert", f"M3 heat-set insert, {spec.mount.insert_diameter_mm:g} "
+                           f"mm bore, {spec.mount.insert_depth_mm:g} mm long", mount_inserts, "pcs", "brass",
+                           "bought", None, None, "root mount to the robot (plus M3 screws of the robot's length)"))
+    if payload_inserts:
+        rows.append(BomRow("BVSR", "fastener", "payload insert", f"M3 heat-set insert, "
+                           f"{spec.payload.insert_diameter_mm:g} mm bore, {spec.payload.insert_depth_mm:g} mm long",
+                           payload_inserts, "pcs", "brass", "bought", None, None, "tip payload mount"))
+    if spec.vertebra.socket == "set_screw":
+        size = _nearest(THREAD_BY_TAP_DRILL, spec.socket.set_screw_tap_drill_mm)
+        rows.append(BomRow("BVSR", "fastener", "rod set screw", f"ISO 4026 M{size:g} x 4 set screw, flat point",
+                           roles.get("setscrew", 0), "pcs", "steel", "bought", None, None,
+                           "one per panel socket"))
+
+    # Pneumatics.
+    lines = spec.segments * 5
+    fittings = roles.get("port", 0)
+    d_tube = spec.tubes.outer_diameter_mm
+    rows.append(BomRow("pneumatics", "pneumatic", "root fitting",
+                       f"push-in fitting M5 x tube {d_tube:g} mm, straight", fittings, "pcs", "", "bought", None, None,
+                       "segment 1's five lines, in the root mount's tapped ports"))
+    routes = tube_routes_mm(asm)
+    total_tube = 0.0
+    for line, inside in routes.items():
+        length = inside * (1.0 + fp.tube_bend_allowance) + fp.tube_lead_mm
+        total_tube += length
+        rows.append(BomRow("pneumatics", "pneumatic", f"tube {line}", f"PU tube {d_tube:g} x "
+                           f"{d_tube - 1.5:g} mm, cut to {length:.0f} mm", round(length, 1), "mm", "PU", "cut",
+                           None, None, f"{inside:.1f} mm inside the tail (+{100 * fp.tube_bend_allowance:.0f} % for "
+                           f"bending) + {fp.tube_lead_mm:g} mm lead to the valves"))
+    rows.append(BomRow("pneumatics", "pneumatic", "tee", f"push-in tee, tube {d_tube:g} mm", lines, "pcs", "",
+                       "bought", None, None, "joins each line to its pressure and its vacuum valve")
+                if fp.valves_per_line == 2 else
+                BomRow("pneumatics", "pneumatic", "manifold", f"push-in manifold 1 x {fp.valves_per_line}",
+                       lines, "pcs", "", "bought", None, None, "joins each line to its valves"))
+    rows.append(BomRow("pneumatics", "pneumatic", "solenoid valve", "2/2-way solenoid valve, 24 V DC",
+                       lines * fp.valves_per_line, "pcs", "", "bought", None, None,
+                       f"{fp.valves_per_line} per line x {lines} lines (paper: 20 valves for 10 channels)"))
+
+    # Rigid comparison tail.
+    rt = manifest.get("rigid_tail")
+    rigid_mass = 0.0
+    if rt:
+        for p in manifest["parts"]:
+            if p["kind"] == "rigid_tail":
+                rigid_mass += p["mass_g"]
+                size = p["info"]["size_mm"]
+                rows.append(BomRow("rigid tail", "part", p["name"], f"rigid tail piece {size[0]:.1f} x {size[1]:.1f} x "
+                                   f"{size[2]:.1f} mm", 1, "pcs", "PLA", "FDM", p["mass_g"], p["mass_g"],
+                                   "mass at solid density; infill lowers it"))
+        j = rt["joining"]
+        rows.append(BomRow("rigid tail", "fastener", "dowel pin", j["pins"]["designation"], j["pins"]["count"],
+                           "pcs", "steel", "bought", None, None, "one per SOA column end"))
+        rows.append(BomRow("rigid tail", "fastener", "tie rod", f"{j['tie_rod']['designation']} threaded rod, cut to "
+                           f"{j['tie_rod']['cut_length_mm']:.1f} mm", 1, "pcs", "steel", "cut", None, None,
+                           "through the rod column, clamps every piece"))
+        rows.append(BomRow("rigid tail", "fastener", "tie rod nut", j["nuts"]["designation"] + " hex nut",
+                           j["nuts"]["count"], "pcs", "steel", "bought", None, None, "in the root and tip nut pockets"))
+
+    # Molds.
+    molds = manifest.get("molds", {})
+    mold_mass = 0.0
+    soa_count = sum(p["count"] for p in manifest["parts"] if p["kind"] == "soa")
+    for mp in molds.get("parts", []):
+        sac = bool(mp.get("sacrificial"))
+        mat = fp.core_material if sac else fp.mold_material
+        qty = soa_count if sac else fp.mold_sets
+        m_each = float(mp["volume_mm3"]) * spec.material(mat).density_g_cm3 / 1000.0
+        mold_mass += qty * m_each
+        rows.append(BomRow("molds", "part", f"mold_{mp['name']}", "sacrificial core (dissolve after casting)" if sac
+                           else f"mold {mp['role']}", qty, "pcs", mat, "FDM", m_each, qty * m_each,
+                           "one per SOA cast" if sac else f"{fp.mold_sets} mold sets"))
+    if molds.get("parts"):
+        thread = _nearest(THREAD_BY_CLEARANCE, spec.casting.bolt_hole_diameter_mm)
+        length, grip = _mold_bolt_length_mm(manifest, thread)
+        rows.append(BomRow("molds", "fastener", "mold bolt", f"ISO 4762 M{thread:g} x {length}", 4 * fp.mold_sets,
+                           "pcs", "steel", "bought", None, None, f"four per set through lid, halves and plate "
+                           f"(grip {grip:.1f} mm)"))
+        rows.append(BomRow("molds", "fastener", "mold nut", f"ISO 4032 M{thread:g} hex nut", 4 * fp.mold_sets, "pcs",
+                           "steel", "bought", None, None, "four per set"))
+
+    # Totals.
+    rows.append(BomRow("BVSR", "total", "BVSR modelled mass", "panels + SOAs + rods", 1, "", "", "", bvsr_mass,
+                       bvsr_mass, "fittings, tubes, adhesive and inserts not weighed"))
+    if rt:
+        rows.append(BomRow("rigid tail", "total", "rigid tail mass", "all pieces, solid PLA", 1, "", "PLA", "FDM",
+                           rigid_mass, rigid_mass, "infill lowers it"))
+    if molds.get("parts"):
+        rows.append(BomRow("molds", "total", "mold material", "rigid sets + cores", 1, "", "", "FDM", mold_mass,
+                           mold_mass, ""))
+    rows.append(BomRow("pneumatics", "total", "tube", f"PU tube {d_tube:g} mm, all lines", round(total_tube, 1),
+                       "mm", "PU", "cut", None, None, f"{lines} lines"))
+    return rows
+
+
+def _fmt(v: Any) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return f"{v:.2f}" if not v.is_integer() else f"{int(v)}"
+    return str(v)
+
+
+def write_bom(root: Path, rows: list[BomRow]) -> dict[str, Any]:
+    """Write ``bom.csv`` and ``bom.md``; returns the manifest's ``bom`` section."""
+    with (root / "bom.csv").open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=FIELDS)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: _fmt(v) for k, v in asdict(r).items()})
+    lines = ["# Bill of materials", "",
+             "Counts from the assembly; masses from the B-rep volumes and the densities in the parameter file.", ""]
+    for product in dict.fromkeys(r.product for r in rows):
+        lines += [f"## {product}", "", "| item | designation | qty | unit | material | process | mass each (g) "
+                  "| mass total (g) | notes |", "|---|---|---:|---|---|---|---:|---:|---|"]
+        for r in rows:
+            if r.product == product:
+                item = f"**{r.item}**" if r.category == "total" else r.item
+                lines.append(f"| {item} | {r.designation} | {_fmt(r.quantity)} | {r.unit} | {r.material} | "
+                             f"{r.process} | {_fmt(r.mass_each_g)} | {_fmt(r.mass_total_g)} | {r.notes} |")
+        lines.append("")
+    (root / "bom.md").write_text("\n".join(lines))
+    totals = {r.item: {"quantity": r.quantity, "unit": r.unit, "mass_g": r.mass_total_g}
+              for r in rows if r.category == "total"}
+    counts = {"printed_parts": sum(r.quantity for r in rows if r.category == "part" and r.process in ("MJF", "FDM")),
+              "cast_parts": sum(r.quantity for r in rows if r.process == "cast"),
+              "fasteners": sum(r.quantity for r in rows if r.category == "fastener" and r.unit == "pcs"),
+              "valves": sum(r.quantity for r in rows if r.item == "solenoid valve")}
+    return {"csv": "bom.csv", "md": "bom.md", "rows": len(rows), "totals": totals, "counts": counts}

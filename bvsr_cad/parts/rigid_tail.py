@@ -1,0 +1,216 @@
+"""The rigid comparison tail (SPEC section 4): the BVSR's outer geometry at rest, in PLA.
+
+The paper's disturbance tests compare the BVSR with a rigid twin of
+"identical geometric parameters". Here the twin is the union of the panel
+rims, the five SOA envelopes of every joint (filled: a rigid twin needs no air
+inside) and the rod, cut into pieces that print on an FDM printer.
+
+Split: one piece per joint, at the lower face of every panel. Piece ``k`` is
+panel ``k-1`` lying on the bed with joint ``k``'s five SOA columns and its rod
+standing on it, up to panel ``k``'s lower face; the tip panel is a piece of
+its own. That is the only split for which no panel hangs over air (a panel in
+the middle of a piece would need support under its whole lower face), so the
+split is fixed by printability and the printer volume is checked, not used to
+choose it.
+
+Joining: a dowel pin per SOA column end (the column's top face and the next
+panel's lower face get matching blind holes) locates the pieces and takes
+the shear; a threaded tie rod through the rod column with a nut in a pocket in
+the root face and in the tip face clamps the stack.
+
+Simplified against the BVSR (none of it shows from outside): the SOA pockets,
+air channels, fitting ports, tube ports and feed passages and the rod socket
+are filled; the lightening holes, the tube pass-through holes and the mount
+and payload insert bores are kept, so the twin bolts to the same robot and
+carries the same payloads.
+
+Frame of a piece: its print frame (panel lower face on z = 0, tail axes),
+i.e. the tail frame moved down by the panel's z0.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import build123d as bd
+import numpy as np
+
+from ..spec.layout import PanelLayout, soa_angles_deg, polar
+from ..spec.tables import SoaTable, TailSpec
+from ._kernel import GeometryError, cut_all, cylinder_between, fuse_all, single_solid
+
+#: Panel features kept in the twin (they show from outside or carry the robot and payload).
+KEPT_ROLES = ("lightening", "tube", "insert")
+#: Hex nut across flats (ISO 4032) by thread size, mm, and its height.
+NUT_AF_MM = {2.0: 4.0, 2.5: 5.0, 3.0: 5.5}
+NUT_HEIGHT_MM = {2.0: 1.6, 2.5: 2.0, 3.0: 2.4}
+#: Extra room around a nut in its printed pocket (FDM holes print small).
+NUT_POCKET_CLEARANCE_MM = 0.3
+#: A pin hole is this much deeper than half the pin so the pin never bottoms out.
+PIN_HOLE_EXTRA_MM = 0.5
+
+
+@dataclass(frozen=True)
+class PrintFeature:
+    """A hole added only to assemble the twin (excluded from the envelope comparison).
+
+    ``p0``/``p1`` are in the tail frame (mm); the hole is the cylinder between them.
+    """
+
+    name: str
+    kind: str  # pin_hole, tie_rod_hole, nut_pocket
+    p0: tuple[float, float, float]
+    p1: tuple[float, float, float]
+    diameter_mm: float
+
+
+@dataclass(frozen=True)
+class RigidPiece:
+    name: str
+    index: int  # 1..joints for joint pieces, joints + 1 for the tip piece
+    z0_mm: float  # the piece's bed face in the tail frame
+    solid: bd.Solid  # print frame
+    features: tuple[PrintFeature, ...]
+    size_mm: tuple[float, float, float]
+
+
+def _soa_envelope(soa: SoaTable, flange_diameter_mm: float) -> bd.Solid:
+    """The SOA's outer surface, filled: flange discs and the bellows' outer loft."""
+    from .soa import _square, bellows_profile  # the same fold levels as the soft SOA
+
+    p = bellows_profile(soa, flange_diameter_mm)
+    outer = bd.loft([_square(s, p.corner_radius_mm, z) for s, z in zip(p.outer_side_mm, p.z_mm)], ruled=True)
+    r = flange_diameter_mm / 2.0
+    lower = bd.Solid.make_cylinder(r, p.flange_thickness_mm)
+    upper = bd.Solid.make_cylinder(r, p.flange_thickness_mm, bd.Plane.XY.offset(p.height_mm - p.flange_thickness_mm))
+    return single_solid(lower.fuse(outer, upper), "rigid tail: SOA envelope")
+
+
+def _frustum(lay: PanelLayout) -> bd.Solid:
+    if abs(lay.rim_radius_lower_mm - lay.rim_radius_upper_mm) < 1e-9:
+        return bd.Solid.make_cylinder(lay.rim_radius_lower_mm, lay.thickness_mm)
+    return bd.Solid.make_cone(lay.rim_radius_lower_mm, lay.rim_radius_upper_mm, lay.thickness_mm)
+
+
+def _location(m: np.ndarray) -> bd.Location:
+    from OCP.gp import gp_Trsf
+    from OCP.TopLoc import TopLoc_Location
+
+    trsf = gp_Trsf()
+    trsf.SetValues(*m[0], *m[1], *m[2])
+    return bd.Location(TopLoc_Location(trsf))
+
+
+def tie_rod_hole_mm(spec: TailSpec) -> float:
+    fp = spec.fabrication_package
+    return fp.tie_rod_thread + fp.tie_rod_clearance_mm
+
+
+def pin_hole_mm(spec: TailSpec) -> float:
+    fp = spec.fabrication_package
+    return fp.pin_diameter_mm + fp.pin_hole_clearance_mm
+
+
+def nut_pocket_depth_mm(spec: TailSpec) -> float:
+    return NUT_HEIGHT_MM[spec.fabrication_package.tie_rod_thread] + 0.5
+
+
+def tie_rod_length_mm(spec: TailSpec) -> float:
+    """Cut length of the tie rod: through the tail, nut pockets at both ends, flush with the nuts' outer faces."""
+    return spec.length_mm - 2.0 * nut_pocket_depth_mm(spec) + 2.0 * NUT_HEIGHT_MM[spec.fabrication_package.tie_rod_thread]
+
+
+def _hex_prism(af_mm: float, z0: float, z1: float) -> bd.Solid:
+    """A hexagonal pocket (flats across ``af_mm``) between z0 and z1 on the axis."""
+    r = af_mm / math.sqrt(3.0)  # circumradius
+    face = bd.Plane.XY.offset(z0) * bd.RegularPolygon(r, 6).face()
+    return bd.Solid.extrude(face, bd.Vector(0, 0, z1 - z0))
+
+
+def rigid_tail_pieces(spec: TailSpec, layouts: list[PanelLayout],
+                      soa_transforms: dict[int, list[np.ndarray]]) -> list[RigidPiece]:
+    """Build every piece of the rigid twin in its print frame.
+
+    Args:
+        spec: the validated tail spec.
+        layouts: every panel's layout (the same ones the BVSR panels are built from).
+        soa_transforms: per joint k (1-based), the five SOA placements (4x4, SOA frame -> tail frame, mm).
+
+    Returns:
+        The pieces from root to tip.
+
+    Raises:
+        GeometryError: a piece does not fit the printer volume of ``[fabrication_package]``, or the
+            kernel failed.
+    """
+    fp = spec.fabrication_package
+    soa_env = _soa_envelope(spec.soa, spec.joint.base_diameter_mm)
+    d_pin, d_tie = pin_hole_mm(spec), tie_rod_hole_mm(spec)
+    pin_depth = fp.pin_length_mm / 2.0 + PIN_HOLE_EXTRA_MM
+    nut_af = NUT_AF_MM[fp.tie_rod_thread] + NUT_POCKET_CLEARANCE_MM
+    nut_depth = nut_pocket_depth_mm(spec)
+    pieces: list[RigidPiece] = []
+    n = len(layouts)
+    for k in range(1, n + 1):
+        lay = layouts[k - 1]
+        z0 = lay.z0_mm
+        top = layouts[k].z0_mm if k < n else z0 + lay.thickness_mm
+        down = np.eye(4)
+        down[2, 3] = -z0
+        body = _frustum(lay)
+        body = fuse_all(body, (cylinder_between(b.p0, b.p1, b.diameter_mm) for b in lay.bosses))
+        features: list[PrintFeature] = []
+        if k < n:
+            rod = bd.Solid.make_cylinder(spec.vertebra.diameter_mm / 2.0, top - z0)
+            columns = [soa_env.moved(_location(down @ m)) for m in soa_transforms[k]]
+            body = body.fuse(rod, *columns)
+        cuts = [cylinder_between(c.p0, c.p1, c.diameter_mm) for c in lay.cuts if c.role in KEPT_ROLES]
+        h = top - z0
+        # Tie rod along the axis, through the whole piece.
+        features.append(PrintFeature("tie_rod", "tie_rod_hole", (0.0, 0.0, z0 - 1e-3), (0.0, 0.0, top + 1e-3), d_tie))
+        # Pin holes: up from this piece's bed face (into the panel, under the previous joint's columns)
+        # and down from the top faces of this piece's columns.
+        angles = soa_angles_deg()
+        if k > 1:
+            for i, a in enumerate(angles, start=1):
+                xy = polar(lay.pitch_radius_lower_mm, a)
+                features.append(PrintFeature(f"pin_{k - 1}_{i}_upper", "pin_hole", (*xy, z0 - 1e-3),
+                                             (*xy, z0 + pin_depth), d_pin))
+        if k < n:
+            nxt = layouts[k]
+            for i, a in enumerate(angles, start=1):
+                xy = polar(nxt.pitch_radius_lower_mm, a)
+                features.append(PrintFeature(f"pin_{k}_{i}_lower", "pin_hole", (*xy, top - pin_depth),
+                                             (*xy, top + 1e-3), d_pin))
+        tools = list(cuts)
+        if k < n:
+            # The SOA flanges reach into the next panel's pockets: that part belongs to the next piece.
+            tools.append(bd.Solid.make_box(400.0, 400.0, 20.0).moved(bd.Location((-200.0, -200.0, h))))
+        for f in features:
+            p0 = (f.p0[0], f.p0[1], f.p0[2] - z0)
+            p1 = (f.p1[0], f.p1[1], f.p1[2] - z0)
+            tools.append(cylinder_between(p0, p1, f.diameter_mm))
+        if k == 1:
+            features.append(PrintFeature("nut_root", "nut_pocket", (0.0, 0.0, z0 - 1e-3), (0.0, 0.0, z0 + nut_depth),
+                                         nut_af * 2 / math.sqrt(3.0)))
+            tools.append(_hex_prism(nut_af, -1e-3, nut_depth))
+        if k == n:
+            features.append(PrintFeature("nut_tip", "nut_pocket", (0.0, 0.0, top - nut_depth), (0.0, 0.0, top + 1e-3),
+                                         nut_af * 2 / math.sqrt(3.0)))
+            tools.append(_hex_prism(nut_af, h - nut_depth, h + 1e-3))
+        name = f"rigid_j{k}" if k < n else "rigid_tip"
+        solid = single_solid(cut_all(body, tools), f"rigid tail piece {name}")
+        box = solid.bounding_box()
+        size = (box.size.X, box.size.Y, box.size.Z)
+        # Either way round on the bed.
+        fits = size[0] <= max(fp.printer_x_mm, fp.printer_y_mm) and size[1] <= min(fp.printer_x_mm, fp.printer_y_mm) \
+            or size[1] <= max(fp.printer_x_mm, fp.printer_y_mm) and size[0] <= min(fp.printer_x_mm, fp.printer_y_mm)
+        if not fits or size[2] > fp.printer_z_mm:
+            raise GeometryError(
+                f"rigid tail piece {name} is {size[0]:.1f} x {size[1]:.1f} x {size[2]:.1f} mm and does not fit the "
+                f"printer (fabrication_package.printer_x_mm/printer_y_mm/printer_z_mm = {fp.printer_x_mm:g} x "
+                f"{fp.printer_y_mm:g} x {fp.printer_z_mm:g} mm); one joint per piece is the smallest split that "
+                "prints without support")
+        pieces.append(RigidPiece(name, k, z0, solid, tuple(features), size))
+    return pieces

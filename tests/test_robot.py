@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import math
 import shutil
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -156,3 +157,33 @@ def test_pybullet_helper_couples_mimic_joints(robot_export):
         pb.disconnect(cid)
     assert moved > 1e-3
     assert worst < 0.02
+
+
+def test_eq13_ramp():
+    from bvsr_cad.sim import ramp_pa
+
+    t0, p0 = 0.04, 6e5
+    assert ramp_pa(0.0, p0) == 0.0 and ramp_pa(t0, p0) == pytest.approx(p0) and ramp_pa(0.2, p0) == pytest.approx(p0)
+    h = 1e-7
+    assert (ramp_pa(h, p0) - ramp_pa(0.0, p0)) / h == pytest.approx(0.0, abs=1e3)  # P'(0) = 0
+    assert (ramp_pa(t0, p0) - ramp_pa(t0 - h, p0)) / h == pytest.approx(0.0, abs=1e3)  # P'(t0) = 0
+
+
+@pytest.mark.slow
+def test_simulate_command(tmp_path, capsys):
+    from bvsr_cad.cli import main
+
+    from .conftest import PARAMS
+
+    assert main(["simulate", str(PARAMS / "bvsr.toml"), "--pressure-bar", "9", "-q"]) == 2
+    assert "--pressure-bar" in capsys.readouterr().err
+    runs = {}
+    for bar in ("2", "6"):
+        assert main(["simulate", str(PARAMS / "bvsr.toml"), "--pressure-bar", bar, "--json", "-o", str(tmp_path)]) == 0
+        runs[bar] = json.loads(capsys.readouterr().out)
+    for r in runs.values():
+        assert {"peak_velocity_deg_s", "peak_root_torque_nm", "peak_root_force_n"} <= set(r)
+        assert Path(r["plot"]).is_file()
+    # Higher pressure, faster segment and larger root torque (the paper's trend).
+    assert runs["6"]["peak_velocity_deg_s"] > runs["2"]["peak_velocity_deg_s"] > 0
+    assert runs["6"]["peak_root_torque_nm"] > runs["2"]["peak_root_torque_nm"] > 0

@@ -1,10 +1,408 @@
-"""Printability checks on every printed part (filled in by the fabrication issue)."""
+"""Printability of every printed part of an export (the manifest's ``print_jobs``).
+
+Per STL, in the orientation it is exported in:
+
+* ``print_fits_volume``: the bounding box fits the job's build volume (either way round on the bed);
+* ``print_flat_base``: it rests on z = 0 with a flat face of some area;
+* ``print_overhang``: the overhang map. A downward face steeper than
+  ``max_overhang_deg`` from vertical is an overhang; connected overhang
+  regions narrower than ``max_bridge_mm`` (bridges over holes, short ledges)
+  print without support, wider ones are named with their place. Powder-bed
+  (MJF) parts need no support: their map is reported, not judged;
+* ``print_min_wall``: the thinnest wall, from rays cast inwards from the
+  surface (embree) at area-weighted sample points;
+* ``print_min_hole``: the smallest hole, the hydraulic diameter 4 A / P of
+  every enclosed void in sections along z, x and y;
+* ``slice:<job>/<part>``: the STL slices in PrusaSlicer's command line without
+  an error, with a time limit. Results are cached by the STL's SHA-256, the
+  slicer version and the options (``~/.cache/bvsr_cad/slices.json``, or
+  ``$BVSR_CACHE``), so an unchanged part is not sliced twice. Without the
+  slicer the check reports ``passed: null`` and says it is not installed.
+* ``rigid_tail_envelope``: the rigid twin, assembled, against the BVSR at
+  rest: every sample of the twin's outer surface lies within
+  ``envelope_tolerance_mm`` of the BVSR's surface and every sample of the
+  BVSR's surface lies inside the twin or on it, except inside the pin and
+  tie-rod holes the twin adds.
+* ``rigid_tail_robot_loads``: MuJoCo compiles the twin's MJCF and URDF.
+"""
 
 from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any
+
+import networkx as nx
+import numpy as np
+import trimesh
+from shapely.geometry import MultiPoint
 
 from .export import Export
 from .result import CheckResult
 
+SLICER = "prusa-slicer"
+SLICER_OPTIONS = ("--layer-height", "0.3", "--first-layer-height", "0.3", "--fill-density", "15%")
+BED_Z_TOL_MM = 1e-6
+MIN_BASE_AREA_MM2 = 25.0
+#: A tessellated circle of n sides has 4 A / P = d cos(pi / n); allow for it.
+HOLE_POLYGON_FACTOR = 0.97
+WALL_SAMPLES = 3000
+SECTIONS_PER_AXIS = 10
+#: Rays that leave the part within this distance graze an edge: not a wall.
+WALL_GRAZE_MM = 0.02
+#: Opposite faces within this angle of parallel make a wall.
+WALL_PARALLEL_DEG = 20.0
+
+
+def _fits(size: np.ndarray, volume: list[float]) -> bool:
+    x, y, z = (float(v) for v in size)
+    vx, vy, vz = volume
+    return z <= vz and ((x <= vx and y <= vy) or (x <= vy and y <= vx))
+
+
+def overhang_regions(mesh: trimesh.Trimesh, max_overhang_deg: float) -> list[dict[str, Any]]:
+    """Connected regions of downward faces steeper than ``max_overhang_deg`` from vertical (bed excluded)."""
+    n = mesh.face_normals
+    zmin = mesh.bounds[0][2]
+    on_bed = np.abs(mesh.triangles[:, :, 2] - zmin).max(axis=1) < 1e-4
+    # Angle from vertical of a downward face = its normal's angle below the horizontal.
+    steep = (n[:, 2] < -np.sin(np.radians(max_overhang_deg)) + 1e-9) & ~on_bed
+    idx = np.flatnonzero(steep)
+    if len(idx) == 0:
+        return []
+    keep = set(idx.tolist())
+    g = nx.Graph()
+    g.add_nodes_from(idx.tolist())
+    adj = mesh.face_adjacency
+    mask = np.array([a in keep and b in keep for a, b in adj]) if len(adj) else np.zeros(0, bool)
+    g.add_edges_from(adj[mask].tolist())
+    regions = []
+    for comp in nx.connected_components(g):
+        faces = np.fromiter(comp, int)
+        pts = mesh.triangles[faces].reshape(-1, 3)
+        area = float(mesh.area_faces[faces].sum())
+        hull = MultiPoint(pts[:, :2]).minimum_rotated_rectangle
+        if hull.geom_type == "Polygon":
+            xy = np.asarray(hull.exterior.coords)[:4]
+            sides = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
+            width = float(min(sides[0], sides[1]))
+        else:
+            width = 0.0
+        c = (mesh.triangles_center[faces] * mesh.area_faces[faces, None]).sum(axis=0) / max(area, 1e-12)
+        regions.append({"area_mm2": area, "width_mm": width, "centre_mm": [round(float(v), 2) for v in c]})
+    return sorted(regions, key=lambda r: -r["area_mm2"])
+
+
+def min_wall_mm(mesh: trimesh.Trimesh, samples: int = WALL_SAMPLES, seed: int = 0,
+                horizontal: bool = False) -> tuple[float, list[float]]:
+    """Thinnest wall: rays from area-weighted surface samples inwards to an opposite face within
+    ``WALL_PARALLEL_DEG`` of parallel."""
+    rng = np.random.default_rng(seed)
+    p = mesh.area_faces / mesh.area_faces.sum()
+    faces = rng.choice(len(mesh.faces), size=min(samples, len(mesh.faces)), replace=False, p=p)
+    # Walls (faces within 45 deg of vertical) and plates (the rest) have different limits in FDM:
+    # a wall is extrusion widths, a plate is layers.
+    flat = np.abs(mesh.face_normals[faces, 2]) > np.sqrt(0.5)
+    faces = faces[flat] if horizontal else faces[~flat]
+    if len(faces) == 0:
+        return float("inf"), [0.0, 0.0, 0.0]
+    origins = mesh.triangles_center[faces] - mesh.face_normals[faces] * 1e-4
+    dirs = -mesh.face_normals[faces]
+    locs, ray_idx, tri_idx = mesh.ray.intersects_location(origins, dirs, multiple_hits=False)
+    if len(ray_idx) == 0:
+        return float("inf"), [0.0, 0.0, 0.0]
+    d = np.linalg.norm(locs - origins[ray_idx], axis=1)
+    # A wall has an opposite face nearly parallel to the one the ray leaves; the tip of a
+    # wedge (a sharp edge) is thin by nature and prints as the edge it is.
+    parallel = np.einsum("ij,ij->i", mesh.face_normals[tri_idx], dirs[ray_idx]) >= np.cos(np.radians(WALL_PARALLEL_DEG))
+    ok = (d > WALL_GRAZE_MM) & parallel
+    if not ok.any():
+        return float("inf"), [0.0, 0.0, 0.0]
+    i = int(np.argmin(np.where(ok, d, np.inf)))
+    return float(d[i]), [round(float(v), 2) for v in origins[ray_idx[i]]]
+
+
+def _voids(path) -> list[tuple[float, float, np.ndarray]]:
+    """(area, 4 A / P, centroid) of every enclosed void of a planar section."""
+    from shapely.geometry import Polygon
+
+    out = []
+    if path is None:
+        return out
+    for poly in path.polygons_full:
+        for ring in poly.interiors:
+            hole = Polygon(ring)
+            if hole.length > 0:
+                out.append((hole.area, 4.0 * hole.area / hole.length, np.asarray(hole.centroid.coords[0])))
+    return out
+
+
+def min_hole_mm(mesh: trimesh.Trimesh, sections: int = SECTIONS_PER_AXIS, step_mm: float = 0.25) -> tuple[float, str]:
+    """Smallest hole whose axis runs along x, y or z: the hydraulic diameter 4 A / P of an
+    enclosed void that appears with the same size and place in two sections ``step_mm`` apart
+    (a section grazing a hole across it makes a thin sliver that is not a hole)."""
+    best, where = float("inf"), ""
+    lo, hi = mesh.bounds
+    for axis in range(3):
+        normal = np.zeros(3)
+        normal[axis] = 1.0
+        span = hi[axis] - lo[axis]
+        base = np.linspace(lo[axis] + 0.013 * span, hi[axis] - 0.011 * span - step_mm, sections) - lo[axis]
+        heights = np.sort(np.concatenate([base, base + step_mm]))
+        try:
+            paths = mesh.section_multiplane(plane_origin=lo.copy(), plane_normal=normal, heights=heights)
+        except (ValueError, IndexError):
+            continue
+        for i in range(0, len(heights) - 1, 2):
+            a, b = _voids(paths[i]), _voids(paths[i + 1])
+            for area, d, c in a:
+                twin = any(np.linalg.norm(c - c2) < 0.2 and abs(area2 - area) <= 0.15 * area for area2, _d2, c2 in b)
+                if twin and d < best:
+                    best, where = d, f"{'xyz'[axis]} = {lo[axis] + heights[i]:.2f} mm"
+    return best, where
+
+
+def _slicer_version() -> str | None:
+    exe = shutil.which(SLICER)
+    if exe is None:
+        return None
+    try:
+        out = subprocess.run([exe, "--help"], capture_output=True, text=True, timeout=30)
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    for line in (out.stdout + out.stderr).splitlines():
+        if line.startswith("PrusaSlicer-"):
+            return line.split()[0]
+    return "PrusaSlicer (unknown version)"
+
+
+def _cache_path() -> Path:
+    base = Path(os.environ.get("BVSR_CACHE", Path.home() / ".cache" / "bvsr_cad"))
+    return base / "slices.json"
+
+
+def _slice(stl: Path, volume: list[float], timeout_s: float) -> dict[str, Any]:
+    vx, vy, vz = volume
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [SLICER, "--export-gcode", *SLICER_OPTIONS,
+               "--bed-shape", f"0x0,{vx:g}x0,{vx:g}x{vy:g},0x{vy:g}", "--max-print-height", f"{vz:g}",
+               "--center", f"{vx / 2:g},{vy / 2:g}", "--output", str(Path(tmp) / "out.gcode"), str(stl)]
+        t0 = time.perf_counter()
+        try:
+            res = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            return {"ok": False, "seconds": timeout_s, "error": f"timed out after {timeout_s:g} s"}
+        gcode = Path(tmp) / "out.gcode"
+        layers = 0
+        if gcode.is_file():
+            layers = sum(1 for line in gcode.open() if line.startswith(";LAYER_CHANGE"))
+        errors = [l for l in (res.stdout + res.stderr).splitlines() if "error" in l.lower() and "[trace]" not in l]
+        ok = res.returncode == 0 and gcode.is_file() and layers > 0
+        return {"ok": ok, "seconds": time.perf_counter() - t0, "layers": layers,
+                "error": "" if ok else (errors[-1] if errors else f"exit code {res.returncode}")}
+
+
+def check_slicing(exp: Export, items: list[tuple[str, Path, list[float]]], timeout_s: float) -> list[CheckResult]:
+    """Slice every STL (cached by content, slicer version and options)."""
+    version = _slicer_version()
+    if version is None:
+        return [CheckResult(f"slice:{name}", None, None, 0, "errors", str(path.relative_to(exp.root)),
+                            f"{SLICER} not installed (apt-get install prusa-slicer)") for name, path, _ in items]
+    cache_file = _cache_path()
+    try:
+        cache = json.loads(cache_file.read_text())
+    except (OSError, ValueError):
+        cache = {}
+    keys = {}
+    for name, path, volume in items:
+        h = hashlib.sha256(path.read_bytes())
+        h.update(json.dumps([version, SLICER_OPTIONS, volume]).encode())
+        keys[name] = h.hexdigest()
+    todo = [(n, p, v) for n, p, v in items if keys[n] not in cache]
+    with ThreadPoolExecutor(max_workers=max(1, min(2, os.cpu_count() or 1))) as pool:
+        for (name, _p, _v), res in zip(todo, pool.map(lambda it: _slice(it[1], it[2], timeout_s), todo)):
+            cache[keys[name]] = {**res, "when": time.strftime("%Y-%m-%d %H:%M:%S")}
+    try:
+        cache_file.parent.mkdir(parents=True, exist_ok=True)
+        cache_file.write_text(json.dumps(cache, indent=1))
+    except OSError:
+        pass  # a read-only home only costs the cache
+    out = []
+    fresh = {n for n, _p, _v in todo}
+    for name, path, _v in items:
+        r = cache[keys[name]]
+        how = "sliced now" if name in fresh else f"cached result of {r['when']} (same STL, slicer and options)"
+        note = f"{version}, {' '.join(SLICER_OPTIONS)}: {r.get('layers', 0)} layers in {r['seconds']:.1f} s, {how}"
+        if not r["ok"]:
+            note += f"; {r['error']}"
+        out.append(CheckResult(f"slice:{name}", bool(r["ok"]), 0 if r["ok"] else 1, 0, "errors",
+                               str(path.relative_to(exp.root)), note))
+    return out
+
+
+def _bvsr_rest_meshes(exp: Export) -> list[trimesh.Trimesh]:
+    parts = {p["name"]: p for p in exp.parts}
+    out = []
+    for inst in exp.manifest["assembly"]["instances"]:
+        p = parts[inst["part"]]
+        m = exp.part_frame_mesh(p)
+        m.apply_transform(np.asarray(inst["transform"], float))
+        out.append(m)
+    return out
+
+
+def _in_features(points: np.ndarray, features: list[dict[str, Any]], margin_mm: float) -> np.ndarray:
+    inside = np.zeros(len(points), bool)
+    for f in features:
+        p0, p1 = np.asarray(f["p0_mm"]), np.asarray(f["p1_mm"])
+        axis = p1 - p0
+        L = np.linalg.norm(axis)
+        axis /= L
+        rel = points - p0
+        t = rel @ axis
+        radial = np.linalg.norm(rel - np.outer(t, axis), axis=1)
+        inside |= (t >= -margin_mm) & (t <= L + margin_mm) & (radial <= f["diameter_mm"] / 2 + margin_mm)
+    return inside
+
+
+def check_envelope(exp: Export, samples: int = 6000, seed: int = 1) -> list[CheckResult]:
+    """The rigid twin's outer surface against the BVSR at rest (both ways)."""
+    rt = exp.manifest.get("rigid_tail")
+    if not rt:
+        return []
+    tol = float(rt["envelope_tolerance_mm"])
+    pieces = [p for p in exp.parts if p["kind"] == "rigid_tail"]
+    features = [f for p in pieces for f in p["info"]["print_features"]] + list(rt.get("filled_features", []))
+    rigid_parts = []
+    for p in pieces:
+        m = exp.part_frame_mesh(p).copy()
+        m.apply_transform(np.asarray(p["tail_transform"], float))
+        rigid_parts.append(m)
+    import manifold3d as mf
+
+    def to_m(m: trimesh.Trimesh):
+        return mf.Manifold(mf.Mesh(vert_properties=np.asarray(m.vertices, np.float32),
+                                   tri_verts=np.asarray(m.faces, np.uint32)))
+
+    union = mf.Manifold.batch_boolean([to_m(m) for m in rigid_parts], mf.OpType.Add)
+    um = union.to_mesh()
+    rigid = trimesh.Trimesh(np.asarray(um.vert_properties)[:, :3], np.asarray(um.tri_verts), process=True)
+    bvsr = _bvsr_rest_meshes(exp)
+    bvsr_all = trimesh.util.concatenate(bvsr)
+    rng = np.random.default_rng(seed)
+    margin = 0.3
+    # Twin -> BVSR: every outer-surface sample of the twin is on the BVSR's surface.
+    pts, _ = trimesh.sample.sample_surface(rigid, samples, seed=int(rng.integers(1 << 31)))
+    pts = pts[~_in_features(pts, features, margin)]
+    _, d_out, _ = trimesh.proximity.closest_point(bvsr_all, pts)
+    i = int(np.argmax(d_out))
+    # BVSR -> twin: every BVSR surface sample is inside the twin or on its surface.
+    bpts, _ = trimesh.sample.sample_surface(bvsr_all, samples, seed=int(rng.integers(1 << 31)))
+    bpts = bpts[~_in_features(bpts, features, margin)]
+    sd = trimesh.proximity.signed_distance(rigid, bpts)  # positive inside
+    j = int(np.argmin(sd))
+    outside = float(max(0.0, -sd[j]))
+    where = "rigid_tail/* vs the BVSR at rest"
+    return [
+        CheckResult("rigid_tail_envelope_twin_on_bvsr", float(d_out[i]) <= tol, float(d_out[i]), tol, "mm", where,
+                    f"{len(pts)} samples of the twin's surface (pin, tie-rod and nut holes and the filled pneumatic and "
+                    "socket features excluded); farthest from "
+                    f"the BVSR's surface at {np.round(pts[i], 2).tolist()}"),
+        CheckResult("rigid_tail_envelope_bvsr_inside_twin", outside <= tol, outside, tol, "mm", where,
+                    f"{len(bpts)} samples of the BVSR's surface; farthest outside the twin at "
+                    f"{np.round(bpts[j], 2).tolist()}"),
+    ]
+
+
+def check_rigid_robot(exp: Export) -> list[CheckResult]:
+    rt = exp.manifest.get("rigid_tail", {}).get("robot")
+    if not rt:
+        return []
+    import mujoco
+
+    out = []
+    for key in ("mjcf", "urdf"):
+        path = exp.root / rt[key]
+        try:
+            model = mujoco.MjModel.from_xml_path(str(path))
+            data = mujoco.MjData(model)
+            mujoco.mj_step(model, data)
+            mass = float(model.body_mass.sum())
+            ok = abs(mass - rt["mass_kg"]) <= 1e-6 * max(1.0, rt["mass_kg"])
+            note = f"MuJoCo {mujoco.__version__}: {model.nbody - 1} body, {model.njnt} joints, mass {mass:.4f} kg"
+        except Exception as exc:  # MuJoCo raises ValueError with its own message
+            ok, note = False, f"MuJoCo failed: {exc}"
+        out.append(CheckResult(f"rigid_tail_robot_loads:{key}", ok, int(ok), 1, "", rt[key], note))
+    return out
+
 
 def check_printability(exp: Export) -> list[CheckResult]:
-    return []
+    """Every printability check on every STL the manifest's ``print_jobs`` names."""
+    jobs = exp.manifest.get("print_jobs")
+    if not jobs:
+        return []
+    fab = exp.manifest["fabrication"]
+    out: list[CheckResult] = []
+    to_slice: list[tuple[str, Path, list[float]]] = []
+    for job in jobs:
+        fdm = job["process"] == "FDM"
+        for it in job["items"]:
+            rel, name = it["stl"], f"{job['name']}/{it['part']}"
+            mesh = exp.mesh(rel)
+            lo, hi = mesh.bounds
+            size = hi - lo
+            out.append(CheckResult(f"print_fits_volume:{name}", _fits(size, job["build_volume_mm"]),
+                                   [round(float(v), 2) for v in size], job["build_volume_mm"], "mm", rel))
+            zmin = float(lo[2])
+            down = (mesh.face_normals[:, 2] < -0.9999) & (np.abs(mesh.triangles[:, :, 2] - zmin).max(axis=1) < 1e-6)
+            base = float(mesh.area_faces[down].sum())
+            out.append(CheckResult(f"print_flat_base:{name}", abs(zmin) < BED_Z_TOL_MM and base >= MIN_BASE_AREA_MM2,
+                                   base, MIN_BASE_AREA_MM2, "mm2", rel, f"lowest z {zmin:.6f} mm"))
+            regions = overhang_regions(mesh, fab["max_overhang_deg"])
+            down_area = float(mesh.area_faces[mesh.face_normals[:, 2] < 0].sum())
+            over = sum(r["area_mm2"] for r in regions)
+            support = [r for r in regions if r["width_mm"] > fab["max_bridge_mm"]]
+            frac = over / down_area if down_area > 0 else 0.0
+            text = (f"{100 * frac:.2f} % of the downward area is steeper than {fab['max_overhang_deg']:g} deg from "
+                    f"vertical in {len(regions)} regions; {len(regions) - len(support)} no wider than "
+                    f"{fab['max_bridge_mm']:g} mm (bridges, short ledges)")
+            if support:
+                text += "; needs support at " + "; ".join(
+                    f"{r['centre_mm']} ({r['area_mm2']:.1f} mm2, {r['width_mm']:.1f} mm wide)" for r in support[:5])
+            elif regions:
+                r = max(regions, key=lambda r: r["width_mm"])
+                text += f"; widest {r['width_mm']:.2f} mm at {r['centre_mm']}"
+            if not fdm:
+                text = "powder bed (MJF): no support needed; " + text
+            out.append(CheckResult(f"print_overhang:{name}", (len(support) == 0) if fdm else None,
+                                   sum(r["area_mm2"] for r in support), 0.0, "mm2 needing support", rel, text))
+            wall, at = min_wall_mm(mesh)
+            plate, at_plate = min_wall_mm(mesh, horizontal=True)
+            wall_min = fab["fdm_min_wall_mm"] if fdm else fab["mjf_min_wall_mm"]
+            plate_min = fab["fdm_min_plate_mm"] if fdm else fab["mjf_min_wall_mm"]
+            if it["kind"] in ("mold", "mold_core"):
+                wall_min = plate_min = fab["mold_min_wall_mm"]
+            note = "" if fdm else f"; limit {fab.get('mjf_min_wall_note', '')}"
+            out.append(CheckResult(f"print_min_wall:{name}", wall >= wall_min, wall, wall_min, "mm", rel,
+                                   f"thinnest wall (faces within 45 deg of vertical) at {at}, rays inwards to a "
+                                   f"parallel face{note}"))
+            out.append(CheckResult(f"print_min_plate:{name}", plate >= plate_min, plate, plate_min, "mm", rel,
+                                   f"thinnest plate (faces within 45 deg of horizontal) at {at_plate}{note}"))
+            hole, where = min_hole_mm(mesh)
+            hole_min = fab["fdm_min_hole_mm"] if fdm else fab["mjf_min_hole_mm"]
+            ok = hole >= HOLE_POLYGON_FACTOR * hole_min
+            out.append(CheckResult(f"print_min_hole:{name}", ok, hole if np.isfinite(hole) else None, hole_min,
+                                   "mm", rel, f"smallest enclosed void (4 A / P) at {where}" if where else
+                                   "no enclosed void in any section"))
+            to_slice.append((name, exp.root / rel, job["build_volume_mm"]))
+    out += check_slicing(exp, to_slice, float(fab["slicer_timeout_s"]))
+    out += check_envelope(exp)
+    out += check_rigid_robot(exp)
+    return out

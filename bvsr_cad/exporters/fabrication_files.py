@@ -2,8 +2,8 @@
 
 Writes, beside what the pipeline already wrote:
 
-* ``step/<piece>.step``, ``stl/<piece>.stl`` (print orientation) and
-  ``rigid_tail/assembled/<piece>.stl`` (tail frame) for every piece of the
+* ``step/<piece>.step`` and ``stl/<piece>.stl`` (print orientation; the
+  manifest's ``tail_transform`` places it in the tail) for every piece of the
   rigid PLA twin (:mod:`bvsr_cad.parts.rigid_tail`); the pieces join the
   manifest's ``parts`` with kind ``rigid_tail`` and process ``FDM``;
 * ``robot/<name>_rigid.urdf`` and ``robot/<name>_rigid.xml``: the twin as one
@@ -29,7 +29,7 @@ import trimesh
 
 from .. import units
 from ..assembly.build import Assembly
-from ..parts.rigid_tail import (RigidPiece, nut_pocket_depth_mm, pin_hole_mm, rigid_tail_pieces, tie_rod_hole_mm,
+from ..parts.rigid_tail import (KEPT_ROLES, RigidPiece, nut_pocket_depth_mm, pin_hole_mm, rigid_tail_pieces, tie_rod_hole_mm,
                                 tie_rod_length_mm)
 from ..spec.load import ParamError
 from .bom import bom_rows, write_bom
@@ -39,6 +39,8 @@ from .urdf import _f, _vec
 RIGID_COLOR = (0.80, 0.80, 0.74)
 #: Gap between objects laid out side by side in a job's 3MF (mm).
 PLATE_GAP_MM = 5.0
+#: Tessellation of the rigid twin's visual mesh in the robot description (mm).
+ROBOT_MESH_TOLERANCE_MM = 0.3
 
 
 def _check_keys(asm: Assembly) -> None:
@@ -51,6 +53,19 @@ def _check_keys(asm: Assembly) -> None:
                 if value not in spec.materials]
     if problems:
         raise ParamError("parameters", problems)
+
+
+def _filled_features(asm: Assembly) -> list[dict[str, Any]]:
+    """The BVSR panel features the twin fills (tail frame), excluded from the envelope comparison."""
+    out = []
+    for lay in asm.panel_layouts:
+        for c in (*lay.cuts, *lay.passages):
+            if c.role in KEPT_ROLES:
+                continue
+            out.append({"name": f"{lay.name}:{c.name}", "kind": c.role, "diameter_mm": c.diameter_mm,
+                        "p0_mm": [c.p0[0], c.p0[1], c.p0[2] + lay.z0_mm],
+                        "p1_mm": [c.p1[0], c.p1[1], c.p1[2] + lay.z0_mm]})
+    return out
 
 
 def _soa_transforms(asm: Assembly) -> dict[int, list[np.ndarray]]:
@@ -79,11 +94,9 @@ def _rigid_parts(asm: Assembly, pieces: list[RigidPiece], root: Path) -> list[di
     mat = spec.material("PLA")
     entries = []
     for p in pieces:
-        files = {"step": f"step/{p.name}.step", "stl": f"stl/{p.name}.stl",
-                 "assembled_stl": f"rigid_tail/assembled/{p.name}.stl"}
+        files = {"step": f"step/{p.name}.step", "stl": f"stl/{p.name}.stl"}
         _write_step(p.solid, p.name, root / files["step"])
         _write_stl(p.solid, root / files["stl"])
-        _write_stl(p.solid.moved(bd.Location((0.0, 0.0, p.z0_mm))), root / files["assembled_stl"])
         transform = np.eye(4)
         transform[2, 3] = p.z0_mm
         entries.append({
@@ -101,24 +114,49 @@ def _rigid_parts(asm: Assembly, pieces: list[RigidPiece], root: Path) -> list[di
     return entries
 
 
-def _rigid_robot(asm: Assembly, root: Path, parts: list[dict[str, Any]]) -> dict[str, Any]:
+def _visual_meshes(pieces: list[RigidPiece]) -> list[trimesh.Trimesh]:
+    """Coarse meshes of the pieces in the tail frame, in metres.
+
+    Called before the print STLs are written: OCCT keeps the finest triangulation
+    a shape has had, so tessellating afterwards would return the print mesh.
+    """
+    visual = []
+    for piece in pieces:
+        verts, tris = piece.solid.tessellate(ROBOT_MESH_TOLERANCE_MM, 0.5)
+        v = np.array([(q.X, q.Y, q.Z + piece.z0_mm) for q in verts]) * units.mm_to_m(1.0)
+        visual.append(trimesh.Trimesh(v, np.asarray(tris), process=False))
+    return visual
+
+
+def _rigid_robot(asm: Assembly, root: Path, parts: list[dict[str, Any]],
+                 visual: list[trimesh.Trimesh]) -> dict[str, Any]:
     """URDF and MJCF of the rigid twin: one body fixed to the robot's mount."""
     spec = asm.spec
     name = f"{spec.name}_rigid"
-    meshes = [trimesh.load(root / p["files"]["assembled_stl"], file_type="stl", force="mesh") for p in parts]
+    meshes = []
+    for p in parts:  # each piece's print STL moved from its print frame into the tail frame
+        m = trimesh.load(root / p["files"]["stl"], file_type="stl", force="mesh")
+        m.apply_transform(np.asarray(p["tail_transform"], float))
+        meshes.append(m)
     mesh = trimesh.util.concatenate(meshes)
     mesh.apply_scale(units.mm_to_m(1.0))
-    density_kg_m3 = spec.material("PLA").density_g_cm3 * 1000.0
-    mesh.density = density_kg_m3
+    mesh.density = spec.material("PLA").density_g_cm3 * 1000.0  # kg/m3
     mass_kg = float(mesh.mass)
     com = np.asarray(mesh.center_mass, float)
     inertia = np.asarray(mesh.moment_inertia, float)  # about the centre of mass, tail axes
     folder = root / "robot"
     (folder / "meshes").mkdir(parents=True, exist_ok=True)
     mesh_rel = f"meshes/{name}.stl"
-    mesh.export(folder / mesh_rel)
+    # The visual mesh is coarse (MuJoCo takes at most 200000 faces); the inertia above is from the print STLs.
+    trimesh.util.concatenate(visual).export(folder / mesh_rel)
 
     robot = ET.Element("robot", name=name)
+    # MuJoCo makes a URDF's root link its world: the twin hangs from a massless "mount" by a fixed joint,
+    # kept as its own body (fusestatic off) so simulators see the twin's mass and inertia.
+    mj_ext = ET.SubElement(robot, "mujoco")
+    ET.SubElement(mj_ext, "compiler", balanceinertia="false", discardvisual="false", fusestatic="false",
+                  strippath="false")
+    ET.SubElement(robot, "link", name="mount")
     m = ET.SubElement(robot, "material", name="PLA")
     ET.SubElement(m, "color", rgba=_vec((*RIGID_COLOR, 1.0)))
     link = ET.SubElement(robot, "link", name="rigid_tail")
@@ -134,6 +172,10 @@ def _rigid_robot(asm: Assembly, root: Path, parts: list[dict[str, Any]]) -> dict
         ET.SubElement(g, "mesh", filename=mesh_rel)
         if tag == "visual":
             ET.SubElement(el, "material", name="PLA")
+    fixed = ET.SubElement(robot, "joint", name="mount_to_rigid_tail", type="fixed")
+    ET.SubElement(fixed, "origin", xyz="0 0 0", rpy="0 0 0")
+    ET.SubElement(fixed, "parent", link="mount")
+    ET.SubElement(fixed, "child", link="rigid_tail")
     ET.indent(robot)
     urdf_rel = f"robot/{name}.urdf"
     ET.ElementTree(robot).write(root / urdf_rel, encoding="utf-8", xml_declaration=True)
@@ -244,10 +286,10 @@ def write_fabrication(asm: Assembly, root: Path, manifest: dict[str, Any],
     _check_keys(asm)
     progress("rigid comparison tail (PLA pieces)")
     pieces = rigid_tail_pieces(spec, asm.panel_layouts, _soa_transforms(asm))
-    (root / "rigid_tail" / "assembled").mkdir(parents=True, exist_ok=True)
+    visual = _visual_meshes(pieces)
     rigid = _rigid_parts(asm, pieces, root)
     progress("rigid tail robot description")
-    robot_rigid = _rigid_robot(asm, root, rigid)
+    robot_rigid = _rigid_robot(asm, root, rigid, visual)
     progress("print files (STL, 3MF per process and material)")
     jobs = _print_jobs(asm, root, manifest, rigid)
     rigid_section = {
@@ -264,6 +306,7 @@ def write_fabrication(asm: Assembly, root: Path, manifest: dict[str, Any],
         "simplified": "SOA pockets, air channels, fitting and tube ports, feed passages and the rod socket are "
                       "filled; lightening holes, tube pass-throughs and mount/payload insert bores are kept",
         "envelope_tolerance_mm": fp.envelope_tolerance_mm,
+        "filled_features": _filled_features(asm),
         "mass_g_solid": sum(p["mass_g"] for p in rigid),
         "robot": robot_rigid,
     }
@@ -272,8 +315,13 @@ def write_fabrication(asm: Assembly, root: Path, manifest: dict[str, Any],
         "rigid_tail": rigid_section,
         "print_jobs": jobs,
         "fabrication": {"max_overhang_deg": fp.max_overhang_deg, "max_bridge_mm": fp.max_bridge_mm,
-                        "fdm_min_wall_mm": fp.fdm_min_wall_mm, "fdm_min_hole_mm": fp.fdm_min_hole_mm,
-                        "mjf_min_hole_mm": fp.mjf_min_hole_mm, "mjf_min_wall_mm": spec.fabrication.min_wall_mm,
+                        "fdm_min_wall_mm": fp.fdm_min_wall_mm, "fdm_min_plate_mm": fp.fdm_min_plate_mm, "fdm_min_hole_mm": fp.fdm_min_hole_mm,
+                        "mjf_min_hole_mm": fp.mjf_min_hole_mm, # The pocket rim lips are allowed thinner than other webs by the
+                        # layout rules (fabrication.min_rim_lip_mm): they only locate a flange.
+                        "mjf_min_wall_mm": min(spec.fabrication.min_wall_mm, spec.fabrication.min_rim_lip_mm),
+                        "mjf_min_wall_note": f"fabrication.min_rim_lip_mm = {spec.fabrication.min_rim_lip_mm:g} "
+                                             f"(pocket rim lips); other webs >= {spec.fabrication.min_wall_mm:g} "
+                                             "by the layout validation",
                         "mold_min_wall_mm": spec.casting.min_print_wall_mm,
                         "slicer_timeout_s": fp.slicer_timeout_s},
     }

@@ -1,14 +1,340 @@
-"""The export's report (filled in by the fabrication issue).
+"""The export's report: ``report.html`` with its pictures in ``report/``.
 
-Written last, after the checks, so it can show their results.
+Written last, after the checks, so it shows their results. It reads only
+the export folder (the manifest and the files it names) and renders
+off-screen with pyvista (VTK's OSMesa/EGL build needs no display); if
+rendering fails the report says so in place of the pictures instead of
+failing the build.
+
+Sections: summary, the assembly and every part (print orientation), the
+rigid comparison tail, the mold set, the analysis plots the manifest lists,
+the paper comparison of SPEC section 6 (computed beside reported, with the
+difference; figures the build does not model are marked so), the mass
+budget, print jobs and BOM totals, and the table of checks.
 """
 
 from __future__ import annotations
 
+import html
+import os
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+import trimesh
+
+COLORS = {"panel": (0.55, 0.60, 0.68), "soa": (0.95, 0.55, 0.15), "rod": (0.92, 0.92, 0.88),
+          "rigid_tail": (0.80, 0.80, 0.74), "mold": (0.45, 0.62, 0.85), "mold_core": (0.35, 0.75, 0.45)}
+
+#: SPEC section 6: quantity, paper value, unit, measured on, and the check that computes it (or None).
+PAPER_ROWS: tuple[tuple[str, float, str, str, str | None, str], ...] = (
+    ("mass", 111.2, "g", "one standalone segment", "paper:segment_standalone_mass", ""),
+    ("mass", 283.0, "g", "whole tail", "paper:tail_mass", ""),
+    ("length", 210.0, "mm", "whole tail (BVSR)", "paper:tail_length", ""),
+    ("taper half-angle (alpha_2 - 90)", 1.23, "deg", "Table I", "paper:taper_half_angle", ""),
+    ("quasi-static max angle, extension", 51.9, "deg", "one segment", "paper:qs_max_angle:extension", ""),
+    ("quasi-static max angle, flexion", 46.5, "deg", "one segment", "paper:qs_max_angle:flexion", ""),
+    ("quasi-static max angle, waggle", 46.1, "deg", "one segment", "paper:qs_max_angle:waggle", ""),
+    ("blocked force, extension", 19.7, "N", "one segment", "paper:qs_blocked_force:extension", ""),
+    ("blocked force, flexion", 17.8, "N", "one segment", "paper:qs_blocked_force:flexion", ""),
+    ("blocked force, waggle", 16.8, "N", "one segment", "paper:qs_blocked_force:waggle", ""),
+    ("peak angular velocity at 6 bar, extension", 678.6, "deg/s", "one segment", None,
+     "`bvsr simulate` computes it; not run by `bvsr build`"),
+    ("peak angular velocity at 6 bar, flexion", 628.1, "deg/s", "one segment", None,
+     "`bvsr simulate` computes it; not run by `bvsr build`"),
+    ("peak angular velocity at 6 bar, waggle", 625.0, "deg/s", "one segment", None,
+     "`bvsr simulate` computes it; not run by `bvsr build`"),
+    ("motion time exponent T ~ P^n", -0.63, "", "one segment", None, "not modelled yet"),
+    ("velocity exponent V ~ P^n", 0.61, "", "one segment", None, "not modelled yet"),
+    ("peak inertial torque, 6 bar, no payload", 1.21, "N m", "whole tail", None,
+     "`bvsr simulate` computes it; not run by `bvsr build`"),
+    ("peak inertial torque, 6 bar, 100 g tip", 1.88, "N m", "whole tail", None,
+     "`bvsr simulate --payload-g 100`; not run by `bvsr build`"),
+    ("peak root force, 500 g tip", 23.6, "N", "whole tail on the quadruped", None,
+     "needs the platform model (Eq 20-22): not modelled yet"),
+    ("peak root torque, 500 g tip", 2.48, "N m", "whole tail on the quadruped", None,
+     "needs the platform model (Eq 20-22): not modelled yet"),
+    ("workspace half-width", 100.0, "mm", "BVSR tip", "paper:workspace_half_width", ""),
+    ("cart lift over a 9 mm obstacle (700 g cart)", 10.5, "mm", "whole tail", None, "not modelled yet"),
+)
+
+CSS = """
+body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:2em auto;max-width:1200px;color:#222;
+line-height:1.4;padding:0 1em}
+h1{margin-bottom:0.2em} h2{border-bottom:2px solid #ddd;padding-bottom:0.2em;margin-top:2em}
+table{border-collapse:collapse;margin:0.5em 0;font-size:0.9em} td,th{border:1px solid #ccc;padding:3px 7px;
+vertical-align:top} th{background:#f3f3f3;text-align:left} td.num{text-align:right;font-variant-numeric:tabular-nums}
+.pass{color:#1a7f37;font-weight:600}.fail{color:#cf222e;font-weight:700}.info{color:#6e7781}
+.grid{display:flex;flex-wrap:wrap;gap:10px}.grid figure{margin:0;border:1px solid #ddd;padding:4px;background:#fafafa}
+figcaption{font-size:0.85em;text-align:center} img{max-width:100%} .muted{color:#6e7781}
+.badge{display:inline-block;padding:2px 10px;border-radius:10px;color:#fff;font-weight:600}
+"""
+
+
+def _e(v: Any) -> str:
+    return html.escape(str(v))
+
+
+def _num(v: Any, digits: int = 4) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, bool):
+        return str(v)
+    if isinstance(v, (int, float)):
+        return f"{v:.{digits}g}"
+    if isinstance(v, list):
+        return "[" + ", ".join(_num(x, digits) for x in v) + "]"
+    return _e(v)
+
+
+def _pyvista():
+    os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+    import pyvista as pv
+    import vtk
+
+    vtk.vtkLogger.SetStderrVerbosity(vtk.vtkLogger.VERBOSITY_OFF)
+    pv.OFF_SCREEN = True
+    return pv
+
+
+def _poly(pv, mesh: trimesh.Trimesh):
+    cells = np.hstack([np.full((len(mesh.faces), 1), 3), mesh.faces]).astype(np.int64).ravel()
+    return pv.PolyData(np.asarray(mesh.vertices, float), cells)
+
+
+def _render_parts(root: Path, items: list[tuple[str, str, str]], out: Path) -> dict[str, str]:
+    """One small picture per STL (print orientation, the bed drawn as a grid); returns name -> path."""
+    pv = _pyvista()
+    out.mkdir(parents=True, exist_ok=True)
+    pics: dict[str, str] = {}
+    plotter = pv.Plotter(off_screen=True, window_size=(360, 300))
+    for name, rel, kind in items:
+        mesh = trimesh.load(root / rel, file_type="stl", force="mesh")
+        plotter.clear()
+        plotter.add_mesh(_poly(pv, mesh), color=COLORS.get(kind, (0.7, 0.7, 0.7)), smooth_shading=False)
+        lo, hi = mesh.bounds
+        size = float(max(hi[0] - lo[0], hi[1] - lo[1])) * 1.3
+        bed = pv.Plane(center=((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, 0.0), direction=(0, 0, 1),
+                       i_size=size, j_size=size, i_resolution=8, j_resolution=8)
+        plotter.add_mesh(bed, color=(0.85, 0.85, 0.85), style="wireframe", line_width=1)
+        plotter.view_isometric()
+        plotter.reset_camera()
+        plotter.add_text(f"{name}  {hi[0] - lo[0]:.0f} x {hi[1] - lo[1]:.0f} x {hi[2] - lo[2]:.0f} mm",
+                         font_size=8)
+        path = out / f"{name}.png"
+        plotter.screenshot(str(path))
+        pics[name] = str(path.relative_to(root))
+    plotter.close()
+    return pics
+
+
+def _render_rigid(root: Path, manifest: dict[str, Any], path: Path) -> str:
+    """The rigid twin assembled beside an exploded stack of its pieces."""
+    pv = _pyvista()
+    plotter = pv.Plotter(off_screen=True, window_size=(1200, 560), shape=(1, 2))
+    pieces = [p for p in manifest["parts"] if p["kind"] == "rigid_tail"]
+    for col, gap in ((0, 0.0), (1, 18.0)):
+        plotter.subplot(0, col)
+        for i, p in enumerate(pieces):
+            mesh = trimesh.load(root / p["files"]["stl"], file_type="stl", force="mesh")
+            t = np.asarray(p["tail_transform"], float).copy()
+            t[2, 3] += gap * i
+            mesh.apply_transform(t)
+            shade = 0.72 + 0.1 * (i % 2)
+            plotter.add_mesh(_poly(pv, mesh), color=(shade, shade, shade * 0.92), smooth_shading=False)
+        plotter.camera_position = [(-300.0, 200.0, -40.0 + 60 * col), (0.0, 0.0, 130.0 + 50 * col), (0.0, 1.0, 0.0)]
+        plotter.reset_camera()
+        plotter.add_text("rigid PLA twin, assembled" if col == 0 else "pieces as printed, exploded along the tail",
+                         font_size=10)
+    plotter.screenshot(str(path))
+    plotter.close()
+    return str(path.relative_to(root))
+
+
+def _pngs(section: Any) -> list[str]:
+    out: list[str] = []
+    if isinstance(section, dict):
+        for v in section.values():
+            out += _pngs(v)
+    elif isinstance(section, list):
+        for v in section:
+            out += _pngs(v)
+    elif isinstance(section, str) and section.lower().endswith(".png"):
+        out.append(section)
+    return out
+
+
+def _fig(src: str, caption: str, width: int | None = None) -> str:
+    w = f' style="width:{width}px"' if width else ""
+    return f'<figure{w}><img src="{_e(src)}" alt="{_e(caption)}"><figcaption>{_e(caption)}</figcaption></figure>'
+
+
+def _status(passed: Any) -> str:
+    return {True: '<span class="pass">PASS</span>', False: '<span class="fail">FAIL</span>',
+            None: '<span class="info">INFO</span>'}[passed]
+
+
+def _paper_table(manifest: dict[str, Any]) -> str:
+    checks = {c["name"]: c for c in manifest.get("checks", [])}
+    rows = ["<table><tr><th>quantity</th><th>measured on</th><th>paper</th><th>computed</th><th>difference</th>"
+            "<th>unit</th><th>note</th></tr>"]
+    segments = int(manifest.get("segments", 2))
+    for qty, paper, unit, on, check, why in PAPER_ROWS:
+        c = checks.get(check) if check else None
+        if check == "paper:tail_mass" and segments != 2:
+            c, why = None, "the paper weighs only the 2-segment tail"
+        if c is not None and isinstance(c.get("value"), (int, float)):
+            ref = c["limit"] if isinstance(c.get("limit"), (int, float)) else paper
+            diff = c["value"] - ref
+            pct = f" ({100 * diff / ref:+.1f} %)" if ref else ""
+            rows.append(f"<tr><td>{_e(qty)}</td><td>{_e(on)}</td><td class=num>{_num(ref)}</td>"
+                        f"<td class=num>{_num(c['value'])}</td><td class=num>{diff:+.4g}{pct}</td><td>{_e(unit)}</td>"
+                        f"<td>{_e(c.get('note', ''))}</td></tr>")
+        else:
+            rows.append(f"<tr><td>{_e(qty)}</td><td>{_e(on)}</td><td class=num>{_num(paper)}</td>"
+                        f"<td class=info>not modelled</td><td></td><td>{_e(unit)}</td>"
+                        f"<td>{_e(why or 'not computed by this build')}</td></tr>")
+    rows.append("</table>")
+    return "\n".join(rows)
+
+
+def _mass_table(manifest: dict[str, Any]) -> str:
+    rows = ["<table><tr><th>part</th><th>kind</th><th>material</th><th>process</th><th>count</th>"
+            "<th>mass each (g)</th><th>mass total (g)</th></tr>"]
+    for p in manifest["parts"]:
+        if p["kind"] == "rigid_tail":
+            continue
+        rows.append(f"<tr><td>{_e(p['name'])}</td><td>{_e(p['kind'])}</td><td>{_e(p['material'])}</td>"
+                    f"<td>{_e(p['process'])}</td><td class=num>{p['count']}</td><td class=num>{p['mass_g']:.2f}</td>"
+                    f"<td class=num>{p['count'] * p['mass_g']:.2f}</td></tr>")
+    m = manifest["mass_g"]
+    rows.append(f"<tr><th colspan=6>BVSR tail (modelled: panels, SOAs, rods)</th><th class=num>{m['tail']:.2f}</th></tr>")
+    for i, (a, b) in enumerate(zip(m.get("segments", []), m.get("segments_standalone", [])), start=1):
+        rows.append(f"<tr><td colspan=6>segment s{i}: in the tail (shared panels halved) / standalone</td>"
+                    f"<td class=num>{a:.2f} / {b:.2f}</td></tr>")
+    rt = manifest.get("rigid_tail")
+    if rt:
+        rows.append(f"<tr><th colspan=6>rigid PLA twin (solid density; infill lowers it)</th>"
+                    f"<th class=num>{rt['mass_g_solid']:.2f}</th></tr>")
+    rows.append("</table>")
+    return "\n".join(rows)
+
+
+def _checks_table(checks: list[dict[str, Any]]) -> str:
+    order = sorted(checks, key=lambda c: {False: 0, None: 1, True: 2}[c["passed"]])
+    rows = ["<table><tr><th></th><th>check</th><th>value</th><th>limit</th><th>unit</th><th>where</th><th>note</th></tr>"]
+    for c in order:
+        rows.append(f"<tr><td>{_status(c['passed'])}</td><td>{_e(c['name'])}</td><td class=num>{_num(c['value'])}</td>"
+                    f"<td class=num>{_num(c['limit'])}</td><td>{_e(c['unit'])}</td><td>{_e(c['where'])}</td>"
+                    f"<td>{_e(c.get('note', ''))}</td></tr>")
+    rows.append("</table>")
+    return "\n".join(rows)
+
 
 def write_report(root: Path, manifest: dict[str, Any]) -> dict[str, Any]:
-    """Write the report under ``root``; returns keys to merge into the manifest."""
-    return {}
+    """Write ``report.html`` and its pictures (``report/``) under ``root``; returns the manifest's ``report``."""
+    out = root / "report"
+    out.mkdir(exist_ok=True)
+    problems: list[str] = []
+    items = [(it["part"], it["stl"], it["kind"]) for job in manifest.get("print_jobs", []) for it in job["items"]]
+    items += [(p["name"], p["files"]["stl"], p["kind"]) for p in manifest["parts"]
+              if p["process"] not in ("MJF", "FDM")]
+    try:
+        part_pics = _render_parts(root, items, out / "parts")
+    except Exception as exc:  # a missing GL library must not lose the export; the report says what failed
+        part_pics, problems = {}, problems + [f"part renders failed: {exc}"]
+    rigid_pic = None
+    if manifest.get("rigid_tail"):
+        try:
+            rigid_pic = _render_rigid(root, manifest, out / "rigid_tail.png")
+        except Exception as exc:
+            problems.append(f"rigid tail render failed: {exc}")
+
+    checks = manifest.get("checks", [])
+    n_fail = sum(1 for c in checks if c["passed"] is False)
+    n_pass = sum(1 for c in checks if c["passed"] is True)
+    n_info = sum(1 for c in checks if c["passed"] is None)
+    badge = ('<span class="badge" style="background:#cf222e">checks FAILED</span>' if n_fail else
+             '<span class="badge" style="background:#1a7f37">all checks pass</span>')
+    h: list[str] = [f"<!doctype html><html><head><meta charset='utf-8'><title>{_e(manifest['name'])} report</title>"
+                    f"<style>{CSS}</style></head><body>"]
+    h.append(f"<h1>{_e(manifest['name'])}: build report</h1>")
+    h.append(f"<p>{badge} {n_pass} passed, {n_fail} failed, {n_info} informational. "
+             f"{manifest['segments']} segments, {manifest['joints']} joints, {manifest['panels']} panels; "
+             f"length {manifest['length_mm']:.2f} mm; taper {manifest['taper']['half_angle_deg']:.3f} deg "
+             f"(paper's alpha_2 - 90 = 1.23 deg: {_e(manifest['taper']['limited_by'])}); "
+             f"params sha256 <code>{_e(manifest['params_sha256'][:12])}</code>.</p>")
+    for p in problems:
+        h.append(f"<p class=fail>{_e(p)} (install the system GL libraries VTK needs, e.g. libgl1 / libosmesa6)</p>")
+
+    h.append("<h2>Assembly at rest</h2><div class=grid>")
+    prev = manifest.get("previews", {})
+    if prev.get("assembly"):
+        h.append(_fig(prev["assembly"], "BVSR at rest (SOAs translucent)"))
+    if prev.get("parts"):
+        h.append(_fig(prev["parts"], "unique parts in their part frames"))
+    h.append("</div>")
+
+    h.append("<h2>Every part in print orientation</h2><p class=muted>As exported in <code>print/</code>: lying on "
+             "z = 0 on the bed grid; SOAs and rods are cast and cut, shown in their part frame.</p><div class=grid>")
+    for name, pic in part_pics.items():
+        h.append(_fig(pic, name, 260))
+    h.append("</div>")
+
+    rt = manifest.get("rigid_tail")
+    if rt:
+        j = rt["joining"]
+        h.append("<h2>Rigid PLA comparison tail</h2>")
+        if rigid_pic:
+            h.append(f"<div class=grid>{_fig(rigid_pic, 'rigid twin: assembled and exploded')}</div>")
+        env = {c["name"]: c for c in checks if c["name"].startswith("rigid_tail_envelope")}
+        env_txt = ", ".join(f"{k.removeprefix('rigid_tail_envelope_')}: {_num(v['value'], 3)} mm (limit "
+                            f"{_num(v['limit'])})" for k, v in env.items())
+        h.append(f"<p>{len(rt['pieces'])} pieces for a {' x '.join(f'{v:g}' for v in rt['printer_volume_mm'])} mm "
+                 f"printer: {_e(rt['split'])}. Joined by {j['pins']['count']} dowel pins "
+                 f"({_e(j['pins']['designation'])}) and a {_e(j['tie_rod']['designation'])} tie rod cut to "
+                 f"{j['tie_rod']['cut_length_mm']:.1f} mm with two {_e(j['nuts']['designation'])} nuts. "
+                 f"Simplified: {_e(rt['simplified'])}. Envelope against the BVSR at rest: {_e(env_txt)}. "
+                 f"Robot description: <code>{_e(rt['robot']['urdf'])}</code>, <code>{_e(rt['robot']['mjcf'])}</code> "
+                 f"(one rigid body, {rt['robot']['mass_kg'] * 1000:.1f} g solid).</p>")
+
+    molds = manifest.get("molds", {})
+    if molds.get("exploded_png"):
+        h.append("<h2>SOA mold set</h2><div class=grid>")
+        h.append(_fig(molds["exploded_png"], "mold set, exploded along the pull directions"))
+        h.append("</div>")
+
+    pngs = _pngs(manifest.get("analysis", {}))
+    h.append("<h2>Analyses</h2>")
+    if pngs:
+        h.append("<div class=grid>" + "".join(_fig(p, Path(p).stem.replace("_", " ")) for p in pngs) + "</div>")
+    else:
+        h.append("<p class=muted>No analysis plots in this export.</p>")
+
+    h.append("<h2>Against the paper (SPEC section 6)</h2>")
+    h.append(_paper_table(manifest))
+    h.append("<h2>Mass budget</h2>")
+    h.append(_mass_table(manifest))
+
+    jobs = manifest.get("print_jobs", [])
+    if jobs:
+        h.append("<h2>Print jobs</h2><table><tr><th>job</th><th>material</th><th>build volume (mm)</th><th>parts</th>"
+                 "<th>mass (g)</th><th>3MF</th></tr>")
+        for job in jobs:
+            h.append(f"<tr><td>{_e(job['name'])}</td><td>{_e(job['material_name'])}</td>"
+                     f"<td>{_num(job['build_volume_mm'])}</td><td class=num>{job['total_parts']}</td>"
+                     f"<td class=num>{job['total_mass_g']:.1f}</td><td><a href='{_e(job['files']['3mf'])}'>"
+                     f"{_e(job['files']['3mf'])}</a></td></tr>")
+        h.append("</table>")
+    bom = manifest.get("bom")
+    if bom:
+        h.append(f"<p>Bill of materials: <a href='{_e(bom['md'])}'>{_e(bom['md'])}</a>, "
+                 f"<a href='{_e(bom['csv'])}'>{_e(bom['csv'])}</a> ({bom['rows']} rows; "
+                 + ", ".join(f"{_e(k.replace('_', ' '))} {_num(v)}" for k, v in bom["counts"].items()) + ").</p>")
+
+    h.append("<h2>Checks</h2><p class=muted>Failures first, then comparisons, then passes.</p>")
+    h.append(_checks_table(checks))
+    h.append("</body></html>")
+    (root / "report.html").write_text("\n".join(h))
+    return {"report": {"html": "report.html", "pictures": sorted(set(part_pics.values()) | ({rigid_pic} - {None})),
+                       "problems": problems}}

@@ -49,6 +49,8 @@ NUT_HEIGHT_MM = {2.0: 1.6, 2.5: 2.0, 3.0: 2.4}
 NUT_POCKET_CLEARANCE_MM = 0.3
 #: A pin hole is this much deeper than half the pin so the pin never bottoms out.
 PIN_HOLE_EXTRA_MM = 0.5
+#: Material kept over a pin hole in a panel (the tip panel's distal face).
+PANEL_PIN_FLOOR_MM = 1.5
 
 
 @dataclass(frozen=True)
@@ -147,7 +149,9 @@ def rigid_tail_pieces(spec: TailSpec, layouts: list[PanelLayout],
     fp = spec.fabrication_package
     soa_env = _soa_envelope(spec.soa, spec.joint.base_diameter_mm)
     d_pin, d_tie = pin_hole_mm(spec), tie_rod_hole_mm(spec)
-    pin_depth = fp.pin_length_mm / 2.0 + PIN_HOLE_EXTRA_MM
+    # The pin sits deeper in the column than in the panel so the tip panel keeps a floor over its holes.
+    panel_pin_depth = min(fp.pin_length_mm / 2.0 + PIN_HOLE_EXTRA_MM, layouts[0].thickness_mm - PANEL_PIN_FLOOR_MM)
+    column_pin_depth = fp.pin_length_mm - (panel_pin_depth - PIN_HOLE_EXTRA_MM) + PIN_HOLE_EXTRA_MM
     nut_af = NUT_AF_MM[fp.tie_rod_thread] + NUT_POCKET_CLEARANCE_MM
     nut_depth = nut_pocket_depth_mm(spec)
     pieces: list[RigidPiece] = []
@@ -176,12 +180,12 @@ def rigid_tail_pieces(spec: TailSpec, layouts: list[PanelLayout],
             for i, a in enumerate(angles, start=1):
                 xy = polar(lay.pitch_radius_lower_mm, a)
                 features.append(PrintFeature(f"pin_{k - 1}_{i}_upper", "pin_hole", (*xy, z0 - 1e-3),
-                                             (*xy, z0 + pin_depth), d_pin))
+                                             (*xy, z0 + panel_pin_depth), d_pin))
         if k < n:
             nxt = layouts[k]
             for i, a in enumerate(angles, start=1):
                 xy = polar(nxt.pitch_radius_lower_mm, a)
-                features.append(PrintFeature(f"pin_{k}_{i}_lower", "pin_hole", (*xy, top - pin_depth),
+                features.append(PrintFeature(f"pin_{k}_{i}_lower", "pin_hole", (*xy, top - column_pin_depth),
                                              (*xy, top + 1e-3), d_pin))
         tools = list(cuts)
         if k < n:

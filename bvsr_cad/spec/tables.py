@@ -294,6 +294,8 @@ class FabricationPackage:
                                 ge=0, le=50, default=10.0)
     fdm_min_wall_mm: float = rule("thinnest wall an FDM part may have (two 0.4 mm perimeters)", gt=0.2, le=10,
                                   default=0.8)
+    fdm_min_plate_mm: float = rule("thinnest horizontal plate an FDM part may have (three 0.2 mm layers)",
+                                   gt=0.1, le=10, default=0.6)
     fdm_min_hole_mm: float = rule("smallest hole an FDM part may have", gt=0.2, le=10, default=1.5)
     mjf_min_hole_mm: float = rule("smallest hole an MJF part may have (powder removal)", gt=0.2, le=10,
                                   default=1.5)

@@ -102,10 +102,8 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         say("previews (off-screen renders)")
         manifest["previews"] = render_previews(asm, tmp)
         manifest.update(write_analyses(asm, tmp, say))
-        limits = manifest.get("analysis", {}).get("limits")
-        if limits:
-            theta_max = theta_max_from_limits(json.loads((tmp / limits).read_text()), spec.joints)
-            manifest.update(write_robot(asm, tmp, theta_max, say))
+        limits = json.loads((tmp / manifest["analysis"]["limits"]).read_text())
+        manifest.update(write_robot(asm, tmp, theta_max_from_limits(limits, spec.joints), say))
         manifest.update(write_molds(asm, tmp, say))
         manifest.update(write_fabrication(asm, tmp, manifest, say))
         write_manifest(tmp, manifest)

@@ -106,9 +106,8 @@ def write_robot(asm: Assembly, root: Path, theta_max_rad: list[float],
 
 def theta_max_from_limits(limits: dict, joints: int) -> list[float]:
     """Minimum over phi of theta_max for each joint, from ``analysis/limits.json``."""
-    out = []
-    for k in range(1, joints + 1):
-        entry = limits[f"j{k}"] if f"j{k}" in limits else limits["joints"][k - 1]
-        values = entry["theta_max_rad"] if isinstance(entry, dict) else entry
-        out.append(float(np.min(values)))
-    return out
+    by_name = {entry["joint"]: entry for entry in limits["joints"]}
+    missing = [f"j{k}" for k in range(1, joints + 1) if f"j{k}" not in by_name]
+    if missing:
+        raise ValueError(f"analysis/limits.json has no limits for {', '.join(missing)}")
+    return [float(np.min(by_name[f"j{k}"]["theta_max_rad"])) for k in range(1, joints + 1)]

@@ -111,24 +111,18 @@ def cmd_simulate(args) -> int:
     return EXIT_OK
 
 
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: must be > 0")
-    return value
+def _number(minimum: float, inclusive: bool):
+    """argparse type: a number above ``minimum`` (or equal, if ``inclusive``), with a clear message."""
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        if value < minimum or (value == minimum and not inclusive):
+            raise argparse.ArgumentTypeError(f"{text!r}: must be {'>=' if inclusive else '>'} {minimum:g}")
+        return value
 
-
-def _non_negative(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: must be >= 0")
-    return value
+    return parse
 
 
 def cmd_workspace(args) -> int:
@@ -188,8 +182,8 @@ def make_parser() -> argparse.ArgumentParser:
     c.set_defaults(func=cmd_check)
     sm = sub.add_parser("simulate", help="drive the MJCF with a pressure pulse; peak velocity and root torque")
     sm.add_argument("params", help="parameter file")
-    sm.add_argument("--pressure-bar", type=_positive, default=6.0, help="pulse gauge pressure in bar (default 6)")
-    sm.add_argument("--payload-g", type=_non_negative, default=0.0, help="tip payload in grams (default 0)")
+    sm.add_argument("--pressure-bar", type=_number(0.0, inclusive=False), default=6.0, help="pulse gauge pressure in bar (default 6)")
+    sm.add_argument("--payload-g", type=_number(0.0, inclusive=True), default=0.0, help="tip payload in grams (default 0)")
     sm.add_argument("-o", "--output", help="folder for the plot (default exports/<name>/simulate/)")
     sm.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     sm.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")

@@ -143,10 +143,10 @@ def bom_rows(asm: Assembly, manifest: dict[str, Any]) -> list[BomRow]:
     routes = tube_routes_mm(asm)
     total_tube = 0.0
     for line, inside in routes.items():
-        length = inside * (1.0 + fp.tube_bend_allowance) + fp.tube_lead_mm
+        length = round(inside * (1.0 + fp.tube_bend_allowance) + fp.tube_lead_mm, 1)  # cut to 0.1 mm
         total_tube += length
         rows.append(BomRow("pneumatics", "pneumatic", f"tube {line}", f"PU tube {d_tube:g} x "
-                           f"{d_tube - 1.5:g} mm, cut to {length:.0f} mm", round(length, 1), "mm", "PU", "cut",
+                           f"{d_tube - 1.5:g} mm, cut to {length:.1f} mm", length, "mm", "PU", "cut",
                            None, None, f"{inside:.1f} mm inside the tail (+{100 * fp.tube_bend_allowance:.0f} % for "
                            f"bending) + {fp.tube_lead_mm:g} mm lead to the valves"))
     rows.append(BomRow("pneumatics", "pneumatic", "tee", f"push-in tee, tube {d_tube:g} mm", lines, "pcs", "",

@@ -1,0 +1,171 @@
+"""The fabrication package: rigid twin, print files, 3MF, BOM, printability, report.
+
+Uses the session's default export (``bvsr_export`` in conftest: one full build).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from bvsr_cad.checks.export import Export
+from bvsr_cad.checks.printability import check_envelope, overhang_regions
+
+
+@pytest.fixture(scope="module")
+def manifest(bvsr_export) -> dict:
+    return json.loads((bvsr_export / "manifest.json").read_text())
+
+
+def _checks(manifest: dict, prefix: str) -> list[dict]:
+    return [c for c in manifest["checks"] if c["name"].startswith(prefix)]
+
+
+def test_rigid_pieces_one_per_joint_and_fit_the_printer(manifest, bvsr_export):
+    pieces = [p for p in manifest["parts"] if p["kind"] == "rigid_tail"]
+    assert [p["name"] for p in pieces] == [f"rigid_j{k}" for k in range(1, manifest["joints"] + 1)] + ["rigid_tip"]
+    vx, vy, vz = manifest["rigid_tail"]["printer_volume_mm"]
+    assert (vx, vy, vz) == (250.0, 210.0, 210.0)
+    for p in pieces:
+        assert p["process"] == "FDM" and p["material"] == "PLA" and p["count"] == 1
+        lo, hi = trimesh.load(bvsr_export / p["files"]["stl"]).bounds
+        x, y, z = hi - lo
+        assert z <= vz and ((x <= vx and y <= vy) or (x <= vy and y <= vx)), p["name"]
+        assert abs(lo[2]) < 1e-6
+
+
+def test_rigid_pieces_stack_to_the_tail_length(manifest):
+    pieces = [p for p in manifest["parts"] if p["kind"] == "rigid_tail"]
+    top = max(p["tail_transform"][2][3] + p["info"]["size_mm"][2] for p in pieces)
+    assert top == pytest.approx(manifest["length_mm"], abs=1e-6)
+
+
+def test_rigid_envelope_equals_bvsr_at_rest(bvsr_export, manifest):
+    tol = manifest["rigid_tail"]["envelope_tolerance_mm"]
+    results = check_envelope(Export.open(bvsr_export), samples=3000, seed=7)
+    assert len(results) == 2
+    for r in results:
+        assert r.passed and r.value <= tol, r.line()
+
+
+def test_rigid_pieces_need_no_support(manifest):
+    over = _checks(manifest, "print_overhang:FDM_PLA/rigid")
+    assert len(over) == manifest["joints"] + 1
+    assert all(c["passed"] is True and c["value"] == 0 for c in over)
+
+
+def test_overhang_map_finds_a_flat_ceiling():
+    # A table: a 40 x 40 top on one 5 x 5 leg; the top's underside needs support, 35 mm > 10 mm bridge.
+    leg = trimesh.creation.box((5, 5, 20))
+    leg.apply_translation((0, 0, 10))
+    top = trimesh.creation.box((40, 40, 3))
+    top.apply_translation((0, 0, 21.5))
+    regions = overhang_regions(trimesh.boolean.union([leg, top], engine="manifold"), 45.0)
+    widest = max(r["width_mm"] for r in regions)
+    assert widest == pytest.approx(40.0, abs=0.01)
+    assert max(r["area_mm2"] for r in regions) == pytest.approx(40 * 40 - 25, abs=0.01)
+
+
+def test_print_jobs_lie_on_the_bed_with_quantities(manifest, bvsr_export):
+    jobs = {j["name"]: j for j in manifest["print_jobs"]}
+    assert set(jobs) == {"MJF_PA12", "FDM_PLA", "FDM_PVA"}
+    counts = {p["name"]: p["count"] for p in manifest["parts"]}
+    soa = counts["soa"]
+    for j in jobs.values():
+        for it in j["items"]:
+            mesh = trimesh.load(bvsr_export / it["stl"])
+            assert abs(mesh.bounds[0][2]) < 1e-6, it["stl"]
+            if it["part"] in counts:
+                assert it["quantity"] == counts[it["part"]]
+    assert sum(it["quantity"] for it in jobs["MJF_PA12"]["items"]) == manifest["panels"]
+    assert jobs["FDM_PVA"]["items"][0]["quantity"] == soa == 5 * manifest["joints"]
+
+
+def test_3mf_round_trips_with_names_and_millimetres(manifest, bvsr_export):
+    for job in manifest["print_jobs"]:
+        path = bvsr_export / job["files"]["3mf"]
+        with zipfile.ZipFile(path) as z:
+            model = z.read("3D/3dmodel.model").decode()
+        assert 'unit="millimeter"' in model
+        scene = trimesh.load(path, file_type="3mf")
+        names = {it["part"] for it in job["items"]}
+        assert set(scene.geometry) == names
+        for it in job["items"]:
+            stl = trimesh.load(bvsr_export / it["stl"])
+            assert scene.geometry[it["part"]].volume == pytest.approx(stl.volume, rel=1e-6)
+
+
+def test_bom_counts_equal_the_assembly(manifest, bvsr_export):
+    rows = list(csv.DictReader((bvsr_export / "bom.csv").open()))
+    by_item = {r["item"]: r for r in rows}
+    for p in manifest["parts"]:
+        assert float(by_item[p["name"]]["quantity"]) == p["count"], p["name"]
+    assert float(by_item["soa"]["quantity"]) == 30
+    assert sum(float(r["quantity"]) for r in rows if r["item"].startswith("panel")) == manifest["panels"] == 7
+    assert float(by_item["solenoid valve"]["quantity"]) == 20  # 2 per line, 10 lines
+    assert float(by_item["dowel pin"]["quantity"]) == 5 * manifest["joints"]
+    tubes = [r for r in rows if r["item"].startswith("tube s")]
+    assert len(tubes) == 5 * manifest["segments"]
+    total = next(r for r in rows if r["category"] == "total" and r["item"] == "tube")
+    assert float(total["quantity"]) == pytest.approx(sum(float(r["quantity"]) for r in tubes), abs=0.1)
+    modelled = next(r for r in rows if r["item"] == "BVSR modelled mass")
+    assert float(modelled["mass_total_g"]) == pytest.approx(manifest["mass_g"]["tail"], abs=0.01)
+    assert (bvsr_export / "bom.md").read_text().count("| qty |") >= 3
+
+
+def test_segment_two_tubes_reach_the_boundary_port(manifest, bvsr_export):
+    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.exporters.bom import tube_routes_mm
+    from bvsr_cad.spec.load import load_spec
+
+    spec = load_spec(bvsr_export / "params.toml")
+    routes = tube_routes_mm(build_assembly(spec))
+    t = spec.joint.panel_thickness_mm
+    port_z = spec.joints_per_segment * spec.joint.joint_height_mm + spec.tubes.port_depth_mm
+    for i in range(1, 6):
+        assert routes[f"s1_line{i}"] == 0.0
+        # Straight along z at rest, plus the small radial step of the taper.
+        assert routes[f"s2_line{i}"] == pytest.approx(port_z, abs=0.05)
+    assert t > 0
+
+
+def test_printability_and_slicing_pass(manifest):
+    prints = _checks(manifest, "print_")
+    n_stl = sum(len(j["items"]) for j in manifest["print_jobs"])
+    assert len(_checks(manifest, "print_fits_volume:")) == n_stl
+    assert all(c["passed"] is not False for c in prints)
+    slices = _checks(manifest, "slice:")
+    assert len(slices) == n_stl
+    assert all(c["passed"] is True for c in slices) or all(c["passed"] is None for c in slices)
+
+
+def test_rigid_robot_loads_in_mujoco(manifest, bvsr_export):
+    mujoco = pytest.importorskip("mujoco")
+    rt = manifest["rigid_tail"]
+    for key in ("mjcf", "urdf"):
+        model = mujoco.MjModel.from_xml_path(str(bvsr_export / rt["robot"][key]))
+        assert model.njnt == 0
+        assert float(model.body_mass.sum()) == pytest.approx(rt["robot"]["mass_kg"], rel=1e-6)
+    solid_g = sum(p["mass_g"] for p in manifest["parts"] if p["kind"] == "rigid_tail")
+    assert rt["robot"]["mass_kg"] * 1000 == pytest.approx(solid_g, rel=2e-3)
+
+
+def test_report_has_its_pictures(manifest, bvsr_export):
+    html = (bvsr_export / "report.html").read_text()
+    import re
+
+    srcs = re.findall(r'<img src="([^"]+)"', html)
+    assert srcs and all((bvsr_export / s).is_file() for s in srcs)
+    for part in manifest["parts"]:
+        assert f"report/parts/{part['name']}.png" in srcs or f"report/parts/{part['name']}.png" in html
+    assert "Against the paper" in html and "not modelled" in html and "678.6" in html
+    for png in ("analysis/workspace.png", "molds/exploded.png"):
+        if (bvsr_export / png).is_file():
+            assert png in srcs
+    assert manifest["report"]["problems"] == []

@@ -23,7 +23,7 @@ class Export:
 
     @classmethod
     def open(cls, root: str | Path) -> "Export":
-        root = Path(root)
+        root = Path(root).resolve()  # checks may change the working folder (MuJoCo logs)
         path = root / "manifest.json"
         if not root.is_dir():
             raise ExportError(f"{root}: not a folder; expected an export made by `bvsr build`")

@@ -156,12 +156,3 @@ def test_build_refuses_to_replace_a_foreign_folder(tmp_path, capsys):
     assert main(["build", str(PARAMS / "bvsr.toml"), "-o", str(foreign), "-q"]) == 2
     assert (foreign / "thesis.tex").read_text() == "precious"
     assert "refusing" in capsys.readouterr().err
-
-
-def test_bvsr_l_builds_and_checks(tmp_path, capsys):
-    out = tmp_path / "bvsr_l"
-    assert main(["build", str(PARAMS / "bvsr_l.toml"), "-o", str(out), "-q"]) == 0
-    assert main(["check", str(out), "--json", "-q"]) == 0
-    m = json.loads((out / "manifest.json").read_text())
-    assert next(p for p in m["parts"] if p["name"] == "soa")["count"] == 45
-    assert m["length_mm"] == pytest.approx(388.59, abs=1e-6)

@@ -111,13 +111,13 @@ def cmd_simulate(args) -> int:
     return EXIT_OK
 
 
-def _number(minimum: float, inclusive: bool):
+def _number(minimum: float, inclusive: bool, kind: type = float):
     """argparse type: a number above ``minimum`` (or equal, if ``inclusive``), with a clear message."""
-    def parse(text: str) -> float:
+    def parse(text: str):
         try:
-            value = float(text)
+            value = kind(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+            raise argparse.ArgumentTypeError(f"{text!r} is not {'an integer' if kind is int else 'a number'}") from None
         if value < minimum or (value == minimum and not inclusive):
             raise argparse.ArgumentTypeError(f"{text!r}: must be {'>=' if inclusive else '>'} {minimum:g}")
         return value
@@ -128,10 +128,8 @@ def _number(minimum: float, inclusive: bool):
 def cmd_workspace(args) -> int:
     from .analysis.workspace import run_workspace
     from .assembly.build import build_assembly
-    from .spec.load import ParamError, load_spec
+    from .spec.load import load_spec
 
-    if args.samples < 1:
-        raise ParamError("--samples", [f"--samples {args.samples}: must be at least 1"])
     spec = load_spec(args.params)
     say = _progress(args.quiet)
     ws = run_workspace(build_assembly(spec, say), args.samples, args.seed, say)
@@ -146,10 +144,8 @@ def cmd_clearance(args) -> int:
     from .analysis.clearance import clearance_over, posed_tail
     from .analysis.workspace import run_workspace
     from .assembly.build import build_assembly
-    from .spec.load import ParamError, load_spec
+    from .spec.load import load_spec
 
-    if args.poses < 1:
-        raise ParamError("--poses", [f"--poses {args.poses}: must be at least 1"])
     spec = load_spec(args.params)
     say = _progress(args.quiet)
     asm = build_assembly(spec, say)
@@ -190,14 +186,14 @@ def make_parser() -> argparse.ArgumentParser:
     sm.set_defaults(func=cmd_simulate)
     wk = sub.add_parser("workspace", help="tip workspace by the paper's random chamber-state protocol")
     wk.add_argument("params", help="parameter file")
-    wk.add_argument("--samples", type=int, default=20000)
+    wk.add_argument("--samples", type=_number(1, inclusive=True, kind=int), default=20000)
     wk.add_argument("--seed", type=int, default=1)
     wk.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     wk.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     wk.set_defaults(func=cmd_workspace)
     cl = sub.add_parser("clearance", help="minimum clearance between solids over the workspace")
     cl.add_argument("params", help="parameter file")
-    cl.add_argument("--poses", type=int, default=20000)
+    cl.add_argument("--poses", type=_number(1, inclusive=True, kind=int), default=20000)
     cl.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     cl.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     cl.set_defaults(func=cmd_clearance)
@@ -205,7 +201,10 @@ def make_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = make_parser().parse_args(argv)
+    try:
+        args = make_parser().parse_args(argv)
+    except SystemExit as exc:  # --help (0) or a bad argument (2): return it like every other outcome
+        return int(exc.code or 0)
     from .checks.export import ExportError
     from .parts._kernel import GeometryError
     from .pipeline import OutputError

@@ -48,3 +48,7 @@ def g_mm2_to_kg_m2(value_g_mm2: float):
 
 def deg_s_to_rad_s(value_deg_s: float) -> float:
     return math.radians(value_deg_s)
+
+
+def g_cm3_to_kg_m3(value_g_cm3: float) -> float:
+    return value_g_cm3 * 1000.0

@@ -47,7 +47,7 @@ def _mesh_inertial(exp: Export, visuals: list[dict]) -> tuple[float, np.ndarray,
     masses, coms, inertias = [], [], []
     for v in visuals:
         mesh = trimesh.load(exp.root / v["mesh"], force="mesh")
-        mesh.density = v["density_g_cm3"] * 1000.0  # kg/m^3
+        mesh.density = units.g_cm3_to_kg_m3(v["density_g_cm3"])
         masses.append(mesh.mass)
         coms.append(mesh.center_mass)
         inertias.append(mesh.moment_inertia)  # about the mesh's CoM, frame axes
@@ -85,8 +85,8 @@ def check_inertias(exp: Export) -> list[CheckResult]:
     tail_kg = units.g_to_kg(exp.manifest["mass_g"]["tail"])
     rel = abs(total_kg - tail_kg) / tail_kg
     out.append(CheckResult("robot_mass_matches_tail", rel <= MASS_TOLERANCE, 100 * rel, 100 * MASS_TOLERANCE,
-                           "%", robot["urdf"], f"links {total_kg * 1000:.4f} g (virtual links included), "
-                           f"parts {tail_kg * 1000:.4f} g"))
+                           "%", robot["urdf"], f"links {total_kg * units.G_PER_KG:.4f} g (virtual links included), "
+                           f"parts {tail_kg * units.G_PER_KG:.4f} g"))
     # Each link with meshes against its meshes; a joint's two deformable halves together at rest.
     for b in robot["bending_joints"]:
         j = b["name"]
@@ -107,7 +107,7 @@ def _compare(exp: Export, name: str, mine, visuals, where: str) -> CheckResult:
     gyr = math.sqrt(np.trace(I1) / m1)
     err = max(abs(m0 - m1) / m1, np.linalg.norm(c0 - c1) / gyr, np.linalg.norm(I0 - I1) / np.linalg.norm(I1))
     return CheckResult(f"robot_inertia_vs_mesh:{name}", err <= INERTIA_TOLERANCE, 100 * err, 100 * INERTIA_TOLERANCE,
-                       "%", where, f"B-rep {m0 * 1000:.3f} g vs meshes {m1 * 1000:.3f} g; largest relative "
+                       "%", where, f"B-rep {m0 * units.G_PER_KG:.3f} g vs meshes {m1 * units.G_PER_KG:.3f} g; largest relative "
                        "difference of mass, CoM (per radius of gyration) and inertia tensor")
 
 

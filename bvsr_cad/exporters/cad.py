@@ -14,12 +14,16 @@ STL_LINEAR_TOLERANCE_MM = 0.005
 STL_ANGULAR_TOLERANCE_RAD = 0.05
 
 
-def write_part_step(part: PartDef, path: Path) -> None:
-    solid = part.solid
-    solid.label = part.name
-    solid.color = bd.Color(*COLORS[part.kind])
+def write_step(solid: bd.Shape, label: str, rgb: tuple[float, float, float], path: Path) -> None:
+    """One named, coloured solid as a STEP file in millimetres."""
+    solid.label = label
+    solid.color = bd.Color(*rgb)
     if not bd.export_step(solid, path, unit=bd.Unit.MM):
         raise OSError(f"STEP export failed: {path}")
+
+
+def write_part_step(part: PartDef, path: Path) -> None:
+    write_step(part.solid, part.name, COLORS[part.kind], path)
 
 
 def write_part_stl(part: PartDef, path: Path) -> None:

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..assembly.build import Assembly
 from ..parts.mold import MoldPart, MoldSet, mold_set
+from .cad import write_step
 
 #: Mold meshes: fine enough that the cavity (closed mold minus channels) and
 #: the cast agree far inside the 0.5 % the cavity check allows.
@@ -45,11 +46,7 @@ def _stl(shape: bd.Shape, path: Path) -> None:
 
 def _step(part: MoldPart, path: Path) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
-    solid = part.solid
-    solid.label = part.name
-    solid.color = bd.Color(*COLORS[part.role])
-    if not bd.export_step(solid, path, unit=bd.Unit.MM):
-        raise OSError(f"STEP export failed: {path}")
+    write_step(part.solid, part.name, COLORS[part.role], path)
 
 
 def _render_exploded(molds: MoldSet, path: Path) -> None:

@@ -136,12 +136,13 @@ def check_inputs(spec: TailSpec, pressure_bar: float, payload_g: float) -> None:
 def joint_limits_rad(spec: TailSpec, progress: Callable[[str], None] | None = None) -> list[float]:
     """Collision-free theta_max of every joint (minimum over phi), as the build's limits analysis gives."""
     from .analysis.clearance import posed_tail
-    from .analysis.limits import joint_limits_bound
+    from .analysis.limits import fold_stack, joint_limits
 
     say = progress or (lambda _m: None)
     say("joint limits from the clearance analysis")
     pt = posed_tail(build_assembly(spec))
-    return [min(j.theta_max_rad) for j in joint_limits_bound(pt, spec.analysis.min_clearance_mm)]
+    lims = joint_limits(pt, spec.analysis.min_clearance_mm, exact=False, stack=fold_stack(spec))
+    return [min(j.theta_max_rad) for j in lims]
 
 
 def simulate(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float, payload_g: float = 0.0,

@@ -8,16 +8,30 @@ with their distance from the bending axis; points inside a panel's thickness
 (panels, the SOA flanges seated in the pockets, the rod in its bore) move
 rigidly with that panel.
 
-Stage 1 (every pose, vectorised): in a joint gap the map's metric is
-diag(1, 1, lambda^2) with lambda = 1 - rho theta / L (rho: a point's distance
-from the rod towards the bending plane), identity in the panels. A straight
-segment between two posed points pulls back to a rest curve at most
-1 / min(1, lambda_min) times longer, so for every pair
-    clearance >= min(1, lambda_min) x rest clearance,
-lambda_min over the joints the pair spans and rho up to the pair's radial
-extent (valid for theta < L / rho, about 1 rad, far beyond the workspace).
-Exact rest clearances come from the meshes once. Stage 2: exact mesh distances
-(python-fcl) of the posed meshes for the lowest bounds confirm the minimum.
+Stage 1 (every pose, vectorised). In a joint gap the map's metric is
+diag(1, 1, lambda^2) in the rest coordinates, with lambda = 1 - kappa h,
+kappa = theta / L and h = x cos(phi) + y sin(phi) a point's distance from the
+rod towards the bending direction (identity in the panels). A straight
+segment between two posed points pulls back to a rest curve that reaches at
+most h_pair(phi) + L sum(theta) / 8 towards the bending direction (h_pair:
+the pair's support function; the second term the segment's sagitta), so on
+it the metric is at least diag(1, 1, lambda_min^2) with
+    lambda_min = min over the joints the pair spans of 1 - kappa (h_pair(phi) + bulge).
+Hence (valid for theta < L / h, about 1 rad, far beyond the workspace)
+    clearance >= d_lambda(rest) >= min(1, lambda_min) x rest clearance,
+where d_lambda is the rest distance after the joint gaps the pair spans are
+shortened by lambda_min along z and the panels are not (the metric is
+identity in a panel: two SOAs stacked on either side of a panel stay at
+least its thickness apart). Stage 1a
+evaluates the right-hand bound for every pose and pair at once; stage 1b
+tightens the candidates below the running minimum with d_lambda, taken
+from a per-pair table on a lambda grid (rest meshes cut at the gap faces
+and shortened, python-fcl, computed on first use: d_lambda grows with
+lambda, so the grid value below is a bound). It is what keeps, for instance, the flanges of two SOAs seated
+side by side in a panel at their rest clearance: their gap is horizontal.
+Stage 2: exact mesh distances (python-fcl) of the posed meshes for the
+lowest bounds confirm the minimum; it is certified when no unconfirmed
+(pose, pair) has a bound below it.
 """
 
 from __future__ import annotations
@@ -37,6 +51,14 @@ from ..models.kinematics import TailKinematics, joint_transform_uv, theta_phi_fr
 Progress = Callable[[str], None]
 #: Longest mesh edge on bending parts, so that deformed triangles follow the arc (chord error < 0.01 mm).
 BENDING_EDGE_MM = 2.0
+#: Bending-direction bins of the pairs' support functions.
+SUPPORT_BINS = 72
+#: z-scales of the stage-1b table (ascending; 0 and 1 included).
+LAMBDA_GRID = np.array([0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.55, 0.6, 0.65, 0.7, 0.75, 0.8, 0.84, 0.88, 0.9, 0.92,
+                        0.94, 0.95, 0.96, 0.97, 0.98, 0.99, 0.995, 1.0])
+#: Bounds and exact values closer than this are equal: the posed meshes follow the arcs by chords
+#: of at most BENDING_EDGE_MM, so their "exact" distances are good to about 0.01 mm.
+TIE_MM = 0.01
 
 
 @dataclass
@@ -45,13 +67,26 @@ class PosedTail:
 
     kin: TailKinematics
     names: list[str]
-    meshes: list[trimesh.Trimesh]
+    meshes: list[trimesh.Trimesh]  # bending parts subdivided so that the posed triangles follow the arcs
     joint_height_mm: float
     pairs: np.ndarray  # (n_pairs, 2) instance indices
     rest_mm: np.ndarray  # (n_pairs,) exact rest clearance
     rho_mm: np.ndarray  # (n_pairs,) radial extent of the pair
-    span: np.ndarray  # (n_pairs, n_joints) bool: joints whose bending the pair feels
-    _fcl_rest: list = field(default_factory=list, repr=False)
+    span: np.ndarray  # (n_pairs, n_joints) bool: joints whose bending the pair feels (contiguous)
+    support_mm: np.ndarray  # (n_pairs, SUPPORT_BINS) h_pair over each bin of bending directions
+    coarse: list[trimesh.Trimesh]  # the same surfaces, not subdivided (rest distances)
+    cut: list[trimesh.Trimesh]  # the coarse surfaces cut at every gap face (piecewise-affine maps in z)
+    _aniso: dict = field(default_factory=dict, repr=False)  # (pair, grid index) -> d_lambda
+    _scaled: dict = field(default_factory=dict, repr=False)  # (instance, grid index, span) -> fcl object
+
+    def __post_init__(self) -> None:
+        # Pairs grouped by the (contiguous) run of joints they span.
+        groups: dict[tuple[int, int], list[int]] = {}
+        for p, row in enumerate(self.span):
+            on = np.flatnonzero(row)
+            if len(on):
+                groups.setdefault((int(on[0]), int(on[-1])), []).append(p)
+        self._groups = [(lo, hi, np.array(ids)) for (lo, hi), ids in sorted(groups.items())]
 
     def deform_points(self, pts: np.ndarray, w: np.ndarray) -> np.ndarray:
         """Plane-section map of rest points (m, 3) for one pose w (n_joints, 2)."""
@@ -75,17 +110,66 @@ class PosedTail:
             out[gap] = np.einsum("nij,nj->ni", base[kg] @ ts, q)[:, :3]
         return out
 
-    def lower_bounds(self, w: np.ndarray) -> np.ndarray:
-        """Stage 1: conservative clearance of every pair at every pose, (n_poses, n_pairs)."""
+    def stretch(self, w: np.ndarray) -> np.ndarray:
+        """lambda_min of every pair at every pose, (n_poses, n_pairs), in [0, 1]."""
+        w = np.asarray(w, float)
         theta = np.hypot(w[..., 0], w[..., 1])  # (n, J)
-        on = self.span[None, :, :]
-        kmax = np.max(np.where(on, theta[:, None, :], 0.0), axis=-1) / self.kin.length_mm  # (n, pairs)
-        # A straight segment between two posed points bulges outwards from the
-        # arcs by at most its sagitta, (L / theta)(1 - cos(span / 2)) <= L span / 8,
-        # so its preimage reaches rho + L span / 8.
-        bulge = self.kin.length_mm * np.sum(np.where(on, theta[:, None, :], 0.0), axis=-1) / 8.0
-        lam = np.clip(1.0 - (self.rho_mm[None, :] + bulge) * kmax, 0.0, 1.0)
-        return lam * self.rest_mm[None, :]
+        kappa = theta / self.kin.length_mm
+        bins = (np.floor((np.arctan2(w[..., 1], w[..., 0]) + np.pi) / (2 * np.pi) * SUPPORT_BINS).astype(int)
+                % SUPPORT_BINS)
+        lam = np.ones((len(w), len(self.pairs)))
+        for lo, hi, ids in self._groups:
+            bulge = self.kin.length_mm * theta[:, lo:hi + 1].sum(axis=1) / 8.0  # (n,)
+            h = self.support_mm[ids]  # (g, bins)
+            worst = np.ones((len(w), len(ids)))
+            for j in range(lo, hi + 1):
+                reach = np.take(h, bins[:, j], axis=1).T + bulge[:, None]  # (n, g)
+                np.minimum(worst, 1.0 - kappa[:, j, None] * reach, out=worst)
+            lam[:, ids] = worst
+        return np.clip(lam, 0.0, 1.0)
+
+    def lower_bounds(self, w: np.ndarray) -> np.ndarray:
+        """Stage 1a: min(1, lambda_min) x rest clearance of every pair at every pose, (n_poses, n_pairs)."""
+        return self.stretch(w) * self.rest_mm[None, :]
+
+    def shorten_z(self, z: np.ndarray, lam: float, joints: np.ndarray) -> np.ndarray:
+        """z after the gaps of ``joints`` (bool, n_joints) are shortened by ``lam`` (panels unchanged)."""
+        hj, t = self.joint_height_mm, self.kin.panel_thickness_mm
+        out = np.array(z, float)
+        for j in np.flatnonzero(joints):
+            lo, hi = j * hj + t, (j + 1) * hj
+            out -= (1.0 - lam) * np.clip(z - lo, 0.0, hi - lo)
+        return out
+
+    def aniso_rest(self, pair: int, k: int) -> float:
+        """d_lambda of ``pair`` at LAMBDA_GRID[k] (cached)."""
+        key = (pair, k)
+        if key not in self._aniso:
+            if LAMBDA_GRID[k] == 1.0 or not self.span[pair].any():
+                self._aniso[key] = float(self.rest_mm[pair])
+            else:
+                span = self.span[pair]
+                objs = []
+                for i in self.pairs[pair]:
+                    ck = (int(i), k, span.tobytes())
+                    if ck not in self._scaled:
+                        m = self.cut[int(i)]
+                        v = m.vertices.copy()
+                        v[:, 2] = self.shorten_z(v[:, 2], float(LAMBDA_GRID[k]), span)
+                        self._scaled[ck] = _fcl_object(trimesh.Trimesh(v, m.faces, process=False))
+                    objs.append(self._scaled[ck])
+                self._aniso[key] = _fcl_distance(*objs)
+        return self._aniso[key]
+
+    def refine(self, lam: np.ndarray, pair_ids: np.ndarray) -> np.ndarray:
+        """Stage 1b: max(lambda x rest, d_lambda at the grid value below lambda) for matching arrays."""
+        lam = np.asarray(lam, float)
+        k = np.clip(np.searchsorted(LAMBDA_GRID, lam, side="right") - 1, 0, len(LAMBDA_GRID) - 1)
+        if len(k) == 0:
+            return np.zeros(0)
+        uniq, inv = np.unique(np.c_[pair_ids, k], axis=0, return_inverse=True)
+        table = np.array([self.aniso_rest(int(p), int(kk)) for p, kk in uniq])[inv.ravel()]
+        return np.maximum(lam * self.rest_mm[pair_ids], table)
 
     def exact(self, w: np.ndarray, pair_ids: np.ndarray) -> np.ndarray:
         """Stage 2: exact clearance of some pairs at one pose (negative: penetration depth unknown, -0)."""
@@ -106,13 +190,26 @@ class PosedTail:
         return out
 
 
-def _mesh(solid, bending: bool) -> trimesh.Trimesh:
+def _mesh(solid) -> trimesh.Trimesh:
     verts, tris = solid.tessellate(0.02, 0.3)
-    m = trimesh.Trimesh(np.array([[v.X, v.Y, v.Z] for v in verts]), np.array(tris), process=True)
-    if bending:
-        v, f = trimesh.remesh.subdivide_to_size(m.vertices, m.faces, BENDING_EDGE_MM)
-        m = trimesh.Trimesh(v, f, process=False)
-    return m
+    return trimesh.Trimesh(np.array([[v.X, v.Y, v.Z] for v in verts]), np.array(tris), process=True)
+
+
+def _cut_at_z(m: trimesh.Trimesh, levels: np.ndarray) -> trimesh.Trimesh:
+    """The same surface with every triangle that crosses a plane z = level split along it."""
+    lo, hi = m.bounds[:, 2]
+    v, f = np.asarray(m.vertices, float), np.asarray(m.faces)
+    for z in levels[(levels > lo + 1e-9) & (levels < hi - 1e-9)]:
+        o = np.array([0.0, 0.0, z])
+        va, fa = trimesh.intersections.slice_faces_plane(v, f, np.array([0.0, 0.0, 1.0]), o)[:2]
+        vb, fb = trimesh.intersections.slice_faces_plane(v, f, np.array([0.0, 0.0, -1.0]), o)[:2]
+        v, f = np.vstack([va, vb]), np.vstack([fa, fb + len(va)])
+    return trimesh.Trimesh(v, f, process=False)
+
+
+def _subdivided(m: trimesh.Trimesh) -> trimesh.Trimesh:
+    v, f = trimesh.remesh.subdivide_to_size(m.vertices, m.faces, BENDING_EDGE_MM)
+    return trimesh.Trimesh(v, f, process=False)
 
 
 def _rod_mesh(diameter_mm: float, length_mm: float, sections: int = 32) -> trimesh.Trimesh:
@@ -139,7 +236,8 @@ def _rod_mesh(diameter_mm: float, length_mm: float, sections: int = 32) -> trime
 def _fcl_object(m: trimesh.Trimesh) -> fcl.CollisionObject:
     bvh = fcl.BVHModel()
     bvh.beginModel(len(m.vertices), len(m.faces))
-    bvh.addSubModel(m.vertices, m.faces)
+    # Plain arrays: python-fcl reads them row by row, and trimesh's tracked arrays make that 10x slower.
+    bvh.addSubModel(np.array(m.vertices, dtype=np.float64), np.array(m.faces, dtype=np.int32))
     bvh.endModel()
     return fcl.CollisionObject(bvh, fcl.Transform())
 
@@ -179,23 +277,34 @@ def posed_tail(asm: Assembly, progress: Progress | None = None, cutoff_mm: float
     kin = TailKinematics.from_spec(spec)
     cutoff = spec.joint.joint_height_mm if cutoff_mm is None else cutoff_mm
     say("clearance: meshing the instances")
-    part_mesh: dict[str, trimesh.Trimesh] = {}
+    part_mesh: dict[str, tuple[trimesh.Trimesh, trimesh.Trimesh]] = {}
+    coarse = []
     names, meshes = [], []
     for inst in asm.instances:
         part = asm.part_of(inst)
         if part.name not in part_mesh:
             if part.kind == "rod":
-                part_mesh[part.name] = _rod_mesh(part.info["diameter_mm"], part.info["cut_length_mm"])
+                rod = _rod_mesh(part.info["diameter_mm"], part.info["cut_length_mm"])
+                part_mesh[part.name] = (rod, rod)
             else:
-                part_mesh[part.name] = _mesh(part.solid, bending=part.kind == "soa")
-        m = part_mesh[part.name].copy()
+                m = _mesh(part.solid)
+                part_mesh[part.name] = (m, _subdivided(m) if part.kind == "soa" else m)
+        c = part_mesh[part.name][0].copy()
+        c.apply_transform(np.asarray(inst.transform, float))
+        coarse.append(c)
+        m = part_mesh[part.name][1].copy()
         m.apply_transform(np.asarray(inst.transform, float))
         names.append(inst.name)
         meshes.append(m)
     index = {n: i for i, n in enumerate(names)}
     hj, t = spec.joint.joint_height_mm, spec.joint.panel_thickness_mm
     gaps = np.array([[k * hj + t, (k + 1) * hj] for k in range(spec.joints)])
-    pairs, rest, rho, span = [], [], [], []
+    pairs, rest, rho, span, support = [], [], [], [], []
+    # Support functions at the bin edges; over a bin of width d a support function is at most
+    # max(edges) / cos(d / 2) (sublinearity), or max(edges) where that is negative.
+    edges = np.linspace(-np.pi, np.pi, SUPPORT_BINS + 1)
+    dirs = np.c_[np.cos(edges), np.sin(edges)]
+    h_edge = {i: (m.vertices[:, :2] @ dirs.T).max(axis=0) for i, m in enumerate(meshes)}
     rest_obj: dict[int, fcl.CollisionObject] = {}
     say("clearance: exact rest distances of the candidate pairs")
     for a, b in must_not_touch(asm):
@@ -209,11 +318,16 @@ def posed_tail(asm: Assembly, progress: Progress | None = None, cutoff_mm: float
         pairs.append((index[a], index[b]))
         for i in (index[a], index[b]):
             if i not in rest_obj:
-                rest_obj[i] = _fcl_object(meshes[i])
+                rest_obj[i] = _fcl_object(coarse[i])
         rest.append(_fcl_distance(rest_obj[index[a]], rest_obj[index[b]]))
         rho.append(max(np.max(np.hypot(m.vertices[:, 0], m.vertices[:, 1])) for m in (ma, mb)))
         span.append((gaps[:, 1] > zlo) & (gaps[:, 0] < zhi))
-    return PosedTail(kin, names, meshes, hj, np.array(pairs), np.array(rest), np.array(rho), np.array(span))
+        h = np.maximum(h_edge[index[a]], h_edge[index[b]])
+        hb = np.maximum(h[:-1], h[1:])
+        support.append(np.where(hb > 0, hb / np.cos(np.pi / SUPPORT_BINS), hb))
+    levels = np.sort(gaps.ravel())
+    return PosedTail(kin, names, meshes, hj, np.array(pairs), np.array(rest), np.array(rho), np.array(span),
+                     np.array(support), coarse, [_cut_at_z(m, levels) for m in coarse])
 
 
 @dataclass(frozen=True)
@@ -223,7 +337,9 @@ class ClearanceResult:
     pair: tuple[str, str]
     theta_rad: list[float]
     phi_rad: list[float]
-    lower_bound_mm: float  # stage 1 over every pose and pair
+    lower_bound_mm: float  # the true minimum over the poses is not below this
+    stage1_min_mm: float  # stage 1a bound, minimum over every pose and pair
+    refined: int  # (pose, pair) candidates tightened by stage 1b
     confirmed: int  # exact evaluations
     certified: bool  # no unconfirmed (pose, pair) has a bound below the reported minimum
     seconds: float
@@ -236,43 +352,66 @@ class ClearanceResult:
     def to_json(self) -> dict:
         return {"poses": int(self.poses), "min_clearance_mm": float(self.min_clearance_mm), "pair": list(self.pair),
                 "pose": {"theta_rad": self.theta_rad, "phi_rad": self.phi_rad},
-                "lower_bound_mm": float(self.lower_bound_mm), "exact_evaluations": int(self.confirmed),
+                "lower_bound_mm": float(self.lower_bound_mm), "stage1_min_mm": float(self.stage1_min_mm),
+                "refined_candidates": int(self.refined), "exact_evaluations": int(self.confirmed),
                 "certified": bool(self.certified), "seconds": self.seconds, "poses_per_s": self.poses_per_s}
 
 
-def clearance_over(pt: PosedTail, w: np.ndarray, max_exact: int = 4) -> ClearanceResult:
+def clearance_over(pt: PosedTail, w: np.ndarray, max_exact: int = 8, seed_candidates: int = 64) -> ClearanceResult:
     """Two-stage minimum clearance over poses w (n, n_joints, 2).
 
-    Candidates are confirmed in increasing order of their bound until the next
-    bound is not below the best exact value (then the minimum is certified) or
-    ``max_exact`` evaluations were spent.
+    The smallest stage-1 bounds are refined (stage 1b) and the lowest is
+    evaluated exactly; then every (pose, pair) whose bound is below that value
+    is refined, and the survivors are confirmed exactly in increasing order of
+    their bound until the next bound is not below the best exact value (the
+    minimum is then certified) or ``max_exact`` evaluations were spent.
     """
     t0 = time.perf_counter()
-    lb = pt.lower_bounds(w)
-    flat = lb.ravel()
-    order = np.argpartition(flat, min(len(flat) - 1, 4 * max_exact))[: 4 * max_exact + 1]
-    order = order[np.argsort(flat[order])]
-    best, best_at = np.inf, None
-    done = 0
-    certified = False
-    for idx in order:
-        if flat[idx] >= best:
-            certified = True
+    n_pairs = len(pt.pairs)
+    lam = pt.stretch(w).ravel()
+    lb = lam * np.tile(pt.rest_mm, len(w))
+    m = min(len(lb), seed_candidates)
+    seed = np.argpartition(lb, m - 1)[:m]
+    rb_seed = pt.refine(lam[seed], seed % n_pairs)
+    first = int(seed[np.argmin(rb_seed)])
+
+    def exact(idx: int) -> float:
+        pose, pair = divmod(idx, n_pairs)
+        return float(pt.exact(w[pose], np.array([pair]))[0])
+
+    best, best_at, done = exact(first), first, 1
+    cand = np.flatnonzero(lb < best - TIE_MM)
+    cand = cand[cand != first]
+    rb = pt.refine(lam[cand], cand % n_pairs)
+    n_refined = len(cand) + m
+    keep = rb < best - TIE_MM
+    cand, rb = cand[keep], rb[keep]
+    order = np.argsort(rb, kind="stable")
+    cand, rb = cand[order], rb[order]
+    certified, n_done = True, 0
+    for n_done, (idx, bound) in enumerate(zip(cand, rb)):
+        if bound >= best - TIE_MM:
+            n_done = len(cand)
             break
         if done >= max_exact:
+            certified = False
             break
-        pose, pair = divmod(int(idx), lb.shape[1])
-        d = float(pt.exact(w[pose], np.array([pair]))[0])
+        d = exact(int(idx))
         done += 1
         if d < best:
-            best, best_at = d, (pose, pair)
-    pose, pair = best_at
+            best, best_at = d, int(idx)
+    else:
+        n_done = len(cand)
+    rest_bounds = rb[n_done:]
+    lower = float(min(best, rest_bounds.min())) if (not certified and len(rest_bounds)) else best
+    pose, pair = divmod(best_at, n_pairs)
     theta, phi = theta_phi_from_uv(w[pose])
     a, b = pt.pairs[pair]
     seconds = time.perf_counter() - t0
     rest = {f"{pt.names[i]}|{pt.names[j]}": float(r) for (i, j), r in zip(pt.pairs, pt.rest_mm)}
     return ClearanceResult(len(w), best, (pt.names[a], pt.names[b]), [float(v) for v in theta],
-                           [float(v) for v in phi], float(flat.min()), done, certified, seconds, rest)
+                           [float(v) for v in phi], lower, float(lb.min()), n_refined, done, certified,
+                           seconds, rest)
 
 
 def brute_force(pt: PosedTail, w: np.ndarray) -> np.ndarray:

@@ -1,26 +1,54 @@
 """Collision-free bending limit theta_max(phi) of every joint (the others straight).
 
-For each joint and bending-plane angle, bisection on theta in [0, 1 rad]: a
-pose is free when every pair keeps the required clearance; the stage-1 bound
-of :mod:`bvsr_cad.analysis.clearance` clears most pairs, exact mesh distances
-decide the rest.
+For each joint and bending-plane angle, bisection on theta in [0, theta_hi]
+for the largest pose at which every pair that feels the joint keeps the
+required clearance (the others do not move relative to each other). A pose
+is tested in the stages of :mod:`bvsr_cad.analysis.clearance`: the stage-1a
+bound clears most pairs, the stage-1b bound (z-scaled rest distances) most
+of the rest, and exact mesh distances of the posed meshes decide what is left.
+
+The SOAs bound the bend too: a bellows cannot fold shorter than its stack of
+walls. In the plane-section model the pleated section at a point shortens by
+lambda = 1 - kappa h, so the joint's SOAs reach their stack at
+    theta_stack(phi) = (1 - lambda_solid) L / h_soa(phi),
+lambda_solid = facet rows x wall thickness / H_o and h_soa the SOAs' reach
+towards the bending direction (their bellows, flanges excluded). The search
+for the clearance limit stops there.
+
+Two limits come out per plane: ``theta_bound_rad`` from the bounds alone
+(conservative: the pose is certainly free) and ``theta_max_rad``, the exact
+limit, searched above it. The exact limit is not monotone in theory (a pair
+could touch and part again), so the bisection assumes, as every sampled
+limit does, that the free set is an interval from the straight pose.
 """
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..spec.tables import TailSpec
 from .clearance import PosedTail
+
+
+def fold_stack(spec: TailSpec) -> tuple[float, float]:
+    """(lambda_solid, flange thickness mm): a bellows folds no shorter than its facet rows x wall thickness."""
+    soa = spec.soa
+    return soa.facet_rows * soa.facet_thickness_mm / soa.origami_height_mm, soa.flange_thickness_mm
 
 
 @dataclass(frozen=True)
 class JointLimits:
     joint: str
     phi_rad: list[float]
-    theta_max_rad: list[float]
-    limiting_pair: list[list[str]]
+    theta_max_rad: list[float]  # exact (or the bound where exact=False)
+    theta_bound_rad: list[float]  # from the bounds alone: never above theta_max_rad
+    limiting_pair: list[list[str]]  # the pair that would come closer than required just beyond the limit
+    clearance_at_limit_mm: list[float | None]  # its exact clearance there (None: not evaluated)
+    limited_by: list[str]  # "clearance", "fold stack" (the SOAs fully folded) or "search range"
 
 
 def _pose(pt: PosedTail, joint: int, theta: float, phi: float) -> np.ndarray:
@@ -29,68 +57,126 @@ def _pose(pt: PosedTail, joint: int, theta: float, phi: float) -> np.ndarray:
     return w
 
 
-def _worst(pt: PosedTail, w: np.ndarray, need_mm: float, joint: int) -> tuple[float, int]:
-    lb = pt.lower_bounds(w[None])[0]
-    # Only pairs that feel this joint move; the others keep their rest clearance (>= their bound).
-    check = np.flatnonzero((lb < need_mm) & pt.span[:, joint])
-    if len(check) == 0:
-        return float(lb.min()), int(lb.argmin())
-    ex = pt.exact(w, check)
-    return float(ex.min()), int(check[ex.argmin()])
+class _Tester:
+    """Whether joint k bent to (theta, phi) keeps ``need_mm`` between every pair that feels it."""
+
+    def __init__(self, pt: PosedTail, joint: int, need_mm: float):
+        self.pt, self.k, self.need = pt, joint, need_mm
+        self.ids = np.flatnonzero(pt.span[:, joint])
+        self.exact_calls = 0
+
+    def bound_ok(self, theta: float, phi: float) -> tuple[bool, int]:
+        w = _pose(self.pt, self.k, theta, phi)
+        lam = self.pt.stretch(w[None])[0, self.ids]
+        lb = lam * self.pt.rest_mm[self.ids]
+        low = lb < self.need
+        if not low.any():
+            return True, -1
+        rb = self.pt.refine(lam[low], self.ids[low])
+        return bool((rb >= self.need).all()), int(self.ids[low][np.argmin(rb)])
+
+    def exact_ok(self, theta: float, phi: float) -> tuple[bool, int, float]:
+        w = _pose(self.pt, self.k, theta, phi)
+        lam = self.pt.stretch(w[None])[0, self.ids]
+        low = lam * self.pt.rest_mm[self.ids] < self.need
+        if not low.any():
+            return True, -1, float("inf")
+        cand = self.ids[low]
+        rb = self.pt.refine(lam[low], cand)
+        cand = cand[rb < self.need]
+        if len(cand) == 0:
+            return True, -1, float("inf")
+        d = self.pt.exact(w, cand)
+        self.exact_calls += len(cand)
+        i = int(np.argmin(d))
+        return bool(d[i] >= self.need), int(cand[i]), float(d[i])
 
 
-def joint_limits(pt: PosedTail, need_mm: float, n_phi: int = 12, theta_hi_rad: float = 1.0,
-                 steps: int = 10) -> list[JointLimits]:
-    """theta_max(phi) of every joint, to theta_hi / 2^steps (1 mrad by default)."""
-    out = []
+def _bisect(ok: Callable[[float], bool], lo: float, hi: float, tol: float) -> tuple[float, float]:
+    """Largest free theta: ``ok(lo)`` holds, ``ok(hi)`` does not; returns the final (lo, hi)."""
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        if ok(mid):
+            lo = mid
+        else:
+            hi = mid
+    return lo, hi
+
+
+def stack_limit_rad(pt: PosedTail, joint: int, phis: np.ndarray, lambda_solid: float,
+                    flange_mm: float) -> np.ndarray:
+    """theta_stack(phi) of joint ``joint`` (0-based): where its most compressed SOA is fully folded."""
+    reach = np.full(len(phis), -np.inf)
+    dirs = np.c_[np.cos(phis), np.sin(phis)]
+    for name, m in zip(pt.names, pt.coarse):
+        if name.startswith(f"j{joint + 1}_soa"):
+            z = m.vertices[:, 2]
+            bellows = m.vertices[(z > z.min() + flange_mm) & (z < z.max() - flange_mm), :2]
+            reach = np.maximum(reach, (bellows @ dirs.T).max(axis=0))
+    with np.errstate(divide="ignore"):
+        return np.where(reach > 0, (1.0 - lambda_solid) * pt.kin.length_mm / reach, np.inf)
+
+
+def joint_limits(pt: PosedTail, need_mm: float, n_phi: int = 36, theta_hi_rad: float = 1.0,
+                 tol_rad: float = 1e-3, exact: bool = True, stack: tuple[float, float] | None = None,
+                 progress: Callable[[str], None] | None = None) -> list[JointLimits]:
+    """theta_max(phi) of every joint at ``n_phi`` bending planes, to ``tol_rad``.
+
+    Args:
+        stack: (lambda_solid, flange thickness mm) to stop at the SOAs' fold stack; None: no stack limit.
+        exact: False stops at the bounds' limit (conservative, seconds instead of minutes).
+    """
+    say = progress or (lambda _m: None)
     phis = np.linspace(-np.pi, np.pi, n_phi, endpoint=False)
-    for k in range(pt.kin.n_joints):
-        th_max, pairs = [], []
-        for phi in phis:
-            d, p = _worst(pt, _pose(pt, k, theta_hi_rad, phi), need_mm, k)
-            if d >= need_mm:
-                th_max.append(theta_hi_rad)
-                pairs.append([])
-                continue
-            lo, hi, hit = 0.0, theta_hi_rad, p
-            for _ in range(steps):
-                mid = 0.5 * (lo + hi)
-                d, p = _worst(pt, _pose(pt, k, mid, phi), need_mm, k)
-                if d >= need_mm:
-                    lo = mid
-                else:
-                    hi, hit = mid, p
-            th_max.append(lo)
-            a, b = pt.pairs[hit]
-            pairs.append([pt.names[a], pt.names[b]])
-        out.append(JointLimits(f"j{k + 1}", [float(v) for v in phis], [float(v) for v in th_max], pairs))
-    return out
-
-
-def joint_limits_bound(pt: PosedTail, need_mm: float, n_phi: int = 36, theta_hi_rad: float = 1.0,
-                       n_theta: int = 1001) -> list[JointLimits]:
-    """Conservative theta_max(phi) from the stage-1 bound alone (vectorised; what `bvsr build` saves):
-    the exact limit is never below it (at theta_hi / (n_theta - 1) resolution)."""
-    phis = np.linspace(-np.pi, np.pi, n_phi, endpoint=False)
-    th = np.linspace(0.0, theta_hi_rad, n_theta)
-    tt, pp = np.meshgrid(th, phis, indexing="ij")
     out = []
     for k in range(pt.kin.n_joints):
-        w = np.zeros((tt.size, pt.kin.n_joints, 2))
-        w[:, k, 0] = (tt * np.cos(pp)).ravel()
-        w[:, k, 1] = (tt * np.sin(pp)).ravel()
-        lb = pt.lower_bounds(w)[:, pt.span[:, k]].reshape(n_theta, n_phi, -1)
-        ids = np.flatnonzero(pt.span[:, k])
-        bad = lb.min(-1) < need_mm  # (theta, phi)
-        first = np.where(bad.any(0), bad.argmax(0), n_theta)
-        th_max, pairs = [], []
-        for j in range(n_phi):
-            if first[j] >= n_theta:
-                th_max.append(float(theta_hi_rad))
+        t0 = time.perf_counter()
+        test = _Tester(pt, k, need_mm)
+        th_stack = stack_limit_rad(pt, k, phis, *stack) if stack else np.full(n_phi, np.inf)
+        th_b, th_x, pairs, at, why = [], [], [], [], []
+        for phi, t_stack in zip(phis, th_stack):
+            top = float(min(theta_hi_rad, t_stack))
+            if test.bound_ok(top, phi)[0]:
+                th_b.append(top)
+                th_x.append(top)
                 pairs.append([])
+                at.append(None)
+                why.append("fold stack" if t_stack <= theta_hi_rad else "search range")
                 continue
-            th_max.append(float(th[max(first[j] - 1, 0)]))
-            a, b = pt.pairs[ids[lb[first[j], j].argmin()]]
-            pairs.append([pt.names[a], pt.names[b]])
-        out.append(JointLimits(f"j{k + 1}", [float(v) for v in phis], th_max, pairs))
+            theta_hi = top
+            lo, hi = _bisect(lambda t: test.bound_ok(t, phi)[0], 0.0, theta_hi, tol_rad)
+            th_b.append(lo)
+            if exact:
+                # The exact limit is at or above the bound's: bracket it with growing steps, then bisect.
+                step = 4 * tol_rad
+                while True:
+                    t = min(theta_hi, lo + step)
+                    if not test.exact_ok(t, phi)[0]:
+                        hi = t
+                        break
+                    lo, step = t, 2 * step
+                    if t >= theta_hi:
+                        hi = t
+                        break
+                if hi > lo:
+                    lo, hi = _bisect(lambda t: test.exact_ok(t, phi)[0], lo, hi, tol_rad)
+            th_x.append(lo)
+            d, p = None, -1
+            if hi > lo:
+                if exact:
+                    _ok, p, dist = test.exact_ok(hi, phi)
+                    d = dist if np.isfinite(dist) else None
+                if p < 0:
+                    p = test.bound_ok(hi, phi)[1]
+                why.append("clearance")
+            else:
+                why.append("fold stack" if t_stack <= theta_hi_rad else "search range")
+            pairs.append([pt.names[pt.pairs[p][0]], pt.names[pt.pairs[p][1]]] if p >= 0 else [])
+            at.append(d)
+        say(f"limits j{k + 1}: theta_max {min(th_x):.3f}..{max(th_x):.3f} rad "
+            f"({'exact' if exact else 'bounds'}; {why.count('clearance')} of {n_phi} planes limited by clearance, "
+            f"{why.count('fold stack')} by the fold stack), {test.exact_calls} exact distances, "
+            f"{time.perf_counter() - t0:.1f} s")
+        out.append(JointLimits(f"j{k + 1}", [float(v) for v in phis], [float(v) for v in th_x],
+                               [float(v) for v in th_b], pairs, at, why))
     return out

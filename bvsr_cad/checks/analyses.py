@@ -32,7 +32,7 @@ def check_analyses(exp: Export) -> list[CheckResult]:
         lowest = min(min(j["theta_max_rad"]) for j in lim["joints"])
         reach = files["workspace"]["max_theta_rad"]
         out.append(CheckResult("limits:cover_workspace", lowest >= reach, lowest, reach, "rad", ana["limits"],
-                               "smallest collision-free theta_max(phi) against the largest workspace theta"))
+                               "smallest theta_max(phi) (clearance bounds, SOA fold stack) against the largest workspace theta"))
     if "workspace" in files:
         w = files["workspace"]
         ref = paper.paper_workspace_half_width(exp.manifest.get("segments", 2))

@@ -9,12 +9,12 @@ from pathlib import Path
 from typing import Any
 
 from ..analysis.clearance import clearance_map, clearance_over, plot_clearance_map, posed_tail
-from ..analysis.limits import joint_limits_bound
+from ..analysis.limits import fold_stack, joint_limits
 from ..analysis.workspace import plot_workspace, quasi_static_table, run_workspace
 from ..assembly.build import Assembly
 
-#: Limits in the build: 36 bending planes, 1 mrad steps, from the conservative stage-1 bound
-#: (exact bisection, `analysis.limits.joint_limits`, takes minutes: it is a library call).
+#: Limits in the build: 36 bending planes, 1 mrad steps, from the clearance bounds (conservative) and
+#: the SOAs' fold stack. The exact search above the bounds (`joint_limits(..., exact=True)`) takes minutes.
 BUILD_LIMIT_PHIS = 36
 
 
@@ -51,9 +51,12 @@ def write_analyses(asm: Assembly, root: Path, progress: Callable[[str], None]) -
                        f"{spec.name}: j{spec.joints} bending alone (stage-1 bound)", ws.max_theta_rad,
                        cfg.min_clearance_mm)
     progress("analysis: joint limits")
-    lims = joint_limits_bound(pt, cfg.min_clearance_mm, BUILD_LIMIT_PHIS)
+    stack = fold_stack(spec)
+    lims = joint_limits(pt, cfg.min_clearance_mm, BUILD_LIMIT_PHIS, exact=False, stack=stack, progress=progress)
     lim_json = {"required_clearance_mm": cfg.min_clearance_mm, "theta_search_max_rad": 1.0,
-                "resolution_rad": 1e-3, "method": "stage-1 bound (conservative: exact limits are not lower)",
+                "resolution_rad": 1e-3, "fold_stack_lambda": stack[0],
+                "method": "the smaller of the SOAs' fold stack and the clearance bounds (stages 1a and 1b: "
+                          "conservative, the exact clearance limit is not lower)",
                 "joints": [vars(lim) for lim in lims], "workspace_max_theta_rad": ws.max_theta_rad}
     (out / "limits.json").write_text(json.dumps(lim_json, indent=1))
     progress(f"analysis: {time.perf_counter() - t0:.1f} s")

@@ -422,18 +422,38 @@ def brute_force(pt: PosedTail, w: np.ndarray) -> np.ndarray:
 
 def clearance_map(pt: PosedTail, joint: int, theta_max_rad: float, n_theta: int = 60, n_phi: int = 72
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Stage-1 bound of the minimum clearance when only ``joint`` (0-based) bends: (theta, phi, bound)."""
+    """Stage-1 bound (1a, tightened by 1b) of the minimum clearance over the pairs that feel ``joint``
+    (0-based) when only it bends: (theta, phi, bound). The others keep their rest clearance."""
     th = np.linspace(0, theta_max_rad, n_theta)
     ph = np.linspace(-np.pi, np.pi, n_phi)
     tt, pp = np.meshgrid(th, ph, indexing="ij")
     w = np.zeros((tt.size, pt.kin.n_joints, 2))
     w[:, joint, 0] = (tt * np.cos(pp)).ravel()
     w[:, joint, 1] = (tt * np.sin(pp)).ravel()
-    return th, ph, pt.lower_bounds(w).min(-1).reshape(tt.shape)
+    ids = np.flatnonzero(pt.span[:, joint])
+    lam = pt.stretch(w)[:, ids]
+    lb = lam * pt.rest_mm[ids]
+    best = lb.min(axis=1)
+    # Stage 1b only where it can lower the minimum: entries whose 1a bound is below the smallest
+    # rest clearance of the joint's pairs (a refined bound never exceeds the rest clearance).
+    cap = pt.rest_mm[ids].min()
+    pose, pair = np.nonzero(lb < cap)
+    out = np.minimum(lb.min(axis=1), cap)
+    if len(pose):
+        rb = pt.refine(lam[pose, pair], ids[pair])
+        # min over the refined candidates and the unrefined rest (whose bounds are >= cap).
+        refined = np.full(lb.shape, np.inf)
+        refined[pose, pair] = rb
+        untouched = np.where(lb >= cap, lb, np.inf).min(axis=1)
+        out = np.minimum(refined.min(axis=1), untouched)
+    del best
+    return th, ph, out.reshape(tt.shape)
 
 
 def plot_clearance_map(th: np.ndarray, ph: np.ndarray, bound: np.ndarray, path, title: str,
-                       workspace_theta_rad: float, min_clearance_mm: float) -> None:
+                       workspace_theta_rad: float, min_clearance_mm: float,
+                       curves: dict[str, tuple[np.ndarray, np.ndarray]] | None = None) -> None:
+    """The map, the required clearance as a red contour and optional (phi, theta) curves (rad)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -443,11 +463,16 @@ def plot_clearance_map(th: np.ndarray, ph: np.ndarray, bound: np.ndarray, path, 
     cs = ax.pcolormesh(np.degrees(ph), np.degrees(th), bound, shading="auto", cmap="viridis")
     fig.colorbar(cs, label="clearance lower bound (mm)")
     ax.contour(np.degrees(ph), np.degrees(th), bound, levels=[min_clearance_mm], colors="r")
+    ax.plot([], [], color="r", label=f"clearance bound = {min_clearance_mm:g} mm (required)")
+    for (label, (cp, ct)), style in zip((curves or {}).items(), ("w-", "m:", "c-.")):
+        order = np.argsort(cp)
+        ax.plot(np.degrees(np.asarray(cp)[order]), np.degrees(np.asarray(ct)[order]), style, lw=1.5, label=label)
     ax.axhline(np.degrees(workspace_theta_rad), color="w", ls="--", lw=1, label="largest theta in the workspace")
     ax.set_xlabel("phi (deg)")
     ax.set_ylabel("theta (deg)")
     ax.set_title(title)
-    ax.legend(loc="upper right", fontsize=8)
+    ax.set_ylim(0, np.degrees(th.max()) * 1.12)
+    ax.legend(loc="lower left", fontsize=8, framealpha=0.85)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

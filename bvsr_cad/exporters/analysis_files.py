@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from ..analysis.clearance import clearance_map, clearance_over, plot_clearance_map, posed_tail
-from ..analysis.limits import fold_stack, joint_limits
+from ..analysis.limits import fold_stack, joint_limits, stack_limit_rad
 from ..analysis.workspace import plot_workspace, quasi_static_table, run_workspace
 from ..assembly.build import Assembly
 
@@ -46,13 +46,17 @@ def write_analyses(asm: Assembly, root: Path, progress: Callable[[str], None]) -
     cl_json = res.to_json() | {"required_mm": cfg.min_clearance_mm,
                                "note": "poses resampled from the build's workspace samples"}
     (out / "clearance.json").write_text(json.dumps(cl_json, indent=1))
-    th, ph, bound = clearance_map(pt, spec.joints - 1, 1.0)
-    plot_clearance_map(th, ph, bound, out / "clearance_map.png",
-                       f"{spec.name}: j{spec.joints} bending alone (stage-1 bound)", ws.max_theta_rad,
-                       cfg.min_clearance_mm)
     progress("analysis: joint limits")
     stack = fold_stack(spec)
     lims = joint_limits(pt, cfg.min_clearance_mm, BUILD_LIMIT_PHIS, exact=False, stack=stack, progress=progress)
+    tip = spec.joints - 1
+    th, ph, bound = clearance_map(pt, tip, 1.0)
+    phis = np.asarray(lims[tip].phi_rad)
+    plot_clearance_map(th, ph, bound, out / "clearance_map.png",
+                       f"{spec.name}: minimum clearance (bound) with j{spec.joints} bending alone",
+                       ws.max_theta_rad, cfg.min_clearance_mm,
+                       {"theta_max (saved limit)": (phis, np.asarray(lims[tip].theta_max_rad)),
+                        "SOAs fully folded (fold stack)": (phis, stack_limit_rad(pt, tip, phis, *stack))})
     lim_json = {"required_clearance_mm": cfg.min_clearance_mm, "theta_search_max_rad": 1.0,
                 "resolution_rad": 1e-3, "fold_stack_lambda": stack[0],
                 "method": "the smaller of the SOAs' fold stack and the clearance bounds (stages 1a and 1b: "

@@ -69,7 +69,7 @@ def cmd_build(args) -> int:
 def cmd_check(args) -> int:
     from .checks.run import run_checks
 
-    results = run_checks(args.export, _progress(args.quiet or args.json))
+    results = run_checks(args.export, _progress(args.quiet or args.json), run_slicer=args.slice)
     return _print_results(results, args.json)
 
 
@@ -173,6 +173,9 @@ def make_parser() -> argparse.ArgumentParser:
     b.set_defaults(func=cmd_build)
     c = sub.add_parser("check", help="run every check on an export folder")
     c.add_argument("export", help="export folder made by `bvsr build`")
+    c.add_argument("--slice", action="store_true",
+                   help="first slice every printed STL the slice cache does not hold yet with PrusaSlicer "
+                        "(prusa-slicer, 2 at a time); `bvsr build` and `bvsr check` never slice otherwise")
     c.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     c.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     c.set_defaults(func=cmd_check)
@@ -206,6 +209,7 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as exc:  # --help (0) or a bad argument (2): return it like every other outcome
         return int(exc.code or 0)
     from .checks.export import ExportError
+    from .checks.printability import SlicerMissingError
     from .parts._kernel import GeometryError
     from .pipeline import OutputError
     from .sim import SimulationInputError
@@ -213,7 +217,7 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         return args.func(args)
-    except (ParamError, OutputError, ExportError, SimulationInputError) as exc:
+    except (ParamError, OutputError, ExportError, SimulationInputError, SlicerMissingError) as exc:
         print(f"bvsr: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except GeometryError as exc:

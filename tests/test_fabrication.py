@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import csv
 import json
+import shutil
 import zipfile
 from pathlib import Path
 
@@ -14,8 +15,17 @@ import numpy as np
 import pytest
 import trimesh
 
+from bvsr_cad.checks import printability
 from bvsr_cad.checks.export import Export
-from bvsr_cad.checks.printability import check_envelope, overhang_regions
+from bvsr_cad.checks.printability import (
+    SLICER,
+    check_envelope,
+    check_slicing,
+    overhang_regions,
+    slice_items,
+    slice_stls,
+)
+from bvsr_cad.cli import main
 
 
 @pytest.fixture(scope="module")
@@ -142,7 +152,60 @@ def test_printability_and_slicing_pass(manifest):
     assert all(c["passed"] is not False for c in prints)
     slices = _checks(manifest, "slice:")
     assert len(slices) == n_stl
-    assert all(c["passed"] is True for c in slices) or all(c["passed"] is None for c in slices)
+    # The build never slices: each STL reports its cached result or that it was not sliced.
+    for c in slices:
+        assert c["passed"] is True or (c["passed"] is None and "--slice" in c["note"]), c
+
+
+def _no_slicer_started(monkeypatch) -> None:
+    def refuse(*_a, **_k):
+        raise AssertionError("the checks started the slicer")
+
+    monkeypatch.setattr(printability, "_slice", refuse)
+    monkeypatch.setattr(printability, "_slicer_version", refuse)
+    monkeypatch.setattr(printability.subprocess, "run", refuse)
+
+
+def test_slicing_not_in_the_cache_is_null_with_the_command(bvsr_export, manifest, monkeypatch, tmp_path):
+    monkeypatch.setenv("BVSR_CACHE", str(tmp_path / "empty_cache"))
+    _no_slicer_started(monkeypatch)
+    results = check_slicing(Export.open(bvsr_export))
+    assert len(results) == sum(len(j["items"]) for j in manifest["print_jobs"])
+    for r in results:
+        assert r.name.startswith("slice:") and r.passed is None and r.value is None, r.line()
+        assert f"bvsr check {bvsr_export.resolve()} --slice" in r.note, r.note
+        assert "not sliced in the build" in r.note or "not installed" in r.note
+
+
+def test_slice_one_stl_as_check_slice_does(bvsr_export, monkeypatch, tmp_path):
+    if shutil.which(SLICER) is None:
+        pytest.skip(f"{SLICER} is not installed (apt-get install prusa-slicer)")
+    monkeypatch.setenv("BVSR_CACHE", str(tmp_path / "cache"))
+    exp = Export.open(bvsr_export)
+    core = [it for it in slice_items(exp) if it.name == "FDM_PVA/mold_core"]
+    assert len(core) == 1
+    said: list[str] = []
+    done = slice_stls(exp, core, progress=said.append)  # what `bvsr check --slice` runs, on one small STL
+    assert done["FDM_PVA/mold_core"]["ok"] is True and done["FDM_PVA/mold_core"]["layers"] > 0, done
+    assert any(m.startswith("slice 1/1 print/FDM_PVA/mold_core.stl: ok, ") for m in said), said
+    (now,) = check_slicing(exp, core, sliced_now=done)
+    assert now.passed is True and "sliced now" in now.note, now.line()
+    # Later checks (a build, `bvsr check`) find it in the cache without starting the slicer.
+    _no_slicer_started(monkeypatch)
+    by_name = {r.name: r for r in check_slicing(exp)}
+    cached = by_name["slice:FDM_PVA/mold_core"]
+    assert cached.passed is True and "cached result of" in cached.note, cached.line()
+    layers = int(cached.note.split(": ")[1].split(" layers")[0])
+    assert layers == done["FDM_PVA/mold_core"]["layers"] > 0
+    assert all(r.passed is None for n, r in by_name.items() if n != "slice:FDM_PVA/mold_core")
+
+
+def test_check_slice_without_the_slicer_exits_2(bvsr_export, monkeypatch, tmp_path, capsys):
+    monkeypatch.setenv("PATH", str(tmp_path))  # no prusa-slicer on it
+    monkeypatch.setenv("BVSR_CACHE", str(tmp_path / "cache"))
+    assert main(["check", str(bvsr_export), "--slice", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "prusa-slicer" in err and "not on PATH" in err and "apt-get install prusa-slicer" in err, err
 
 
 def test_rigid_robot_loads_in_mujoco(manifest, bvsr_export):

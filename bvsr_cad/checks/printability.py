@@ -14,10 +14,12 @@ Per STL, in the orientation it is exported in:
 * ``print_min_hole``: the smallest hole, the hydraulic diameter 4 A / P of
   every enclosed void in sections along z, x and y;
 * ``slice:<job>/<part>``: the STL slices in PrusaSlicer's command line without
-  an error, with a time limit. Results are cached by the STL's SHA-256, the
-  slicer version and the options (``~/.cache/bvsr_cad/slices.json``, or
-  ``$BVSR_CACHE``), so an unchanged part is not sliced twice. Without the
-  slicer the check reports ``passed: null`` and says it is not installed.
+  an error, with a time limit. Slicing takes seconds per part, so the checks
+  never start the slicer: :func:`slice_stls` (``bvsr check EXPORT --slice``)
+  slices every STL not yet in the cache, and the check reports the cached
+  result for that exact file (the STL's SHA-256, the slicer version and the
+  options; ``~/.cache/bvsr_cad/slices.json``, or ``$BVSR_CACHE``), or
+  ``passed: null`` with the command that slices it.
 * ``rigid_tail_envelope``: the rigid twin, assembled, against the BVSR at
   rest: every sample of the twin's outer surface lies within
   ``envelope_tolerance_mm`` of the BVSR's surface and every sample of the
@@ -35,7 +37,9 @@ import shutil
 import subprocess
 import tempfile
 import time
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable, Collection
+from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -48,6 +52,10 @@ from .export import Export
 from .result import CheckResult
 
 SLICER = "prusa-slicer"
+SLICER_INSTALL = "apt-get install prusa-slicer"
+#: How ``bvsr`` slices an export; the slicing checks name it when a result is missing.
+SLICE_COMMAND = "bvsr check {export} --slice"
+SLICE_WORKERS = 2
 SLICER_OPTIONS = ("--layer-height", "0.3", "--first-layer-height", "0.3", "--fill-density", "15%")
 BED_Z_TOL_MM = 1e-6
 MIN_BASE_AREA_MM2 = 25.0
@@ -169,14 +177,43 @@ def min_hole_mm(mesh: trimesh.Trimesh, sections: int = SECTIONS_PER_AXIS, step_m
     return best, where
 
 
-def _slicer_version() -> str | None:
-    exe = shutil.which(SLICER)
-    if exe is None:
-        return None
+class SlicerMissingError(RuntimeError):
+    """Slicing was asked for and PrusaSlicer's command line is not installed."""
+
+
+@dataclass(frozen=True)
+class SliceItem:
+    """One printed STL of an export: ``name`` is ``<job>/<part>``, ``rel`` its path in the export."""
+
+    name: str
+    rel: str
+    path: Path
+    volume: list[float]
+
+
+def slice_items(exp: Export) -> list[SliceItem]:
+    """Every STL the manifest's ``print_jobs`` name, in their order."""
+    return [SliceItem(f"{job['name']}/{it['part']}", it["stl"], exp.root / it["stl"], list(job["build_volume_mm"]))
+            for job in exp.manifest.get("print_jobs") or [] for it in job["items"]]
+
+
+def _slicer_exe() -> str | None:
+    return shutil.which(SLICER)
+
+
+def _slicer_identity(exe: str) -> str:
+    """The installed slicer without running it: its resolved path, size and modification time."""
+    real = os.path.realpath(exe)
+    st = os.stat(real)
+    return f"{real}|{st.st_size}|{st.st_mtime_ns}"
+
+
+def _slicer_version(exe: str) -> str:
+    """The version PrusaSlicer prints (this starts the slicer; only :func:`slice_stls` calls it)."""
     try:
         out = subprocess.run([exe, "--help"], capture_output=True, text=True, timeout=30)
     except (OSError, subprocess.TimeoutExpired):
-        return None
+        return "PrusaSlicer (unknown version)"
     for line in (out.stdout + out.stderr).splitlines():
         if line.startswith("PrusaSlicer-"):
             return line.split()[0]
@@ -188,17 +225,53 @@ def _cache_path() -> Path:
     return base / "slices.json"
 
 
-def _slice(stl: Path, volume: list[float], timeout_s: float) -> dict[str, Any]:
+#: Key of the cache entry that maps an installed slicer (see :func:`_slicer_identity`) to its version,
+#: so that the checks find cached results without starting the slicer.
+_CACHE_SLICERS = "slicers"
+
+
+def _read_cache() -> dict[str, Any]:
+    try:
+        cache = json.loads(_cache_path().read_text())
+    except (OSError, ValueError):
+        return {}
+    return cache if isinstance(cache, dict) else {}
+
+
+def _update_cache(entries: dict[str, Any], slicers: dict[str, str]) -> None:
+    """Merge into the cache file as it is now (another process may have added to it) and replace it atomically."""
+    path = _cache_path()
+    cache = _read_cache()
+    cache.update(entries)
+    known = cache.get(_CACHE_SLICERS)
+    cache[_CACHE_SLICERS] = {**(known if isinstance(known, dict) else {}), **slicers}
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=".slices-", suffix=".json", dir=path.parent)
+        with os.fdopen(fd, "w") as f:
+            json.dump(cache, f, indent=1)
+        os.replace(tmp, path)
+    except OSError:
+        pass  # a read-only home only costs the cache
+
+
+def _cache_key(item: SliceItem, version: str) -> str:
+    h = hashlib.sha256(item.path.read_bytes())
+    h.update(json.dumps([version, SLICER_OPTIONS, item.volume]).encode())
+    return h.hexdigest()
+
+
+def _slice(stl: Path, volume: list[float], timeout_s: float, exe: str = SLICER) -> dict[str, Any]:
     vx, vy, vz = volume
     with tempfile.TemporaryDirectory() as tmp:
-        cmd = [SLICER, "--export-gcode", *SLICER_OPTIONS,
+        cmd = [exe, "--export-gcode", *SLICER_OPTIONS,
                "--bed-shape", f"0x0,{vx:g}x0,{vx:g}x{vy:g},0x{vy:g}", "--max-print-height", f"{vz:g}",
                "--center", f"{vx / 2:g},{vy / 2:g}", "--output", str(Path(tmp) / "out.gcode"), str(stl)]
         t0 = time.perf_counter()
         try:
             res = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s)
         except subprocess.TimeoutExpired:
-            return {"ok": False, "seconds": timeout_s, "error": f"timed out after {timeout_s:g} s"}
+            return {"ok": False, "seconds": timeout_s, "layers": 0, "error": f"timed out after {timeout_s:g} s"}
         gcode = Path(tmp) / "out.gcode"
         layers = 0
         if gcode.is_file():
@@ -209,41 +282,92 @@ def _slice(stl: Path, volume: list[float], timeout_s: float) -> dict[str, Any]:
                 "error": "" if ok else (errors[-1] if errors else f"exit code {res.returncode}")}
 
 
-def check_slicing(exp: Export, items: list[tuple[str, Path, list[float]]], timeout_s: float) -> list[CheckResult]:
-    """Slice every STL (cached by content, slicer version and options)."""
-    version = _slicer_version()
-    if version is None:
-        return [CheckResult(f"slice:{name}", None, None, 0, "errors", str(path.relative_to(exp.root)),
-                            f"{SLICER} not installed (apt-get install prusa-slicer)") for name, path, _ in items]
-    cache_file = _cache_path()
-    try:
-        cache = json.loads(cache_file.read_text())
-    except (OSError, ValueError):
-        cache = {}
-    keys = {}
-    for name, path, volume in items:
-        h = hashlib.sha256(path.read_bytes())
-        h.update(json.dumps([version, SLICER_OPTIONS, volume]).encode())
-        keys[name] = h.hexdigest()
-    todo = [(n, p, v) for n, p, v in items if keys[n] not in cache]
-    with ThreadPoolExecutor(max_workers=max(1, min(2, os.cpu_count() or 1))) as pool:
-        for (name, _p, _v), res in zip(todo, pool.map(lambda it: _slice(it[1], it[2], timeout_s), todo)):
-            cache[keys[name]] = {**res, "when": time.strftime("%Y-%m-%d %H:%M:%S")}
-    try:
-        cache_file.parent.mkdir(parents=True, exist_ok=True)
-        cache_file.write_text(json.dumps(cache, indent=1))
-    except OSError:
-        pass  # a read-only home only costs the cache
+def _slice_command(exp: Export) -> str:
+    """The command that slices this export. A build checks its export in a temporary folder
+    ``.<name>.tmp-*`` beside the output (``pipeline.build_export``) and publishes it as ``<name>``."""
+    root = exp.root
+    name = root.name
+    if name.startswith(".") and ".tmp-" in name:
+        root = root.with_name(name[1:name.rindex(".tmp-")])
+    return SLICE_COMMAND.format(export=root)
+
+
+def slice_stls(exp: Export, items: list[SliceItem] | None = None, progress: Callable[[str], None] | None = None,
+               workers: int = SLICE_WORKERS) -> dict[str, dict[str, Any]]:
+    """Slice every STL of ``items`` (default: all of the export's) that the cache does not hold yet, with
+    ``workers`` slicers at a time, and store each result in the cache as soon as it is known.
+
+    Returns:
+        ``{item name: result}`` for the STLs sliced now (``ok``, ``layers``, ``seconds``, ``error``, ``when``).
+
+    Raises:
+        SlicerMissingError: PrusaSlicer's command line is not installed.
+    """
+    say = progress or (lambda _m: None)
+    exe = _slicer_exe()
+    if exe is None:
+        raise SlicerMissingError(f"slicing needs PrusaSlicer's command line, `{SLICER}`, which is not on PATH; "
+                                 f"install it with `{SLICER_INSTALL}` (or put a PrusaSlicer 2.5+ `{SLICER}` "
+                                 "on PATH)")
+    items = slice_items(exp) if items is None else items
+    version = _slicer_version(exe)
+    slicers = {_slicer_identity(exe): version}
+    cache = _read_cache()
+    keys = {it.name: _cache_key(it, version) for it in items}
+    todo = [it for it in items if keys[it.name] not in cache]
+    timeout_s = float(exp.manifest["fabrication"]["slicer_timeout_s"])
+    n = max(1, min(workers, os.cpu_count() or 1))
+    say(f"slicing {len(todo)} of {len(items)} STLs with {version} ({n} at a time; "
+        f"{len(items) - len(todo)} already in {_cache_path()})")
+    done: dict[str, dict[str, Any]] = {}
+    if not todo:
+        _update_cache({}, slicers)
+        return done
+    with ThreadPoolExecutor(max_workers=n) as pool:
+        futures = {pool.submit(_slice, it.path, it.volume, timeout_s, exe): it for it in todo}
+        for k, fut in enumerate(as_completed(futures), 1):
+            it = futures[fut]
+            res = {**fut.result(), "when": time.strftime("%Y-%m-%d %H:%M:%S")}
+            done[it.name] = res
+            _update_cache({keys[it.name]: res}, slicers)
+            state = f"ok, {res['layers']} layers" if res["ok"] else f"FAILED ({res['error']})"
+            say(f"slice {k}/{len(todo)} {it.rel}: {state}, {res['seconds']:.1f} s")
+    return done
+
+
+def check_slicing(exp: Export, items: list[SliceItem] | None = None,
+                  sliced_now: Collection[str] = ()) -> list[CheckResult]:
+    """One ``slice:<job>/<part>`` result per STL from the slice cache; never starts the slicer.
+
+    An STL the cache does not hold (or a slicer :func:`slice_stls` has not run yet) is reported
+    ``passed: None`` with the command that slices it. ``sliced_now`` names the items sliced in this run.
+    """
+    items = slice_items(exp) if items is None else items
+    command = _slice_command(exp)
+    exe = _slicer_exe()
+    cache = _read_cache()
+    version = None
+    if exe is not None:
+        try:
+            version = (cache.get(_CACHE_SLICERS) or {}).get(_slicer_identity(exe))
+        except (OSError, AttributeError):
+            version = None
     out = []
-    fresh = {n for n, _p, _v in todo}
-    for name, path, _v in items:
-        r = cache[keys[name]]
-        how = "sliced now" if name in fresh else f"cached result of {r['when']} (same STL, slicer and options)"
-        note = f"{version}, {' '.join(SLICER_OPTIONS)}: {r.get('layers', 0)} layers in {r['seconds']:.1f} s, {how}"
-        if not r["ok"]:
-            note += f"; {r['error']}"
-        out.append(CheckResult(f"slice:{name}", bool(r["ok"]), 0 if r["ok"] else 1, 0, "errors",
-                               str(path.relative_to(exp.root)), note))
+    for it in items:
+        r = cache.get(_cache_key(it, version)) if version else None
+        if not isinstance(r, dict):
+            why = (f"{SLICER} is not installed ({SLICER_INSTALL}); then `{command}` slices it" if exe is None else
+                   f"not sliced in the build (builds and checks never start the slicer) and not in the slice "
+                   f"cache; `{command}` slices it")
+            out.append(CheckResult(f"slice:{it.name}", None, None, 0, "errors", it.rel, why))
+            continue
+        how = "sliced now" if it.name in sliced_now else \
+            f"cached result of {r.get('when', '?')} (same STL, slicer and options)"
+        note = f"{version}, {' '.join(SLICER_OPTIONS)}: {r.get('layers', 0)} layers in {r.get('seconds', 0.0):.1f} s, {how}"
+        if not r.get("ok"):
+            note += f"; {r.get('error', '')}"
+        out.append(CheckResult(f"slice:{it.name}", bool(r.get("ok")), 0 if r.get("ok") else 1, 0, "errors",
+                               it.rel, note))
     return out
 
 
@@ -343,14 +467,14 @@ def check_rigid_robot(exp: Export) -> list[CheckResult]:
     return out
 
 
-def check_printability(exp: Export) -> list[CheckResult]:
-    """Every printability check on every STL the manifest's ``print_jobs`` names."""
+def check_printability(exp: Export, sliced_now: Collection[str] = ()) -> list[CheckResult]:
+    """Every printability check on every STL the manifest's ``print_jobs`` names (slicing results from
+    the cache: see :func:`check_slicing`)."""
     jobs = exp.manifest.get("print_jobs")
     if not jobs:
         return []
     fab = exp.manifest["fabrication"]
     out: list[CheckResult] = []
-    to_slice: list[tuple[str, Path, list[float]]] = []
     for job in jobs:
         fdm = job["process"] == "FDM"
         for it in job["items"]:
@@ -401,8 +525,7 @@ def check_printability(exp: Export) -> list[CheckResult]:
             out.append(CheckResult(f"print_min_hole:{name}", ok, hole if np.isfinite(hole) else None, hole_min,
                                    "mm", rel, f"smallest enclosed void (4 A / P) at {where}" if where else
                                    "no enclosed void in any section"))
-            to_slice.append((name, exp.root / rel, job["build_volume_mm"]))
-    out += check_slicing(exp, to_slice, float(fab["slicer_timeout_s"]))
+    out += check_slicing(exp, sliced_now=sliced_now)
     out += check_envelope(exp)
     out += check_rigid_robot(exp)
     return out

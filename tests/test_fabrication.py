@@ -19,8 +19,10 @@ from bvsr_cad.checks import printability
 from bvsr_cad.checks.export import Export
 from bvsr_cad.checks.printability import (
     SLICER,
+    _SurfaceIndex,
     check_envelope,
     check_slicing,
+    min_hole_mm,
     overhang_regions,
     slice_items,
     slice_stls,
@@ -206,6 +208,39 @@ def test_check_slice_without_the_slicer_exits_2(bvsr_export, monkeypatch, tmp_pa
     assert main(["check", str(bvsr_export), "--slice", "-q"]) == 2
     err = capsys.readouterr().err
     assert "prusa-slicer" in err and "not on PATH" in err and "apt-get install prusa-slicer" in err, err
+
+
+def test_min_hole_sections_agree_with_trimesh():
+    # A plate with a 3 mm and a 5 mm hole along z and a 2.5 mm hole along x.
+    plate = trimesh.creation.box((40, 20, 8))
+    cut = [trimesh.creation.cylinder(1.5, 30, sections=48), trimesh.creation.cylinder(2.5, 30, sections=48)]
+    cut[0].apply_translation((-10, 0, 0))
+    cut[1].apply_translation((10, 0, 0))
+    side = trimesh.creation.cylinder(1.25, 60, sections=32)
+    side.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, [0, 1, 0]))
+    side.apply_translation((0, 6, 0))
+    mesh = plate.difference(trimesh.util.concatenate(cut + [side]), engine="manifold")
+    mesh.apply_translation(-mesh.bounds[0])
+    d, where = min_hole_mm(mesh)
+    assert d == pytest.approx(2.5 * np.cos(np.pi / 32), abs=0.01) and where.startswith("x = ")
+    solid = printability._manifold(mesh)
+    assert solid is not None
+    heights = np.linspace(0.5, 7.5, 5)
+    for axis in range(3):
+        fast = printability._section_voids(mesh, solid, axis, heights)
+        slow = printability._section_voids(mesh, None, axis, heights)  # trimesh's sections
+        for a, b in zip(fast, slow):
+            assert sorted(round(v[1], 6) for v in a) == sorted(round(v[1], 6) for v in b)
+
+
+def test_closest_points_as_trimesh_computes_them():
+    mesh = trimesh.creation.annulus(3.0, 8.0, 5.0, sections=40)
+    rng = np.random.default_rng(3)
+    pts = np.vstack([rng.uniform(-10, 10, (300, 3)), trimesh.sample.sample_surface(mesh, 300, seed=4)[0]])
+    index = _SurfaceIndex(mesh)
+    _, d, _ = index.closest_point(pts)
+    assert np.allclose(d, trimesh.proximity.closest_point(mesh, pts)[1], atol=1e-12)
+    assert np.allclose(index.signed_distance(pts), trimesh.proximity.signed_distance(mesh, pts), atol=1e-12)
 
 
 def test_rigid_robot_loads_in_mujoco(manifest, bvsr_export):

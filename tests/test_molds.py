@@ -9,9 +9,18 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+import trimesh
 
 from bvsr_cad.checks.export import Export, clear_cache
-from bvsr_cad.checks.molds import MoldMesh, cast_samples, check_demolding, check_molds, mold_meshes
+from bvsr_cad.checks.queries import contains
+from bvsr_cad.checks.molds import (
+    MoldMesh,
+    cast_samples,
+    check_demolding,
+    check_molds,
+    mold_meshes,
+    subdivided_triangles,
+)
 from bvsr_cad.exporters.mold_files import write_molds
 from bvsr_cad.parts.mold import mold_set
 from bvsr_cad.spec.load import ParamError, spec_from_dict
@@ -135,3 +144,27 @@ def test_bad_casting_parameters_are_named(data, bvsr_spec):
     thin = SimpleNamespace(**{**bvsr_spec.casting.__dict__, "cavity_wall_mm": 3.0})
     with pytest.raises(ValueError, match="casting.cavity_wall_mm"):
         mold_set(bvsr_spec.soa, bvsr_spec.joint.base_diameter_mm, thin)
+
+
+def test_subdivision_is_trimeshs_subdivide_to_size():
+    # A box with long and short edges and a cylinder (thin fan triangles): every case of the split.
+    for mesh in (trimesh.creation.box((7.3, 2.2, 0.6)), trimesh.creation.cylinder(4.0, 9.0, sections=24)):
+        v, f = trimesh.remesh.subdivide_to_size(mesh.vertices, mesh.faces, max_edge=1.0)
+        got = subdivided_triangles(mesh, 1.0)
+        assert got.shape == (len(f), 3, 3)
+
+        def rows(tri):
+            r = np.round(tri, 12).reshape(len(tri), -1)
+            return r[np.lexsort(r.T[::-1])]
+
+        assert np.array_equal(rows(got), rows(v[f]))
+
+
+def test_contains_is_trimeshs():
+    mesh = trimesh.creation.annulus(2.0, 5.0, 4.0, sections=32)
+    rng = np.random.default_rng(2)
+    on, faces = trimesh.sample.sample_surface(mesh, 2000, seed=3)
+    side = rng.choice([-1.0, 1.0], len(on))[:, None]
+    pts = np.vstack([rng.uniform(-6, 6, (4000, 3)), on + 0.02 * side * mesh.face_normals[faces]])
+    assert np.array_equal(contains(mesh, pts), mesh.contains(pts))
+

@@ -29,6 +29,7 @@ import numpy as np
 import trimesh
 
 from .export import Export
+from .queries import contains
 from .result import CheckResult as _CheckResult
 
 CAVITY_VOLUME_TOLERANCE = 0.005  # 0.5 % of the cast volume
@@ -97,44 +98,115 @@ def _union(meshes: list[manifold3d.Manifold]) -> manifold3d.Manifold:
     return manifold3d.Manifold.batch_boolean(meshes, manifold3d.OpType.Add)
 
 
+def subdivided_triangles(mesh: trimesh.Trimesh, max_edge: float, max_iter: int = 10) -> np.ndarray:
+    """The triangles of ``trimesh.remesh.subdivide_to_size(mesh.vertices, mesh.faces, max_edge)``, as (n, 3, 3)
+    corners (in another order), computed face by face: a face's pieces depend only on its own edges, so
+    the shared-vertex bookkeeping (the slow part of trimesh's version) is not needed for centres,
+    normals and areas."""
+    tri = np.asarray(mesh.triangles, np.float64)
+    done = []
+    for i in range(max_iter + 1):
+        ends = np.roll(tri, -1, axis=1)  # edge k runs from corner k to corner k + 1
+        long_edge = np.sqrt(((tri - ends) ** 2).sum(axis=2)) > max_edge
+        count = long_edge.sum(axis=1)
+        done.append(tri[count == 0])
+        if not count.any():
+            break
+        if i >= max_iter:
+            raise ValueError("max_iter exceeded!")
+        mid = (tri + ends) / 2.0
+        pieces = []
+        # One long edge (a, b): the midpoint p fans to the opposite corner c.
+        sel = count == 1
+        if sel.any():
+            j = np.argmax(long_edge[sel], axis=1)
+            r = np.arange(len(j))
+            t, m = tri[sel], mid[sel]
+            a, b, c, p = t[r, j], t[r, (j + 1) % 3], t[r, (j + 2) % 3], m[r, j]
+            pieces += [np.stack([a, p, c], axis=1), np.stack([p, b, c], axis=1)]
+        # Two long edges (a, b) and (b, c): the corner (p, b, q) and the quad (a, p, q, c) cut along its
+        # shorter diagonal.
+        sel = count == 2
+        if sel.any():
+            j = (np.argmin(long_edge[sel], axis=1) + 1) % 3
+            r = np.arange(len(j))
+            t, m = tri[sel], mid[sel]
+            a, b, c = t[r, j], t[r, (j + 1) % 3], t[r, (j + 2) % 3]
+            p, q = m[r, j], m[r, (j + 1) % 3]
+            use_aq = (((a - q) ** 2).sum(axis=1) <= ((p - c) ** 2).sum(axis=1))[:, None]
+            pieces += [np.stack([p, b, q], axis=1),
+                       np.where(use_aq[:, None], np.stack([a, p, q], axis=1), np.stack([a, p, c], axis=1)),
+                       np.where(use_aq[:, None], np.stack([a, q, c], axis=1), np.stack([p, q, c], axis=1))]
+        # Three: the regular 1 -> 4 split.
+        sel = count == 3
+        if sel.any():
+            t, m = tri[sel], mid[sel]
+            v0, v1, v2 = t[:, 0], t[:, 1], t[:, 2]
+            m0, m1, m2 = m[:, 0], m[:, 1], m[:, 2]
+            pieces += [np.stack(x, axis=1) for x in ((v0, m0, m2), (m0, v1, m1), (m2, m1, v2), (m0, m1, m2))]
+        tri = np.concatenate(pieces)
+    return np.concatenate(done)
+
+
+def _centres_normals_areas(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Centres, unit normals (zero for a degenerate triangle, as trimesh) and areas of (n, 3, 3) triangles."""
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    norm = np.linalg.norm(cross, axis=1)
+    normals = np.zeros_like(cross)
+    ok = norm > 0
+    normals[ok] = cross[ok] / norm[ok, None]
+    return tri.mean(axis=1), normals, norm / 2.0
+
+
 def cast_samples(cast: trimesh.Trimesh, parts: list[MoldMesh], channels: list[trimesh.Trimesh]) -> CastSamples:
     """Resample the cast surface and find, for each piece, the part it touches.
 
     A piece belongs to the part that contains a point just outside the cast
     there; a piece outside every part must open into a channel.
     """
-    v, f = trimesh.remesh.subdivide_to_size(cast.vertices, cast.faces, max_edge=SAMPLE_EDGE_MM)
-    fine = trimesh.Trimesh(v, f, process=False)
-    centres = fine.triangles_center
-    normals = fine.face_normals
+    centres, normals, areas = _centres_normals_areas(subdivided_triangles(cast, SAMPLE_EDGE_MM))
     probe = centres + SURFACE_OFFSET_MM * normals
     hits = np.zeros((len(parts), len(probe)), bool)
     for i, part in enumerate(parts):
         lo, hi = part.assembled.bounds
         near = np.all((probe >= lo - 1e-6) & (probe <= hi + 1e-6), axis=1)
         if near.any():
-            hits[i, near] = part.assembled.contains(probe[near])
+            hits[i, near] = contains(part.assembled, probe[near])
     count = hits.sum(axis=0)
     owner = np.where(count == 1, hits.argmax(axis=0), np.where(count == 0, -1, -2))
-    return CastSamples(centres, normals, fine.area_faces, owner)
+    return CastSamples(centres, normals, areas, owner)
+
+
+def _boxes_apart(a: manifold3d.Manifold, b: manifold3d.Manifold) -> bool:
+    """The bounding boxes do not overlap: the solids share no volume."""
+    ba, bb = np.asarray(a.bounding_box()), np.asarray(b.bounding_box())
+    return bool(np.any(ba[3:] <= bb[:3]) or np.any(bb[3:] <= ba[:3]))
+
+
+def _shared_volume(a: manifold3d.Manifold, b: manifold3d.Manifold) -> float:
+    return 0.0 if _boxes_apart(a, b) else (a ^ b).volume()
 
 
 def check_cavity(cast: trimesh.Trimesh, parts: list[MoldMesh], channels: list[trimesh.Trimesh],
-                 samples: CastSamples, where: str = "molds") -> list[CheckResult]:
-    """The closed mold's void, minus the channels, is the cast part."""
+                 samples: CastSamples, where: str = "molds", *,
+                 part_solids: list[manifold3d.Manifold] | None = None,
+                 closed: manifold3d.Manifold | None = None) -> list[CheckResult]:
+    """The closed mold's void, minus the channels, is the cast part. ``part_solids`` and ``closed``
+    (the parts as solids and their union) save converting them again."""
     cast_m = to_manifold(cast)
-    part_m = [to_manifold(p.assembled) for p in parts]
-    closed = _union(part_m)
+    cast_v = cast_m.volume()
+    part_m = part_solids if part_solids is not None else [to_manifold(p.assembled) for p in parts]
+    closed = closed if closed is not None else _union(part_m)
     lo, hi = closed.bounding_box()[:3], closed.bounding_box()[3:]
     box = manifold3d.Manifold.cube(tuple(float(b - a) for a, b in zip(lo, hi))).translate(tuple(map(float, lo)))
     # The void also holds bolt holes and pin clearances; the cavity is the
     # part of it that meets the cast (the cast with its gate and vents).
+    # A region smaller than half the cast cannot hold half of it: no need to intersect.
     regions = (box - closed).decompose()
-    touching = [r for r in regions if (r ^ cast_m).volume() > 0.5 * cast_m.volume()]
+    touching = [r for r in regions if r.volume() > 0.5 * cast_v and (r ^ cast_m).volume() > 0.5 * cast_v]
     others = [r for r in regions if not any(r is t for t in touching)]
     void = _union(touching) if touching else manifold3d.Manifold()
     cavity = void - _union([to_manifold(c) for c in channels]) if channels else void
-    cast_v = cast_m.volume()
     cavity_v = cavity.volume()
     rel = (cavity_v - cast_v) / cast_v
     out = [CheckResult("mold_cavity_volume", abs(rel) <= CAVITY_VOLUME_TOLERANCE, 100.0 * rel,
@@ -142,7 +214,7 @@ def check_cavity(cast: trimesh.Trimesh, parts: list[MoldMesh], channels: list[tr
                        f"void minus channels {cavity_v:.1f} mm3 against the cast {cast_v:.1f} mm3; "
                        f"{len(touching)} cavity region(s); {len(others)} other void(s) (around the rotated block, bolt holes, pin clearances) "
                        f"of {sum(r.volume() for r in others):.1f} mm3 do not reach the cast")]
-    intrusions = {p.name: (m ^ cast_m).volume() for p, m in zip(parts, part_m)}
+    intrusions = {p.name: _shared_volume(m, cast_m) for p, m in zip(parts, part_m)}
     worst = max(intrusions, key=intrusions.get)
     limit = INTRUSION_TOLERANCE * cast_v
     out.append(CheckResult("mold_intrusion", intrusions[worst] <= limit, intrusions[worst], limit, "mm3",
@@ -151,7 +223,7 @@ def check_cavity(cast: trimesh.Trimesh, parts: list[MoldMesh], channels: list[tr
     overlap, pair = 0.0, "-"
     for i in range(len(parts)):
         for j in range(i + 1, len(parts)):
-            vol = (part_m[i] ^ part_m[j]).volume()
+            vol = _shared_volume(part_m[i], part_m[j])
             if vol > overlap:
                 overlap, pair = vol, f"{parts[i].name}/{parts[j].name}"
     out.append(CheckResult("mold_parts_overlap", overlap <= limit, overlap, limit, "mm3", f"{where}:{pair}",
@@ -163,7 +235,7 @@ def check_cavity(cast: trimesh.Trimesh, parts: list[MoldMesh], channels: list[tr
         probe = samples.centres[free] + SURFACE_OFFSET_MM * samples.normals[free]
         in_channel = np.zeros(len(probe), bool)
         for ch in channels:
-            in_channel |= ch.contains(probe)
+            in_channel |= contains(ch, probe)
         uncovered = float(samples.areas[free][~in_channel].sum())
     else:
         uncovered = float(samples.areas[free].sum())
@@ -234,10 +306,8 @@ def min_wall_mm(mesh: trimesh.Trimesh) -> tuple[float, np.ndarray]:
     Returns:
         (thickness, location of the thinnest point).
     """
-    v, f = trimesh.remesh.subdivide_to_size(mesh.vertices, mesh.faces, max_edge=WALL_SAMPLE_EDGE_MM)
-    fine = trimesh.Trimesh(v, f, process=False)
-    normals = fine.face_normals
-    origins = fine.triangles_center - 1e-4 * normals
+    centres, normals, _ = _centres_normals_areas(subdivided_triangles(mesh, WALL_SAMPLE_EDGE_MM))
+    origins = centres - 1e-4 * normals
     locs, ray_idx, tri_idx = mesh.ray.intersects_location(origins, -normals, multiple_hits=False)
     if len(ray_idx) == 0:
         return math.inf, np.zeros(3)
@@ -299,18 +369,20 @@ def check_printable(part: MoldMesh, min_wall_limit_mm: float) -> list[CheckResul
 
 
 def check_channels(channels: list[tuple[str, float, trimesh.Trimesh]], parts: list[MoldMesh],
-                   samples: CastSamples, where: str = "molds") -> list[CheckResult]:
-    """Each gate and vent opens onto the cavity, is empty and reaches the outside."""
-    closed = _union([to_manifold(p.assembled) for p in parts])
+                   samples: CastSamples, where: str = "molds", *,
+                   closed: manifold3d.Manifold | None = None) -> list[CheckResult]:
+    """Each gate and vent opens onto the cavity, is empty and reaches the outside. ``closed``: the
+    union of the parts, if already made."""
+    closed = closed if closed is not None else _union([to_manifold(p.assembled) for p in parts])
     bb = np.asarray(closed.bounding_box())
     lo, hi = bb[:3], bb[3:]
     free = samples.owner == -1
     probe = samples.centres[free] + SURFACE_OFFSET_MM * samples.normals[free]
     out = []
     for name, diameter_mm, mesh in channels:
-        opening = float(samples.areas[free][mesh.contains(probe)].sum()) if free.any() else 0.0
+        opening = float(samples.areas[free][contains(mesh, probe)].sum()) if free.any() else 0.0
         nominal = math.pi * diameter_mm ** 2 / 4.0
-        blocked = (to_manifold(mesh) ^ closed).volume()
+        blocked = _shared_volume(to_manifold(mesh), closed)
         outside = bool(np.any(np.abs(mesh.bounds - lo).min(axis=0) < 1e-3)
                        or np.any(np.abs(mesh.bounds - hi).min(axis=0) < 1e-3))
         ok = opening >= CHANNEL_OPENING_MIN * nominal and outside and blocked <= 1e-3 * mesh.volume
@@ -343,11 +415,13 @@ def check_mold_set(cast: trimesh.Trimesh, parts: list[MoldMesh],
     """Every mold check on meshes (the entry point tests use with their own meshes)."""
     channel_meshes = [m for _, _, m in channels]
     samples = cast_samples(cast, parts, channel_meshes)
-    out = check_cavity(cast, parts, channel_meshes, samples, where)
+    part_solids = [to_manifold(p.assembled) for p in parts]
+    closed = _union(part_solids)
+    out = check_cavity(cast, parts, channel_meshes, samples, where, part_solids=part_solids, closed=closed)
     out += check_demolding(cast, parts, samples, parting_margin_mm)
     for part in parts:
         out += check_printable(part, min_wall_limit_mm)
-    out += check_channels(channels, parts, samples, where)
+    out += check_channels(channels, parts, samples, where, closed=closed)
     out += check_pu(cast, channel_meshes, density_g_cm3, soa_volume_mm3, where)
     return out
 

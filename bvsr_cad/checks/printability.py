@@ -12,7 +12,8 @@ Per STL, in the orientation it is exported in:
 * ``print_min_wall``: the thinnest wall, from rays cast inwards from the
   surface (embree) at area-weighted sample points;
 * ``print_min_hole``: the smallest hole, the hydraulic diameter 4 A / P of
-  every enclosed void in sections along z, x and y;
+  every enclosed void in sections along x, y and z (manifold3d's planar
+  sections; trimesh's when the STL is not a closed manifold);
 * ``slice:<job>/<part>``: the STL slices in PrusaSlicer's command line without
   an error, with a time limit. Slicing takes seconds per part, so the checks
   never start the slicer: :func:`slice_stls` (``bvsr check EXPORT --slice``)
@@ -43,12 +44,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import networkx as nx
+import manifold3d
 import numpy as np
 import trimesh
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 from shapely.geometry import MultiPoint
 
 from .export import Export
+from .queries import contains
 from .result import CheckResult
 
 SLICER = "prusa-slicer"
@@ -85,15 +89,18 @@ def overhang_regions(mesh: trimesh.Trimesh, max_overhang_deg: float) -> list[dic
     idx = np.flatnonzero(steep)
     if len(idx) == 0:
         return []
-    keep = set(idx.tolist())
-    g = nx.Graph()
-    g.add_nodes_from(idx.tolist())
-    adj = mesh.face_adjacency
-    mask = np.array([a in keep and b in keep for a, b in adj]) if len(adj) else np.zeros(0, bool)
-    g.add_edges_from(adj[mask].tolist())
+    # Connected components of the steep faces over shared edges; labels are numbered in
+    # order of each region's lowest face index.
+    adj = mesh.face_adjacency.reshape(-1, 2)
+    adj = adj[steep[adj[:, 0]] & steep[adj[:, 1]]]
+    local = np.full(len(n), -1)
+    local[idx] = np.arange(len(idx))
+    graph = coo_matrix((np.ones(len(adj)), (local[adj[:, 0]], local[adj[:, 1]])), shape=(len(idx), len(idx)))
+    count, labels = connected_components(graph, directed=False)
+    order = np.argsort(labels, kind="stable")
+    groups = np.split(idx[order], np.cumsum(np.bincount(labels, minlength=count))[:-1])
     regions = []
-    for comp in nx.connected_components(g):
-        faces = np.fromiter(comp, int)
+    for faces in groups:
         pts = mesh.triangles[faces].reshape(-1, 3)
         area = float(mesh.area_faces[faces].sum())
         hull = MultiPoint(pts[:, :2]).minimum_rotated_rectangle
@@ -138,7 +145,7 @@ def min_wall_mm(mesh: trimesh.Trimesh, samples: int = WALL_SAMPLES, seed: int = 
 
 
 def _voids(path) -> list[tuple[float, float, np.ndarray]]:
-    """(area, 4 A / P, centroid) of every enclosed void of a planar section."""
+    """(area, 4 A / P, centroid) of every enclosed void of a trimesh planar section."""
     from shapely.geometry import Polygon
 
     out = []
@@ -152,27 +159,75 @@ def _voids(path) -> list[tuple[float, float, np.ndarray]]:
     return out
 
 
+def _ring_voids(rings) -> list[tuple[float, float, np.ndarray]]:
+    """(area, 4 A / P, centroid) of every hole of a manifold3d cross-section: its clockwise contours."""
+    out = []
+    for ring in rings:
+        r = np.asarray(ring, float)
+        if len(r) < 3:
+            continue
+        x, y = r[:, 0], r[:, 1]
+        xn, yn = np.roll(x, -1), np.roll(y, -1)
+        cross = x * yn - xn * y
+        area = 0.5 * float(cross.sum())
+        if area >= 0.0:  # an outline (counter-clockwise), not a hole
+            continue
+        perimeter = float(np.hypot(xn - x, yn - y).sum())
+        centroid = np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / (6.0 * area)
+        out.append((-area, -4.0 * area / perimeter, centroid))
+    return out
+
+
+#: Rigid maps that turn x (resp. y, z) into z, so that a z section of the mapped solid is an x (y, z) section.
+_AXIS_TO_Z = (np.array([[0.0, 1, 0, 0], [0, 0, 1, 0], [1, 0, 0, 0]]),
+              np.array([[0.0, 0, 1, 0], [1, 0, 0, 0], [0, 1, 0, 0]]),
+              np.array([[1.0, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]]))
+
+
+def _manifold(mesh: trimesh.Trimesh) -> manifold3d.Manifold | None:
+    """The mesh as a manifold3d solid (double precision), or None if it is not a closed manifold."""
+    solid = manifold3d.Manifold(manifold3d.Mesh64(vert_properties=np.asarray(mesh.vertices, np.float64),
+                                                  tri_verts=np.asarray(mesh.faces, np.uint32)))
+    return solid if solid.status() == manifold3d.Error.NoError and not solid.is_empty() else None
+
+
+def _section_voids(mesh: trimesh.Trimesh, solid: manifold3d.Manifold | None, axis: int, offsets: np.ndarray):
+    """Voids of the sections normal to ``axis`` at ``bounds[0][axis] + offsets``: manifold3d's planar
+    sections of ``solid``, or trimesh's sections of the mesh when it is not a closed manifold (None if
+    trimesh cannot cut it)."""
+    lo = mesh.bounds[0]
+    if solid is not None:
+        turned = solid.transform(_AXIS_TO_Z[axis])
+        return [_ring_voids(turned.slice(float(lo[axis] + h)).to_polygons()) for h in offsets]
+    normal = np.zeros(3)
+    normal[axis] = 1.0
+    try:
+        paths = mesh.section_multiplane(plane_origin=lo.copy(), plane_normal=normal, heights=offsets)
+    except (ValueError, IndexError):
+        return None
+    return [_voids(path) for path in paths]
+
+
 def min_hole_mm(mesh: trimesh.Trimesh, sections: int = SECTIONS_PER_AXIS, step_mm: float = 0.25) -> tuple[float, str]:
     """Smallest hole whose axis runs along x, y or z: the hydraulic diameter 4 A / P of an
     enclosed void that appears with the same size and place in two sections ``step_mm`` apart
-    (a section grazing a hole across it makes a thin sliver that is not a hole)."""
+    (a section grazing a hole across it makes a thin sliver that is not a hole). Of holes equal
+    within ``1e-6`` mm the first found (x, then y, then z; from below) gives the place."""
     best, where = float("inf"), ""
     lo, hi = mesh.bounds
+    solid = _manifold(mesh)
     for axis in range(3):
-        normal = np.zeros(3)
-        normal[axis] = 1.0
         span = hi[axis] - lo[axis]
         base = np.linspace(lo[axis] + 0.013 * span, hi[axis] - 0.011 * span - step_mm, sections) - lo[axis]
         heights = np.sort(np.concatenate([base, base + step_mm]))
-        try:
-            paths = mesh.section_multiplane(plane_origin=lo.copy(), plane_normal=normal, heights=heights)
-        except (ValueError, IndexError):
+        voids = _section_voids(mesh, solid, axis, heights)
+        if voids is None:
             continue
         for i in range(0, len(heights) - 1, 2):
-            a, b = _voids(paths[i]), _voids(paths[i + 1])
+            a, b = voids[i], voids[i + 1]
             for area, d, c in a:
                 twin = any(np.linalg.norm(c - c2) < 0.2 and abs(area2 - area) <= 0.15 * area for area2, _d2, c2 in b)
-                if twin and d < best:
+                if twin and d < best - 1e-6:
                     best, where = d, f"{'xyz'[axis]} = {lo[axis] + heights[i]:.2f} mm"
     return best, where
 
@@ -363,7 +418,8 @@ def check_slicing(exp: Export, items: list[SliceItem] | None = None,
             continue
         how = "sliced now" if it.name in sliced_now else \
             f"cached result of {r.get('when', '?')} (same STL, slicer and options)"
-        note = f"{version}, {' '.join(SLICER_OPTIONS)}: {r.get('layers', 0)} layers in {r.get('seconds', 0.0):.1f} s, {how}"
+        note = (f"{version}, {' '.join(SLICER_OPTIONS)}: {r.get('layers', 0)} layers in "
+                f"{r.get('seconds', 0.0):.1f} s, {how}")
         if not r.get("ok"):
             note += f"; {r.get('error', '')}"
         out.append(CheckResult(f"slice:{it.name}", bool(r.get("ok")), 0 if r.get("ok") else 1, 0, "errors",
@@ -396,8 +452,120 @@ def _in_features(points: np.ndarray, features: list[dict[str, Any]], margin_mm: 
     return inside
 
 
+class _SurfaceIndex:
+    """Closest points on a triangle mesh, exactly as ``trimesh.proximity.closest_point`` and
+    ``signed_distance`` compute them, with the search structures built once and in bulk: a k-d tree
+    of the triangles' centroids and an R-tree of their boxes, bulk-loaded from arrays rather than
+    from a Python stream. Each query's search box is bounded by the distance to the triangles of
+    the k nearest centroids, which is tighter than trimesh's nearest-vertex bound on large facets."""
+
+    def __init__(self, mesh: trimesh.Trimesh, k: int = 4):
+        import rtree
+        from scipy.spatial import cKDTree
+
+        self.mesh = mesh
+        self.tri = np.asarray(mesh.triangles, np.float64)
+        self.k = min(k, len(self.tri))
+        self.centroids = cKDTree(self.tri.mean(axis=1))
+        self.tree = rtree.index.Index((np.arange(len(self.tri), dtype=np.int64), self.tri.min(axis=1),
+                                       self.tri.max(axis=1)), properties=rtree.index.Property(dimension=3))
+
+    def upper_bound(self, points: np.ndarray) -> np.ndarray:
+        """A distance to the mesh no smaller than the true one: to the triangles of the nearest centroids.
+        A degenerate triangle gives no distance; a point near only those is bounded by the mesh's size."""
+        from trimesh.triangles import closest_point as on_triangles
+
+        pts = np.asarray(points, np.float64)
+        n = len(pts)
+        _, near = self.centroids.query(pts, k=self.k)
+        near = np.asarray(near).reshape(n, -1)
+        first = np.repeat(pts, near.shape[1], axis=0)
+        bound = np.fmin.reduce(np.linalg.norm(on_triangles(self.tri[near.ravel()], first) - first, axis=1)
+                               .reshape(n, -1), axis=1)
+        lo, hi = self.tri.reshape(-1, 3).min(axis=0), self.tri.reshape(-1, 3).max(axis=0)
+        far = np.linalg.norm(np.maximum(np.abs(pts - lo), np.abs(pts - hi)), axis=1)
+        return np.where(np.isfinite(bound), bound, far)
+
+    def closest_point(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(closest point, distance, triangle id) per point; ties as ``trimesh.proximity.closest_point``."""
+        from trimesh.constants import tol
+        from trimesh.triangles import closest_point as on_triangles
+
+        pts = np.asarray(points, np.float64)
+        n = len(pts)
+        r = (self.upper_bound(pts) * (1.0 + 1e-9) + 1e-9)[:, None]
+        cand, counts = self.tree.intersection_v(pts - r, pts + r)
+        counts = counts.astype(np.int64)
+        if (counts == 0).any():  # cannot happen: the k nearest triangles lie in the box
+            raise RuntimeError("closest point: a query found no candidate triangle")
+        qi = np.repeat(np.arange(n), counts)
+        close = on_triangles(self.tri[cand], pts[qi])
+        vec = pts[qi] - close
+        d2 = np.einsum("ij,ij->i", vec, vec)
+        # The two nearest candidates of each point: the first is the answer, unless both are
+        # equally near (an edge or a corner): then the face whose normal points at the query.
+        order = np.lexsort((d2, qi))
+        start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        a = order[start]
+        b = order[np.minimum(start + 1, start + counts - 1)]
+        pick = a.copy()
+        tie = (np.abs(d2[b] - d2[a]) < tol.merge) & (d2[a] > tol.merge) & (d2[b] > tol.merge) & (b != a)
+        if tie.any():
+            normals = self.mesh.face_normals
+            va = vec[a[tie]] / np.sqrt(d2[a[tie]])[:, None]
+            vb = vec[b[tie]] / np.sqrt(d2[b[tie]])[:, None]
+            use_b = np.einsum("ij,ij->i", normals[cand[b[tie]]], vb) > np.einsum("ij,ij->i", normals[cand[a[tie]]], va)
+            pick[np.flatnonzero(tie)[use_b]] = b[tie][use_b]
+        return close[pick], np.sqrt(d2[pick]), cand[pick]
+
+    def signed_distance(self, points: np.ndarray, contains: Callable[[np.ndarray], np.ndarray] | None = None
+                        ) -> np.ndarray:
+        """Positive inside, as ``trimesh.proximity.signed_distance``: the sign from the closest face's normal
+        where the point projects into that face, else from ``contains`` (default: a ray test on the mesh)."""
+        from trimesh.constants import tol
+        from trimesh.triangles import points_to_barycentric
+
+        pts = np.asarray(points, np.float64)
+        closest, distance, tid = self.closest_point(pts)
+        nonzero = np.flatnonzero(distance > tol.merge)
+        if len(nonzero) == 0:
+            return distance
+        normals = self.mesh.face_normals[tid[nonzero]]
+        p = pts[nonzero]
+        projection = p - normals * np.einsum("ij,ij->i", p - closest[nonzero], normals)[:, None]
+        bary = points_to_barycentric(self.tri[tid[nonzero]], projection)
+        on = ~((bary < -tol.merge) | (bary > 1 + tol.merge)).any(axis=1)
+        sign = np.sign(np.einsum("ij,ij->i", normals[on], p[on] - projection[on]))
+        distance[nonzero[on]] *= -1.0 * sign
+        inside = (contains or self.mesh.ray.contains_points)(p[~on])
+        distance[nonzero[~on]] *= inside.astype(int) * 2 - 1.0
+        return distance
+
+
+def _inside_any(meshes: list[trimesh.Trimesh], points: np.ndarray, skip: np.ndarray | None = None) -> np.ndarray:
+    """Which points lie inside one of ``meshes``; ``skip[i]``: a mesh not to test point i in (its own piece)."""
+    inside = np.zeros(len(points), bool)
+    for k, m in enumerate(meshes):
+        lo, hi = m.bounds
+        sel = np.all((points >= lo - 1e-6) & (points <= hi + 1e-6), axis=1) & ~inside
+        if skip is not None:
+            sel &= skip != k
+        if sel.any():
+            idx = np.flatnonzero(sel)
+            inside[idx[contains(m, points[idx])]] = True
+    return inside
+
+
+#: A sample of a twin piece's surface is on the twin's outer surface unless the point this far
+#: out along its normal is inside another piece: faces where two pieces meet (the STLs leave
+#: them a few nanometres apart) are not surface of the assembled twin.
+OUTER_PROBE_MM = 1e-3
+
+
 def check_envelope(exp: Export, samples: int = 6000, seed: int = 1) -> list[CheckResult]:
-    """The rigid twin's outer surface against the BVSR at rest (both ways)."""
+    """The rigid twin's outer surface against the BVSR at rest (both ways). The twin is its pieces,
+    assembled: a point is inside it when it is inside a piece, and its outer surface is the pieces'
+    surface less the faces where two pieces meet."""
     rt = exp.manifest.get("rigid_tail")
     if not rt:
         return []
@@ -406,31 +574,27 @@ def check_envelope(exp: Export, samples: int = 6000, seed: int = 1) -> list[Chec
     features = [f for p in pieces for f in p["info"]["print_features"]] + list(rt.get("filled_features", []))
     rigid_parts = []
     for p in pieces:
-        m = exp.part_frame_mesh(p).copy()
+        m = exp.part_frame_mesh(p)  # a copy
         m.apply_transform(np.asarray(p["tail_transform"], float))
         rigid_parts.append(m)
-    import manifold3d as mf
-
-    def to_m(m: trimesh.Trimesh):
-        return mf.Manifold(mf.Mesh(vert_properties=np.asarray(m.vertices, np.float32),
-                                   tri_verts=np.asarray(m.faces, np.uint32)))
-
-    union = mf.Manifold.batch_boolean([to_m(m) for m in rigid_parts], mf.OpType.Add)
-    um = union.to_mesh()
-    rigid = trimesh.Trimesh(np.asarray(um.vert_properties)[:, :3], np.asarray(um.tri_verts), process=True)
+    rigid = trimesh.util.concatenate(rigid_parts)
+    piece_of_face = np.repeat(np.arange(len(rigid_parts)), [len(m.faces) for m in rigid_parts])
     bvsr = _bvsr_rest_meshes(exp)
     bvsr_all = trimesh.util.concatenate(bvsr)
     rng = np.random.default_rng(seed)
     margin = 0.3
-    # Twin -> BVSR: every outer-surface sample of the twin is on the BVSR's surface.
-    pts, _ = trimesh.sample.sample_surface(rigid, samples, seed=int(rng.integers(1 << 31)))
+    # Twin -> BVSR: every outer-surface sample of the twin is on the BVSR's surface. Twice as many
+    # samples of the pieces' surfaces as wanted; the first ``samples`` on the outer surface are kept.
+    pts, fid = trimesh.sample.sample_surface(rigid, 2 * samples, seed=int(rng.integers(1 << 31)))
+    probe = pts + OUTER_PROBE_MM * rigid.face_normals[fid]
+    pts = pts[~_inside_any(rigid_parts, probe, skip=piece_of_face[fid])][:samples]
     pts = pts[~_in_features(pts, features, margin)]
-    _, d_out, _ = trimesh.proximity.closest_point(bvsr_all, pts)
+    _, d_out, _ = _SurfaceIndex(bvsr_all).closest_point(pts)
     i = int(np.argmax(d_out))
     # BVSR -> twin: every BVSR surface sample is inside the twin or on its surface.
     bpts, _ = trimesh.sample.sample_surface(bvsr_all, samples, seed=int(rng.integers(1 << 31)))
     bpts = bpts[~_in_features(bpts, features, margin)]
-    sd = trimesh.proximity.signed_distance(rigid, bpts)  # positive inside
+    sd = _SurfaceIndex(rigid).signed_distance(bpts, lambda q: _inside_any(rigid_parts, q))  # positive inside
     j = int(np.argmin(sd))
     outside = float(max(0.0, -sd[j]))
     where = "rigid_tail/* vs the BVSR at rest"

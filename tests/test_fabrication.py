@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import shutil
 import zipfile
 from pathlib import Path
@@ -27,6 +28,7 @@ from bvsr_cad.checks.printability import (
     slice_items,
     slice_stls,
 )
+from bvsr_cad.checks.run import run_checks
 from bvsr_cad.cli import main
 
 
@@ -208,6 +210,29 @@ def test_check_slice_without_the_slicer_exits_2(bvsr_export, monkeypatch, tmp_pa
     assert main(["check", str(bvsr_export), "--slice", "-q"]) == 2
     err = capsys.readouterr().err
     assert "prusa-slicer" in err and "not on PATH" in err and "apt-get install prusa-slicer" in err, err
+
+
+def test_printability_in_a_second_process_gives_the_same_results(bvsr_export):
+    said: list[str] = []
+    beside = run_checks(bvsr_export, said.append)
+    alone = run_checks(bvsr_export, parallel=False)
+    assert json.dumps([r.to_json() for r in beside]) == json.dumps([r.to_json() for r in alone])
+    if (os.cpu_count() or 1) >= 2:
+        assert any(m.startswith("printability: done in the second process") for m in said), said
+
+
+def test_printability_runs_here_when_the_second_process_fails(bvsr_export, monkeypatch):
+    from bvsr_cad.checks import run
+
+    if (os.cpu_count() or 1) < 2:
+        pytest.skip("one core: the printability checks never leave the process")
+    monkeypatch.setattr(run.sys, "executable", shutil.which("false") or "/bin/false")  # exits, no results
+    monkeypatch.setattr(run, "check_printability", lambda exp, sliced_now=(): ["ran here"])
+    said: list[str] = []
+    group = run._Printability(Export.open(bvsr_export), (), said.append, parallel=True)
+    assert group.results() == ["ran here"]
+    assert any("without results; running them here" in m for m in said), said
+    assert group.proc is None
 
 
 def test_min_hole_sections_agree_with_trimesh():

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -24,10 +25,13 @@ class _Parser(argparse.ArgumentParser):
 
 def _progress(quiet: bool):
     t0 = time.perf_counter()
+    lock = threading.Lock()  # a second process's lines arrive from a reader thread
 
     def say(msg: str) -> None:
         if not quiet:
-            print(f"[{time.perf_counter() - t0:6.1f}s] {msg}", file=sys.stderr, flush=True)
+            with lock:
+                sys.stderr.write(f"[{time.perf_counter() - t0:6.1f}s] {msg}\n")
+                sys.stderr.flush()
 
     return say
 

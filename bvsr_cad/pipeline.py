@@ -28,6 +28,7 @@ from .exporters.render import render_previews
 from .exporters.report import write_report
 from .exporters.robot_files import theta_max_from_limits, write_robot
 from .spec.load import load_spec, params_sha256
+from .worker import SecondProcess, WorkerLost
 
 Progress = Callable[[str], None]
 
@@ -67,6 +68,20 @@ def _publish(tmp: Path, out_dir: Path) -> None:
         shutil.rmtree(old, ignore_errors=True)
 
 
+def _analyses(proc: SecondProcess | None, asm, tmp: Path, say: Progress) -> dict:
+    """The analyses' manifest keys: from the second process, or computed here without one."""
+    if proc is not None:
+        if proc.running:
+            say("analyses: waiting for the second process")
+        try:
+            keys = proc.result()
+            say(f"analyses: done in the second process ({proc.seconds:.1f} s)")
+            return keys
+        except WorkerLost as exc:
+            say(f"analyses: {exc}; running them here")
+    return write_analyses(asm, tmp, say)
+
+
 def build_export(params: str | Path, out_dir: str | Path | None = None,
                  progress: Progress | None = None) -> BuildResult:
     """Build every part of the tail described by ``params`` into ``out_dir``.
@@ -84,9 +99,16 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
     _check_output(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     say(f"building {spec.name}: {spec.segments} segments, {spec.joints} joints, {spec.panels} panels")
-    asm = build_assembly(spec, say)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
+    analyses = None
     try:
+        # The analyses (workspace, clearance, limits) need only the parameters: a second process
+        # runs them from the file while this one builds, exports and fabricates.
+        analyses = SecondProcess.start("bvsr_cad.exporters.analysis_files",
+                                       [str(params.resolve()), str(tmp.resolve())], tmp, say)
+        if analyses is not None:
+            say("analyses: started in a second process")
+        asm = build_assembly(spec, say)
         (tmp / "step").mkdir()
         (tmp / "stl").mkdir()
         files: dict[str, dict[str, str]] = {}
@@ -101,11 +123,13 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         manifest = manifest_dict(asm, params_sha256(params), files, "step/assembly.step")
         say("previews (off-screen renders)")
         manifest["previews"] = render_previews(asm, tmp)
-        manifest.update(write_analyses(asm, tmp, say))
+        molds = write_molds(asm, tmp, say)
+        fabrication = write_fabrication(asm, tmp, manifest | molds, say)
+        manifest.update(_analyses(analyses, asm, tmp, say))
         limits = json.loads((tmp / manifest["analysis"]["limits"]).read_text())
         manifest.update(write_robot(asm, tmp, theta_max_from_limits(limits, spec.joints), say))
-        manifest.update(write_molds(asm, tmp, say))
-        manifest.update(write_fabrication(asm, tmp, manifest, say))
+        manifest.update(molds)
+        manifest.update(fabrication)
         write_manifest(tmp, manifest)
         say("checks")
         results = run_checks(tmp, say)
@@ -116,6 +140,8 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         write_manifest(tmp, manifest)
         _publish(tmp, out)
     except BaseException:
+        if analyses is not None:
+            analyses.close()
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return BuildResult(out, results, time.perf_counter() - t0)

@@ -156,3 +156,24 @@ def test_build_refuses_to_replace_a_foreign_folder(tmp_path, capsys):
     assert main(["build", str(PARAMS / "bvsr.toml"), "-o", str(foreign), "-q"]) == 2
     assert (foreign / "thesis.tex").read_text() == "precious"
     assert "refusing" in capsys.readouterr().err
+
+
+def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, monkeypatch):
+    from bvsr_cad import pipeline, worker
+    from bvsr_cad.spec.load import ParamError
+
+    proc = worker.SecondProcess.start("bvsr_cad.exporters.analysis_files",
+                                      [str(tmp_path / "nope.toml"), str(tmp_path)], tmp_path)
+    if proc is None:
+        pytest.skip("one core: the analyses never leave the process")
+    # The child's exception is raised here, as it was raised there.
+    with pytest.raises(ParamError, match="nope.toml"):
+        proc.result()
+    assert not proc.running
+    # A process that dies without a result: the pipeline runs the analyses itself.
+    monkeypatch.setattr(worker.sys, "executable", shutil.which("false") or "/bin/false")
+    lost = worker.SecondProcess.start("bvsr_cad.exporters.analysis_files", [], tmp_path)
+    monkeypatch.setattr(pipeline, "write_analyses", lambda asm, root, say: {"analysis": "computed here"})
+    said: list[str] = []
+    assert pipeline._analyses(lost, None, tmp_path, said.append) == {"analysis": "computed here"}
+    assert any("without a result; running them here" in m for m in said), said

@@ -222,17 +222,19 @@ def test_printability_in_a_second_process_gives_the_same_results(bvsr_export):
 
 
 def test_printability_runs_here_when_the_second_process_fails(bvsr_export, monkeypatch):
+    from bvsr_cad import worker
     from bvsr_cad.checks import run
 
     if (os.cpu_count() or 1) < 2:
         pytest.skip("one core: the printability checks never leave the process")
-    monkeypatch.setattr(run.sys, "executable", shutil.which("false") or "/bin/false")  # exits, no results
+    monkeypatch.setattr(worker.sys, "executable", shutil.which("false") or "/bin/false")  # exits, no results
     monkeypatch.setattr(run, "check_printability", lambda exp, sliced_now=(): ["ran here"])
     said: list[str] = []
     group = run._Printability(Export.open(bvsr_export), (), said.append, parallel=True)
+    assert group.proc is not None
     assert group.results() == ["ran here"]
-    assert any("without results; running them here" in m for m in said), said
-    assert group.proc is None
+    assert any("without a result; running them here" in m for m in said), said
+    assert not group.proc.running
 
 
 def test_min_hole_sections_agree_with_trimesh():

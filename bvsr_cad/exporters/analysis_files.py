@@ -67,3 +67,25 @@ def write_analyses(asm: Assembly, root: Path, progress: Callable[[str], None]) -
     return {"analysis": {"limits": "analysis/limits.json", "workspace": "analysis/workspace.json",
                          "clearance": "analysis/clearance.json", "workspace_png": "analysis/workspace.png",
                          "clearance_map_png": "analysis/clearance_map.png"}}
+
+
+def _analyses_from_params(params: str, root: str) -> dict[str, Any]:
+    """The second process's work (``bvsr build``): the same analyses from the parameter file,
+    progress on stderr (the parent relays it)."""
+    import sys
+
+    from ..assembly.build import build_assembly
+    from ..spec.load import load_spec
+
+    def say(msg: str) -> None:
+        print(f"(second process) {msg}", file=sys.stderr, flush=True)
+
+    return write_analyses(build_assembly(load_spec(params)), Path(root), say)
+
+
+if __name__ == "__main__":
+    import sys
+
+    from ..worker import serve
+
+    sys.exit(serve(sys.argv[1], _analyses_from_params, *sys.argv[2:]))

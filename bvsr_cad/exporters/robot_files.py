@@ -60,7 +60,7 @@ def write_robot(asm: Assembly, root: Path, theta_max_rad: list[float],
     progress("robot model (B-rep inertials)")
     robot = robot_for(asm, theta_max_rad)
     folder = root / "robot"
-    folder.mkdir()
+    folder.mkdir(exist_ok=True)  # the fabrication package may have put the rigid twin there
     progress("robot meshes")
     mesh_files = write_robot_meshes(robot, folder / "meshes")
     name = asm.spec.name

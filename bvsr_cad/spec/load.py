@@ -28,6 +28,9 @@ class ParamError(ValueError):
         lines = "\n".join(f"  - {p}" for p in self.problems)
         super().__init__(f"{self.path}: {len(self.problems)} problem(s) in the parameters:\n{lines}")
 
+    def __reduce__(self):  # pickles (a second process hands it back to the build)
+        return (type(self), (self.path, self.problems))
+
 
 def _allowed(meta: dict[str, Any]) -> str:
     if meta.get("choices"):

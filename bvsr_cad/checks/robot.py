@@ -213,8 +213,26 @@ def check_mujoco(exp: Export) -> list[CheckResult]:
     return out
 
 
+def _import_pybullet():
+    """pybullet prints its build time on the C-level stderr when imported (noise under ``-q``)."""
+    import sys
+
+    if "pybullet" in sys.modules:
+        return sys.modules["pybullet"]
+    saved, devnull = os.dup(2), os.open(os.devnull, os.O_WRONLY)
+    try:
+        sys.stderr.flush()
+        os.dup2(devnull, 2)
+        import pybullet
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(devnull)
+    return pybullet
+
+
 def check_pybullet(exp: Export) -> list[CheckResult]:
-    import pybullet as pb
+    pb = _import_pybullet()
 
     urdf = exp.root / exp.manifest["robot"]["urdf"]
     expected = {l["name"]: l["mass_kg"] for l in exp.manifest["robot"]["links"]}

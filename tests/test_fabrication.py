@@ -294,3 +294,8 @@ def test_report_has_its_pictures(manifest, bvsr_export):
         if (bvsr_export / png).is_file():
             assert png in srcs
     assert manifest["report"]["problems"] == []
+    # The analyses in words: the certified minimum clearance and a limit per joint, as in the files.
+    cl = json.loads((bvsr_export / manifest["analysis"]["clearance"]).read_text())
+    assert f"{cl['min_clearance_mm']:.3f} mm between {cl['pair'][0]} and {cl['pair'][1]}" in html
+    joints = json.loads((bvsr_export / manifest["analysis"]["limits"]).read_text())["joints"]
+    assert all(f"joint {j['joint']}: bending limit" in html for j in joints)

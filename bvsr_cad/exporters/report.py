@@ -16,6 +16,8 @@ budget, print jobs and BOM totals, and the table of checks.
 from __future__ import annotations
 
 import html
+import json
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -220,6 +222,35 @@ def _mass_table(manifest: dict[str, Any]) -> str:
     return "\n".join(rows)
 
 
+def _analysis_table(root: Path, manifest: dict[str, Any]) -> str:
+    """Workspace extents, the certified minimum clearance and every joint's limit, from the analysis files."""
+    ana = manifest.get("analysis", {})
+    try:
+        ws = json.loads((root / ana["workspace"]).read_text())
+        cl = json.loads((root / ana["clearance"]).read_text())
+        lim = json.loads((root / ana["limits"]).read_text())
+    except (KeyError, OSError, ValueError):
+        return "<p class=muted>No analysis results in this export.</p>"
+    ext = ws["tip_extent_mm"]
+    rows = ["<table><tr><th>analysis</th><th>result</th></tr>",
+            f"<tr><td>tip workspace ({ws['samples']} samples of the paper's protocol)</td><td>x {_num(ext['x'])} mm, "
+            f"y {_num(ext['y'])} mm; largest joint bend {math.degrees(ws['max_theta_rad']):.2f} deg</td></tr>",
+            f"<tr><td>minimum clearance over {cl['poses']} workspace poses (required "
+            f"{_num(cl['required_mm'])} mm)</td><td>{cl['min_clearance_mm']:.3f} mm between {_e(cl['pair'][0])} and "
+            f"{_e(cl['pair'][1])}; {'certified' if cl['certified'] else 'not certified'} (no pose and pair has a "
+            f"lower bound below it), {cl['exact_evaluations']} exact distance(s)</td></tr>"]
+    for j in lim["joints"]:
+        th = np.degrees(j["theta_max_rad"])
+        why = ", ".join(f"{'the clearance bound' if w == 'clearance' else 'the ' + w} on {j['limited_by'].count(w)}"
+                        for w in sorted(set(j["limited_by"])))
+        pairs = sorted({" / ".join(p) for p in j["limiting_pair"] if p})
+        rows.append(f"<tr><td>joint {_e(j['joint'])}: bending limit theta_max over {len(th)} planes</td>"
+                    f"<td>{th.min():.1f} to {th.max():.1f} deg (set by {why}"
+                    f"{'; pair ' + _e(', '.join(pairs[:2])) if pairs else ''})</td></tr>")
+    rows.append("</table>")
+    return "\n".join(rows)
+
+
 def _checks_table(checks: list[dict[str, Any]]) -> str:
     order = sorted(checks, key=lambda c: {False: 0, None: 1, True: 2}[c["passed"]])
     rows = ["<table><tr><th></th><th>check</th><th>value</th><th>limit</th><th>unit</th><th>where</th><th>note</th></tr>"]
@@ -306,6 +337,7 @@ def write_report(root: Path, manifest: dict[str, Any]) -> dict[str, Any]:
 
     pngs = _pngs(manifest.get("analysis", {}))
     h.append("<h2>Analyses</h2>")
+    h.append(_analysis_table(root, manifest))
     if pngs:
         h.append("<div class=grid>" + "".join(_fig(p, Path(p).stem.replace("_", " ")) for p in pngs) + "</div>")
     else:

@@ -105,7 +105,7 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         # The analyses (workspace, clearance, limits) need only the parameters: a second process
         # runs them from the file while this one builds, exports and fabricates.
         analyses = SecondProcess.start("bvsr_cad.exporters.analysis_files",
-                                       [str(params.resolve()), str(tmp.resolve())], tmp, say)
+                                       [str(params.resolve()), str(tmp.resolve()), params_sha256(params)], tmp, say)
         if analyses is not None:
             say("analyses: started in a second process")
         asm = build_assembly(spec, say)

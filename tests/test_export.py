@@ -162,12 +162,13 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
     from bvsr_cad import pipeline, worker
     from bvsr_cad.spec.load import ParamError
 
+    changed = write_toml(tmp_path / "edited.toml", {"name": "edited"})
     proc = worker.SecondProcess.start("bvsr_cad.exporters.analysis_files",
-                                      [str(tmp_path / "nope.toml"), str(tmp_path)], tmp_path)
+                                      [str(changed), str(tmp_path), "sha256 of what the build read"], tmp_path)
     if proc is None:
         pytest.skip("one core: the analyses never leave the process")
     # The child's exception is raised here, as it was raised there.
-    with pytest.raises(ParamError, match="nope.toml"):
+    with pytest.raises(ParamError, match="edited.toml.*changed while the build was running"):
         proc.result()
     assert not proc.running
     # A process that dies without a result: the pipeline runs the analyses itself.

@@ -69,13 +69,16 @@ def write_analyses(asm: Assembly, root: Path, progress: Callable[[str], None]) -
                          "clearance_map_png": "analysis/clearance_map.png"}}
 
 
-def _analyses_from_params(params: str, root: str) -> dict[str, Any]:
-    """The second process's work (``bvsr build``): the same analyses from the parameter file,
-    progress on stderr (the parent relays it)."""
+def _analyses_from_params(params: str, root: str, sha256: str) -> dict[str, Any]:
+    """The second process's work (``bvsr build``): the same analyses from the parameter file (the
+    one the build read: ``sha256``), progress on stderr (the parent relays it)."""
     import sys
 
     from ..assembly.build import build_assembly
-    from ..spec.load import load_spec
+    from ..spec.load import ParamError, load_spec, params_sha256
+
+    if params_sha256(params) != sha256:
+        raise ParamError(params, ["the file changed while the build was running; build again"])
 
     def say(msg: str) -> None:
         print(f"(second process) {msg}", file=sys.stderr, flush=True)

@@ -141,7 +141,7 @@ def joint_limits_rad(spec: TailSpec, progress: Callable[[str], None] | None = No
     say = progress or (lambda _m: None)
     say("joint limits from the clearance analysis")
     pt = posed_tail(build_assembly(spec))
-    lims = joint_limits(pt, spec.analysis.min_clearance_mm, exact=False, stack=fold_stack(spec))
+    lims = joint_limits(pt, spec.analysis.min_clearance_mm, stack=fold_stack(spec))
     return [min(j.theta_max_rad) for j in lims]
 
 

@@ -45,6 +45,15 @@ def test_bound_is_conservative_and_exact_at_rest(asm):
         assert (exact >= refined - TIE_MM).all()
         # The bounds bite: stage 1b is within 20 % of the exact clearance for most pairs at 0.3 rad.
         assert np.median(refined / exact) > 0.8
+    # Panels are posed as their rest BVH under a rigid transform: the same as deforming the mesh.
+    from bvsr_cad.analysis.clearance import _fcl_distance
+
+    import trimesh
+
+    a, b = pt.names.index("panel0"), pt.names.index("panel1")
+    pair = int(np.flatnonzero((pt.pairs[:, 0] == a) & (pt.pairs[:, 1] == b))[0])
+    posed = [trimesh.Trimesh(pt.deform_points(pt.meshes[i].vertices, w[1]), pt.meshes[i].faces) for i in (a, b)]
+    assert pt.exact(w[1], np.array([pair]))[0] == pytest.approx(_fcl_distance(*posed), abs=1e-9)
     # Flanges seated in one panel move rigidly: their clearance does not change with the pose,
     # and the refined bound (a horizontal gap) keeps it.
     i = int(np.argmin(pt.rest_mm))
@@ -54,7 +63,7 @@ def test_bound_is_conservative_and_exact_at_rest(asm):
 
 def test_clearance_over_is_certified_and_limits_are_conservative(asm):
     from bvsr_cad.analysis.clearance import TIE_MM, clearance_over, posed_tail
-    from bvsr_cad.analysis.limits import fold_stack, joint_limits
+    from bvsr_cad.analysis.limits import fold_stack, joint_limits, stack_limit_rad
 
     pt = posed_tail(asm)
     rng = np.random.default_rng(2)
@@ -66,13 +75,20 @@ def test_clearance_over_is_certified_and_limits_are_conservative(asm):
     everything = np.arange(len(pt.pairs))
     assert min(pt.exact(w[p], everything).min() for p in worst) >= res.min_clearance_mm - TIE_MM
     need = asm.spec.analysis.min_clearance_mm
-    lims = joint_limits(pt, need, n_phi=4, exact=False, stack=fold_stack(asm.spec))
-    for lim in lims[-1:]:
-        for phi, th in zip(lim.phi_rad, lim.theta_max_rad):
+    stack = fold_stack(asm.spec)
+    bound = joint_limits(pt, need, n_phi=4, exact=False, stack=stack)
+    lims = joint_limits(pt, need, n_phi=4, exact=True, stack=stack)
+    for b, lim in zip(bound, lims):
+        assert b.theta_max_rad == b.theta_bound_rad == lim.theta_bound_rad
+        assert all(x >= y for x, y in zip(lim.theta_max_rad, lim.theta_bound_rad))
+    for lim in (bound[-1], lims[-1]):
+        k = int(lim.joint[1:]) - 1
+        for phi, th, why in zip(lim.phi_rad, lim.theta_max_rad, lim.limited_by):
             pose = np.zeros((pt.kin.n_joints, 2))
-            k = int(lim.joint[1:]) - 1
             pose[k] = (th * np.cos(phi), th * np.sin(phi))
             assert pt.exact(pose, np.flatnonzero(pt.span[:, k])).min() >= need
+            if why == "fold stack":  # then theta_max is where the most compressed SOA folds flat
+                assert th == pytest.approx(stack_limit_rad(pt, k, np.array([phi]), *stack)[0])
 
 
 def test_cli_bad_input_exit_2(capsys):

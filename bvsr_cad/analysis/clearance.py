@@ -87,6 +87,15 @@ class PosedTail:
             if len(on):
                 groups.setdefault((int(on[0]), int(on[-1])), []).append(p)
         self._groups = [(lo, hi, np.array(ids)) for (lo, hi), ids in sorted(groups.items())]
+        # Instances that lie inside one panel's thickness move with that panel as a rigid body:
+        # their posed mesh is the rest BVH under a transform (no rebuild).
+        hj, t = self.joint_height_mm, self.kin.panel_thickness_mm
+        self._rigid_in: list[int] = []
+        for m in self.meshes:
+            zlo, zhi = m.bounds[:, 2]
+            k = int(np.floor(zlo / hj + 1e-9))
+            self._rigid_in.append(k if zhi <= k * hj + t + 1e-9 and k <= self.kin.n_joints else -1)
+        self._rest_bvh: dict[int, fcl.BVHModel] = {}
 
     def deform_points(self, pts: np.ndarray, w: np.ndarray) -> np.ndarray:
         """Plane-section map of rest points (m, 3) for one pose w (n_joints, 2)."""
@@ -174,11 +183,24 @@ class PosedTail:
     def exact(self, w: np.ndarray, pair_ids: np.ndarray) -> np.ndarray:
         """Stage 2: exact clearance of some pairs at one pose (negative: penetration depth unknown, -0)."""
         posed: dict[int, fcl.CollisionObject] = {}
+        panel_frames = None
 
         def obj(i: int) -> fcl.CollisionObject:
+            nonlocal panel_frames
             if i not in posed:
-                m = self.meshes[i]
-                posed[i] = _fcl_object(trimesh.Trimesh(self.deform_points(m.vertices, w), m.faces, process=False))
+                k = self._rigid_in[i]
+                if k >= 0:  # the same map as deform_points, applied as one rigid transform
+                    if panel_frames is None:
+                        panel_frames = self.kin.frames(w)[1]
+                    if i not in self._rest_bvh:
+                        self._rest_bvh[i] = _bvh(self.meshes[i])
+                    tf = panel_frames[k].copy()
+                    tf[:3, 3] -= tf[:3, 2] * (k * self.joint_height_mm)
+                    posed[i] = fcl.CollisionObject(self._rest_bvh[i], fcl.Transform(tf[:3, :3], tf[:3, 3]))
+                else:
+                    m = self.meshes[i]
+                    posed[i] = _fcl_object(trimesh.Trimesh(self.deform_points(m.vertices, w), m.faces,
+                                                           process=False))
             return posed[i]
 
         out = np.empty(len(pair_ids))
@@ -234,12 +256,16 @@ def _rod_mesh(diameter_mm: float, length_mm: float, sections: int = 32) -> trime
 
 
 def _fcl_object(m: trimesh.Trimesh) -> fcl.CollisionObject:
+    return fcl.CollisionObject(_bvh(m), fcl.Transform())
+
+
+def _bvh(m: trimesh.Trimesh) -> fcl.BVHModel:
     bvh = fcl.BVHModel()
     bvh.beginModel(len(m.vertices), len(m.faces))
     # Plain arrays: python-fcl reads them row by row, and trimesh's tracked arrays make that 10x slower.
     bvh.addSubModel(np.array(m.vertices, dtype=np.float64), np.array(m.faces, dtype=np.int32))
     bvh.endModel()
-    return fcl.CollisionObject(bvh, fcl.Transform())
+    return bvh
 
 
 def _fcl_distance(a: trimesh.Trimesh | fcl.CollisionObject, b: trimesh.Trimesh | fcl.CollisionObject) -> float:

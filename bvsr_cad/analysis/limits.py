@@ -16,10 +16,12 @@ towards the bending direction (their bellows, flanges excluded). The search
 for the clearance limit stops there.
 
 Two limits come out per plane: ``theta_bound_rad`` from the bounds alone
-(conservative: the pose is certainly free) and ``theta_max_rad``, the exact
-limit, searched above it. The exact limit is not monotone in theory (a pair
-could touch and part again), so the bisection assumes, as every sampled
-limit does, that the free set is an interval from the straight pose.
+(conservative: every bend up to it is certainly free, the bounds only fall
+as theta grows) and ``theta_max_rad``, searched above it with exact
+distances at EXACT_SAMPLES bends up to the top of the search and bisection
+below the first that fails. Clearance is not monotone in theory (a pair
+could touch and part again between samples), so above the bound the search
+assumes, as every sampled limit does, that the free set is an interval.
 """
 
 from __future__ import annotations
@@ -49,6 +51,10 @@ class JointLimits:
     limiting_pair: list[list[str]]  # the pair that would come closer than required just beyond the limit
     clearance_at_limit_mm: list[float | None]  # its exact clearance there (None: not evaluated)
     limited_by: list[str]  # "clearance", "fold stack" (the SOAs fully folded) or "search range"
+
+
+#: Exact checks between the bounds' limit and the top of the search (the fold stack or theta_hi).
+EXACT_SAMPLES = 4
 
 
 def _pose(pt: PosedTail, joint: int, theta: float, phi: float) -> np.ndarray:
@@ -124,7 +130,7 @@ def joint_limits(pt: PosedTail, need_mm: float, n_phi: int = 36, theta_hi_rad: f
 
     Args:
         stack: (lambda_solid, flange thickness mm) to stop at the SOAs' fold stack; None: no stack limit.
-        exact: False stops at the bounds' limit (conservative, seconds instead of minutes).
+        exact: False stops at the bounds' limit (conservative; theta_max_rad = theta_bound_rad).
     """
     say = progress or (lambda _m: None)
     phis = np.linspace(-np.pi, np.pi, n_phi, endpoint=False)
@@ -147,17 +153,15 @@ def joint_limits(pt: PosedTail, need_mm: float, n_phi: int = 36, theta_hi_rad: f
             lo, hi = _bisect(lambda t: test.bound_ok(t, phi)[0], 0.0, theta_hi, tol_rad)
             th_b.append(lo)
             if exact:
-                # The exact limit is at or above the bound's: bracket it with growing steps, then bisect.
-                step = 4 * tol_rad
-                while True:
-                    t = min(theta_hi, lo + step)
-                    if not test.exact_ok(t, phi)[0]:
-                        hi = t
+                # Free up to the bound's limit for certain; above it, exact distances at EXACT_SAMPLES
+                # evenly spaced bends up to the top, and bisection below the first that fails.
+                for t in np.linspace(lo, theta_hi, EXACT_SAMPLES + 1)[1:]:
+                    if not test.exact_ok(float(t), phi)[0]:
+                        hi = float(t)
                         break
-                    lo, step = t, 2 * step
-                    if t >= theta_hi:
-                        hi = t
-                        break
+                    lo = float(t)
+                else:
+                    hi = lo
                 if hi > lo:
                     lo, hi = _bisect(lambda t: test.exact_ok(t, phi)[0], lo, hi, tol_rad)
             th_x.append(lo)

@@ -13,8 +13,7 @@ from ..analysis.limits import fold_stack, joint_limits, stack_limit_rad
 from ..analysis.workspace import plot_workspace, quasi_static_table, run_workspace
 from ..assembly.build import Assembly
 
-#: Limits in the build: 36 bending planes, 1 mrad steps, from the clearance bounds (conservative) and
-#: the SOAs' fold stack. The exact search above the bounds (`joint_limits(..., exact=True)`) takes minutes.
+#: Limits in the build: 36 bending planes, 1 mrad steps.
 BUILD_LIMIT_PHIS = 36
 
 
@@ -48,7 +47,7 @@ def write_analyses(asm: Assembly, root: Path, progress: Callable[[str], None]) -
     (out / "clearance.json").write_text(json.dumps(cl_json, indent=1))
     progress("analysis: joint limits")
     stack = fold_stack(spec)
-    lims = joint_limits(pt, cfg.min_clearance_mm, BUILD_LIMIT_PHIS, exact=False, stack=stack, progress=progress)
+    lims = joint_limits(pt, cfg.min_clearance_mm, BUILD_LIMIT_PHIS, exact=True, stack=stack, progress=progress)
     tip = spec.joints - 1
     th, ph, bound = clearance_map(pt, tip, 1.0)
     phis = np.asarray(lims[tip].phi_rad)
@@ -59,8 +58,8 @@ def write_analyses(asm: Assembly, root: Path, progress: Callable[[str], None]) -
                         "SOAs fully folded (fold stack)": (phis, stack_limit_rad(pt, tip, phis, *stack))})
     lim_json = {"required_clearance_mm": cfg.min_clearance_mm, "theta_search_max_rad": 1.0,
                 "resolution_rad": 1e-3, "fold_stack_lambda": stack[0],
-                "method": "the smaller of the SOAs' fold stack and the clearance bounds (stages 1a and 1b: "
-                          "conservative, the exact clearance limit is not lower)",
+                "method": "the smaller of the SOAs' fold stack and the clearance limit: free for certain up to "
+                          "theta_bound_rad (stage-1 bounds), exact distances above it (analysis/limits.py)",
                 "joints": [vars(lim) for lim in lims], "workspace_max_theta_rad": ws.max_theta_rad}
     (out / "limits.json").write_text(json.dumps(lim_json, indent=1))
     progress(f"analysis: {time.perf_counter() - t0:.1f} s")

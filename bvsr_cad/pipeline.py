@@ -28,7 +28,7 @@ from .exporters.render import render_previews
 from .exporters.report import write_report
 from .exporters.robot_files import theta_max_from_limits, write_robot
 from .spec.load import load_spec, params_sha256
-from .worker import SecondProcess, WorkerLost
+from .worker import SecondProcess, result_or
 
 Progress = Callable[[str], None]
 
@@ -66,20 +66,6 @@ def _publish(tmp: Path, out_dir: Path) -> None:
         raise
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
-
-
-def _analyses(proc: SecondProcess | None, asm, tmp: Path, say: Progress) -> dict:
-    """The analyses' manifest keys: from the second process, or computed here without one."""
-    if proc is not None:
-        if proc.running:
-            say("analyses: waiting for the second process")
-        try:
-            keys = proc.result()
-            say(f"analyses: done in the second process ({proc.seconds:.1f} s)")
-            return keys
-        except WorkerLost as exc:
-            say(f"analyses: {exc}; running them here")
-    return write_analyses(asm, tmp, say)
 
 
 def build_export(params: str | Path, out_dir: str | Path | None = None,
@@ -125,7 +111,7 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         manifest["previews"] = render_previews(asm, tmp)
         molds = write_molds(asm, tmp, say)
         fabrication = write_fabrication(asm, tmp, manifest | molds, say)
-        manifest.update(_analyses(analyses, asm, tmp, say))
+        manifest.update(result_or(analyses, lambda: write_analyses(asm, tmp, say), say, "analyses"))
         limits = json.loads((tmp / manifest["analysis"]["limits"]).read_text())
         manifest.update(write_robot(asm, tmp, theta_max_from_limits(limits, spec.joints), say))
         manifest.update(molds)

@@ -117,3 +117,19 @@ class SecondProcess:
                 os.unlink(self.out)
             except OSError:
                 pass
+
+
+def result_or(proc: SecondProcess | None, here: Callable[[], Any], say: Callable[[str], None], what: str) -> Any:
+    """The second process's result, or ``here()`` run in this process when there is none or it was lost."""
+    if proc is None:
+        say(what)
+        return here()
+    if proc.running:
+        say(f"{what}: waiting for the second process")
+    try:
+        out = proc.result()
+    except WorkerLost as exc:
+        say(f"{what}: {exc}; running them here")
+        return here()
+    say(f"{what}: done in the second process ({proc.seconds:.1f} s)")
+    return out

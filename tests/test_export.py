@@ -159,7 +159,7 @@ def test_build_refuses_to_replace_a_foreign_folder(tmp_path, capsys):
 
 
 def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, monkeypatch):
-    from bvsr_cad import pipeline, worker
+    from bvsr_cad import worker
     from bvsr_cad.spec.load import ParamError
 
     changed = write_toml(tmp_path / "edited.toml", {"name": "edited"})
@@ -171,10 +171,10 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
     with pytest.raises(ParamError, match=r"edited.toml(.|\n)*changed while the build was running"):
         proc.result()
     assert not proc.running
-    # A process that dies without a result: the pipeline runs the analyses itself.
+    # A process that dies without a result: the work runs here instead.
     monkeypatch.setattr(worker.sys, "executable", shutil.which("false") or "/bin/false")
     lost = worker.SecondProcess.start("bvsr_cad.exporters.analysis_files", [], tmp_path)
-    monkeypatch.setattr(pipeline, "write_analyses", lambda asm, root, say: {"analysis": "computed here"})
     said: list[str] = []
-    assert pipeline._analyses(lost, None, tmp_path, said.append) == {"analysis": "computed here"}
+    assert worker.result_or(lost, lambda: {"analysis": "computed here"}, said.append, "analyses") == {
+        "analysis": "computed here"}
     assert any("without a result; running them here" in m for m in said), said

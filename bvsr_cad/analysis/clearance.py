@@ -71,13 +71,13 @@ class PosedTail:
     joint_height_mm: float
     pairs: np.ndarray  # (n_pairs, 2) instance indices
     rest_mm: np.ndarray  # (n_pairs,) exact rest clearance
-    rho_mm: np.ndarray  # (n_pairs,) radial extent of the pair
     span: np.ndarray  # (n_pairs, n_joints) bool: joints whose bending the pair feels (contiguous)
     support_mm: np.ndarray  # (n_pairs, SUPPORT_BINS) h_pair over each bin of bending directions
     coarse: list[trimesh.Trimesh]  # the same surfaces, not subdivided (rest distances)
     cut: list[trimesh.Trimesh]  # the coarse surfaces cut at every gap face (piecewise-affine maps in z)
     _aniso: dict = field(default_factory=dict, repr=False)  # (pair, grid index) -> d_lambda
     _scaled: dict = field(default_factory=dict, repr=False)  # (instance, grid index, span) -> fcl object
+    rest_bvh: dict = field(default_factory=dict, repr=False)  # instance -> BVH of its coarse rest mesh
 
     def __post_init__(self) -> None:
         # Pairs grouped by the (contiguous) run of joints they span.
@@ -95,7 +95,6 @@ class PosedTail:
             zlo, zhi = m.bounds[:, 2]
             k = int(np.floor(zlo / hj + 1e-9))
             self._rigid_in.append(k if zhi <= k * hj + t + 1e-9 and k <= self.kin.n_joints else -1)
-        self._rest_bvh: dict[int, fcl.BVHModel] = {}
 
     def deform_points(self, pts: np.ndarray, w: np.ndarray) -> np.ndarray:
         """Plane-section map of rest points (m, 3) for one pose w (n_joints, 2)."""
@@ -192,11 +191,11 @@ class PosedTail:
                 if k >= 0:  # the same map as deform_points, applied as one rigid transform
                     if panel_frames is None:
                         panel_frames = self.kin.frames(w)[1]
-                    if i not in self._rest_bvh:
-                        self._rest_bvh[i] = _bvh(self.meshes[i])
+                    if i not in self.rest_bvh:  # a rigid instance is not subdivided: coarse is its mesh
+                        self.rest_bvh[i] = _bvh(self.coarse[i])
                     tf = panel_frames[k].copy()
                     tf[:3, 3] -= tf[:3, 2] * (k * self.joint_height_mm)
-                    posed[i] = fcl.CollisionObject(self._rest_bvh[i], fcl.Transform(tf[:3, :3], tf[:3, 3]))
+                    posed[i] = fcl.CollisionObject(self.rest_bvh[i], fcl.Transform(tf[:3, :3], tf[:3, 3]))
                 else:
                     m = self.meshes[i]
                     posed[i] = _fcl_object(trimesh.Trimesh(self.deform_points(m.vertices, w), m.faces,
@@ -325,13 +324,13 @@ def posed_tail(asm: Assembly, progress: Progress | None = None, cutoff_mm: float
     index = {n: i for i, n in enumerate(names)}
     hj, t = spec.joint.joint_height_mm, spec.joint.panel_thickness_mm
     gaps = np.array([[k * hj + t, (k + 1) * hj] for k in range(spec.joints)])
-    pairs, rest, rho, span, support = [], [], [], [], []
+    pairs, rest, span, support = [], [], [], []
     # Support functions at the bin edges; over a bin of width d a support function is at most
     # max(edges) / cos(d / 2) (sublinearity), or max(edges) where that is negative.
     edges = np.linspace(-np.pi, np.pi, SUPPORT_BINS + 1)
     dirs = np.c_[np.cos(edges), np.sin(edges)]
     h_edge = {i: (m.vertices[:, :2] @ dirs.T).max(axis=0) for i, m in enumerate(meshes)}
-    rest_obj: dict[int, fcl.CollisionObject] = {}
+    rest_bvh: dict[int, fcl.BVHModel] = {}
     say("clearance: exact rest distances of the candidate pairs")
     for a, b in must_not_touch(asm):
         ma, mb = meshes[index[a]], meshes[index[b]]
@@ -343,17 +342,17 @@ def posed_tail(asm: Assembly, progress: Progress | None = None, cutoff_mm: float
         zhi = max(ma.bounds[1, 2], mb.bounds[1, 2])
         pairs.append((index[a], index[b]))
         for i in (index[a], index[b]):
-            if i not in rest_obj:
-                rest_obj[i] = _fcl_object(coarse[i])
-        rest.append(_fcl_distance(rest_obj[index[a]], rest_obj[index[b]]))
-        rho.append(max(np.max(np.hypot(m.vertices[:, 0], m.vertices[:, 1])) for m in (ma, mb)))
+            if i not in rest_bvh:
+                rest_bvh[i] = _bvh(coarse[i])
+        rest.append(_fcl_distance(*(fcl.CollisionObject(rest_bvh[i], fcl.Transform())
+                                    for i in (index[a], index[b]))))
         span.append((gaps[:, 1] > zlo) & (gaps[:, 0] < zhi))
         h = np.maximum(h_edge[index[a]], h_edge[index[b]])
         hb = np.maximum(h[:-1], h[1:])
         support.append(np.where(hb > 0, hb / np.cos(np.pi / SUPPORT_BINS), hb))
     levels = np.sort(gaps.ravel())
-    return PosedTail(kin, names, meshes, hj, np.array(pairs), np.array(rest), np.array(rho), np.array(span),
-                     np.array(support), coarse, [_cut_at_z(m, levels) for m in coarse])
+    return PosedTail(kin, names, meshes, hj, np.array(pairs), np.array(rest), np.array(span),
+                     np.array(support), coarse, [_cut_at_z(m, levels) for m in coarse], rest_bvh=rest_bvh)
 
 
 @dataclass(frozen=True)
@@ -414,22 +413,19 @@ def clearance_over(pt: PosedTail, w: np.ndarray, max_exact: int = 8, seed_candid
     cand, rb = cand[keep], rb[keep]
     order = np.argsort(rb, kind="stable")
     cand, rb = cand[order], rb[order]
-    certified, n_done = True, 0
-    for n_done, (idx, bound) in enumerate(zip(cand, rb)):
+    certified, lower = True, best
+    for idx, bound in zip(cand, rb):  # rb ascending: the first bound not below the best ends it
         if bound >= best - TIE_MM:
-            n_done = len(cand)
             break
         if done >= max_exact:
-            certified = False
+            certified, lower = False, float(min(best, bound))
             break
         d = exact(int(idx))
         done += 1
         if d < best:
             best, best_at = d, int(idx)
-    else:
-        n_done = len(cand)
-    rest_bounds = rb[n_done:]
-    lower = float(min(best, rest_bounds.min())) if (not certified and len(rest_bounds)) else best
+    if certified:
+        lower = best
     pose, pair = divmod(best_at, n_pairs)
     theta, phi = theta_phi_from_uv(w[pose])
     a, b = pt.pairs[pair]
@@ -459,20 +455,14 @@ def clearance_map(pt: PosedTail, joint: int, theta_max_rad: float, n_theta: int 
     ids = np.flatnonzero(pt.span[:, joint])
     lam = pt.stretch(w)[:, ids]
     lb = lam * pt.rest_mm[ids]
-    best = lb.min(axis=1)
     # Stage 1b only where it can lower the minimum: entries whose 1a bound is below the smallest
     # rest clearance of the joint's pairs (a refined bound never exceeds the rest clearance).
     cap = pt.rest_mm[ids].min()
+    refined = np.where(lb >= cap, lb, np.inf)
     pose, pair = np.nonzero(lb < cap)
-    out = np.minimum(lb.min(axis=1), cap)
     if len(pose):
-        rb = pt.refine(lam[pose, pair], ids[pair])
-        # min over the refined candidates and the unrefined rest (whose bounds are >= cap).
-        refined = np.full(lb.shape, np.inf)
-        refined[pose, pair] = rb
-        untouched = np.where(lb >= cap, lb, np.inf).min(axis=1)
-        out = np.minimum(refined.min(axis=1), untouched)
-    del best
+        refined[pose, pair] = pt.refine(lam[pose, pair], ids[pair])
+    out = refined.min(axis=1)
     return th, ph, out.reshape(tt.shape)
 
 

@@ -70,32 +70,36 @@ class _Tester:
         self.pt, self.k, self.need = pt, joint, need_mm
         self.ids = np.flatnonzero(pt.span[:, joint])
         self.exact_calls = 0
+        self._exact: dict[tuple[float, float], tuple[bool, int, float]] = {}  # the search asks twice at its end
 
-    def bound_ok(self, theta: float, phi: float) -> tuple[bool, int]:
-        w = _pose(self.pt, self.k, theta, phi)
-        lam = self.pt.stretch(w[None])[0, self.ids]
-        lb = lam * self.pt.rest_mm[self.ids]
-        low = lb < self.need
-        if not low.any():
-            return True, -1
-        rb = self.pt.refine(lam[low], self.ids[low])
-        return bool((rb >= self.need).all()), int(self.ids[low][np.argmin(rb)])
-
-    def exact_ok(self, theta: float, phi: float) -> tuple[bool, int, float]:
+    def _screen(self, theta: float, phi: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The pose, and the pairs whose stage-1a bound is below the need with their stage-1b bounds."""
         w = _pose(self.pt, self.k, theta, phi)
         lam = self.pt.stretch(w[None])[0, self.ids]
         low = lam * self.pt.rest_mm[self.ids] < self.need
-        if not low.any():
-            return True, -1, float("inf")
-        cand = self.ids[low]
-        rb = self.pt.refine(lam[low], cand)
-        cand = cand[rb < self.need]
+        return w, self.ids[low], self.pt.refine(lam[low], self.ids[low])
+
+    def bound_ok(self, theta: float, phi: float) -> tuple[bool, int]:
+        """(the bounds guarantee the need, the pair with the lowest bound or -1)."""
+        _w, cand, rb = self._screen(theta, phi)
         if len(cand) == 0:
-            return True, -1, float("inf")
-        d = self.pt.exact(w, cand)
-        self.exact_calls += len(cand)
-        i = int(np.argmin(d))
-        return bool(d[i] >= self.need), int(cand[i]), float(d[i])
+            return True, -1
+        return bool((rb >= self.need).all()), int(cand[np.argmin(rb)])
+
+    def exact_ok(self, theta: float, phi: float) -> tuple[bool, int, float]:
+        """(the need is kept, the closest pair or -1, its exact clearance): exact distances for the pairs
+        the bounds do not clear."""
+        if (theta, phi) not in self._exact:
+            w, cand, rb = self._screen(theta, phi)
+            cand = cand[rb < self.need]
+            if len(cand) == 0:
+                self._exact[theta, phi] = (True, -1, float("inf"))
+            else:
+                d = self.pt.exact(w, cand)
+                self.exact_calls += len(cand)
+                i = int(np.argmin(d))
+                self._exact[theta, phi] = (bool(d[i] >= self.need), int(cand[i]), float(d[i]))
+        return self._exact[theta, phi]
 
 
 def _bisect(ok: Callable[[float], bool], lo: float, hi: float, tol: float) -> tuple[float, float]:

@@ -14,10 +14,9 @@ from dataclasses import dataclass, field
 
 import build123d as bd
 import numpy as np
-from OCP.gp import gp_Trsf
-from OCP.TopLoc import TopLoc_Location
 
 from .. import units
+from ..parts._kernel import location
 from ..parts.panel import panel
 from ..parts.soa import soa_body
 from ..parts.vertebra import rod
@@ -76,13 +75,6 @@ class Assembly:
     def mass_g(self, part: str) -> float:
         p = self.parts[part]
         return units.mass_g(p.solid.volume, self.spec.material(p.material).density_g_cm3)
-
-
-def location(t: tuple[tuple[float, ...], ...]) -> bd.Location:
-    """A rigid 4x4 transform (rows) as a build123d Location."""
-    trsf = gp_Trsf()
-    trsf.SetValues(*t[0], *t[1], *t[2])
-    return bd.Location(TopLoc_Location(trsf))
 
 
 def _as_tuple(m: np.ndarray) -> tuple[tuple[float, ...], ...]:

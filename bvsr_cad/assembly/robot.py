@@ -316,7 +316,7 @@ def _top_socket(asm: Assembly, k: int, i: int) -> np.ndarray:
 
 
 def _location(T_mm: np.ndarray) -> bd.Location:
-    from .build import location
+    from ..parts._kernel import location
 
     return location(_as_tuple(T_mm))
 

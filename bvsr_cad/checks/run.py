@@ -7,7 +7,7 @@ import sys
 from collections.abc import Callable, Collection
 from pathlib import Path
 
-from ..worker import SecondProcess, WorkerLost, serve
+from ..worker import SecondProcess, result_or, serve
 from .export import Export, clear_cache
 from .layout import check_layout
 from .mass import check_masses
@@ -41,18 +41,8 @@ class _Printability:
                 say("printability: started in a second process")
 
     def results(self) -> list[CheckResult]:
-        if self.proc is None:
-            self.say("printability")
-            return check_printability(self.exp, sliced_now=self.sliced_now)
-        if self.proc.running:
-            self.say("printability: waiting for the second process")
-        try:
-            out = self.proc.result()
-        except WorkerLost as exc:
-            self.say(f"printability: {exc}; running them here")
-            return check_printability(self.exp, sliced_now=self.sliced_now)
-        self.say(f"printability: done in the second process ({self.proc.seconds:.1f} s)")
-        return out
+        return result_or(self.proc, lambda: check_printability(self.exp, sliced_now=self.sliced_now), self.say,
+                         "printability")
 
     def close(self) -> None:
         if self.proc is not None:

@@ -12,6 +12,16 @@ class GeometryError(RuntimeError):
     """The CAD kernel could not make a valid solid from valid parameters."""
 
 
+def location(t) -> bd.Location:
+    """A rigid 4x4 transform (rows: nested sequences or an array, mm) as a build123d Location."""
+    from OCP.gp import gp_Trsf
+    from OCP.TopLoc import TopLoc_Location
+
+    trsf = gp_Trsf()
+    trsf.SetValues(*(float(v) for v in t[0]), *(float(v) for v in t[1]), *(float(v) for v in t[2]))
+    return bd.Location(TopLoc_Location(trsf))
+
+
 def cylinder_between(p0: Sequence[float], p1: Sequence[float], diameter_mm: float) -> bd.Solid:
     """A solid cylinder whose axis runs from p0 to p1 (mm)."""
     d = bd.Vector(*p1) - bd.Vector(*p0)

@@ -45,7 +45,7 @@ import build123d as bd
 import numpy as np
 
 from ..spec.tables import Casting, SoaTable
-from ._kernel import GeometryError, cut_all, cylinder_between, fuse_all, single_solid
+from ._kernel import GeometryError, cut_all, cylinder_between, fuse_all, location, single_solid
 from .soa import bellows_profile, soa_body
 
 #: Pull direction of half_a (the side x - y > 0); half_b is pulled the other way.
@@ -78,7 +78,7 @@ class MoldPart:
 
     @property
     def print_solid(self) -> bd.Solid:
-        return self.solid.moved(_location(self.print_transform))
+        return self.solid.moved(location(self.print_transform))
 
 
 @dataclass(frozen=True)
@@ -105,15 +105,6 @@ class MoldSet:
     info: dict = field(default_factory=dict, hash=False, compare=False)
 
 
-def _location(t: Matrix) -> bd.Location:
-    from OCP.gp import gp_Trsf
-    from OCP.TopLoc import TopLoc_Location
-
-    trsf = gp_Trsf()
-    trsf.SetValues(*t[0], *t[1], *t[2])
-    return bd.Location(TopLoc_Location(trsf))
-
-
 def _as_matrix(m: np.ndarray) -> Matrix:
     return tuple(tuple(float(v) for v in row) for row in m)
 
@@ -126,7 +117,7 @@ def _print_transform(x_dir: np.ndarray, z_dir: np.ndarray, solid: bd.Solid) -> n
     y = np.cross(z, x)
     m = np.eye(4)
     m[0, :3], m[1, :3], m[2, :3] = x, y, z
-    box = solid.moved(_location(_as_matrix(m))).bounding_box()
+    box = solid.moved(location(_as_matrix(m))).bounding_box()
     m[:3, 3] = (-(box.min.X + box.max.X) / 2.0, -(box.min.Y + box.max.Y) / 2.0, -box.min.Z)
     return m
 

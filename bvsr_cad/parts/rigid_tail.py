@@ -38,7 +38,7 @@ import numpy as np
 
 from ..spec.layout import PanelLayout, soa_angles_deg, polar
 from ..spec.tables import SoaTable, TailSpec
-from ._kernel import GeometryError, cut_all, cylinder_between, fuse_all, single_solid
+from ._kernel import GeometryError, cut_all, cylinder_between, fuse_all, location, single_solid
 
 #: Panel features kept in the twin (they show from outside or carry the robot and payload).
 KEPT_ROLES = ("lightening", "tube", "insert")
@@ -93,15 +93,6 @@ def _frustum(lay: PanelLayout) -> bd.Solid:
     if abs(lay.rim_radius_lower_mm - lay.rim_radius_upper_mm) < 1e-9:
         return bd.Solid.make_cylinder(lay.rim_radius_lower_mm, lay.thickness_mm)
     return bd.Solid.make_cone(lay.rim_radius_lower_mm, lay.rim_radius_upper_mm, lay.thickness_mm)
-
-
-def _location(m: np.ndarray) -> bd.Location:
-    from OCP.gp import gp_Trsf
-    from OCP.TopLoc import TopLoc_Location
-
-    trsf = gp_Trsf()
-    trsf.SetValues(*m[0], *m[1], *m[2])
-    return bd.Location(TopLoc_Location(trsf))
 
 
 def tie_rod_hole_mm(spec: TailSpec) -> float:
@@ -167,7 +158,7 @@ def rigid_tail_pieces(spec: TailSpec, layouts: list[PanelLayout],
         features: list[PrintFeature] = []
         if k < n:
             rod = bd.Solid.make_cylinder(spec.vertebra.diameter_mm / 2.0, top - z0)
-            columns = [soa_env.moved(_location(down @ m)) for m in soa_transforms[k]]
+            columns = [soa_env.moved(location(down @ m)) for m in soa_transforms[k]]
             body = body.fuse(rod, *columns)
         cuts = [cylinder_between(c.p0, c.p1, c.diameter_mm) for c in lay.cuts if c.role in KEPT_ROLES]
         h = top - z0

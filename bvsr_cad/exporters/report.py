@@ -25,39 +25,35 @@ from typing import Any
 import numpy as np
 import trimesh
 
+from ..spec import paper
+
 COLORS = {"panel": (0.55, 0.60, 0.68), "soa": (0.95, 0.55, 0.15), "rod": (0.92, 0.92, 0.88),
           "rigid_tail": (0.80, 0.80, 0.74), "mold": (0.45, 0.62, 0.85), "mold_core": (0.35, 0.75, 0.45)}
 
-#: SPEC section 6: quantity, paper value, unit, measured on, and the check that computes it (or None).
-PAPER_ROWS: tuple[tuple[str, float, str, str, str | None, str], ...] = (
-    ("mass", 111.2, "g", "one standalone segment", "paper:segment_standalone_mass", ""),
-    ("mass", 283.0, "g", "whole tail", "paper:tail_mass", ""),
-    ("length", 210.0, "mm", "whole tail (BVSR)", "paper:tail_length", ""),
-    ("taper half-angle (alpha_2 - 90)", 1.23, "deg", "Table I", "paper:taper_half_angle", ""),
-    ("quasi-static max angle, extension", 51.9, "deg", "one segment", "paper:qs_max_angle:extension", ""),
-    ("quasi-static max angle, flexion", 46.5, "deg", "one segment", "paper:qs_max_angle:flexion", ""),
-    ("quasi-static max angle, waggle", 46.1, "deg", "one segment", "paper:qs_max_angle:waggle", ""),
-    ("blocked force, extension", 19.7, "N", "one segment", "paper:qs_blocked_force:extension", ""),
-    ("blocked force, flexion", 17.8, "N", "one segment", "paper:qs_blocked_force:flexion", ""),
-    ("blocked force, waggle", 16.8, "N", "one segment", "paper:qs_blocked_force:waggle", ""),
-    ("peak angular velocity at 6 bar, extension", 678.6, "deg/s", "one segment", None,
-     "`bvsr simulate` computes it; not run by `bvsr build`"),
-    ("peak angular velocity at 6 bar, flexion", 628.1, "deg/s", "one segment", None,
-     "`bvsr simulate` computes it; not run by `bvsr build`"),
-    ("peak angular velocity at 6 bar, waggle", 625.0, "deg/s", "one segment", None,
-     "`bvsr simulate` computes it; not run by `bvsr build`"),
-    ("motion time exponent T ~ P^n", -0.63, "", "one segment", None, "not modelled yet"),
-    ("velocity exponent V ~ P^n", 0.61, "", "one segment", None, "not modelled yet"),
-    ("peak inertial torque, 6 bar, no payload", 1.21, "N m", "whole tail", None,
-     "`bvsr simulate` computes it; not run by `bvsr build`"),
-    ("peak inertial torque, 6 bar, 100 g tip", 1.88, "N m", "whole tail", None,
+_SIM = "`bvsr simulate` computes it; not run by `bvsr build`"
+_PLATFORM = "needs the platform model (Eq 20-22): not modelled yet"
+#: SPEC section 6: quantity, the paper's figure (spec/paper.py), the check that computes it (or None), a note.
+PAPER_ROWS: tuple[tuple[str, paper.PaperFigure, str | None, str], ...] = (
+    ("mass", paper.SEGMENT_STANDALONE_MASS, "paper:segment_standalone_mass", ""),
+    ("mass", paper.TAIL_MASS, "paper:tail_mass", ""),
+    ("length", paper.TAIL_LENGTH_BVSR, "paper:tail_length", ""),
+    ("taper half-angle (alpha_2 - 90)", paper.PaperFigure(
+        round(paper.TILT_ANGLE_SEGMENT_1.value - 90.0, 6), "deg", "Table I", paper.TILT_ANGLE_SEGMENT_1.where),
+     "paper:taper_half_angle", ""),
+    *((f"quasi-static max angle, {m}", f, f"paper:qs_max_angle:{m}", "") for m, f in paper.QS_MAX_ANGLE_DEG.items()),
+    *((f"blocked force, {m}", f, f"paper:qs_blocked_force:{m}", "") for m, f in paper.QS_BLOCKED_FORCE_N.items()),
+    ("peak angular velocity at 6 bar, extension", paper.SEGMENT_PEAK_VELOCITY_EXTENSION, None, _SIM),
+    ("peak angular velocity at 6 bar, flexion", paper.SEGMENT_PEAK_VELOCITY_FLEXION, None, _SIM),
+    ("peak angular velocity at 6 bar, waggle", paper.SEGMENT_PEAK_VELOCITY_WAGGLE, None, _SIM),
+    ("motion time exponent T ~ P^n", paper.MOTION_TIME_EXPONENT, None, "not modelled yet"),
+    ("velocity exponent V ~ P^n", paper.VELOCITY_EXPONENT, None, "not modelled yet"),
+    ("peak inertial torque, 6 bar, no payload", paper.TAIL_PEAK_TORQUE_NO_PAYLOAD, None, _SIM),
+    ("peak inertial torque, 6 bar, 100 g tip", paper.TAIL_PEAK_TORQUE_100G, None,
      "`bvsr simulate --payload-g 100`; not run by `bvsr build`"),
-    ("peak root force, 500 g tip", 23.6, "N", "whole tail on the quadruped", None,
-     "needs the platform model (Eq 20-22): not modelled yet"),
-    ("peak root torque, 500 g tip", 2.48, "N m", "whole tail on the quadruped", None,
-     "needs the platform model (Eq 20-22): not modelled yet"),
-    ("workspace half-width", 100.0, "mm", "BVSR tip", "paper:workspace_half_width", ""),
-    ("cart lift over a 9 mm obstacle (700 g cart)", 10.5, "mm", "whole tail", None, "not modelled yet"),
+    ("peak root force, 500 g tip", paper.TAIL_PEAK_500G[0], None, _PLATFORM),
+    ("peak root torque, 500 g tip", paper.TAIL_PEAK_500G[1], None, _PLATFORM),
+    ("workspace half-width", paper.WORKSPACE_HALF_WIDTH_BVSR, "paper:workspace_half_width", ""),
+    ("cart lift over a 9 mm obstacle (700 g cart)", paper.CART_LIFT_9MM, None, "not modelled yet"),
 )
 
 CSS = """
@@ -181,19 +177,20 @@ def _paper_table(manifest: dict[str, Any]) -> str:
     rows = ["<table><tr><th>quantity</th><th>measured on</th><th>paper</th><th>computed</th><th>difference</th>"
             "<th>unit</th><th>note</th></tr>"]
     segments = int(manifest.get("segments", 2))
-    for qty, paper, unit, on, check, why in PAPER_ROWS:
+    for qty, fig, check, why in PAPER_ROWS:
+        value, unit, on = fig.value, fig.unit, fig.measured_on
         c = checks.get(check) if check else None
         if check == "paper:tail_mass" and segments != 2:
             c, why = None, "the paper weighs only the 2-segment tail"
         if c is not None and isinstance(c.get("value"), (int, float)):
-            ref = c["limit"] if isinstance(c.get("limit"), (int, float)) else paper
+            ref = c["limit"] if isinstance(c.get("limit"), (int, float)) else value
             diff = c["value"] - ref
             pct = f" ({100 * diff / ref:+.1f} %)" if ref else ""
             rows.append(f"<tr><td>{_e(qty)}</td><td>{_e(on)}</td><td class=num>{_num(ref)}</td>"
                         f"<td class=num>{_num(c['value'])}</td><td class=num>{diff:+.4g}{pct}</td><td>{_e(unit)}</td>"
                         f"<td>{_e(c.get('note', ''))}</td></tr>")
         else:
-            rows.append(f"<tr><td>{_e(qty)}</td><td>{_e(on)}</td><td class=num>{_num(paper)}</td>"
+            rows.append(f"<tr><td>{_e(qty)}</td><td>{_e(on)}</td><td class=num>{_num(value)}</td>"
                         f"<td class=info>not modelled</td><td></td><td>{_e(unit)}</td>"
                         f"<td>{_e(why or 'not computed by this build')}</td></tr>")
     rows.append("</table>")

@@ -36,6 +36,11 @@ def paper_length(segments: int) -> PaperFigure:
 
 SEGMENT_PEAK_VELOCITY_EXTENSION = PaperFigure(678.6, "deg/s", "one segment, extension, 6 bar, up to 38 deg",
                                               "Sec. IV-A-3")
+SEGMENT_PEAK_VELOCITY_FLEXION = PaperFigure(628.1, "deg/s", "one segment, flexion, 6 bar", "Sec. IV-A-3")
+SEGMENT_PEAK_VELOCITY_WAGGLE = PaperFigure(625.0, "deg/s", "one segment, waggle, 6 bar", "Sec. IV-A-3")
+MOTION_TIME_EXPONENT = PaperFigure(-0.63, "", "one segment, T ~ P^n", "Sec. IV-A-3")
+VELOCITY_EXPONENT = PaperFigure(0.61, "", "one segment, V ~ P^n", "Sec. IV-A-3")
+CART_LIFT_9MM = PaperFigure(10.5, "mm", "whole tail, 700 g cart over a 9 mm obstacle", "Sec. IV-C-2")
 TAIL_PEAK_TORQUE_NO_PAYLOAD = PaperFigure(1.21, "N m", "whole tail, 6 bar, no payload", "Sec. IV-A-4")
 TAIL_PEAK_TORQUE_100G = PaperFigure(1.88, "N m", "whole tail, 6 bar, 100 g tip", "Sec. IV-A-4")
 TAIL_PEAK_FORCE_NO_PAYLOAD = PaperFigure(5.58, "N", "whole tail, 6 bar, no payload", "Sec. IV-A-4")

@@ -80,8 +80,8 @@ def cmd_check(args) -> int:
 def cmd_simulate(args) -> int:
     from .exporters.plots import plot_simulation
     from .sim import check_inputs, joint_limits_rad, simulate
-    from .spec import paper
-    from .spec.load import load_spec
+    from .parameters import paper
+    from .parameters.load import load_spec
 
     say = _progress(args.quiet or args.json)
     spec = load_spec(args.params)
@@ -132,7 +132,7 @@ def _number(minimum: float, inclusive: bool, kind: type = float):
 def cmd_workspace(args) -> int:
     from .analysis.workspace import run_workspace
     from .assembly.build import build_assembly
-    from .spec.load import load_spec
+    from .parameters.load import load_spec
 
     spec = load_spec(args.params)
     say = _progress(args.quiet)
@@ -148,7 +148,7 @@ def cmd_clearance(args) -> int:
     from .analysis.clearance import clearance_over, posed_tail
     from .analysis.workspace import run_workspace
     from .assembly.build import build_assembly
-    from .spec.load import load_spec
+    from .parameters.load import load_spec
 
     spec = load_spec(args.params)
     say = _progress(args.quiet)
@@ -211,7 +211,7 @@ def main(argv: list[str] | None = None) -> int:
     from .parts._kernel import GeometryError
     from .pipeline import OutputError
     from .sim import SimulationInputError
-    from .spec.load import ParamError
+    from .parameters.load import ParamError
 
     try:
         return args.func(args)

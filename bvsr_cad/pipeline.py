@@ -27,7 +27,7 @@ from .exporters.fabrication_files import write_fabrication
 from .exporters.render import render_previews
 from .exporters.report import write_report
 from .exporters.robot_files import theta_max_from_limits, write_robot
-from .spec.load import load_spec, params_sha256
+from .parameters.load import load_spec, params_sha256
 from .worker import SecondProcess, result_or
 
 Progress = Callable[[str], None]

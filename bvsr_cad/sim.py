@@ -30,7 +30,7 @@ from .assembly.build import build_assembly
 from .exporters.mjcf import mjcf_tree, write_mjcf
 from .exporters.robot_files import actuation_si, robot_for
 from .exporters.robot_meshes import write_robot_meshes
-from .spec.tables import TailSpec
+from .parameters.tables import TailSpec
 
 RAMP_T0_S = 0.040  # Eq 13's t_0 (the paper's fit)
 VELOCITY_WINDOW_DEG = 38.0  # the paper measures the velocity up to this bending angle

@@ -23,7 +23,7 @@ def data(bvsr_data) -> dict:
 
 @pytest.fixture(scope="session")
 def bvsr_spec():
-    from bvsr_cad.spec.load import load_spec
+    from bvsr_cad.parameters.load import load_spec
 
     return load_spec(PARAMS / "bvsr.toml")
 

@@ -13,7 +13,7 @@ import trimesh
 
 from bvsr_cad.assembly.build import build_assembly
 from bvsr_cad.cli import main
-from bvsr_cad.spec import paper
+from bvsr_cad.parameters import paper
 
 from .conftest import PARAMS, write_toml
 
@@ -160,7 +160,7 @@ def test_build_refuses_to_replace_a_foreign_folder(tmp_path, capsys):
 
 def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, monkeypatch):
     from bvsr_cad import worker
-    from bvsr_cad.spec.load import ParamError
+    from bvsr_cad.parameters.load import ParamError
 
     changed = write_toml(tmp_path / "edited.toml", {"name": "edited"})
     proc = worker.SecondProcess.start("bvsr_cad.exporters.analysis_files",

@@ -23,7 +23,7 @@ from bvsr_cad.checks.molds import (
 )
 from bvsr_cad.exporters.mold_files import write_molds
 from bvsr_cad.parts.mold import mold_set
-from bvsr_cad.spec.load import ParamError, spec_from_dict
+from bvsr_cad.parameters.load import ParamError, spec_from_dict
 
 MOLD_PARTS = {"half_a", "half_b", "bottom_plate", "lid", "core"}
 

@@ -11,8 +11,8 @@ from bvsr_cad.assembly.build import build_assembly
 from bvsr_cad.parts.panel import panel
 from bvsr_cad.parts.soa import bellows_profile, soa_body
 from bvsr_cad.parts.vertebra import rod
-from bvsr_cad.spec import layout
-from bvsr_cad.spec.load import load_spec, spec_from_dict
+from bvsr_cad.parameters import layout
+from bvsr_cad.parameters.load import load_spec, spec_from_dict
 
 from .conftest import PARAMS
 

@@ -8,8 +8,8 @@ import math
 import pytest
 
 from bvsr_cad.cli import main
-from bvsr_cad.spec import layout
-from bvsr_cad.spec.load import ParamError, load_spec, spec_from_dict
+from bvsr_cad.parameters import layout
+from bvsr_cad.parameters.load import ParamError, load_spec, spec_from_dict
 
 from .conftest import PARAMS, write_toml
 

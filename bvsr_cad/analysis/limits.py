@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..spec.tables import TailSpec
+from ..parameters.tables import TailSpec
 from .clearance import PosedTail
 
 

@@ -18,7 +18,7 @@ import numpy as np
 from .. import units
 from ..assembly.build import Assembly
 from ..models.statics import LumpedMasses, TailStatics, quasi_static_segment
-from ..spec.tables import TailSpec
+from ..parameters.tables import TailSpec
 
 Progress = Callable[[str], None]
 

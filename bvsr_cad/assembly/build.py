@@ -20,9 +20,9 @@ from ..parts._kernel import location
 from ..parts.panel import panel
 from ..parts.soa import soa_body
 from ..parts.vertebra import rod
-from ..spec.layout import (ISO_PITCH_MM, PanelLayout, half_angle_rad, panel_layout, polar, rod_bore_mm,
+from ..parameters.layout import (ISO_PITCH_MM, PanelLayout, half_angle_rad, panel_layout, polar, rod_bore_mm,
                            soa_angles_deg)
-from ..spec.tables import TailSpec
+from ..parameters.tables import TailSpec
 
 Progress = Callable[[str], None]
 

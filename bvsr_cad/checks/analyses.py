@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from ..spec import paper
+from ..parameters import paper
 from .export import Export
 from .result import CheckResult
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..spec import paper
+from ..parameters import paper
 from .export import Export
 from .result import CheckResult
 

@@ -20,7 +20,7 @@ import trimesh
 
 from .. import units
 from ..models.kinematics import TailKinematics, chord_length_mm, uv_from_theta_phi
-from ..spec.load import load_spec
+from ..parameters.load import load_spec
 from .export import Export
 from .result import CheckResult
 

@@ -74,7 +74,7 @@ def _analyses_from_params(params: str, root: str, sha256: str) -> dict[str, Any]
     import sys
 
     from ..assembly.build import build_assembly
-    from ..spec.load import ParamError, load_spec, params_sha256
+    from ..parameters.load import ParamError, load_spec, params_sha256
 
     if params_sha256(params) != sha256:
         raise ParamError(params, ["the file changed while the build was running; build again"])

@@ -31,7 +31,7 @@ from .. import units
 from ..assembly.build import Assembly
 from ..parts.rigid_tail import (KEPT_ROLES, RigidPiece, nut_pocket_depth_mm, pin_hole_mm, rigid_tail_pieces, tie_rod_hole_mm,
                                 tie_rod_length_mm)
-from ..spec.load import ParamError
+from ..parameters.load import ParamError
 from .bom import bom_rows, write_bom
 from .cad import STL_ANGULAR_TOLERANCE_RAD, STL_LINEAR_TOLERANCE_MM
 from .urdf import _f, _vec

@@ -11,8 +11,8 @@ import build123d as bd
 
 from .. import __version__
 from ..assembly.build import Assembly, instance_solid, segment_masses_g
-from ..spec.layout import binding_constraint, max_feasible_taper_deg
-from ..spec.tables import AUTO
+from ..parameters.layout import binding_constraint, max_feasible_taper_deg
+from ..parameters.tables import AUTO
 
 
 def tail_length_mm(asm: Assembly) -> float:

@@ -9,7 +9,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from ..spec import paper  # noqa: E402
+from ..parameters import paper  # noqa: E402
 
 
 def plot_simulation(res, path: Path, title: str) -> None:

@@ -25,14 +25,14 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from ..spec import paper
+from ..parameters import paper
 
 COLORS = {"panel": (0.55, 0.60, 0.68), "soa": (0.95, 0.55, 0.15), "rod": (0.92, 0.92, 0.88),
           "rigid_tail": (0.80, 0.80, 0.74), "mold": (0.45, 0.62, 0.85), "mold_core": (0.35, 0.75, 0.45)}
 
 _SIM = "`bvsr simulate` computes it; not run by `bvsr build`"
 _PLATFORM = "needs the platform model (Eq 20-22): not modelled yet"
-#: SPEC section 6: quantity, the paper's figure (spec/paper.py), the check that computes it (or None), a note.
+#: SPEC section 6: quantity, the paper's figure (parameters/paper.py), the check that computes it (or None), a note.
 PAPER_ROWS: tuple[tuple[str, paper.PaperFigure, str | None, str], ...] = (
     ("mass", paper.SEGMENT_STANDALONE_MASS, "paper:segment_standalone_mass", ""),
     ("mass", paper.TAIL_MASS, "paper:tail_mass", ""),

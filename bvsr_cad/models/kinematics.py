@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..spec.layout import half_angle_rad, panel_layout, soa_angles_deg
-from ..spec.tables import TailSpec
+from ..parameters.layout import half_angle_rad, panel_layout, soa_angles_deg
+from ..parameters.tables import TailSpec
 
 #: Below this bending angle the closed forms lose digits; the series are exact to ~1e-17.
 SERIES_BELOW_RAD = 1e-2

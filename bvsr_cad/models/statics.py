@@ -2,7 +2,7 @@
 
 Units inside: N, mm, kg, kPa (gauge). An SOA pushes F_i = P_i A - k_i dl_i
 (Eq 3) with k_i = m_a P_i + n_a (Eq 4, k in N/m with P in kPa, see
-:class:`bvsr_cad.spec.tables.Actuation`) and dl_i = l_i - l_i(0) from Eq 1.
+:class:`bvsr_cad.parameters.tables.Actuation`) and dl_i = l_i - l_i(0) from Eq 1.
 Generalised forces use the joint's bending vector w = theta (cos phi, sin phi):
 the actuators give tau = (dl/dw)^T F (virtual work; the paper's J_a^T F r is
 not dimensionally consistent), the rod -E I w / L (Eq 10, I = pi d^4 / 64),
@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import units
-from ..spec.tables import TailSpec
+from ..parameters.tables import TailSpec
 from .kinematics import TailKinematics, soa_lengths_and_jacobian, theta_phi_from_uv, uv_from_theta_phi
 
 #: Standard gravity, m/s^2 (N per kg).
@@ -310,7 +310,7 @@ def least_norm_in_box(m: np.ndarray, b: np.ndarray, lo: float, hi: float, max_it
 def pressure_pattern_kpa(phi_rad: float, low_kpa: float, high_kpa: float) -> np.ndarray:
     """Bend towards phi: SOAs on that side evacuated, the opposite side pressurised,
     SOAs on the bending axis (|cos| < 1e-9) inactive."""
-    from ..spec.layout import soa_angles_deg
+    from ..parameters.layout import soa_angles_deg
 
     c = np.cos(np.radians(soa_angles_deg()) - phi_rad)
     return np.where(c > 1e-9, low_kpa, np.where(c < -1e-9, high_kpa, 0.0))

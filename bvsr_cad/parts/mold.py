@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 import build123d as bd
 import numpy as np
 
-from ..spec.tables import Casting, SoaTable
+from ..parameters.tables import Casting, SoaTable
 from ._kernel import GeometryError, cut_all, cylinder_between, fuse_all, location, single_solid
 from .soa import bellows_profile, soa_body
 

@@ -1,6 +1,6 @@
 """Panels: root mount, intermediate, segment boundary and tip (SPEC section 4).
 
-Every feature comes from :func:`bvsr_cad.spec.layout.panel_layout`, so the
+Every feature comes from :func:`bvsr_cad.parameters.layout.panel_layout`, so the
 validated layout and the built solid cannot disagree. Frame: the panel's lower
 face at z = 0, Y dorsal; the rim is a frustum following the tail's taper.
 """
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import build123d as bd
 
-from ..spec.layout import PanelLayout
+from ..parameters.layout import PanelLayout
 from ._kernel import cut_all, cylinder_between, fuse_all, single_solid
 
 

@@ -36,8 +36,8 @@ from dataclasses import dataclass
 import build123d as bd
 import numpy as np
 
-from ..spec.layout import PanelLayout, soa_angles_deg, polar
-from ..spec.tables import SoaTable, TailSpec
+from ..parameters.layout import PanelLayout, soa_angles_deg, polar
+from ..parameters.tables import SoaTable, TailSpec
 from ._kernel import GeometryError, cut_all, cylinder_between, fuse_all, location, single_solid
 
 #: Panel features kept in the twin (they show from outside or carry the robot and payload).

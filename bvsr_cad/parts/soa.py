@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import build123d as bd
 
-from ..spec.tables import SoaTable
+from ..parameters.tables import SoaTable
 from ._kernel import single_solid
 
 

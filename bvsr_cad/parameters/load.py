@@ -3,7 +3,7 @@
 Every problem is collected before reporting, and each names the file, the
 key, the value and what is allowed. Geometric feasibility (pockets that
 overlap, a taper beyond the feasible one, ...) is checked afterwards by
-:func:`bvsr_cad.spec.layout.validate_layout`.
+:func:`bvsr_cad.parameters.layout.validate_layout`.
 """
 
 from __future__ import annotations

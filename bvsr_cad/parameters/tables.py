@@ -2,7 +2,7 @@
 materials, the vertebra choice, the taper and fabrication allowances).
 
 Each field carries its validation rule in ``metadata`` (see :func:`rule`), so
-the loader in :mod:`bvsr_cad.spec.load` validates every file the same way and
+the loader in :mod:`bvsr_cad.parameters.load` validates every file the same way and
 every error names the key, the value and what is allowed.
 """
 

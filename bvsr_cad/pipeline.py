@@ -8,7 +8,6 @@ partial one.
 
 from __future__ import annotations
 
-import json
 import shutil
 import tempfile
 import time
@@ -16,7 +15,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from .analysis.run import run_analyses
 from .assembly.build import build_assembly
+from .assembly.robot import robot_model
 from .checks.result import CheckResult
 from .checks.run import run_checks
 from .exporters.analysis_files import write_analyses
@@ -26,7 +27,7 @@ from .exporters.mold_files import write_molds
 from .exporters.fabrication_files import write_fabrication
 from .exporters.render import render_previews
 from .exporters.report import write_report
-from .exporters.robot_files import theta_max_from_limits, write_robot
+from .exporters.robot_files import write_robot
 from .parameters.load import load_spec, params_sha256
 from .worker import SecondProcess, result_or
 
@@ -90,8 +91,8 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
     try:
         # The analyses (workspace, clearance, limits) need only the parameters: a second process
         # runs them from the file while this one builds, exports and fabricates.
-        analyses = SecondProcess.start("bvsr_cad.exporters.analysis_files",
-                                       [str(params.resolve()), str(tmp.resolve()), params_sha256(params)], tmp, say)
+        analyses = SecondProcess.start("bvsr_cad.analysis.run", [str(params.resolve()), params_sha256(params)],
+                                       tmp, say)
         if analyses is not None:
             say("analyses: started in a second process")
         asm = build_assembly(spec, say)
@@ -111,9 +112,11 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         manifest["previews"] = render_previews(asm, tmp)
         molds = write_molds(asm, tmp, say)
         fabrication = write_fabrication(asm, tmp, manifest | molds, say)
-        manifest.update(result_or(analyses, lambda: write_analyses(asm, tmp, say), say, "analyses"))
-        limits = json.loads((tmp / manifest["analysis"]["limits"]).read_text())
-        manifest.update(write_robot(asm, tmp, theta_max_from_limits(limits, spec.joints), say))
+        results = result_or(analyses, lambda: run_analyses(asm, say), say, "analyses")
+        manifest.update(write_analyses(results, tmp, spec.name))
+        say("robot model (B-rep inertials)")
+        robot = robot_model(asm, results.theta_max_per_joint())
+        manifest.update(write_robot(robot, tmp, say))
         manifest.update(molds)
         manifest.update(fabrication)
         write_manifest(tmp, manifest)

@@ -27,8 +27,8 @@ import numpy as np
 
 from . import units
 from .assembly.build import build_assembly
+from .assembly.robot import robot_model
 from .exporters.mjcf import mjcf_tree, write_mjcf
-from .exporters.robot_files import actuation_si, robot_for
 from .exporters.robot_meshes import write_robot_meshes
 from .parameters.tables import TailSpec
 
@@ -64,12 +64,13 @@ class SimResult:
     peak_root_torque_nm: float
 
 
-def _model_xml(spec: TailSpec, theta_max_rad: list[float], folder: Path, payload_g: float) -> Path:
-    """Per-segment MJCF of ``spec`` with a root force/torque sensor and an optional tip payload."""
+def _model_xml(spec: TailSpec, theta_max_rad: list[float], folder: Path, payload_g: float) -> tuple[Path, list[str]]:
+    """Per-segment MJCF of ``spec`` with a root force/torque sensor and an optional tip payload,
+    and the names of its extension lines' actuators."""
     asm = build_assembly(spec)
-    robot = robot_for(asm, theta_max_rad)
+    robot = robot_model(asm, theta_max_rad)
     mesh_files = write_robot_meshes(robot, folder / "meshes")
-    tree, _ = mjcf_tree(robot, mesh_files, actuation_si(asm), per_segment=True)
+    tree, _ = mjcf_tree(robot, mesh_files, per_segment=True)
     root = tree.getroot()
     panel0 = root.find(".//body[@name='panel0']")
     ET.SubElement(panel0, "site", name="root_ft", pos="0 0 0", size="0.002")
@@ -86,16 +87,17 @@ def _model_xml(spec: TailSpec, theta_max_rad: list[float], folder: Path, payload
     ET.SubElement(sensor, "torque", name="root_torque", site="root_ft")
     path = folder / f"{spec.name}_sim.xml"
     write_mjcf(path, tree)
-    return path
+    return path, sorted({s.line for s in robot.soas if s.line_index in EXTENSION_LINES})
 
 
-def _run(path: Path, spec: TailSpec, p0_pa: float, seconds: float, stop_angle_deg: float | None = None):
+def _run(model: tuple[Path, list[str]], spec: TailSpec, p0_pa: float, seconds: float,
+         stop_angle_deg: float | None = None):
     import mujoco
 
+    path, extension = model
     m = mujoco.MjModel.from_xml_path(str(path))
     d = mujoco.MjData(m)
-    lines = [i for i in range(m.nu)
-             if int(mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, i).rsplit("line", 1)[1]) in EXTENSION_LINES]
+    lines = [m.actuator(name).id for name in extension]
     tip = m.body(f"panel{spec.panels - 1}").id
     # Settle under gravity first and tare the sensor, as the paper's six-axis sensor reads changes.
     for _ in range(int(round(SETTLE_S / m.opt.timestep))):

@@ -52,3 +52,16 @@ def deg_s_to_rad_s(value_deg_s: float) -> float:
 
 def g_cm3_to_kg_m3(value_g_cm3: float) -> float:
     return value_g_cm3 * 1000.0
+
+
+def nmm_to_nm(value_nmm: float) -> float:
+    """Torque or rotational stiffness: N mm -> N m."""
+    return value_nmm / MM_PER_M
+
+
+def kpa_to_pa(value_kpa):
+    return value_kpa * PA_PER_KPA
+
+
+def mm2_to_m2(value_mm2: float) -> float:
+    return value_mm2 / (MM_PER_M * MM_PER_M)

@@ -1,9 +1,10 @@
 """Work in a second Python process, beside the main one (the machine's second core).
 
-The child is a fresh interpreter started as ``python -m MODULE OUT ARGS...``;
+The child is a fresh interpreter started as ``python -m MODULE - ARGS...``;
 the module's ``__main__`` block calls :func:`serve`, which runs one function
-and pickles ``("ok", result)`` or ``("error", exception)`` into the file
-``OUT``. A fresh interpreter rather than :mod:`multiprocessing`: a spawned
+and pickles ``("ok", result)`` or ``("error", exception)`` onto its standard
+output (anything else printed there goes to stderr instead). Nothing is
+written to disk: the result travels in memory through the pipe. A fresh interpreter rather than :mod:`multiprocessing`: a spawned
 child would first re-run the caller's main script (a user's build script
 without a ``__main__`` guard would build twice).
 
@@ -19,7 +20,6 @@ import os
 import pickle
 import subprocess
 import sys
-import tempfile
 import threading
 import time
 from collections.abc import Callable
@@ -31,8 +31,13 @@ class WorkerLost(RuntimeError):
     """The second process ended without a result (killed, crashed); the caller may do the work itself."""
 
 
-def serve(out: str, fn: Callable[..., Any], *args: Any) -> int:
-    """Run ``fn(*args)`` and pickle its result, or its exception, into ``out`` (the child's side)."""
+def serve(_out: str, fn: Callable[..., Any], *args: Any) -> int:
+    """Run ``fn(*args)`` and pickle its result, or its exception, onto stdout (the child's side).
+
+    ``_out`` is the placeholder argument the parent passes (``-``)."""
+    result_fd = os.dup(1)
+    os.dup2(2, 1)  # stray prints (a library's banner) must not corrupt the pickle
+    sys.stdout = sys.stderr
     try:
         payload = ("ok", fn(*args))
     except BaseException as exc:  # noqa: BLE001 - handed to the parent, which raises it
@@ -42,44 +47,49 @@ def serve(out: str, fn: Callable[..., Any], *args: Any) -> int:
         pickle.loads(data)  # an exception class with its own __init__ may not come back
     except Exception:  # an exception or a result that does not pickle
         data = pickle.dumps(("error", RuntimeError(f"second process failed: {payload[1]}")))
-    Path(out).write_bytes(data)
+    with os.fdopen(result_fd, "wb") as out:
+        out.write(data)
     return 0
 
 
 class SecondProcess:
-    def __init__(self, proc: subprocess.Popen, out: str):
+    def __init__(self, proc: subprocess.Popen):
         self.proc: subprocess.Popen | None = proc
-        self.out = out
         self.t0 = time.perf_counter()
+        self._chunks: list[bytes] = []
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        assert self.proc is not None and self.proc.stdout is not None
+        for chunk in iter(lambda: self.proc.stdout.read(1 << 16), b""):
+            self._chunks.append(chunk)
 
     @classmethod
     def start(cls, module: str, args: list[str], cwd: Path,
               progress: Callable[[str], None] | None = None) -> "SecondProcess | None":
-        """``python -m module OUT *args`` in ``cwd``; each line of its stderr goes to ``progress``
+        """``python -m module - *args`` in ``cwd``; each line of its stderr goes to ``progress``
         (from a reader thread) or, without it, nowhere."""
         if (os.cpu_count() or 1) < 2:
             return None
-        fd, out = tempfile.mkstemp(prefix="bvsr-worker-", suffix=".pickle")
-        os.close(fd)
         package_root = str(Path(__file__).resolve().parents[1])  # the bvsr_cad this process runs
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(
             [package_root] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])}
         try:
-            proc = subprocess.Popen([sys.executable, "-m", module, out, *args], cwd=cwd, env=env,
-                                    stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                    stderr=subprocess.DEVNULL if progress is None else subprocess.PIPE,
-                                    text=True, errors="replace")
+            proc = subprocess.Popen([sys.executable, "-m", module, "-", *args], cwd=cwd, env=env,
+                                    stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                    stderr=subprocess.DEVNULL if progress is None else subprocess.PIPE)
         except OSError:
-            os.unlink(out)
             return None
         if progress is not None:
             def relay() -> None:
-                for line in proc.stderr:
+                for raw in proc.stderr:
+                    line = raw.decode("utf-8", "replace").rstrip()
                     if line.strip():
-                        progress(line.rstrip())
+                        progress(line)
 
             threading.Thread(target=relay, daemon=True).start()
-        return cls(proc, out)
+        return cls(proc)
 
     @property
     def running(self) -> bool:
@@ -97,9 +107,10 @@ class SecondProcess:
         """
         assert self.proc is not None, "result() after close()"
         code = self.proc.wait()
+        self._reader.join()
         try:
-            status, payload = pickle.loads(Path(self.out).read_bytes())
-        except (OSError, EOFError, pickle.UnpicklingError) as exc:
+            status, payload = pickle.loads(b"".join(self._chunks))
+        except (EOFError, pickle.UnpicklingError) as exc:
             raise WorkerLost(f"the second process ended (exit code {code}) without a result") from exc
         finally:
             self.close()
@@ -113,10 +124,6 @@ class SecondProcess:
                 self.proc.terminate()
                 self.proc.wait()
             self.proc = None
-            try:
-                os.unlink(self.out)
-            except OSError:
-                pass
 
 
 def result_or(proc: SecondProcess | None, here: Callable[[], Any], say: Callable[[str], None], what: str) -> Any:

@@ -18,7 +18,8 @@ from bvsr_cad.assembly.robot import chord_joint_value, chord_m, rest_pair, split
 from bvsr_cad.checks.export import Export
 from bvsr_cad.checks.robot import check_robot
 from bvsr_cad.exporters.mjcf import chord_polynomial
-from bvsr_cad.exporters.robot_files import actuation_si, write_robot
+from bvsr_cad.assembly.robot import robot_model
+from bvsr_cad.exporters.robot_files import write_robot
 from bvsr_cad.models.coupling import couple_mimic_joints, mimic_joints
 from bvsr_cad.parts.vertebra import rod
 
@@ -76,7 +77,7 @@ def test_chord_polynomial_and_limit():
 def robot_export(tmp_path_factory, bvsr_spec):
     root = tmp_path_factory.mktemp("robot")
     asm = build_assembly(bvsr_spec)
-    frag = write_robot(asm, root, [THETA_MAX] * bvsr_spec.joints, lambda _m: None)
+    frag = write_robot(robot_model(asm, [THETA_MAX] * bvsr_spec.joints), root, lambda _m: None)
     shutil.copy(__import__("tests.conftest", fromlist=["PARAMS"]).PARAMS / "bvsr.toml", root / "params.toml")
     manifest = {"name": "bvsr", "parts": [], "params_file": "params.toml",
                 "mass_g": {"tail": sum(asm.mass_g(i.part) for i in asm.instances)}, **frag}
@@ -95,7 +96,10 @@ def test_every_robot_check_passes(robot_export):
 
 def test_mjcf_rod_springs_add_up_to_ei_over_l(robot_export, bvsr_spec):
     m = mujoco.MjModel.from_xml_path(str(robot_export / "robot" / "bvsr.xml"))
-    ei_l = actuation_si(build_assembly(bvsr_spec)).rod_bending_stiffness_nm_rad
+    # Hand calculation from the parameter file: E I / L of a solid round rod, SI.
+    rod = bvsr_spec.materials[bvsr_spec.vertebra.material]
+    d_m = bvsr_spec.vertebra.diameter_mm / 1000.0
+    ei_l = rod.youngs_modulus_mpa * 1e6 * math.pi * d_m ** 4 / 64.0 / (bvsr_spec.joint.gap_mm / 1000.0)
     k_a = m.jnt_stiffness[m.joint("j1_theta_a").id]
     k_b = m.jnt_stiffness[m.joint("j1_theta_b").id]
     theta = 0.2

@@ -78,6 +78,7 @@ class PosedTail:
     _aniso: dict = field(default_factory=dict, repr=False)  # (pair, grid index) -> d_lambda
     _scaled: dict = field(default_factory=dict, repr=False)  # (instance, grid index, span) -> fcl object
     rest_bvh: dict = field(default_factory=dict, repr=False)  # instance -> BVH of its coarse rest mesh
+    instances: list = field(default_factory=list, repr=False)  # the assembly's Instance of each mesh
 
     def __post_init__(self) -> None:
         # Pairs grouped by the (contiguous) run of joints they span.
@@ -276,19 +277,20 @@ def must_not_touch(asm: Assembly) -> list[tuple[str, str]]:
     """Every pair of instances except those joined by design: an SOA and its two
     panels (bonded flanges), a rod and the panels it is screwed through, two
     rods meeting in a segment-boundary panel."""
-    spec = asm.spec
-    J = spec.joints_per_segment
-    names = [i.name for i in asm.instances]
-    joined: set[frozenset[str]] = set()
-    for k in range(1, spec.panels):
-        for i in range(1, 6):
-            joined |= {frozenset((f"j{k}_soa{i}", f"panel{k - 1}")), frozenset((f"j{k}_soa{i}", f"panel{k}"))}
-    for s in range(1, spec.segments + 1):
-        for k in range(J * (s - 1), J * s + 1):
-            joined.add(frozenset((f"rod_s{s}", f"panel{k}")))
-        if s > 1:
-            joined.add(frozenset((f"rod_s{s - 1}", f"rod_s{s}")))
-    return [(a, b) for a, b in itertools.combinations(names, 2) if frozenset((a, b)) not in joined]
+    J = asm.spec.joints_per_segment
+
+    def joined(a, b) -> bool:
+        roles = {a.role: a, b.role: b}
+        if set(roles) == {"soa", "panel"}:
+            return roles["panel"].panel in (roles["soa"].joint - 1, roles["soa"].joint)
+        if set(roles) == {"rod", "panel"}:
+            s = roles["rod"].segment
+            return J * (s - 1) <= roles["panel"].panel <= J * s
+        if a.role == b.role == "rod":
+            return abs(a.segment - b.segment) == 1
+        return False
+
+    return [(a.name, b.name) for a, b in itertools.combinations(asm.instances, 2) if not joined(a, b)]
 
 
 def posed_tail(asm: Assembly, progress: Progress | None = None, cutoff_mm: float | None = None) -> PosedTail:
@@ -352,7 +354,8 @@ def posed_tail(asm: Assembly, progress: Progress | None = None, cutoff_mm: float
         support.append(np.where(hb > 0, hb / np.cos(np.pi / SUPPORT_BINS), hb))
     levels = np.sort(gaps.ravel())
     return PosedTail(kin, names, meshes, hj, np.array(pairs), np.array(rest), np.array(span),
-                     np.array(support), coarse, [_cut_at_z(m, levels) for m in coarse], rest_bvh=rest_bvh)
+                     np.array(support), coarse, [_cut_at_z(m, levels) for m in coarse], rest_bvh=rest_bvh,
+                     instances=list(asm.instances))
 
 
 @dataclass(frozen=True)
@@ -464,31 +467,3 @@ def clearance_map(pt: PosedTail, joint: int, theta_max_rad: float, n_theta: int 
         refined[pose, pair] = pt.refine(lam[pose, pair], ids[pair])
     out = refined.min(axis=1)
     return th, ph, out.reshape(tt.shape)
-
-
-def plot_clearance_map(th: np.ndarray, ph: np.ndarray, bound: np.ndarray, path, title: str,
-                       workspace_theta_rad: float, min_clearance_mm: float,
-                       curves: dict[str, tuple[np.ndarray, np.ndarray]] | None = None) -> None:
-    """The map, the required clearance as a red contour and optional (phi, theta) curves (rad)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4.6))
-    cs = ax.pcolormesh(np.degrees(ph), np.degrees(th), bound, shading="auto", cmap="viridis")
-    fig.colorbar(cs, label="clearance lower bound (mm)")
-    ax.contour(np.degrees(ph), np.degrees(th), bound, levels=[min_clearance_mm], colors="r")
-    ax.plot([], [], color="r", label=f"clearance bound = {min_clearance_mm:g} mm (required)")
-    for (label, (cp, ct)), style in zip((curves or {}).items(), ("w-", "m:", "c-.")):
-        order = np.argsort(cp)
-        ax.plot(np.degrees(np.asarray(cp)[order]), np.degrees(np.asarray(ct)[order]), style, lw=1.5, label=label)
-    ax.axhline(np.degrees(workspace_theta_rad), color="w", ls="--", lw=1, label="largest theta in the workspace")
-    ax.set_xlabel("phi (deg)")
-    ax.set_ylabel("theta (deg)")
-    ax.set_title(title)
-    ax.set_ylim(0, np.degrees(th.max()) * 1.12)
-    ax.legend(loc="lower left", fontsize=8, framealpha=0.85)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)

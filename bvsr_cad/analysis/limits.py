@@ -118,8 +118,8 @@ def stack_limit_rad(pt: PosedTail, joint: int, phis: np.ndarray, lambda_solid: f
     """theta_stack(phi) of joint ``joint`` (0-based): where its most compressed SOA is fully folded."""
     reach = np.full(len(phis), -np.inf)
     dirs = np.c_[np.cos(phis), np.sin(phis)]
-    for name, m in zip(pt.names, pt.coarse):
-        if name.startswith(f"j{joint + 1}_soa"):
+    for inst, m in zip(pt.instances, pt.coarse):
+        if inst.role == "soa" and inst.joint == joint + 1:
             z = m.vertices[:, 2]
             bellows = m.vertices[(z > z.min() + flange_mm) & (z < z.max() - flange_mm), :2]
             reach = np.maximum(reach, (bellows @ dirs.T).max(axis=0))

@@ -9,7 +9,6 @@ joint's pose and the tip point (centre of the tip panel's distal face).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -17,6 +16,8 @@ import numpy as np
 
 from .. import units
 from ..assembly.build import Assembly
+from ..models.rod import rod_section
+from ..parameters.layout import N_SOA
 from ..models.statics import LumpedMasses, TailStatics, quasi_static_segment
 from ..parameters.tables import TailSpec
 
@@ -24,21 +25,20 @@ Progress = Callable[[str], None]
 
 
 def lumped_masses(asm: Assembly) -> LumpedMasses:
-    """Panel masses (with the rod inside them) and joint masses (five SOAs and the rod in the gap), kg."""
+    """Panel masses (with the rod inside them) and joint masses (its SOAs and the rod in the gap), kg."""
     spec = asm.spec
-    rod = spec.materials[spec.vertebra.material]
-    rod_g_per_mm = units.mass_g(math.pi * spec.vertebra.diameter_mm**2 / 4.0, rod.density_g_cm3)
+    rod = rod_section(spec)
     t = spec.joint.panel_thickness_mm
-    by_name = {i.name: i for i in asm.instances}
-    panel_g = np.array([asm.mass_g(by_name[f"panel{k}"].part) for k in range(spec.panels)]) + rod_g_per_mm * t
-    joint_g = np.full(spec.joints, 5 * asm.mass_g("soa") + rod_g_per_mm * spec.joint.gap_mm)
+    panel_g = np.array([asm.mass_g(asm.instance(f"panel{k}").part) for k in range(spec.panels)]) + rod.mass_g(t)
+    joint_g = np.array([sum(asm.mass_g(i.part) for i in asm.soas_of_joint(k)) + rod.mass_g(spec.joint.gap_mm)
+                        for k in range(1, spec.joints + 1)])
     return LumpedMasses(panel_g / units.G_PER_KG, joint_g / units.G_PER_KG)
 
 
 def sample_line_pressures_kpa(spec: TailSpec, n: int, rng: np.random.Generator) -> np.ndarray:
     """Gauge pressures (n, n_segments, 5) drawn by the paper's protocol."""
     a = spec.actuation
-    shape = (n, spec.segments, 5)
+    shape = (n, spec.segments, N_SOA)
     state = rng.integers(0, 3, size=shape)  # 0 inactive, 1 pressurised, 2 depressurised
     up = rng.uniform(a.atmospheric_kpa, a.workspace_pressurised_max_kpa_abs, size=shape)
     down = rng.uniform(a.workspace_depressurised_min_kpa_abs, a.atmospheric_kpa, size=shape)
@@ -92,23 +92,3 @@ def quasi_static_table(asm: Assembly, area_scale: tuple[float, ...] = (1.0,)) ->
             rows.append({"motion": motion, "area_mm2": st.act.area_mm2, "max_angle_deg": q.max_angle_deg,
                          "blocked_force_n": q.blocked_force_n, "line_kpa": list(q.line_kpa)})
     return rows
-
-
-def plot_workspace(ws: Workspace, path, title: str) -> None:
-    """The tip cloud in the XY, XZ and YZ planes (PNG)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 3, figsize=(13, 4.4))
-    for ax, (i, j) in zip(axes, ((0, 1), (0, 2), (1, 2))):
-        ax.scatter(ws.tip_mm[:, i], ws.tip_mm[:, j], s=1, alpha=0.3)
-        ax.set_xlabel(f"{'xyz'[i]} (mm)")
-        ax.set_ylabel(f"{'xyz'[j]} (mm)")
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.grid(True, lw=0.3)
-    fig.suptitle(f"{title}: tip workspace, {ws.samples} samples (tail horizontal, gravity -Y)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)

@@ -26,8 +26,6 @@ from ..parameters.tables import TailSpec
 
 Progress = Callable[[str], None]
 
-COLORS = {"panel": (0.55, 0.60, 0.68), "soa": (0.95, 0.55, 0.15), "rod": (0.92, 0.92, 0.88)}
-
 
 @dataclass(frozen=True)
 class PartDef:
@@ -48,11 +46,23 @@ class PartDef:
 
 @dataclass(frozen=True)
 class Instance:
+    """One placed part. Its identity is in fields, never parsed from ``name``."""
+
     name: str
     part: str
     transform: tuple[tuple[float, ...], ...]  # 4x4, part frame -> tail frame (mm)
+    role: str  # panel, soa, rod
     segment: int | None  # 1-based; None for a panel shared by two segments or the root
     segments: tuple[int, ...]  # every segment this instance belongs to (standalone builds)
+    panel: int | None = None  # a panel's index k (panel0 = root)
+    joint: int | None = None  # an SOA's joint k (between panel k-1 and panel k)
+    soa_index: int | None = None  # an SOA's place i = 1..N_SOA around the pitch circle
+    pressure_line: int | None = None  # the line i = 1..N_SOA of its segment that feeds an SOA
+
+    @property
+    def line_name(self) -> str | None:
+        """``s{segment}_line{i}`` of an SOA (the name the robot descriptions give its line)."""
+        return None if self.pressure_line is None else f"s{self.segment}_line{self.pressure_line}"
 
 
 @dataclass
@@ -68,6 +78,19 @@ class Assembly:
 
     def instances_of(self, part: str) -> list[Instance]:
         return [i for i in self.instances if i.part == part]
+
+    def instance(self, name: str) -> Instance:
+        for i in self.instances:
+            if i.name == name:
+                return i
+        raise KeyError(f"no instance {name!r} in {self.spec.name}")
+
+    def panel(self, k: int) -> Instance:
+        return next(i for i in self.instances if i.role == "panel" and i.panel == k)
+
+    def soas_of_joint(self, k: int) -> list[Instance]:
+        """The SOAs of joint k in pentagon order (soa_index 1..N_SOA)."""
+        return sorted((i for i in self.instances if i.role == "soa" and i.joint == k), key=lambda i: i.soa_index)
 
     def volume_mm3(self, part: str) -> float:
         return self.parts[part].solid.volume
@@ -172,8 +195,8 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None) -> Assembly
                                      "tap after printing" if spec.vertebra.socket == "threaded" else None)},
             )
         segs = segments_of_panel(lay.index)
-        instances.append(Instance(lay.name, by_key[key], _as_tuple(translation(z=lay.z0_mm)),
-                                  segs[0] if len(segs) == 1 else None, segs))
+        instances.append(Instance(lay.name, by_key[key], _as_tuple(translation(z=lay.z0_mm)), "panel",
+                                  segs[0] if len(segs) == 1 else None, segs, panel=lay.index))
 
     say("SOA body")
     parts["soa"] = PartDef(
@@ -190,7 +213,8 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None) -> Assembly
             b = np.array([*polar(lo.pitch_radius_upper_mm, a), lo.z0_mm + lo.thickness_mm - lo.pocket_depth_mm])
             m = np.array([*polar(hi.pitch_radius_lower_mm, a), hi.z0_mm + hi.pocket_depth_mm])
             x_dir = np.array([math.cos(math.radians(a + rot)), math.sin(math.radians(a + rot)), 0.0])
-            instances.append(Instance(f"j{k}_soa{i}", "soa", _as_tuple(frame(b, x_dir, m - b)), s, (s,)))
+            instances.append(Instance(f"j{k}_soa{i}", "soa", _as_tuple(frame(b, x_dir, m - b)), "soa", s, (s,),
+                                      joint=k, soa_index=i, pressure_line=i))
 
     rods: dict[float, str] = {}
     for s in range(1, spec.segments + 1):
@@ -204,7 +228,7 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None) -> Assembly
                 solid=rod(spec.vertebra.diameter_mm, length), print_transform=_as_tuple(np.eye(4)),
                 info={"cut_length_mm": length, "diameter_mm": spec.vertebra.diameter_mm},
             )
-        instances.append(Instance(f"rod_s{s}", rods[length], _as_tuple(translation(z=z0)), s, (s,)))
+        instances.append(Instance(f"rod_s{s}", rods[length], _as_tuple(translation(z=z0)), "rod", s, (s,)))
 
     return Assembly(spec=spec, parts=parts, instances=instances, panel_layouts=layouts,
                     taper_half_angle_deg=math.degrees(beta))

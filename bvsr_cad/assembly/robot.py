@@ -27,24 +27,24 @@ import build123d as bd
 import numpy as np
 
 from .. import units
+from ..models.actuator import SoaForceLaw, soa_force_law
+from ..models.kinematics import chord_length_mm
+from ..models.rod import rod_section
+from ..parameters.layout import N_SOA
+from ..parameters.tables import TailSpec
+from ..colors import rgba
 from ..parts.vertebra import rod
-from .build import Assembly, instance_solid, rod_span_mm
+from .build import Assembly, Instance, instance_solid, rod_span_mm
 from .inertia import Inertial, compose, from_solid
 
 VIRTUAL_MASS_KG = 1e-7  # 0.1 mg: valid for every simulator, negligible, and counted in the totals
 VIRTUAL_INERTIA_KG_M2 = 1e-12
 
-RGBA = {"panel": (0.55, 0.60, 0.68, 1.0), "soa": (0.95, 0.55, 0.15, 0.8), "rod": (0.92, 0.92, 0.88, 1.0)}
 
 
 def chord_m(theta_rad, arc_length_m: float):
-    """Chord of an arc of length L bent by theta, with the theta -> 0 limit (vectorised)."""
-    th = np.asarray(theta_rad, float)
-    half = th / 2.0
-    small = np.abs(half) < 1e-4
-    safe = np.where(small, 1.0, half)
-    sinc = np.where(small, 1.0 - half * half / 6.0 + half ** 4 / 120.0, np.sin(safe) / safe)
-    return arc_length_m * sinc
+    """Chord of an arc of length L (m) bent by theta (models/kinematics, any length unit)."""
+    return chord_length_mm(theta_rad, arc_length_m)
 
 
 def chord_joint_value(theta_rad, arc_length_m: float):
@@ -133,7 +133,8 @@ class SoaActuator:
 
     name: str  # jk_soai
     joint: int
-    line: str  # s{segment}_line{i}
+    line: str  # s{segment}_line{i}: the actuator name of its line in the per-segment MJCF
+    line_index: int  # i = 1..N_SOA: the line of its segment (the SOA's place on the pentagon)
     bottom_site: str
     top_site: str
     rest_length_m: float
@@ -150,6 +151,48 @@ class BendingJoint:
     segment: int
 
 
+@dataclass(frozen=True)
+class ActuationSI:
+    """What drives and holds the chain, in SI: the SOA force law, the pressure range, the rod."""
+
+    law: SoaForceLaw  # per SOA
+    pressure_min_pa: float
+    pressure_max_pa: float
+    rod_bending_stiffness_nm_rad: float  # E I / L of one joint
+    rod_axial_stiffness_n_m: float  # E A / L of one joint's rod piece
+    timestep_s: float
+
+    @property
+    def area_m2(self) -> float:
+        return self.law.area_m2
+
+    @property
+    def stiffness_slope_n_m_per_pa(self) -> float:
+        return self.law.stiffness_slope_n_per_m_per_pa
+
+    @property
+    def stiffness_offset_n_m(self) -> float:
+        return self.law.stiffness_offset_n_per_m
+
+    @property
+    def damping_n_s_m(self) -> float:
+        return self.law.damping_n_s_per_m
+
+
+def actuation_si(spec: TailSpec) -> ActuationSI:
+    """The SOA law (models/actuator), the rod (models/rod) and the pressure range of ``spec`` in SI."""
+    rod = rod_section(spec)
+    L_mm = spec.joint.gap_mm
+    return ActuationSI(
+        law=soa_force_law(spec),
+        pressure_min_pa=units.kpa_to_pa(spec.actuation.pressure_min_kpa),
+        pressure_max_pa=units.kpa_to_pa(spec.robot.pulse_pressure_max_kpa),
+        rod_bending_stiffness_nm_rad=rod.bending_stiffness_nm_per_rad(L_mm),
+        rod_axial_stiffness_n_m=rod.axial_stiffness_n_per_m(L_mm),
+        timestep_s=spec.robot.timestep_s,
+    )
+
+
 @dataclass
 class RobotModel:
     name: str
@@ -158,6 +201,7 @@ class RobotModel:
     bending: list[BendingJoint]
     sites: list[Site]
     soas: list[SoaActuator]
+    actuation: ActuationSI
     root: str = "panel0"
 
     @property
@@ -196,20 +240,27 @@ def _rod_solid(ranges: list[tuple[float, float]], diameter_mm: float, z_frame_mm
     return pieces[0] if len(pieces) == 1 else bd.Compound(pieces)
 
 
-def build_robot(asm: Assembly, theta_max_rad: list[float], velocity_limit_rad_s: float,
-                effort_limit_nm: float, chord_effort_n: float) -> RobotModel:
-    """The robot model of the tail at rest.
+def robot_model(asm: Assembly, theta_max_rad: list[float]) -> RobotModel:
+    """The robot model of the tail at rest, in SI.
 
     Args:
         asm: the assembly (mm).
-        theta_max_rad: collision-free bending limit of each joint (the minimum over phi).
-        velocity_limit_rad_s: limit of a whole joint's bending rate (each half-angle joint gets half).
-        effort_limit_nm: torque limit of a bending joint.
-        chord_effort_n: force limit of the chord joints.
+        theta_max_rad: collision-free bending limit of each joint (the minimum over phi), e.g.
+            :meth:`bvsr_cad.analysis.limits.LimitsResult.theta_max_per_joint`.
+
+    The velocity limit of a joint is the segment's peak rate shared by its joints
+    times a margin (``[robot]``); the effort limits are what all N_SOA SOAs can
+    exert at the pulse pressure (a torque on the pitch circle, a force on the chord).
     """
     spec = asm.spec
     if len(theta_max_rad) != spec.joints:
         raise ValueError(f"theta_max_rad: {len(theta_max_rad)} values for {spec.joints} joints")
+    actuation = actuation_si(spec)
+    push_n = N_SOA * float(actuation.law.force_n(actuation.pressure_max_pa, 0.0))
+    chord_effort_n = push_n
+    effort_limit_nm = push_n * units.mm_to_m(spec.joint.pitch_diameter_mm / 2)
+    velocity_limit_rad_s = velocity_limit(spec.robot.segment_velocity_deg_s, spec.robot.velocity_margin,
+                                          spec.joints_per_segment)
     t_mm = spec.joint.panel_thickness_mm
     L_mm = spec.joint.gap_mm
     L = units.mm_to_m(L_mm)
@@ -226,13 +277,12 @@ def build_robot(asm: Assembly, theta_max_rad: list[float], velocity_limit_rad_s:
 
     for lay in asm.panel_layouts:
         name = f"panel{lay.index}"
-        inst = next(i for i in asm.instances if i.name == name)
-        part = asm.part_of(inst)
-        visuals = [Visual(part.name, part.material, panel_mat.density_g_cm3, RGBA["panel"], part.solid)]
+        part = asm.part_of(asm.panel(lay.index))
+        visuals = [Visual(part.name, part.material, panel_mat.density_g_cm3, rgba("panel"), part.solid)]
         inertials = [from_solid(part.solid, panel_mat.density_g_cm3)]
         rod_piece = _rod_solid(in_panel[lay.index], spec.vertebra.diameter_mm, lay.z0_mm)
         if rod_piece is not None:
-            visuals.append(Visual(f"rod_in_{name}", spec.vertebra.material, rod_mat.density_g_cm3, RGBA["rod"],
+            visuals.append(Visual(f"rod_in_{name}", spec.vertebra.material, rod_mat.density_g_cm3, rgba("rod"),
                                   rod_piece))
             inertials.append(from_solid(rod_piece, rod_mat.density_g_cm3))
         collision = Collision("cylinder", units.mm_to_m(lay.rim_radius_lower_mm), t,
@@ -249,17 +299,16 @@ def build_robot(asm: Assembly, theta_max_rad: list[float], velocity_limit_rad_s:
         # Deformable body at rest in the arc-start frame: five SOAs and the rod in the gap.
         soa_solids = []
         soa_inertials = []
-        for inst in asm.instances:
-            if inst.name.startswith(f"{j}_soa"):
-                T = T_start_inv @ np.asarray(inst.transform)
-                soa_solids.append(asm.part_of(inst).solid.moved(_location(T)))
-                soa_inertials.append(from_solid(asm.part_of(inst).solid, soa_mat.density_g_cm3, T))
+        for inst in asm.soas_of_joint(k):
+            T = T_start_inv @ np.asarray(inst.transform)
+            soa_solids.append(asm.part_of(inst).solid.moved(_location(T)))
+            soa_inertials.append(from_solid(asm.part_of(inst).solid, soa_mat.density_g_cm3, T))
         rod_gap = _rod_solid(in_gap[k], spec.vertebra.diameter_mm, z_start_mm)
         parts = list(soa_inertials)
-        visuals = [Visual(f"{j}_soas", spec.use.soa, soa_mat.density_g_cm3, RGBA["soa"], bd.Compound(soa_solids))]
+        visuals = [Visual(f"{j}_soas", spec.use.soa, soa_mat.density_g_cm3, rgba("soa"), bd.Compound(soa_solids))]
         if rod_gap is not None:
             parts.append(from_solid(rod_gap, rod_mat.density_g_cm3))
-            visuals.append(Visual(f"{j}_rod", spec.vertebra.material, rod_mat.density_g_cm3, RGBA["rod"], rod_gap))
+            visuals.append(Visual(f"{j}_rod", spec.vertebra.material, rod_mat.density_g_cm3, rgba("rod"), rod_gap))
         soft = compose(parts)
         half_a, half_b = split_deformable(soft, L)
         names = (f"{j}_after_phi", f"{j}_after_theta_a", f"{j}_after_chord", f"{j}_after_theta_b")
@@ -287,28 +336,24 @@ def build_robot(asm: Assembly, theta_max_rad: list[float], velocity_limit_rad_s:
         bending.append(BendingJoint(j, L, tuple(f"{j}_{n}" for n in ("phi", "theta_a", "chord", "theta_b", "phi_b")),
                                     f"panel{k - 1}", f"panel{k}", th, seg))
         # SOA sockets: the centres of the pocket floors the flanges sit on.
-        i_line = 0
-        for inst in asm.instances:
-            if not inst.name.startswith(f"{j}_soa"):
-                continue
-            i_line += 1
+        for inst in asm.soas_of_joint(k):
             T = np.asarray(inst.transform)
             bottom_mm = T[:3, 3]
-            top_mm = bottom_mm + _top_socket(asm, k, i_line)
+            top_mm = bottom_mm + _top_socket(asm, inst)
             b_site = Site(f"{inst.name}_bottom", f"panel{k - 1}",
                           tuple(units.mm_to_m(v) for v in (bottom_mm - [0, 0, lo.z0_mm])))
             t_site = Site(f"{inst.name}_top", f"panel{k}", tuple(units.mm_to_m(v) for v in (top_mm - [0, 0, hi.z0_mm])))
             sites += [b_site, t_site]
             rest = units.mm_to_m(float(np.linalg.norm(top_mm - bottom_mm)))
-            soas.append(SoaActuator(inst.name, k, f"s{seg}_line{i_line}", b_site.name, t_site.name, rest))
-    return RobotModel(spec.name, links, joints, bending, sites, soas)
+            soas.append(SoaActuator(inst.name, k, inst.line_name, inst.pressure_line, b_site.name,
+                                    t_site.name, rest))
+    return RobotModel(spec.name, links, joints, bending, sites, soas, actuation)
 
 
-def _top_socket(asm: Assembly, k: int, i: int) -> np.ndarray:
-    """Offset from the bottom socket of jk_soai to its top socket (tail frame, mm)."""
-    inst = next(x for x in asm.instances if x.name == f"j{k}_soa{i}")
+def _top_socket(asm: Assembly, inst: Instance) -> np.ndarray:
+    """Offset from an SOA's bottom socket to its top socket (tail frame, mm)."""
     T = np.asarray(inst.transform)
-    hi = asm.panel_layouts[k]
+    hi = asm.panel_layouts[inst.joint]
     # The top socket is where the SOA axis meets panel k's lower pocket floor.
     z_top = hi.z0_mm + hi.pocket_depth_mm
     s = (z_top - T[2, 3]) / T[2, 2]
@@ -344,6 +389,6 @@ def rest_pair(half_a: Inertial, half_b: Inertial, arc_length_m: float) -> Inerti
     return compose([half_a, half_b.transformed(translation_m(z=arc_length_m))])
 
 
-def velocity_limit_rad_s(segment_deg_s: float, margin: float, joints_per_segment: int) -> float:
+def velocity_limit(segment_deg_s: float, margin: float, joints_per_segment: int) -> float:
     """Per bending joint: the segment's peak rate shared by its joints, times a margin."""
     return units.deg_s_to_rad_s(segment_deg_s) / joints_per_segment * margin

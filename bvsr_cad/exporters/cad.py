@@ -6,7 +6,8 @@ from pathlib import Path
 
 import build123d as bd
 
-from ..assembly.build import COLORS, Assembly, PartDef, instance_solid
+from ..assembly.build import Assembly, PartDef, instance_solid
+from ..colors import rgb
 
 #: Tessellation for print STLs: fine enough that the mesh volume stays within
 #: 0.05% of the B-rep volume on every part (checked by `bvsr check`).
@@ -23,7 +24,7 @@ def write_step(solid: bd.Shape, label: str, rgb: tuple[float, float, float], pat
 
 
 def write_part_step(part: PartDef, path: Path) -> None:
-    write_step(part.solid, part.name, COLORS[part.kind], path)
+    write_step(part.solid, part.name, rgb(part.kind), path)
 
 
 def write_part_stl(part: PartDef, path: Path) -> None:
@@ -40,7 +41,7 @@ def write_assembly_step(asm: Assembly, path: Path) -> None:
     for inst in asm.instances:
         solid = instance_solid(asm, inst)
         solid.label = inst.name
-        solid.color = bd.Color(*COLORS[asm.part_of(inst).kind])
+        solid.color = bd.Color(*rgb(asm.part_of(inst).kind))
         children.append(solid)
     compound = bd.Compound(children=children, label=asm.spec.name)
     if not bd.export_step(compound, path, unit=bd.Unit.MM):

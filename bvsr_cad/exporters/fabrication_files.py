@@ -28,6 +28,7 @@ import numpy as np
 import trimesh
 
 from .. import units
+from ..colors import rgb, rgba
 from ..assembly.build import Assembly
 from ..parts.rigid_tail import (KEPT_ROLES, RigidPiece, nut_pocket_depth_mm, pin_hole_mm, rigid_tail_pieces, tie_rod_hole_mm,
                                 tie_rod_length_mm)
@@ -36,7 +37,6 @@ from .bom import bom_rows, write_bom
 from .cad import STL_ANGULAR_TOLERANCE_RAD, STL_LINEAR_TOLERANCE_MM
 from .urdf import _f, _vec
 
-RIGID_COLOR = (0.80, 0.80, 0.74)
 #: Gap between objects laid out side by side in a job's 3MF (mm).
 PLATE_GAP_MM = 5.0
 #: Tessellation of the rigid twin's visual mesh in the robot description (mm).
@@ -84,7 +84,7 @@ def _write_stl(solid: bd.Shape, path: Path) -> None:
 
 def _write_step(solid: bd.Solid, name: str, path: Path) -> None:
     solid.label = name
-    solid.color = bd.Color(*RIGID_COLOR)
+    solid.color = bd.Color(*rgb("rigid_tail"))
     if not bd.export_step(solid, path, unit=bd.Unit.MM):
         raise OSError(f"STEP export failed: {path}")
 
@@ -158,7 +158,7 @@ def _rigid_robot(asm: Assembly, root: Path, parts: list[dict[str, Any]],
                   strippath="false")
     ET.SubElement(robot, "link", name="mount")
     m = ET.SubElement(robot, "material", name="PLA")
-    ET.SubElement(m, "color", rgba=_vec((*RIGID_COLOR, 1.0)))
+    ET.SubElement(m, "color", rgba=_vec(rgba("rigid_tail")))
     link = ET.SubElement(robot, "link", name="rigid_tail")
     inertial = ET.SubElement(link, "inertial")
     ET.SubElement(inertial, "origin", xyz=_vec(com), rpy="0 0 0")
@@ -191,7 +191,7 @@ def _rigid_robot(asm: Assembly, root: Path, parts: list[dict[str, Any]],
     ET.SubElement(body, "inertial", pos=_vec(com), mass=_f(mass_kg),
                   fullinertia=_vec((inertia[0, 0], inertia[1, 1], inertia[2, 2],
                                     inertia[0, 1], inertia[0, 2], inertia[1, 2])))
-    ET.SubElement(body, "geom", type="mesh", mesh="rigid_tail", rgba=_vec((*RIGID_COLOR, 1.0)),
+    ET.SubElement(body, "geom", type="mesh", mesh="rigid_tail", rgba=_vec(rgba("rigid_tail")),
                   contype="0", conaffinity="0")
     ET.indent(mj)
     mjcf_rel = f"robot/{name}.xml"

@@ -25,7 +25,6 @@ tendon's energy 1/2 (k/3) (3 dl)^2 equals their sum 3 (1/2) k dl^2).
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -49,19 +48,6 @@ PHI_DAMPING_NMS = 1e-4
 #: 90 deg, the same straight tail): extension and flexion, the tail's main
 #: motions, start without passing the singularity.
 PHI_REST_RAD = 1.5707963267948966
-
-
-@dataclass(frozen=True)
-class ActuationSI:
-    area_m2: float
-    stiffness_slope_n_m_per_pa: float  # m_a
-    stiffness_offset_n_m: float  # n_a
-    damping_n_s_m: float  # c, per SOA
-    pressure_min_pa: float
-    pressure_max_pa: float
-    rod_bending_stiffness_nm_rad: float  # E I / L of one joint
-    rod_axial_stiffness_n_m: float  # E A / L of one joint's rod piece
-    timestep_s: float
 
 
 def _f(v: float) -> str:
@@ -88,9 +74,10 @@ def chord_polynomial(arc_length_m: float, theta_a_max_rad: float) -> tuple[np.nd
     return coef, err
 
 
-def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], act: ActuationSI, per_segment: bool,
+def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
               mesh_dir: str = "meshes") -> tuple[ET.ElementTree, dict]:
     """The model as an element tree, and facts to record (chord error, counts)."""
+    act = robot.actuation
     model = f"{robot.name}_segments" if per_segment else robot.name
     root = ET.Element("mujoco", model=f"{robot.name}{'_per_segment' if per_segment else ''}")
     ET.SubElement(root, "compiler", angle="radian", meshdir=mesh_dir, autolimits="true")

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..assembly.build import Assembly
 from ..parts.mold import MoldPart, MoldSet, mold_set
+from ..colors import rgb
 from .cad import write_step
 
 #: Mold meshes: fine enough that the cavity (closed mold minus channels) and
@@ -31,8 +32,6 @@ from .cad import write_step
 MOLD_STL_LINEAR_TOLERANCE_MM = 0.005
 MOLD_STL_ANGULAR_TOLERANCE_RAD = 0.1
 
-COLORS = {"shell": (0.45, 0.62, 0.85), "bottom_plate": (0.55, 0.60, 0.68), "lid": (0.55, 0.60, 0.68),
-          "core": (0.35, 0.75, 0.45), "cast": (0.95, 0.55, 0.15)}
 #: How far each part moves along its pull direction in the exploded view (mm).
 EXPLODE_MM = {"half_a": 34.0, "half_b": 34.0, "bottom_plate": 30.0, "lid": 30.0}
 
@@ -46,7 +45,7 @@ def _stl(shape: bd.Shape, path: Path) -> None:
 
 def _step(part: MoldPart, path: Path) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
-    write_step(part.solid, part.name, COLORS[part.role], path)
+    write_step(part.solid, part.name, rgb(part.role), path)
 
 
 def _render_exploded(molds: MoldSet, path: Path) -> None:
@@ -70,16 +69,16 @@ def _render_exploded(molds: MoldSet, path: Path) -> None:
     for part in molds.parts.values():
         pull = np.zeros(3) if part.sacrificial else np.asarray(part.pull_direction)
         offset = pull * EXPLODE_MM.get(part.name, 0.0)
-        plotter.add_mesh(poly(part.solid, offset), color=COLORS[part.role], smooth_shading=False,
+        plotter.add_mesh(poly(part.solid, offset), color=rgb(part.role), smooth_shading=False,
                          opacity=0.6 if part.role == "core" else 1.0, show_edges=False)
         box = part.solid.bounding_box()
         centre = np.array([(box.min.X + box.max.X) / 2, (box.min.Y + box.max.Y) / 2, box.max.Z]) + offset
         tag = part.name + (" (sacrificial)" if part.sacrificial else "")
         labels.append(tag)
         label_points.append(centre)
-    plotter.add_mesh(poly(molds.cast, np.zeros(3)), color=COLORS["cast"], opacity=0.55, smooth_shading=False)
+    plotter.add_mesh(poly(molds.cast, np.zeros(3)), color=rgb("cast"), opacity=0.55, smooth_shading=False)
     for ch in molds.channels:
-        plotter.add_mesh(poly(ch.solid, np.zeros(3)), color=(0.85, 0.15, 0.15))
+        plotter.add_mesh(poly(ch.solid, np.zeros(3)), color=rgb("channel"))
     plotter.add_point_labels(np.array(label_points), labels, font_size=14, point_size=1, shape_opacity=0.6,
                              always_visible=True)
     plotter.add_text(f"SOA mold set: cast x{molds.scale:.4f} (shrinkage), halves split on x = y, "

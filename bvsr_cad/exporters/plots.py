@@ -1,8 +1,10 @@
-"""Plots of simulation results (matplotlib, no display needed)."""
+"""Plots of the analyses and simulation results (matplotlib, no display needed)."""
 
 from __future__ import annotations
 
 from pathlib import Path
+
+import numpy as np
 
 import matplotlib
 
@@ -10,6 +12,44 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from ..parameters import paper  # noqa: E402
+
+
+def plot_workspace(ws, path, title: str) -> None:
+    """The tip cloud in the XY, XZ and YZ planes (PNG)."""
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4.4))
+    for ax, (i, j) in zip(axes, ((0, 1), (0, 2), (1, 2))):
+        ax.scatter(ws.tip_mm[:, i], ws.tip_mm[:, j], s=1, alpha=0.3)
+        ax.set_xlabel(f"{'xyz'[i]} (mm)")
+        ax.set_ylabel(f"{'xyz'[j]} (mm)")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.grid(True, lw=0.3)
+    fig.suptitle(f"{title}: tip workspace, {ws.samples} samples (tail horizontal, gravity -Y)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_clearance_map(th: np.ndarray, ph: np.ndarray, bound: np.ndarray, path, title: str,
+                       workspace_theta_rad: float, min_clearance_mm: float,
+                       curves: dict[str, tuple[np.ndarray, np.ndarray]] | None = None) -> None:
+    """The map, the required clearance as a red contour and optional (phi, theta) curves (rad)."""
+    fig, ax = plt.subplots(figsize=(7, 4.6))
+    cs = ax.pcolormesh(np.degrees(ph), np.degrees(th), bound, shading="auto", cmap="viridis")
+    fig.colorbar(cs, label="clearance lower bound (mm)")
+    ax.contour(np.degrees(ph), np.degrees(th), bound, levels=[min_clearance_mm], colors="r")
+    ax.plot([], [], color="r", label=f"clearance bound = {min_clearance_mm:g} mm (required)")
+    for (label, (cp, ct)), style in zip((curves or {}).items(), ("w-", "m:", "c-.")):
+        order = np.argsort(cp)
+        ax.plot(np.degrees(np.asarray(cp)[order]), np.degrees(np.asarray(ct)[order]), style, lw=1.5, label=label)
+    ax.axhline(np.degrees(workspace_theta_rad), color="w", ls="--", lw=1, label="largest theta in the workspace")
+    ax.set_xlabel("phi (deg)")
+    ax.set_ylabel("theta (deg)")
+    ax.set_title(title)
+    ax.set_ylim(0, np.degrees(th.max()) * 1.12)
+    ax.legend(loc="lower left", fontsize=8, framealpha=0.85)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def plot_simulation(res, path: Path, title: str) -> None:

@@ -8,7 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..assembly.build import COLORS, Assembly
+from ..assembly.build import Assembly
+from ..colors import rgb
 
 
 def _pyvista():
@@ -44,7 +45,7 @@ def render_previews(asm: Assembly, root: Path) -> dict[str, str]:
         t = np.asarray(inst.transform)
         placed = v @ t[:3, :3].T + t[:3, 3]
         kind = asm.part_of(inst).kind
-        plotter.add_mesh(_polydata(pv, placed, f), color=COLORS[kind], smooth_shading=False,
+        plotter.add_mesh(_polydata(pv, placed, f), color=rgb(kind), smooth_shading=False,
                          opacity=0.55 if kind == "soa" else 1.0)
     plotter.add_axes()
     plotter.camera_position = [(-260.0, 170.0, -60.0), (0.0, 0.0, 130.0), (0.0, 1.0, 0.0)]
@@ -61,7 +62,7 @@ def render_previews(asm: Assembly, root: Path) -> dict[str, str]:
     for i, name in enumerate(names):
         plotter.subplot(i // cols, i % cols)
         v, f = meshes[name]
-        plotter.add_mesh(_polydata(pv, v, f), color=COLORS[asm.parts[name].kind], smooth_shading=False)
+        plotter.add_mesh(_polydata(pv, v, f), color=rgb(asm.parts[name].kind), smooth_shading=False)
         plotter.add_text(name, font_size=9)
         plotter.view_isometric()
     plotter.screenshot(str(out / "parts.png"))

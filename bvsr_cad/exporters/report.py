@@ -25,10 +25,9 @@ from typing import Any
 import numpy as np
 import trimesh
 
+from ..colors import rgb
 from ..parameters import paper
 
-COLORS = {"panel": (0.55, 0.60, 0.68), "soa": (0.95, 0.55, 0.15), "rod": (0.92, 0.92, 0.88),
-          "rigid_tail": (0.80, 0.80, 0.74), "mold": (0.45, 0.62, 0.85), "mold_core": (0.35, 0.75, 0.45)}
 
 _SIM = "`bvsr simulate` computes it; not run by `bvsr build`"
 _PLATFORM = "needs the platform model (Eq 20-22): not modelled yet"
@@ -109,7 +108,7 @@ def _render_parts(root: Path, items: list[tuple[str, str, str]], out: Path) -> d
     for name, rel, kind in items:
         mesh = trimesh.load(root / rel, file_type="stl", force="mesh")
         plotter.clear()
-        plotter.add_mesh(_poly(pv, mesh), color=COLORS.get(kind, (0.7, 0.7, 0.7)), smooth_shading=False)
+        plotter.add_mesh(_poly(pv, mesh), color=rgb(kind), smooth_shading=False)
         lo, hi = mesh.bounds
         size = float(max(hi[0] - lo[0], hi[1] - lo[1])) * 1.3
         bed = pv.Plane(center=((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, 0.0), direction=(0, 0, 1),

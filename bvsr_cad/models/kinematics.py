@@ -115,8 +115,10 @@ def _ry(a: np.ndarray) -> np.ndarray:
 
 
 def chord_length_mm(theta_rad: np.ndarray, length_mm: float) -> np.ndarray:
-    """c = 2 L sin(theta/2) / theta, the arc's chord (L at theta = 0)."""
-    S, _, _, _ = _series_coefficients(np.asarray(theta_rad, float) / 2)
+    """c = 2 L sin(theta/2) / theta, the arc's chord (L at theta = 0; even in theta, any length unit).
+
+    The one home of the chord: the kinematics, the robot model and its MJCF chord fit call it."""
+    S, _, _, _ = _series_coefficients(np.abs(np.asarray(theta_rad, float)) / 2)
     return length_mm * S
 
 

@@ -23,12 +23,14 @@ segment has the same pose.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .. import units
 from ..parameters.tables import TailSpec
+from .actuator import SoaForceLaw, soa_force_law
+from .rod import joint_rod_stiffness_nmm_per_rad
 from .kinematics import TailKinematics, soa_lengths_and_jacobian, theta_phi_from_uv, uv_from_theta_phi
 
 #: Standard gravity, m/s^2 (N per kg).
@@ -39,37 +41,42 @@ MOTION_PHI_RAD = {"extension": math.pi / 2, "flexion": -math.pi / 2, "waggle": 0
 
 @dataclass(frozen=True)
 class Actuator:
-    """Eq 3-4 in N and mm."""
+    """The SOA force law (:mod:`bvsr_cad.models.actuator`) in the statics' units (N, mm, kPa)
+    with the pressure bounds of the lines."""
 
-    area_mm2: float
-    slope_n_per_mm_per_kpa: float  # m_a
-    offset_n_per_mm: float  # n_a
+    law: SoaForceLaw
     pressure_min_kpa: float
     pressure_max_kpa: float
 
     @classmethod
     def from_spec(cls, spec: TailSpec, area_mm2: float | None = None) -> "Actuator":
-        a = spec.actuation
-        return cls(a.effective_area_mm2 if area_mm2 is None else area_mm2,
-                   a.stiffness_slope_n_per_m_per_kpa / units.MM_PER_M,
-                   a.stiffness_offset_n_per_m / units.MM_PER_M, a.pressure_min_kpa, a.pressure_max_kpa)
+        law = soa_force_law(spec)
+        if area_mm2 is not None:
+            law = replace(law, area_m2=units.mm2_to_m2(area_mm2))
+        return cls(law, spec.actuation.pressure_min_kpa, spec.actuation.pressure_max_kpa)
+
+    @property
+    def area_mm2(self) -> float:
+        return self.law.area_m2 * units.MM_PER_M ** 2
 
     @property
     def newton_per_kpa(self) -> float:
-        """P A in N for 1 kPa on A mm^2."""
-        return units.PA_PER_KPA * self.area_mm2 / units.MM_PER_M**2
+        """P A in N for 1 kPa on A."""
+        return float(self.law.force_n(units.PA_PER_KPA, 0.0))
+
+    @property
+    def slope_n_per_mm_per_kpa(self) -> float:
+        """m_a in N/mm per kPa."""
+        return self.law.stiffness_slope_n_per_m_per_pa * units.PA_PER_KPA / units.MM_PER_M
+
+    @property
+    def offset_n_per_mm(self) -> float:
+        """n_a in N/mm."""
+        return self.law.stiffness_offset_n_per_m / units.MM_PER_M
 
     def force_n(self, pressure_kpa: np.ndarray, dl_mm: np.ndarray) -> np.ndarray:
         """Eq 3: F = P A - (m_a P + n_a) dl."""
-        return pressure_kpa * self.newton_per_kpa - (self.slope_n_per_mm_per_kpa * pressure_kpa
-                                                     + self.offset_n_per_mm) * dl_mm
-
-
-def rod_bending_stiffness_nmm_per_rad(spec: TailSpec) -> float:
-    """E I / L of one joint: E of the vertebra material, I = pi d^4 / 64, L = H_a."""
-    e_mpa = spec.materials[spec.vertebra.material].youngs_modulus_mpa
-    d = spec.vertebra.diameter_mm
-    return e_mpa * math.pi * d**4 / 64.0 / spec.joint.gap_mm
+        return self.law.force_n(units.kpa_to_pa(pressure_kpa), units.mm_to_m(dl_mm))
 
 
 @dataclass(frozen=True)
@@ -94,7 +101,7 @@ class TailStatics:
     def from_spec(cls, spec: TailSpec, masses: LumpedMasses | None = None,
                   area_mm2: float | None = None) -> "TailStatics":
         return cls(TailKinematics.from_spec(spec), Actuator.from_spec(spec, area_mm2),
-                   rod_bending_stiffness_nmm_per_rad(spec), masses)
+                   joint_rod_stiffness_nmm_per_rad(spec), masses)
 
     def first_segment(self) -> "TailStatics":
         """One standalone segment (the paper's Table III specimen): the first three joints."""
@@ -364,5 +371,5 @@ def quasi_static_segment(seg: TailStatics, motion: str) -> QuasiStatic:
 
 
 __all__ = ["Actuator", "LumpedMasses", "TailStatics", "QuasiStatic", "least_norm_in_box", "pressure_pattern_kpa",
-           "quasi_static_segment", "rod_bending_stiffness_nmm_per_rad", "segment_bend_angle_rad",
+           "quasi_static_segment", "segment_bend_angle_rad",
            "uv_from_theta_phi", "MOTION_PHI_RAD", "G_N_PER_KG"]

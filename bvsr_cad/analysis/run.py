@@ -1,0 +1,114 @@
+"""Every analysis of `bvsr build` as one result object, handed on in memory.
+
+:func:`run_analyses` computes the workspace, the quasi-static table, the
+certified clearance, the exact joint limits and the tip joint's clearance map;
+:mod:`bvsr_cad.exporters.analysis_files` serialises the result and the robot
+model takes its joint limits from it (nothing reads a file the build wrote).
+
+Run as ``python -m bvsr_cad.analysis.run OUT PARAMS SHA256`` it is the build's
+second process (:mod:`bvsr_cad.worker`): the same analyses from the parameter
+file, the result pickled back to the build.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..assembly.build import Assembly
+from .clearance import ClearanceResult, clearance_map, clearance_over, posed_tail
+from .limits import JointLimits, fold_stack, joint_limits, stack_limit_rad
+from .workspace import Workspace, quasi_static_table, run_workspace
+
+#: Limits in the build: 36 bending planes, 1 mrad steps, searched up to 1 rad.
+BUILD_LIMIT_PHIS = 36
+THETA_SEARCH_MAX_RAD = 1.0
+LIMIT_RESOLUTION_RAD = 1e-3
+
+
+@dataclass(frozen=True)
+class ClearanceMap:
+    """Stage-1 bound of the tip joint bending alone, with the saved limit and the fold stack."""
+
+    joint: int  # 1-based
+    theta_rad: np.ndarray
+    phi_rad: np.ndarray
+    bound_mm: np.ndarray  # (theta, phi)
+    limit_phi_rad: np.ndarray
+    limit_theta_rad: np.ndarray
+    stack_theta_rad: np.ndarray
+
+
+@dataclass(frozen=True)
+class AnalysisResults:
+    workspace: Workspace
+    quasi_static: list[dict]
+    clearance: ClearanceResult
+    clearance_poses_note: str
+    required_clearance_mm: float
+    limits: list[JointLimits]
+    fold_stack_lambda: float
+    clearance_map: ClearanceMap
+    seconds: float
+
+    def theta_max_per_joint(self) -> list[float]:
+        """Each joint's limit as one number: the minimum of theta_max over the bending planes."""
+        return [float(np.min(lim.theta_max_rad)) for lim in self.limits]
+
+
+def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None) -> AnalysisResults:
+    say = progress or (lambda _m: None)
+    spec = asm.spec
+    cfg = spec.analysis
+    t0 = time.perf_counter()
+    say("analysis: workspace")
+    ws = run_workspace(asm, cfg.build_workspace_samples, cfg.seed, say)
+    quasi = quasi_static_table(asm, (1.0, 2.0))
+    say("analysis: clearance")
+    pt = posed_tail(asm, say)
+    rng = np.random.default_rng(cfg.seed)
+    idx = rng.integers(0, ws.samples, cfg.build_clearance_poses)
+    clearance = clearance_over(pt, ws.w[idx])
+    say("analysis: joint limits")
+    stack = fold_stack(spec)
+    lims = joint_limits(pt, cfg.min_clearance_mm, BUILD_LIMIT_PHIS, THETA_SEARCH_MAX_RAD, LIMIT_RESOLUTION_RAD,
+                        exact=True, stack=stack,
+                        progress=say)
+    tip = spec.joints - 1
+    th, ph, bound = clearance_map(pt, tip, THETA_SEARCH_MAX_RAD)
+    phis = np.asarray(lims[tip].phi_rad)
+    cmap = ClearanceMap(tip + 1, th, ph, bound, phis, np.asarray(lims[tip].theta_max_rad),
+                        stack_limit_rad(pt, tip, phis, *stack))
+    seconds = time.perf_counter() - t0
+    say(f"analysis: {seconds:.1f} s")
+    return AnalysisResults(ws, quasi, clearance, "poses resampled from the build's workspace samples",
+                           cfg.min_clearance_mm, lims, stack[0], cmap, seconds)
+
+
+def _from_params(params: str, sha256: str) -> AnalysisResults:
+    """The second process's work: the analyses of the parameter file the build read (``sha256``),
+    progress on stderr (the parent relays it)."""
+    import sys
+
+    from ..assembly.build import build_assembly
+    from ..parameters.load import ParamError, load_spec, params_sha256
+
+    if params_sha256(params) != sha256:
+        raise ParamError(params, ["the file changed while the build was running; build again"])
+
+    def say(msg: str) -> None:
+        print(f"(second process) {msg}", file=sys.stderr, flush=True)
+
+    return run_analyses(build_assembly(load_spec(params)), say)
+
+
+if __name__ == "__main__":
+    import sys
+
+    from ..worker import serve
+    from . import run  # the module itself, not __main__: its result classes must pickle by their real name
+
+    sys.exit(serve(sys.argv[1], run._from_params, *sys.argv[2:]))

@@ -1,0 +1,76 @@
+"""The vertebra rod's cross-section: the one home of its E I, E A and mass per length.
+
+The rod is a solid round bar of diameter d in the vertebra material. Every
+model that needs its stiffness or its mass (the statics, the workspace's
+lumped masses, the robot descriptions) calls this module; a calibrated
+stiffness then reaches all of them by changing one input.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .. import units
+from ..parameters.tables import TailSpec
+
+
+@dataclass(frozen=True)
+class RodSection:
+    """A solid round rod: diameter (mm), Young's modulus (MPa = N/mm^2), density (g/cm^3)."""
+
+    material: str  # key into spec.materials
+    diameter_mm: float
+    youngs_modulus_mpa: float
+    density_g_cm3: float
+
+    @property
+    def area_mm2(self) -> float:
+        """A = pi d^2 / 4."""
+        return math.pi * self.diameter_mm ** 2 / 4.0
+
+    @property
+    def second_moment_mm4(self) -> float:
+        """I = pi d^4 / 64 (solid circle about a diameter)."""
+        return math.pi * self.diameter_mm ** 4 / 64.0
+
+    @property
+    def flexural_rigidity_n_mm2(self) -> float:
+        """E I in N mm^2."""
+        return self.youngs_modulus_mpa * self.second_moment_mm4
+
+    @property
+    def axial_rigidity_n(self) -> float:
+        """E A in N."""
+        return self.youngs_modulus_mpa * self.area_mm2
+
+    def bending_stiffness_nmm_per_rad(self, length_mm: float) -> float:
+        """E I / L of a piece of length L bent into an arc (Eq 10): N mm per rad."""
+        return self.flexural_rigidity_n_mm2 / length_mm
+
+    def bending_stiffness_nm_per_rad(self, length_mm: float) -> float:
+        """E I / L in N m per rad."""
+        return units.nmm_to_nm(self.bending_stiffness_nmm_per_rad(length_mm))
+
+    def axial_stiffness_n_per_m(self, length_mm: float) -> float:
+        """E A / L of a piece of length L in N/m."""
+        return self.axial_rigidity_n / length_mm * units.MM_PER_M
+
+    @property
+    def mass_per_length_g_mm(self) -> float:
+        return units.mass_g(self.area_mm2, self.density_g_cm3)
+
+    def mass_g(self, length_mm: float) -> float:
+        return self.mass_per_length_g_mm * length_mm
+
+
+def rod_section(spec: TailSpec) -> RodSection:
+    """The vertebra rod of ``spec`` (its material, diameter, modulus and density)."""
+    key = spec.vertebra.material
+    mat = spec.material(key)
+    return RodSection(key, spec.vertebra.diameter_mm, mat.youngs_modulus_mpa, mat.density_g_cm3)
+
+
+def joint_rod_stiffness_nmm_per_rad(spec: TailSpec) -> float:
+    """E I / L of the rod across one joint gap (L = H_a)."""
+    return rod_section(spec).bending_stiffness_nmm_per_rad(spec.joint.gap_mm)

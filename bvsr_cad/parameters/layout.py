@@ -402,6 +402,18 @@ def binding_constraint(spec: TailSpec) -> str:
     return probs[0][0] if probs else "none"
 
 
+def soa_is_sound(spec: TailSpec) -> bool:
+    """The SOA's own rules hold (:func:`validate_layout` names any that does not), so the dimensions
+    derived from Table II (fold levels, wall offset, interior) mean something."""
+    s = spec.soa
+    return (s.long_side_mm > s.short_side_mm and s.origami_height_mm < s.height_mm
+            and s.short_side_mm - 2 * s.wall_offset_mm > 0.5 and 2 * s.fillet_radius_mm < s.short_side_mm)
+
+
+#: The [fabrication] minimums a panel rule can require (the message names the one that binds).
+_WEB_KEYS = ("min_pocket_gap_mm", "min_wall_mm", "min_rim_lip_mm", "socket_floor_mm")
+
+
 def validate_layout(spec: TailSpec) -> list[str]:
     """Every geometric impossibility, as messages that name the parameter to change."""
     problems: list[str] = []
@@ -458,7 +470,10 @@ def validate_layout(spec: TailSpec) -> list[str]:
                 f"{beta_max:.4f} deg ('auto' picks it); limited by: {binding_constraint(spec)}")
             return problems
     for desc, measured, need in _problems_at(spec, half_angle_rad(spec)):
-        problems.append(f"{desc} (allowed: >= {need:g} mm; see [fabrication], [tubes], [lightening], [mount])")
+        keys = " or ".join(f"fabrication.{k} = {getattr(spec.fabrication, k)!r}" for k in _WEB_KEYS
+                           if getattr(spec.fabrication, k) == need) or f"{need:g} mm"
+        problems.append(f"{desc}, {need - measured:.2f} mm short (allowed: >= {keys}; see [joint], [tubes], "
+                        "[lightening], [mount])")
     return problems
 
 

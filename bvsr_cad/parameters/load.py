@@ -1,9 +1,13 @@
 """TOML parameter file -> validated :class:`TailSpec`.
 
 Every problem is collected before reporting, and each names the file, the
-key, the value and what is allowed. Geometric feasibility (pockets that
-overlap, a taper beyond the feasible one, ...) is checked afterwards by
-:func:`bvsr_cad.parameters.layout.validate_layout`.
+key, the value and what is allowed. Geometric feasibility is checked
+afterwards, on the same derived numbers the generators build from: the
+panels (pockets that overlap, a taper beyond the feasible one, ...) by
+:func:`bvsr_cad.parameters.layout.validate_layout`, the casting mold set by
+:func:`bvsr_cad.parameters.molds.mold_problems` and the rigid twin (its
+pins, tie rod and the printer it must fit) by
+:func:`bvsr_cad.parameters.twin.twin_problems`. A file that loads builds.
 """
 
 from __future__ import annotations
@@ -17,6 +21,9 @@ from pathlib import Path
 from typing import Any
 
 from .tables import AUTO, Material, TailSpec
+
+#: The rigid comparison tail (parts/rigid_tail.py, the fabrication package) is printed in this material.
+RIGID_TWIN_MATERIAL = "PLA"
 
 
 class ParamError(ValueError):
@@ -122,25 +129,44 @@ def spec_from_dict(data: dict[str, Any], source: str | Path = "<dict>") -> TailS
     Raises:
         ParamError: naming every bad key, its value and what is allowed.
     """
-    from .layout import validate_layout  # layout depends on tables only
+    from .layout import soa_is_sound, validate_layout  # layout depends on tables only
+    from .molds import mold_problems
+    from .twin import twin_problems
 
     problems: list[str] = []
     spec = _build(TailSpec, data, "", problems)
     if spec is not None:
         if not re.fullmatch(r"[A-Za-z0-9_-]+", spec.name):
             problems.append(f"name = {spec.name!r}: only letters, digits, '_' and '-' are allowed")
-        for key, value in (("use.panel", spec.use.panel), ("use.soa", spec.use.soa),
-                           ("vertebra.material", spec.vertebra.material)):
-            if value not in spec.materials:
-                problems.append(
-                    f"{key} = {value!r}: not a material in [materials]; allowed: {', '.join(spec.materials)}"
-                )
+        problems += material_problems(spec)
     if problems:
         raise ParamError(source, problems)
+    # Geometry: the panels, then what the generators build on them (one set of derived numbers each,
+    # shared with the generators: parameters/layout.py, parameters/molds.py, parameters/twin.py).
     problems = validate_layout(spec)
+    problems += mold_problems(spec.soa, spec.joint.base_diameter_mm, spec.casting) if soa_is_sound(spec) else []
+    if not problems:
+        problems = twin_problems(spec)
     if problems:
         raise ParamError(source, problems)
     return spec
+
+
+def material_problems(spec: TailSpec) -> list[str]:
+    """Every material key named anywhere in the spec (and the rigid twin's fixed one) must be in [materials]."""
+    out = []
+    allowed = ", ".join(spec.materials)
+    for key, value in (("use.panel", spec.use.panel), ("use.soa", spec.use.soa),
+                       ("vertebra.material", spec.vertebra.material),
+                       ("fabrication_package.core_material", spec.fabrication_package.core_material),
+                       ("fabrication_package.mold_material", spec.fabrication_package.mold_material)):
+        if value not in spec.materials:
+            out.append(f"{key} = {value!r}: not a material in [materials]; allowed: {allowed}")
+    if RIGID_TWIN_MATERIAL not in spec.materials:
+        out.append(f"materials.{RIGID_TWIN_MATERIAL}: missing; the rigid comparison tail is printed in "
+                   f"{RIGID_TWIN_MATERIAL!r} and its mass needs [materials.{RIGID_TWIN_MATERIAL}] (the file names: "
+                   f"{allowed})")
+    return out
 
 
 def load_spec(path: str | Path) -> TailSpec:

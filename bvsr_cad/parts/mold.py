@@ -44,6 +44,7 @@ from dataclasses import dataclass, field
 import build123d as bd
 import numpy as np
 
+from ..parameters.molds import PIN_ROOT_MM, SOCKET_EXTRA_DEPTH_MM, mold_dimensions, mold_problems
 from ..parameters.tables import Casting, SoaTable
 from ._kernel import GeometryError, cut_all, cylinder_between, fuse_all, location, single_solid
 from .soa import bellows_profile, soa_body
@@ -52,10 +53,6 @@ from .soa import bellows_profile, soa_body
 DIAGONAL_PULL = (1.0 / math.sqrt(2.0), -1.0 / math.sqrt(2.0), 0.0)
 #: In-plane direction of the parting plane x = y (towards the +X+Y corner).
 DIAGONAL_ALONG = (1.0 / math.sqrt(2.0), 1.0 / math.sqrt(2.0), 0.0)
-#: Sockets are this much deeper than their pins so a pin never bottoms out.
-SOCKET_EXTRA_DEPTH_MM = 0.5
-#: Pins are fused this deep into their own part so the fuse makes one solid.
-PIN_ROOT_MM = 0.5
 
 Matrix = tuple[tuple[float, ...], ...]
 
@@ -138,11 +135,6 @@ def _uez_box(u0: float, u1: float, e0: float, e1: float, z0: float, z1: float) -
     return bd.Solid.make_box(u1 - u0, e1 - e0, z1 - z0, plane)
 
 
-def _require(ok: bool, message: str) -> None:
-    if not ok:
-        raise ValueError(message)
-
-
 def mold_set(soa: SoaTable, flange_diameter_mm: float, casting: Casting) -> MoldSet:
     """Build the mold set that casts the SOA described by ``soa``.
 
@@ -160,7 +152,11 @@ def mold_set(soa: SoaTable, flange_diameter_mm: float, casting: Casting) -> Mold
         GeometryError: the kernel did not produce one valid solid per part.
     """
     c = casting
-    k = 1.0 + c.shrinkage_percent / 100.0
+    problems = mold_problems(soa, flange_diameter_mm, c)  # the rules the parameter file was validated by
+    if problems:
+        raise ValueError("; ".join(problems))
+    dims = mold_dimensions(soa, flange_diameter_mm, c)
+    k = dims.scale
     prof = bellows_profile(soa, flange_diameter_mm)
 
     # --- The cast and the envelope it fills, in the SOA frame, then scaled.
@@ -182,46 +178,20 @@ def mold_set(soa: SoaTable, flange_diameter_mm: float, casting: Casting) -> Mold
     core = bd.loft([_rounded_square(s, 0.0, z) for s, z in zip(core_s, core_z)], ruled=True)
     core = single_solid(core.scale(k), "core")
 
-    # --- Dimensions in the cast frame.
-    h = k * height
-    fk = k * f
-    z_lo, z_hi = fk, h - fk  # halves between the flanges
-    r_fl = k * r_flange
-    rho_max = k * max(r_flange, soa.computed_circumcircle_mm / 2.0)  # corners may stand proud of the flange
-    core_half = k * prof.inner_side_mm[0] / 2.0
-    wall = c.cavity_wall_mm
-    w = rho_max + wall  # half-width of the square block along u and e
-    t = wall  # plate and lid thickness beyond the flange faces
-    mw = c.min_print_wall_mm
-    socket_d = c.pin_diameter_mm + c.pin_clearance_mm
-    rho_pin = rho_max + wall / 2.0
-    _require(rho_pin - socket_d / 2.0 - rho_max >= mw and w - rho_pin - socket_d / 2.0 >= mw,
-             f"casting.cavity_wall_mm = {wall:g}: too thin for a {socket_d:g} mm pin socket with "
-             f"{mw:g} mm walls on both sides (need >= {2 * (socket_d + 2 * mw):g} mm)")
-    _require(c.core_print_mm <= t - mw,
-             f"casting.core_print_mm = {c.core_print_mm:g}: leaves less than casting.min_print_wall_mm = {mw:g} "
-             f"under the core socket in a {t:g} mm plate (casting.cavity_wall_mm)")
-    _require(c.pin_length_mm + SOCKET_EXTRA_DEPTH_MM + mw <= (z_hi - z_lo) / 2.0,
-             f"casting.pin_length_mm = {c.pin_length_mm:g}: sockets from both ends would meet in the halves")
-    bolt_c = c.bolt_hole_diameter_mm / 2.0 + 2.0 * mw  # bolt axis to the block edges
-    bolt_uv = w - bolt_c
-    _require(math.hypot(bolt_uv, bolt_uv) - c.bolt_hole_diameter_mm / 2.0 - rho_max >= wall
-             and math.hypot(bolt_uv - rho_pin, bolt_uv) >= c.bolt_hole_diameter_mm / 2.0 + socket_d / 2.0 + mw,
-             f"casting.bolt_hole_diameter_mm = {c.bolt_hole_diameter_mm:g}: the bolts do not fit in the block corners")
-
-    def channel_radius(d_mm: float, what: str) -> float:
-        """Radius on the +X/+Y axes where a channel lands fully on the flange
-        face and keeps a printable wall to the square core print."""
-        lo, hi = core_half + mw + d_mm / 2.0, r_fl - d_mm / 2.0
-        _require(lo <= hi, f"casting.{what}_diameter_mm = {d_mm:g}: does not fit on the flange face between "
-                           f"the core print ({2 * core_half:.2f} mm square) and the rim (D {2 * r_fl:.2f} mm)")
-        return (lo + hi) / 2.0
-
-    r_gate = channel_radius(c.gate_diameter_mm, "gate")
-    r_vent = channel_radius(c.vent_diameter_mm, "vent")
+    # --- Dimensions in the cast frame: the same numbers the parameter validation judges.
+    h = dims.cast_height_mm
+    z_lo, z_hi = dims.z_lo_mm, dims.z_hi_mm  # halves between the flanges
+    r_fl = dims.cast_flange_radius_mm
+    w = dims.block_half_mm  # half-width of the square block along u and e
+    t = dims.plate_mm  # plate and lid thickness beyond the flange faces
+    socket_d = dims.socket_mm
+    rho_pin = dims.pin_circle_mm
+    bolt_uv = dims.bolt_uv_mm
+    r_gate = dims.channel_radius_mm(c.gate_diameter_mm)
+    r_vent = dims.channel_radius_mm(c.vent_diameter_mm)
 
     # --- Features shared by several parts.
-    z_bot, z_top = -t, h + t
+    z_bot, z_top = dims.z_bottom_mm, dims.z_top_mm
     bolts = [cylinder_between(_uez(su * bolt_uv, se * bolt_uv, z_bot - 1.0), _uez(su * bolt_uv, se * bolt_uv,
                                                                                      z_top + 1.0),
                               c.bolt_hole_diameter_mm)

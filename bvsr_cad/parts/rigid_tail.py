@@ -38,19 +38,14 @@ import numpy as np
 
 from ..parameters.layout import PanelLayout, soa_angles_deg, polar
 from ..parameters.tables import SoaTable, TailSpec
+# The twin's derived dimensions (pin depths, nut pockets, the printer fit) live with the rules that validate them.
+from ..parameters.twin import (NUT_AF_MM, NUT_HEIGHT_MM, NUT_POCKET_CLEARANCE_MM, PANEL_PIN_FLOOR_MM,  # noqa: F401
+                               PIN_HOLE_EXTRA_MM, fits_printer, nut_pocket_depth_mm, pin_depths_mm, pin_hole_mm,
+                               tie_rod_hole_mm, tie_rod_length_mm, twin_problems)
 from ._kernel import GeometryError, cut_all, cylinder_between, fuse_all, location, single_solid
 
 #: Panel features kept in the twin (they show from outside or carry the robot and payload).
 KEPT_ROLES = ("lightening", "tube", "insert")
-#: Hex nut across flats (ISO 4032) by thread size, mm, and its height.
-NUT_AF_MM = {2.0: 4.0, 2.5: 5.0, 3.0: 5.5}
-NUT_HEIGHT_MM = {2.0: 1.6, 2.5: 2.0, 3.0: 2.4}
-#: Extra room around a nut in its printed pocket (FDM holes print small).
-NUT_POCKET_CLEARANCE_MM = 0.3
-#: A pin hole is this much deeper than half the pin so the pin never bottoms out.
-PIN_HOLE_EXTRA_MM = 0.5
-#: Material kept over a pin hole in a panel (the tip panel's distal face).
-PANEL_PIN_FLOOR_MM = 1.5
 
 
 @dataclass(frozen=True)
@@ -95,25 +90,6 @@ def _frustum(lay: PanelLayout) -> bd.Solid:
     return bd.Solid.make_cone(lay.rim_radius_lower_mm, lay.rim_radius_upper_mm, lay.thickness_mm)
 
 
-def tie_rod_hole_mm(spec: TailSpec) -> float:
-    fp = spec.fabrication_package
-    return fp.tie_rod_thread + fp.tie_rod_clearance_mm
-
-
-def pin_hole_mm(spec: TailSpec) -> float:
-    fp = spec.fabrication_package
-    return fp.pin_diameter_mm + fp.pin_hole_clearance_mm
-
-
-def nut_pocket_depth_mm(spec: TailSpec) -> float:
-    return NUT_HEIGHT_MM[spec.fabrication_package.tie_rod_thread] + 0.5
-
-
-def tie_rod_length_mm(spec: TailSpec) -> float:
-    """Cut length of the tie rod: through the tail, nut pockets at both ends, flush with the nuts' outer faces."""
-    return spec.length_mm - 2.0 * nut_pocket_depth_mm(spec) + 2.0 * NUT_HEIGHT_MM[spec.fabrication_package.tie_rod_thread]
-
-
 def _hex_prism(af_mm: float, z0: float, z1: float) -> bd.Solid:
     """A hexagonal pocket (flats across ``af_mm``) between z0 and z1 on the axis."""
     r = af_mm / math.sqrt(3.0)  # circumradius
@@ -134,15 +110,19 @@ def rigid_tail_pieces(spec: TailSpec, layouts: list[PanelLayout],
         The pieces from root to tip.
 
     Raises:
+        ValueError: the spec breaks a rule of the twin (:func:`bvsr_cad.parameters.twin.twin_problems`,
+            checked when the parameter file is loaded; names the key).
         GeometryError: a piece does not fit the printer volume of ``[fabrication_package]``, or the
             kernel failed.
     """
+    problems = twin_problems(spec)
+    if problems:
+        raise ValueError("; ".join(problems))
     fp = spec.fabrication_package
     soa_env = _soa_envelope(spec.soa, spec.joint.base_diameter_mm)
     d_pin, d_tie = pin_hole_mm(spec), tie_rod_hole_mm(spec)
     # The pin sits deeper in the column than in the panel so the tip panel keeps a floor over its holes.
-    panel_pin_depth = min(fp.pin_length_mm / 2.0 + PIN_HOLE_EXTRA_MM, layouts[0].thickness_mm - PANEL_PIN_FLOOR_MM)
-    column_pin_depth = fp.pin_length_mm - (panel_pin_depth - PIN_HOLE_EXTRA_MM) + PIN_HOLE_EXTRA_MM
+    panel_pin_depth, column_pin_depth = pin_depths_mm(spec, layouts[0].thickness_mm)
     nut_af = NUT_AF_MM[fp.tie_rod_thread] + NUT_POCKET_CLEARANCE_MM
     nut_depth = nut_pocket_depth_mm(spec)
     pieces: list[RigidPiece] = []
@@ -181,7 +161,9 @@ def rigid_tail_pieces(spec: TailSpec, layouts: list[PanelLayout],
         tools = list(cuts)
         if k < n:
             # The SOA flanges reach into the next panel's pockets: that part belongs to the next piece.
-            tools.append(bd.Solid.make_box(400.0, 400.0, 20.0).moved(bd.Location((-200.0, -200.0, h))))
+            side = max(400.0, 4.0 * (lay.rim_radius_lower_mm + spec.joint.base_diameter_mm))
+            tools.append(bd.Solid.make_box(side, side, max(20.0, 2.0 * lay.thickness_mm))
+                         .moved(bd.Location((-side / 2.0, -side / 2.0, h))))
         for f in features:
             p0 = (f.p0[0], f.p0[1], f.p0[2] - z0)
             p1 = (f.p1[0], f.p1[1], f.p1[2] - z0)
@@ -199,9 +181,7 @@ def rigid_tail_pieces(spec: TailSpec, layouts: list[PanelLayout],
         box = solid.bounding_box()
         size = (box.size.X, box.size.Y, box.size.Z)
         # Either way round on the bed.
-        fits = size[0] <= max(fp.printer_x_mm, fp.printer_y_mm) and size[1] <= min(fp.printer_x_mm, fp.printer_y_mm) \
-            or size[1] <= max(fp.printer_x_mm, fp.printer_y_mm) and size[0] <= min(fp.printer_x_mm, fp.printer_y_mm)
-        if not fits or size[2] > fp.printer_z_mm:
+        if not fits_printer(size, fp):
             raise GeometryError(
                 f"rigid tail piece {name} is {size[0]:.1f} x {size[1]:.1f} x {size[2]:.1f} mm and does not fit the "
                 f"printer (fabrication_package.printer_x_mm/printer_y_mm/printer_z_mm = {fp.printer_x_mm:g} x "

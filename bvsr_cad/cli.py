@@ -201,6 +201,47 @@ def make_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: Which parameters shape each generator (bvsr_cad/parts/<module>.py), for the advice after a failure.
+_GENERATOR_PARAMETERS = {
+    "mold": ("the SOA casting mold set", "[casting] (cavity_wall_mm, pins, bolts, gate, vents) or [soa]"),
+    "rigid_tail": ("the rigid comparison tail", "[fabrication_package] (printer_*_mm, pin_*, tie_rod_*) or "
+                   "[joint] (panel_diameter_mm, joint_height_mm)"),
+    "panel": ("a panel", "[fabrication] (min_wall_mm, min_pocket_gap_mm), [tubes], [lightening], [mount], "
+              "[payload], [socket] or [joint]"),
+    "soa": ("the SOA", "[soa] (facet_thickness_mm, fillet_radius_mm, sides, dihedral_deg)"),
+    "vertebra": ("the rod", "[vertebra] or [joint]"),
+}
+
+
+def _raised_in_parts(exc: BaseException) -> str | None:
+    """The generator module (``bvsr_cad/parts/<name>.py``) the exception was raised in, innermost first."""
+    tb, found = exc.__traceback__, None
+    while tb is not None:
+        path = Path(tb.tb_frame.f_code.co_filename)
+        if path.parent.name == "parts" and path.parent.parent.name == "bvsr_cad":
+            found = path.stem if path.stem != "_kernel" or found is None else found
+        tb = tb.tb_next
+    return found
+
+
+def _generator_failure(args, exc: BaseException) -> str:
+    """One paragraph for a generator that failed on a parameter file that loaded: what, where, what to change."""
+    import re
+
+    where = _raised_in_parts(exc)
+    part, params = _GENERATOR_PARAMETERS.get(where or "", ("a part", "the parameters of the part it names"))
+    text = " ".join(str(exc).split())
+    # The keys a message leads with ("casting.cavity_wall_mm = 3.0: ..."), else every key it mentions.
+    named = list(dict.fromkeys(re.findall(r"(?:^|; )([a-z_]+\.[a-z_]+) = ", text))) or \
+        list(dict.fromkeys(re.findall(r"\b[a-z_]+\.[a-z_]+_(?:mm|deg|percent|material|thread)\b", text)))
+    change = f"change {', '.join(named)}" if named else f"change {params}"
+    source = getattr(args, "params", None)
+    published = " Nothing was published." if getattr(args, "func", None) is cmd_build else ""
+    return (f"bvsr: error: {source or 'the input'} passed validation, but building {part} failed: {text}."
+            f"{published} To build it, {change}; the rules checked at load do not cover this combination yet, "
+            "so please report the parameter file with this message.")
+
+
 def main(argv: list[str] | None = None) -> int:
     try:
         args = make_parser().parse_args(argv)
@@ -219,8 +260,13 @@ def main(argv: list[str] | None = None) -> int:
         print(f"bvsr: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except GeometryError as exc:
-        print(f"bvsr: geometry error: {exc}", file=sys.stderr)
-        return EXIT_FAILED
+        print(_generator_failure(args, exc), file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except ValueError as exc:
+        if _raised_in_parts(exc) is None:
+            raise  # a bug, not a parameter: keep its traceback
+        print(_generator_failure(args, exc), file=sys.stderr)
+        return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("bvsr: interrupted; nothing was published", file=sys.stderr)
         return 130

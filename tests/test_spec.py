@@ -77,6 +77,24 @@ BAD = [
                                                         d["socket"].__setitem__("boss_wall_mm", 5.5)),
      "set-screw collar"),
     ("tube holes into the rod bore", lambda d: d["tubes"].__setitem__("inner_radius_mm", 4.0), "rod_bore"),
+    # Rules of the generators beyond the panels, checked at load (issue 10): they used to fail mid-build.
+    ("mold wall too thin for the pins", lambda d: d["casting"].__setitem__("cavity_wall_mm", 3.0),
+     "casting.cavity_wall_mm = 3.0"),
+    ("unknown core material", lambda d: d["fabrication_package"].__setitem__("core_material", "unobtainium"),
+     "fabrication_package.core_material = 'unobtainium'"),
+    ("unknown mold material", lambda d: d["fabrication_package"].__setitem__("mold_material", "unobtainium"),
+     "fabrication_package.mold_material = 'unobtainium'"),
+    ("rigid twin material missing", lambda d: d["materials"].pop("PLA"), "materials.PLA"),
+    ("mold gate wider than the flange face", lambda d: d["casting"].__setitem__("gate_diameter_mm", 6.0),
+     "casting.gate_diameter_mm = 6.0"),
+    ("mold pins meet in the halves", lambda d: d["casting"].__setitem__("pin_length_mm", 17.0),
+     "casting.pin_length_mm = 17.0"),
+    ("rigid twin wider than the printer", lambda d: d["fabrication_package"].__setitem__("printer_y_mm", 60.0),
+     "fabrication_package.printer_y_mm = 60.0"),
+    ("rigid twin taller than the printer", lambda d: d["fabrication_package"].__setitem__("printer_z_mm", 40.0),
+     "fabrication_package.printer_z_mm = 40.0"),
+    ("tie rod through a 4 mm rod column", lambda d: d["vertebra"].__setitem__("diameter_mm", 4.0),
+     "fabrication_package.tie_rod_thread = 3.0"),
 ]
 
 
@@ -113,3 +131,63 @@ def test_every_error_is_collected(tmp_path, data):
     with pytest.raises(ParamError) as err:
         load_spec(write_toml(tmp_path / "bad.toml", data))
     assert len(err.value.problems) == 3
+
+
+def test_thin_mold_wall_names_the_rule_and_the_smallest_wall(data):
+    """casting.cavity_wall_mm = 3.0 used to crash `bvsr build` after 28 s; now load says why and what is allowed.
+
+    Hand calculation: the pins sit mid-wall, so the wall needs a pin socket (3.0 + 0.2 mm) and
+    casting.min_print_wall_mm = 1.2 mm on both sides: 3.2 + 2 x 1.2 = 5.6 mm. The bolts in the block corners
+    need (sqrt 2 - 1)(rho + wall) >= sqrt 2 (1.7 + 2.4) + 1.7 with rho = 1.003 x 12.39 mm (the bellows
+    corners): wall >= 5.69 mm, which binds.
+    """
+    data["casting"]["cavity_wall_mm"] = 3.0
+    with pytest.raises(ParamError) as err:
+        spec_from_dict(data, "bad.toml")
+    msg = str(err.value)
+    assert "casting.cavity_wall_mm = 3.0: mold set:" in msg
+    assert "1.30 mm short of casting.min_print_wall_mm" in msg  # 3.0 / 2 - 3.2 / 2 = -0.1 mm web, 1.2 needed
+    rho = 1.003 * ((18.21 / 2 - 1.2) * math.sqrt(2) + 1.2)
+    wall = (math.sqrt(2) * (3.4 / 2 + 2 * 1.2) + 3.4 / 2) / (math.sqrt(2) - 1) - rho
+    assert f"allowed: >= {math.ceil(wall * 100) / 100:.2f} mm" in msg
+    data["casting"]["cavity_wall_mm"] = math.ceil(wall * 100) / 100
+    spec_from_dict(data, "ok.toml")  # and that wall loads
+
+
+def _generator_fails(monkeypatch, error):
+    """Make the panel generator fail inside parts/panel.py as the kernel would."""
+    import bvsr_cad.parts.panel as panel_module
+
+    def broken(*_args, **_kwargs):
+        raise error
+
+    monkeypatch.setattr(panel_module, "cut_all", broken)
+
+
+@pytest.mark.parametrize("error", [
+    "GeometryError('panel0: the kernel produced 2 solids instead of one')",
+    "ValueError('joint.pitch_diameter_mm = 45.87: a rule the loader missed')",
+])
+def test_generator_failure_exits_2_with_advice_not_a_traceback(tmp_path, monkeypatch, capsys, error):
+    from bvsr_cad.parts._kernel import GeometryError  # noqa: F401 - used by eval
+
+    _generator_fails(monkeypatch, eval(error))
+    out = tmp_path / "out"
+    assert main(["build", str(PARAMS / "bvsr.toml"), "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and err.count("\n") == 1  # one paragraph
+    assert "bvsr.toml passed validation, but building a panel failed" in err
+    assert "Nothing was published" in err and not out.exists()
+    advice = "change joint.pitch_diameter_mm" if "pitch" in error else "change [fabrication] (min_wall_mm"
+    assert advice in err
+
+
+def test_a_value_error_outside_the_generators_keeps_its_traceback(monkeypatch):
+    import bvsr_cad.assembly.build as build_module
+
+    def bug(*_args, **_kwargs):
+        raise ValueError("a bug, not a parameter")
+
+    monkeypatch.setattr(build_module, "build_assembly", bug)
+    with pytest.raises(ValueError, match="a bug"):
+        main(["workspace", str(PARAMS / "bvsr.toml"), "--samples", "1", "-q"])

@@ -17,6 +17,7 @@ from pathlib import Path
 
 from .analysis.run import run_analyses
 from .assembly.build import build_assembly
+from .assembly.products import build_mold_set, build_rigid_twin, rigid_robot_model
 from .assembly.robot import robot_model
 from .checks.result import CheckResult
 from .checks.run import run_checks
@@ -110,8 +111,12 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         manifest = manifest_dict(asm, params_sha256(params), files, "step/assembly.step")
         say("previews (off-screen renders)")
         manifest["previews"] = render_previews(asm, tmp)
-        molds = write_molds(asm, tmp, say)
-        fabrication = write_fabrication(asm, tmp, manifest | molds, say)
+        say("SOA mold set")
+        mold_set = build_mold_set(asm)
+        molds = write_molds(asm, mold_set, tmp, say)
+        say("rigid comparison tail")
+        pieces = build_rigid_twin(asm)
+        fabrication = write_fabrication(asm, pieces, rigid_robot_model(asm, pieces), tmp, manifest | molds, say)
         results = result_or(analyses, lambda: run_analyses(asm, say), say, "analyses")
         manifest.update(write_analyses(results, tmp, spec.name))
         say("robot model (B-rep inertials)")

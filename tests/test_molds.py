@@ -31,7 +31,8 @@ MOLD_PARTS = {"half_a", "half_b", "bottom_plate", "lid", "core"}
 def _export_molds(spec, root: Path) -> Export:
     """Write only the mold set of ``spec`` and open it as an export."""
     root.mkdir(parents=True, exist_ok=True)
-    fragment = write_molds(SimpleNamespace(spec=spec), root, lambda _m: None)
+    fragment = write_molds(SimpleNamespace(spec=spec), mold_set(spec.soa, spec.joint.base_diameter_mm, spec.casting),
+                           root, lambda _m: None)
     (root / "molds.json").write_text(json.dumps(fragment))
     return Export(root, fragment)
 

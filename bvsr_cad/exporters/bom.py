@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..assembly.build import Assembly
+from ..assembly.products import RIGID_MATERIAL
 
 #: Metric thread by tap drill (ISO coarse) and by clearance hole (ISO 273 medium), mm.
 THREAD_BY_TAP_DRILL = {1.6: 2.0, 2.05: 2.5, 2.5: 3.0, 3.3: 4.0, 4.2: 5.0, 5.0: 6.0}
@@ -167,7 +168,7 @@ def bom_rows(asm: Assembly, manifest: dict[str, Any]) -> list[BomRow]:
                 rigid_mass += p["mass_g"]
                 size = p["info"]["size_mm"]
                 rows.append(BomRow("rigid tail", "part", p["name"], f"rigid tail piece {size[0]:.1f} x {size[1]:.1f} x "
-                                   f"{size[2]:.1f} mm", 1, "pcs", "PLA", "FDM", p["mass_g"], p["mass_g"],
+                                   f"{size[2]:.1f} mm", 1, "pcs", RIGID_MATERIAL, "FDM", p["mass_g"], p["mass_g"],
                                    "mass at solid density; infill lowers it"))
         j = rt["joining"]
         rows.append(BomRow("rigid tail", "fastener", "dowel pin", j["pins"]["designation"], j["pins"]["count"],
@@ -204,7 +205,7 @@ def bom_rows(asm: Assembly, manifest: dict[str, Any]) -> list[BomRow]:
     rows.append(BomRow("BVSR", "total", "BVSR modelled mass", "panels + SOAs + rods", 1, "", "", "", bvsr_mass,
                        bvsr_mass, "fittings, tubes, adhesive and inserts not weighed"))
     if rt:
-        rows.append(BomRow("rigid tail", "total", "rigid tail mass", "all pieces, solid PLA", 1, "", "PLA", "FDM",
+        rows.append(BomRow("rigid tail", "total", "rigid tail mass", "all pieces, solid PLA", 1, "", RIGID_MATERIAL, "FDM",
                            rigid_mass, rigid_mass, "infill lowers it"))
     if molds.get("parts"):
         rows.append(BomRow("molds", "total", "mold material", "rigid sets + cores", 1, "", "", "FDM", mold_mass,

@@ -23,16 +23,31 @@ def write_step(solid: bd.Shape, label: str, rgb: tuple[float, float, float], pat
         raise OSError(f"STEP export failed: {path}")
 
 
+def write_stl(shape: bd.Shape, path: Path, tolerance_mm: float = STL_LINEAR_TOLERANCE_MM,
+              angular_tolerance_rad: float = STL_ANGULAR_TOLERANCE_RAD, scale: float = 1.0) -> None:
+    """The one STL writer: binary STL of a shape tessellated by OCCT in millimetres, optionally
+    scaled afterwards (``scale = 1e-3``: metres, for robot descriptions)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    target = path if scale == 1.0 else path.with_suffix(".mm.stl")
+    if not bd.export_stl(shape, target, tolerance=tolerance_mm, angular_tolerance=angular_tolerance_rad,
+                         ascii_format=False):
+        raise OSError(f"STL export failed: {target}")
+    if scale != 1.0:
+        import trimesh
+
+        mesh = trimesh.load(target, force="mesh")
+        target.unlink()
+        mesh.apply_scale(scale)
+        mesh.export(path)
+
+
 def write_part_step(part: PartDef, path: Path) -> None:
     write_step(part.solid, part.name, rgb(part.kind), path)
 
 
 def write_part_stl(part: PartDef, path: Path) -> None:
     """Binary STL in print orientation (mm)."""
-    solid = part.print_solid
-    if not bd.export_stl(solid, path, tolerance=STL_LINEAR_TOLERANCE_MM,
-                         angular_tolerance=STL_ANGULAR_TOLERANCE_RAD, ascii_format=False):
-        raise OSError(f"STL export failed: {path}")
+    write_stl(part.print_solid, path)
 
 
 def write_assembly_step(asm: Assembly, path: Path) -> None:

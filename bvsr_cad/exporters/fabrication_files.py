@@ -23,36 +23,24 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import build123d as bd
 import numpy as np
 import trimesh
 
 from .. import units
 from ..colors import rgb, rgba
 from ..assembly.build import Assembly
-from ..parts.rigid_tail import (KEPT_ROLES, RigidPiece, nut_pocket_depth_mm, pin_hole_mm, rigid_tail_pieces, tie_rod_hole_mm,
-                                tie_rod_length_mm)
-from ..parameters.load import ParamError
+from ..parameters.layout import N_SOA
+from ..assembly.products import RIGID_MATERIAL, RigidRobot, piece_transform_mm
+from ..parts.rigid_tail import KEPT_ROLES, RigidPiece, nut_pocket_depth_mm, pin_hole_mm, tie_rod_hole_mm, tie_rod_length_mm
 from .bom import bom_rows, write_bom
-from .cad import STL_ANGULAR_TOLERANCE_RAD, STL_LINEAR_TOLERANCE_MM
-from .urdf import _f, _vec
+from .cad import write_step, write_stl
+from .xml import num as _f
+from .xml import vec as _vec
 
 #: Gap between objects laid out side by side in a job's 3MF (mm).
 PLATE_GAP_MM = 5.0
 #: Tessellation of the rigid twin's visual mesh in the robot description (mm).
 ROBOT_MESH_TOLERANCE_MM = 0.3
-
-
-def _check_keys(asm: Assembly) -> None:
-    spec = asm.spec
-    fp = spec.fabrication_package
-    problems = [f"fabrication_package.{key} = {value!r}: not a material in [materials]; allowed: "
-                f"{', '.join(spec.materials)}"
-                for key, value in (("core_material", fp.core_material), ("mold_material", fp.mold_material),
-                                   ("rigid tail material 'PLA'", "PLA"))
-                if value not in spec.materials]
-    if problems:
-        raise ParamError("parameters", problems)
 
 
 def _filled_features(asm: Assembly) -> list[dict[str, Any]]:
@@ -68,39 +56,17 @@ def _filled_features(asm: Assembly) -> list[dict[str, Any]]:
     return out
 
 
-def _soa_transforms(asm: Assembly) -> dict[int, list[np.ndarray]]:
-    out: dict[int, list[np.ndarray]] = {}
-    for k in range(1, asm.spec.panels):
-        out[k] = [np.asarray(i.transform) for i in asm.instances if i.name.startswith(f"j{k}_soa")]
-    return out
-
-
-def _write_stl(solid: bd.Shape, path: Path) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if not bd.export_stl(solid, path, tolerance=STL_LINEAR_TOLERANCE_MM, angular_tolerance=STL_ANGULAR_TOLERANCE_RAD,
-                         ascii_format=False):
-        raise OSError(f"STL export failed: {path}")
-
-
-def _write_step(solid: bd.Solid, name: str, path: Path) -> None:
-    solid.label = name
-    solid.color = bd.Color(*rgb("rigid_tail"))
-    if not bd.export_step(solid, path, unit=bd.Unit.MM):
-        raise OSError(f"STEP export failed: {path}")
-
-
 def _rigid_parts(asm: Assembly, pieces: list[RigidPiece], root: Path) -> list[dict[str, Any]]:
     spec = asm.spec
-    mat = spec.material("PLA")
+    mat = spec.material(RIGID_MATERIAL)
     entries = []
     for p in pieces:
         files = {"step": f"step/{p.name}.step", "stl": f"stl/{p.name}.stl"}
-        _write_step(p.solid, p.name, root / files["step"])
-        _write_stl(p.solid, root / files["stl"])
-        transform = np.eye(4)
-        transform[2, 3] = p.z0_mm
+        write_step(p.solid, p.name, rgb("rigid_tail"), root / files["step"])
+        write_stl(p.solid, root / files["stl"])
+        transform = piece_transform_mm(p)
         entries.append({
-            "name": p.name, "kind": "rigid_tail", "material": "PLA", "material_name": mat.name,
+            "name": p.name, "kind": "rigid_tail", "material": RIGID_MATERIAL, "material_name": mat.name,
             "density_g_cm3": mat.density_g_cm3, "process": "FDM", "count": 1,
             "volume_mm3": p.solid.volume, "mass_g": units.mass_g(p.solid.volume, mat.density_g_cm3),
             "instances": [p.name], "files": files,
@@ -114,36 +80,26 @@ def _rigid_parts(asm: Assembly, pieces: list[RigidPiece], root: Path) -> list[di
     return entries
 
 
-def _visual_meshes(pieces: list[RigidPiece]) -> list[trimesh.Trimesh]:
+def _visual_meshes(rigid: RigidRobot) -> list[trimesh.Trimesh]:
     """Coarse meshes of the pieces in the tail frame, in metres.
 
     Called before the print STLs are written: OCCT keeps the finest triangulation
     a shape has had, so tessellating afterwards would return the print mesh.
     """
     visual = []
-    for piece in pieces:
-        verts, tris = piece.solid.tessellate(ROBOT_MESH_TOLERANCE_MM, 0.5)
-        v = np.array([(q.X, q.Y, q.Z + piece.z0_mm) for q in verts]) * units.mm_to_m(1.0)
+    for solid in rigid.solids_mm:
+        verts, tris = solid.tessellate(ROBOT_MESH_TOLERANCE_MM, 0.5)
+        v = np.array([(q.X, q.Y, q.Z) for q in verts]) * units.mm_to_m(1.0)
         visual.append(trimesh.Trimesh(v, np.asarray(tris), process=False))
     return visual
 
 
-def _rigid_robot(asm: Assembly, root: Path, parts: list[dict[str, Any]],
-                 visual: list[trimesh.Trimesh]) -> dict[str, Any]:
-    """URDF and MJCF of the rigid twin: one body fixed to the robot's mount."""
-    spec = asm.spec
-    name = f"{spec.name}_rigid"
-    meshes = []
-    for p in parts:  # each piece's print STL moved from its print frame into the tail frame
-        m = trimesh.load(root / p["files"]["stl"], file_type="stl", force="mesh")
-        m.apply_transform(np.asarray(p["tail_transform"], float))
-        meshes.append(m)
-    mesh = trimesh.util.concatenate(meshes)
-    mesh.apply_scale(units.mm_to_m(1.0))
-    mesh.density = spec.material("PLA").density_g_cm3 * 1000.0  # kg/m3
-    mass_kg = float(mesh.mass)
-    com = np.asarray(mesh.center_mass, float)
-    inertia = np.asarray(mesh.moment_inertia, float)  # about the centre of mass, tail axes
+def _rigid_robot(rigid: RigidRobot, root: Path, visual: list[trimesh.Trimesh]) -> dict[str, Any]:
+    """URDF and MJCF of the rigid twin's one-link model: one body fixed to the robot's mount."""
+    name = rigid.name
+    mass_kg = rigid.inertial.mass_kg
+    com = rigid.inertial.com
+    inertia = rigid.inertial.inertia  # about the centre of mass, tail axes
     folder = root / "robot"
     (folder / "meshes").mkdir(parents=True, exist_ok=True)
     mesh_rel = f"meshes/{name}.stl"
@@ -157,7 +113,7 @@ def _rigid_robot(asm: Assembly, root: Path, parts: list[dict[str, Any]],
     ET.SubElement(mj_ext, "compiler", balanceinertia="false", discardvisual="false", fusestatic="false",
                   strippath="false")
     ET.SubElement(robot, "link", name="mount")
-    m = ET.SubElement(robot, "material", name="PLA")
+    m = ET.SubElement(robot, "material", name=rigid.material)
     ET.SubElement(m, "color", rgba=_vec(rgba("rigid_tail")))
     link = ET.SubElement(robot, "link", name="rigid_tail")
     inertial = ET.SubElement(link, "inertial")
@@ -171,7 +127,7 @@ def _rigid_robot(asm: Assembly, root: Path, parts: list[dict[str, Any]],
         g = ET.SubElement(el, "geometry")
         ET.SubElement(g, "mesh", filename=mesh_rel)
         if tag == "visual":
-            ET.SubElement(el, "material", name="PLA")
+            ET.SubElement(el, "material", name=rigid.material)
     fixed = ET.SubElement(robot, "joint", name="mount_to_rigid_tail", type="fixed")
     ET.SubElement(fixed, "origin", xyz="0 0 0", rpy="0 0 0")
     ET.SubElement(fixed, "parent", link="mount")
@@ -182,7 +138,7 @@ def _rigid_robot(asm: Assembly, root: Path, parts: list[dict[str, Any]],
 
     mj = ET.Element("mujoco", model=name)
     ET.SubElement(mj, "compiler", angle="radian", meshdir="meshes")
-    ET.SubElement(mj, "option", timestep=_f(spec.robot.timestep_s), gravity="0 -9.81 0")
+    ET.SubElement(mj, "option", timestep=_f(rigid.timestep_s), gravity="0 -9.81 0")
     asset = ET.SubElement(mj, "asset")
     ET.SubElement(asset, "mesh", name="rigid_tail", file=f"{name}.stl")
     world = ET.SubElement(mj, "worldbody")
@@ -235,7 +191,7 @@ def _print_jobs(asm: Assembly, root: Path, manifest: dict[str, Any], rigid: list
         if p["process"] == "MJF":
             add("MJF", p["material"], p["name"], p["kind"], p["files"]["stl"], p["count"], p["volume_mm3"])
     for p in rigid:
-        add("FDM", "PLA", p["name"], p["kind"], p["files"]["stl"], p["count"], p["volume_mm3"])
+        add("FDM", RIGID_MATERIAL, p["name"], p["kind"], p["files"]["stl"], p["count"], p["volume_mm3"])
     soa_count = sum(p["count"] for p in manifest["parts"] if p["kind"] == "soa")
     for mp in manifest.get("molds", {}).get("parts", []):
         if mp.get("sacrificial"):
@@ -273,23 +229,17 @@ def _print_jobs(asm: Assembly, root: Path, manifest: dict[str, Any], rigid: list
     return out
 
 
-def write_fabrication(asm: Assembly, root: Path, manifest: dict[str, Any],
-                      progress: Callable[[str], None]) -> dict[str, Any]:
-    """Write the rigid tail, print files and the BOM under ``root``; returns keys to merge into the manifest.
-
-    Raises:
-        ParamError: ``[fabrication_package]`` names a material that is not in ``[materials]``.
-        GeometryError: a rigid-tail piece does not fit the printer or the kernel failed.
-    """
+def write_fabrication(asm: Assembly, pieces: list[RigidPiece], rigid_robot: RigidRobot, root: Path,
+                      manifest: dict[str, Any], progress: Callable[[str], None]) -> dict[str, Any]:
+    """Write the rigid tail (built by :mod:`bvsr_cad.assembly.products`), print files and the BOM
+    under ``root``; returns keys to merge into the manifest."""
     spec = asm.spec
     fp = spec.fabrication_package
-    _check_keys(asm)
     progress("rigid comparison tail (PLA pieces)")
-    pieces = rigid_tail_pieces(spec, asm.panel_layouts, _soa_transforms(asm))
-    visual = _visual_meshes(pieces)
+    visual = _visual_meshes(rigid_robot)
     rigid = _rigid_parts(asm, pieces, root)
     progress("rigid tail robot description")
-    robot_rigid = _rigid_robot(asm, root, rigid, visual)
+    robot_rigid = _rigid_robot(rigid_robot, root, visual)
     progress("print files (STL, 3MF per process and material)")
     jobs = _print_jobs(asm, root, manifest, rigid)
     rigid_section = {
@@ -298,7 +248,7 @@ def write_fabrication(asm: Assembly, root: Path, manifest: dict[str, Any],
         "split": "one piece per joint at each panel's lower face (panel on the bed, SOA columns and rod on it); "
                  "the tip panel alone",
         "joining": {"pins": {"designation": f"ISO 2338 {fp.pin_diameter_mm:g} m6 x {fp.pin_length_mm:g}",
-                             "count": 5 * (spec.panels - 1), "hole_mm": pin_hole_mm(spec)},
+                             "count": N_SOA * (spec.panels - 1), "hole_mm": pin_hole_mm(spec)},
                     "tie_rod": {"designation": f"DIN 976-1 M{fp.tie_rod_thread:g}",
                                 "cut_length_mm": tie_rod_length_mm(spec), "hole_mm": tie_rod_hole_mm(spec)},
                     "nuts": {"designation": f"ISO 4032 M{fp.tie_rod_thread:g}", "count": 2,

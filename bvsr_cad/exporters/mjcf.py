@@ -31,6 +31,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..assembly.robot import RobotModel, chord_joint_value
+from .xml import num as _f
+from .xml import quat_wxyz as _quat
+from .xml import vec as _vec
+from .xml import write_tree
 
 #: Tail frame (Z along the tail, Y dorsal) mounted horizontally in MuJoCo's
 #: world (gravity -Z): tail Z -> world +X, tail Y -> world +Z, tail X -> world +Y.
@@ -48,19 +52,6 @@ PHI_DAMPING_NMS = 1e-4
 #: 90 deg, the same straight tail): extension and flexion, the tail's main
 #: motions, start without passing the singularity.
 PHI_REST_RAD = 1.5707963267948966
-
-
-def _f(v: float) -> str:
-    return f"{float(v):.10g}"
-
-
-def _vec(values) -> str:
-    return " ".join(_f(v) for v in values)
-
-
-def _quat(R: np.ndarray) -> str:
-    x, y, z, w = Rotation.from_matrix(R).as_quat()
-    return _vec((w, x, y, z))
 
 
 def chord_polynomial(arc_length_m: float, theta_a_max_rad: float) -> tuple[np.ndarray, float]:
@@ -247,4 +238,4 @@ def scene_tree(model_file: str, name: str) -> ET.ElementTree:
 
 
 def write_mjcf(path: Path, tree: ET.ElementTree) -> None:
-    tree.write(path, encoding="utf-8")
+    write_tree(tree, path, declaration=False)

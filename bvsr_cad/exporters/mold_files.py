@@ -23,9 +23,9 @@ import build123d as bd
 import numpy as np
 
 from ..assembly.build import Assembly
-from ..parts.mold import MoldPart, MoldSet, mold_set
+from ..parts.mold import MoldSet
 from ..colors import rgb
-from .cad import write_step
+from .cad import write_step, write_stl
 
 #: Mold meshes: fine enough that the cavity (closed mold minus channels) and
 #: the cast agree far inside the 0.5 % the cavity check allows.
@@ -37,10 +37,7 @@ EXPLODE_MM = {"half_a": 34.0, "half_b": 34.0, "bottom_plate": 30.0, "lid": 30.0}
 
 
 def _stl(shape: bd.Shape, path: Path) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if not bd.export_stl(shape, path, tolerance=MOLD_STL_LINEAR_TOLERANCE_MM,
-                         angular_tolerance=MOLD_STL_ANGULAR_TOLERANCE_RAD, ascii_format=False):
-        raise OSError(f"STL export failed: {path}")
+    write_stl(shape, path, MOLD_STL_LINEAR_TOLERANCE_MM, MOLD_STL_ANGULAR_TOLERANCE_RAD)
 
 
 def _step(part: MoldPart, path: Path) -> None:
@@ -96,15 +93,13 @@ def _render_exploded(molds: MoldSet, path: Path) -> None:
     plotter.close()
 
 
-def write_molds(asm: Assembly, root: Path, progress: Callable[[str], None]) -> dict[str, Any]:
-    """Build the mold set for the assembly's SOA and write it under ``root/molds``.
+def write_molds(asm: Assembly, molds: MoldSet, root: Path, progress: Callable[[str], None]) -> dict[str, Any]:
+    """Write the mold set (built by :func:`bvsr_cad.assembly.products.build_mold_set`) under ``root/molds``.
 
     Returns:
         Keys to merge into the manifest (``{"molds": {...}}``).
     """
     spec = asm.spec
-    progress("SOA mold set")
-    molds = mold_set(spec.soa, spec.joint.base_diameter_mm, spec.casting)
     out = root / "molds"
     out.mkdir(exist_ok=True)
     cast_rel = "molds/soa_cast.stl"

@@ -4,11 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import build123d as bd
-import trimesh
-
 from .. import units
 from ..assembly.robot import RobotModel
+from .cad import write_stl
 
 #: Fine enough that link inertias from these meshes match the B-rep within 0.1 %.
 MESH_TOLERANCE_MM = 0.01
@@ -30,10 +28,4 @@ def write_robot_meshes(robot: RobotModel, mesh_dir: Path) -> dict[str, str]:
 
 def _write_m(shape, path: Path, tolerance_mm: float = MESH_TOLERANCE_MM) -> None:
     """Tessellate in millimetres with OCCT (fast), then scale the mesh to metres."""
-    tmp = path.with_suffix(".mm.stl")
-    if not bd.export_stl(shape, tmp, tolerance=tolerance_mm, angular_tolerance=0.1):
-        raise OSError(f"STL export failed: {tmp}")
-    mesh = trimesh.load(tmp, force="mesh")
-    tmp.unlink()
-    mesh.apply_scale(1.0 / units.MM_PER_M)
-    mesh.export(path)
+    write_stl(shape, path, tolerance_mm, 0.1, scale=units.mm_to_m(1.0))

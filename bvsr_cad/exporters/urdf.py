@@ -14,24 +14,10 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-import numpy as np
-from scipy.spatial.transform import Rotation
-
 from ..assembly.robot import RobotModel
-
-
-def _f(v: float) -> str:
-    return f"{float(v):.10g}"
-
-
-def _vec(values) -> str:
-    return " ".join(_f(v) for v in values)
-
-
-def origin_attrs(T) -> dict[str, str]:
-    T = np.asarray(T, float)
-    rpy = Rotation.from_matrix(T[:3, :3]).as_euler("xyz")
-    return {"xyz": _vec(T[:3, 3]), "rpy": _vec(rpy)}
+from .xml import num as _f
+from .xml import origin_attrs, write_tree
+from .xml import vec as _vec
 
 
 def urdf_tree(robot: RobotModel, mesh_files: dict[str, str], mesh_prefix: str = "meshes/") -> ET.ElementTree:
@@ -85,4 +71,4 @@ def urdf_tree(robot: RobotModel, mesh_files: dict[str, str], mesh_prefix: str = 
 
 
 def write_urdf(robot: RobotModel, path: Path, mesh_files: dict[str, str], mesh_prefix: str = "meshes/") -> None:
-    urdf_tree(robot, mesh_files, mesh_prefix).write(path, encoding="utf-8", xml_declaration=True)
+    write_tree(urdf_tree(robot, mesh_files, mesh_prefix), path)

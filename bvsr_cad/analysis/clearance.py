@@ -297,8 +297,6 @@ def posed_tail(asm: Assembly, progress: Progress | None = None, cutoff_mm: float
     """Meshes, pairs and their exact rest clearances. Pairs farther apart at rest
     than one joint pitch (and never spanning a common joint) are dropped: the
     bound above keeps them apart by at least min(1, lambda) x that distance."""
-    from ..assembly.build import instance_solid
-
     say = progress or (lambda _m: None)
     spec = asm.spec
     kin = TailKinematics.from_spec(spec)

@@ -20,7 +20,8 @@ from ..parts._kernel import location
 from ..parts.panel import panel
 from ..parts.soa import soa_body
 from ..parts.vertebra import rod
-from ..parameters.layout import (ISO_PITCH_MM, PanelLayout, half_angle_rad, panel_layout, polar, rod_bore_mm,
+from ..parameters.standard_parts import metric
+from ..parameters.layout import (PanelLayout, half_angle_rad, panel_layout, polar, rod_bore_mm,
                            soa_angles_deg)
 from ..parameters.tables import TailSpec
 
@@ -191,7 +192,7 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None) -> Assembly
                       "pocket_diameter_mm": lay.cuts[0].diameter_mm,
                       "rod_socket": spec.vertebra.socket,
                       "rod_bore_mm": rod_bore_mm(spec),
-                      "rod_thread": (f"M{spec.vertebra.diameter_mm:g}x{ISO_PITCH_MM[spec.vertebra.diameter_mm]:g}, "
+                      "rod_thread": (f"M{spec.vertebra.diameter_mm:g}x{metric(spec.vertebra.diameter_mm).pitch_mm:g}, "
                                      "tap after printing" if spec.vertebra.socket == "threaded" else None)},
             )
         segs = segments_of_panel(lay.index)

@@ -34,7 +34,7 @@ from ..parameters.layout import N_SOA
 from ..parameters.tables import TailSpec
 from ..colors import rgba
 from ..parts.vertebra import rod
-from .build import Assembly, Instance, instance_solid, rod_span_mm
+from .build import Assembly, Instance, rod_span_mm
 from .inertia import Inertial, compose, from_solid
 
 VIRTUAL_MASS_KG = 1e-7  # 0.1 mg: valid for every simulator, negligible, and counted in the totals

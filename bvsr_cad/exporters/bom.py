@@ -19,13 +19,10 @@ import numpy as np
 
 from ..assembly.build import Assembly
 from ..assembly.products import RIGID_MATERIAL
+from ..parameters.standard_parts import metric, size_for_clearance_hole, size_for_tap_drill
 
-#: Metric thread by tap drill (ISO coarse) and by clearance hole (ISO 273 medium), mm.
-THREAD_BY_TAP_DRILL = {1.6: 2.0, 2.05: 2.5, 2.5: 3.0, 3.3: 4.0, 4.2: 5.0, 5.0: 6.0}
-THREAD_BY_CLEARANCE = {2.4: 2.0, 2.9: 2.5, 3.4: 3.0, 4.5: 4.0, 5.5: 5.0, 6.6: 6.0}
 #: Preferred lengths of ISO 4762 socket head cap screws, mm.
 ISO_4762_LENGTHS_MM = (6, 8, 10, 12, 16, 20, 25, 30, 35, 40, 45, 50, 55, 60, 65, 70, 80, 90, 100)
-NUT_HEIGHT_MM = {2.0: 1.6, 2.5: 2.0, 3.0: 2.4, 4.0: 3.2, 5.0: 4.7, 6.0: 5.2}
 
 FIELDS = ("product", "category", "item", "designation", "quantity", "unit", "material", "process",
           "mass_each_g", "mass_total_g", "notes")
@@ -44,10 +41,6 @@ class BomRow:
     mass_each_g: float | None
     mass_total_g: float | None
     notes: str = ""
-
-
-def _nearest(table: dict[float, float], d_mm: float) -> float:
-    return table[min(table, key=lambda k: abs(k - d_mm))]
 
 
 def tube_routes_mm(asm: Assembly) -> dict[str, float]:
@@ -82,7 +75,7 @@ def tube_routes_mm(asm: Assembly) -> dict[str, float]:
 def _mold_bolt_length_mm(manifest: dict[str, Any], thread: float) -> tuple[int, float]:
     block = manifest.get("molds", {}).get("info", {}).get("block_mm")
     grip = float(block[2]) if block else 0.0
-    need = grip + NUT_HEIGHT_MM.get(thread, 0.8 * thread) + 1.0
+    need = grip + metric(thread).nut_height_mm + 1.0
     for length in ISO_4762_LENGTHS_MM:
         if length >= need:
             return length, grip
@@ -129,7 +122,7 @@ def bom_rows(asm: Assembly, manifest: dict[str, Any]) -> list[BomRow]:
                            f"{spec.payload.insert_diameter_mm:g} mm bore, {spec.payload.insert_depth_mm:g} mm long",
                            payload_inserts, "pcs", "brass", "bought", None, None, "tip payload mount"))
     if spec.vertebra.socket == "set_screw":
-        size = _nearest(THREAD_BY_TAP_DRILL, spec.socket.set_screw_tap_drill_mm)
+        size = size_for_tap_drill(spec.socket.set_screw_tap_drill_mm).diameter_mm
         rows.append(BomRow("BVSR", "fastener", "rod set screw", f"ISO 4026 M{size:g} x 4 set screw, flat point",
                            roles.get("setscrew", 0), "pcs", "steel", "bought", None, None,
                            "one per panel socket"))
@@ -193,7 +186,7 @@ def bom_rows(asm: Assembly, manifest: dict[str, Any]) -> list[BomRow]:
                            else f"mold {mp['role']}", qty, "pcs", mat, "FDM", m_each, qty * m_each,
                            "one per SOA cast" if sac else f"{fp.mold_sets} mold sets"))
     if molds.get("parts"):
-        thread = _nearest(THREAD_BY_CLEARANCE, spec.casting.bolt_hole_diameter_mm)
+        thread = size_for_clearance_hole(spec.casting.bolt_hole_diameter_mm).diameter_mm
         length, grip = _mold_bolt_length_mm(manifest, thread)
         rows.append(BomRow("molds", "fastener", "mold bolt", f"ISO 4762 M{thread:g} x {length}", 4 * fp.mold_sets,
                            "pcs", "steel", "bought", None, None, f"four per set through lid, halves and plate "

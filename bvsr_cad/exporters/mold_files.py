@@ -23,7 +23,7 @@ import build123d as bd
 import numpy as np
 
 from ..assembly.build import Assembly
-from ..parts.mold import MoldSet
+from ..parts.mold import MoldPart, MoldSet
 from ..colors import rgb
 from .cad import write_step, write_stl
 

@@ -20,12 +20,10 @@ from functools import lru_cache
 
 import numpy as np
 
+from .standard_parts import metric
 from .tables import AUTO, TailSpec
 
 N_SOA = 5
-#: ISO coarse thread (diameter -> tap drill) for the threaded vertebra socket.
-ISO_TAP_DRILL_MM = {4.0: 3.3, 5.0: 4.2, 6.0: 5.0}
-ISO_PITCH_MM = {4.0: 0.7, 5.0: 0.8, 6.0: 1.0}
 
 
 def soa_angles_deg() -> np.ndarray:
@@ -118,7 +116,7 @@ def hole_d(spec: TailSpec, nominal_mm: float) -> float:
 def rod_bore_mm(spec: TailSpec) -> float:
     d = spec.vertebra.diameter_mm
     if spec.vertebra.socket == "threaded":
-        return hole_d(spec, ISO_TAP_DRILL_MM[d])
+        return hole_d(spec, metric(d).tap_drill_mm)
     return hole_d(spec, d + spec.socket.rod_clearance_mm)
 
 

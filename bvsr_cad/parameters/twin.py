@@ -19,11 +19,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .layout import PanelLayout, half_angle_rad, panel_layout, rounded_square_support
+from .standard_parts import metric
 from .tables import FabricationPackage, TailSpec
 
-#: Hex nut across flats (ISO 4032) by thread size, mm, and its height.
-NUT_AF_MM = {2.0: 4.0, 2.5: 5.0, 3.0: 5.5}
-NUT_HEIGHT_MM = {2.0: 1.6, 2.5: 2.0, 3.0: 2.4}
 #: Extra room around a nut in its printed pocket (FDM holes print small).
 NUT_POCKET_CLEARANCE_MM = 0.3
 #: A pin hole is this much deeper than half the pin so the pin never bottoms out.
@@ -45,12 +43,12 @@ def pin_hole_mm(spec: TailSpec) -> float:
 
 
 def nut_pocket_depth_mm(spec: TailSpec) -> float:
-    return NUT_HEIGHT_MM[spec.fabrication_package.tie_rod_thread] + 0.5
+    return metric(spec.fabrication_package.tie_rod_thread).nut_height_mm + 0.5
 
 
 def tie_rod_length_mm(spec: TailSpec) -> float:
     """Cut length of the tie rod: through the tail, nut pockets at both ends, flush with the nuts' outer faces."""
-    return spec.length_mm - 2.0 * nut_pocket_depth_mm(spec) + 2.0 * NUT_HEIGHT_MM[spec.fabrication_package.tie_rod_thread]
+    return spec.length_mm - 2.0 * nut_pocket_depth_mm(spec) + 2.0 * metric(spec.fabrication_package.tie_rod_thread).nut_height_mm
 
 
 def pin_depths_mm(spec: TailSpec, panel_thickness_mm: float) -> tuple[float, float]:
@@ -205,6 +203,6 @@ def twin_problems(spec: TailSpec) -> list[str]:
     return out
 
 
-__all__ = ["NUT_AF_MM", "NUT_HEIGHT_MM", "NUT_POCKET_CLEARANCE_MM", "PIN_HOLE_EXTRA_MM", "PANEL_PIN_FLOOR_MM",
+__all__ = ["NUT_POCKET_CLEARANCE_MM", "PIN_HOLE_EXTRA_MM", "PANEL_PIN_FLOOR_MM",
            "PieceEnvelope", "fits_printer", "nut_pocket_depth_mm", "piece_envelopes", "pin_depths_mm",
            "pin_hole_mm", "soa_column_reach_mm", "tie_rod_hole_mm", "tie_rod_length_mm", "twin_problems"]

@@ -47,7 +47,7 @@ import numpy as np
 from ..parameters.molds import PIN_ROOT_MM, SOCKET_EXTRA_DEPTH_MM, mold_dimensions, mold_problems
 from ..parameters.tables import Casting, SoaTable
 from ._kernel import GeometryError, cut_all, cylinder_between, fuse_all, location, single_solid
-from .soa import bellows_profile, soa_body
+from .soa import bellows_profile, soa_body, soa_envelope, soa_interior
 
 #: Pull direction of half_a (the side x - y > 0); half_b is pulled the other way.
 DIAGONAL_PULL = (1.0 / math.sqrt(2.0), -1.0 / math.sqrt(2.0), 0.0)
@@ -119,11 +119,6 @@ def _print_transform(x_dir: np.ndarray, z_dir: np.ndarray, solid: bd.Solid) -> n
     return m
 
 
-def _rounded_square(side_mm: float, radius_mm: float, z_mm: float) -> bd.Face:
-    sk = bd.RectangleRounded(side_mm, side_mm, radius_mm) if radius_mm > 1e-6 else bd.Rectangle(side_mm, side_mm)
-    return bd.Plane.XY.offset(z_mm) * sk.face()
-
-
 def _uez(u: float, e: float, z: float) -> tuple[float, float, float]:
     """A point given along the pull (u), along the parting plane (e) and z."""
     d, a = DIAGONAL_PULL, DIAGONAL_ALONG
@@ -162,21 +157,11 @@ def mold_set(soa: SoaTable, flange_diameter_mm: float, casting: Casting) -> Mold
     # --- The cast and the envelope it fills, in the SOA frame, then scaled.
     soa_solid = soa_body(soa, flange_diameter_mm)
     cast = single_solid(soa_solid.scale(k), "cast part")
-    f = prof.flange_thickness_mm
-    height = prof.height_mm
-    loft = bd.loft([_rounded_square(s, prof.corner_radius_mm, z) for s, z in zip(prof.outer_side_mm, prof.z_mm)],
-                   ruled=True)
-    r_flange = flange_diameter_mm / 2.0
-    envelope = bd.Solid.make_cylinder(r_flange, f).fuse(
-        loft, bd.Solid.make_cylinder(r_flange, f, bd.Plane.XY.offset(height - f)))
-    envelope = single_solid(envelope.scale(k), "cast envelope")
+    envelope = single_solid(soa_envelope(soa, flange_diameter_mm).scale(k), "cast envelope")
     # The core is the SOA's interior, prolonged at the end size into the core
     # prints (the same ruled sections the SOA cuts, so it fits exactly).
     print_soa_mm = c.core_print_mm / k
-    core_z = (-print_soa_mm, *prof.z_mm, height + print_soa_mm)
-    core_s = (prof.inner_side_mm[0], *prof.inner_side_mm, prof.inner_side_mm[-1])
-    core = bd.loft([_rounded_square(s, 0.0, z) for s, z in zip(core_s, core_z)], ruled=True)
-    core = single_solid(core.scale(k), "core")
+    core = single_solid(soa_interior(soa, flange_diameter_mm, print_soa_mm).scale(k), "core")
 
     # --- Dimensions in the cast frame: the same numbers the parameter validation judges.
     h = dims.cast_height_mm

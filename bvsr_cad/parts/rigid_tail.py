@@ -37,11 +37,13 @@ import build123d as bd
 import numpy as np
 
 from ..parameters.layout import PanelLayout, soa_angles_deg, polar
-from ..parameters.tables import SoaTable, TailSpec
+from ..parameters.standard_parts import metric
+from ..parameters.tables import TailSpec
 # The twin's derived dimensions (pin depths, nut pockets, the printer fit) live with the rules that validate them.
-from ..parameters.twin import (NUT_AF_MM, NUT_HEIGHT_MM, NUT_POCKET_CLEARANCE_MM, PANEL_PIN_FLOOR_MM,  # noqa: F401
+from ..parameters.twin import (NUT_POCKET_CLEARANCE_MM, PANEL_PIN_FLOOR_MM,  # noqa: F401
                                PIN_HOLE_EXTRA_MM, fits_printer, nut_pocket_depth_mm, pin_depths_mm, pin_hole_mm,
                                tie_rod_hole_mm, tie_rod_length_mm, twin_problems)
+from .soa import soa_envelope
 from ._kernel import GeometryError, cut_all, cylinder_between, fuse_all, location, single_solid
 
 #: Panel features kept in the twin (they show from outside or carry the robot and payload).
@@ -70,18 +72,6 @@ class RigidPiece:
     solid: bd.Solid  # print frame
     features: tuple[PrintFeature, ...]
     size_mm: tuple[float, float, float]
-
-
-def _soa_envelope(soa: SoaTable, flange_diameter_mm: float) -> bd.Solid:
-    """The SOA's outer surface, filled: flange discs and the bellows' outer loft."""
-    from .soa import _square, bellows_profile  # the same fold levels as the soft SOA
-
-    p = bellows_profile(soa, flange_diameter_mm)
-    outer = bd.loft([_square(s, p.corner_radius_mm, z) for s, z in zip(p.outer_side_mm, p.z_mm)], ruled=True)
-    r = flange_diameter_mm / 2.0
-    lower = bd.Solid.make_cylinder(r, p.flange_thickness_mm)
-    upper = bd.Solid.make_cylinder(r, p.flange_thickness_mm, bd.Plane.XY.offset(p.height_mm - p.flange_thickness_mm))
-    return single_solid(lower.fuse(outer, upper), "rigid tail: SOA envelope")
 
 
 def _frustum(lay: PanelLayout) -> bd.Solid:
@@ -119,11 +109,11 @@ def rigid_tail_pieces(spec: TailSpec, layouts: list[PanelLayout],
     if problems:
         raise ValueError("; ".join(problems))
     fp = spec.fabrication_package
-    soa_env = _soa_envelope(spec.soa, spec.joint.base_diameter_mm)
+    soa_env = soa_envelope(spec.soa, spec.joint.base_diameter_mm)
     d_pin, d_tie = pin_hole_mm(spec), tie_rod_hole_mm(spec)
     # The pin sits deeper in the column than in the panel so the tip panel keeps a floor over its holes.
     panel_pin_depth, column_pin_depth = pin_depths_mm(spec, layouts[0].thickness_mm)
-    nut_af = NUT_AF_MM[fp.tie_rod_thread] + NUT_POCKET_CLEARANCE_MM
+    nut_af = metric(fp.tie_rod_thread).nut_af_mm + NUT_POCKET_CLEARANCE_MM
     nut_depth = nut_pocket_depth_mm(spec)
     pieces: list[RigidPiece] = []
     n = len(layouts)

@@ -44,13 +44,38 @@ def bellows_profile(soa: SoaTable, flange_diameter_mm: float) -> BellowsProfile:
                           flange_diameter_mm, soa.built_height_mm)
 
 
-def _square(side_mm: float, radius_mm: float, z_mm: float) -> bd.Face:
+def rounded_square(side_mm: float, radius_mm: float, z_mm: float) -> bd.Face:
+    """A square section of the bellows at height z, its corners rounded at R (sharp at R = 0)."""
     plane = bd.Plane.XY.offset(z_mm)
     if radius_mm > 1e-6:
         sk = bd.RectangleRounded(side_mm, side_mm, radius_mm)
     else:
         sk = bd.Rectangle(side_mm, side_mm)
     return plane * sk.face()
+
+
+def soa_envelope(soa: SoaTable, flange_diameter_mm: float) -> bd.Solid:
+    """The SOA's outer surface, filled: both flange discs and the bellows' outer ruled loft.
+
+    The one home of the SOA's outside: the SOA body, the mold cavity and the
+    rigid twin's columns all start from it.
+    """
+    p = bellows_profile(soa, flange_diameter_mm)
+    outer = bd.loft([rounded_square(s, p.corner_radius_mm, z) for s, z in zip(p.outer_side_mm, p.z_mm)], ruled=True)
+    r = flange_diameter_mm / 2.0
+    lower = bd.Solid.make_cylinder(r, p.flange_thickness_mm)
+    upper = bd.Solid.make_cylinder(r, p.flange_thickness_mm, bd.Plane.XY.offset(p.height_mm - p.flange_thickness_mm))
+    return single_solid(lower.fuse(outer, upper), "SOA envelope")
+
+
+def soa_interior(soa: SoaTable, flange_diameter_mm: float, beyond_ends_mm: float = 0.01) -> bd.Solid:
+    """The SOA's air space: the inner ruled loft, prolonged at the end size through both
+    flanges and ``beyond_ends_mm`` past them (the mold core's prints use the same sections)."""
+    p = bellows_profile(soa, flange_diameter_mm)
+    inner_z = (-beyond_ends_mm, *p.z_mm, p.height_mm + beyond_ends_mm)
+    inner_s = (p.inner_side_mm[0], *p.inner_side_mm, p.inner_side_mm[-1])
+    return single_solid(bd.loft([rounded_square(s, 0.0, z) for s, z in zip(inner_s, inner_z)], ruled=True),
+                        "SOA interior")
 
 
 def soa_body(soa: SoaTable, flange_diameter_mm: float) -> bd.Solid:
@@ -63,14 +88,6 @@ def soa_body(soa: SoaTable, flange_diameter_mm: float) -> bd.Solid:
     Raises:
         GeometryError: the kernel did not produce one valid solid.
     """
-    p = bellows_profile(soa, flange_diameter_mm)
-    outer = bd.loft([_square(s, p.corner_radius_mm, z) for s, z in zip(p.outer_side_mm, p.z_mm)], ruled=True)
     # The interior runs straight through both flanges at the end size.
-    inner_z = (-0.01, *p.z_mm, p.height_mm + 0.01)
-    inner_s = (p.inner_side_mm[0], *p.inner_side_mm, p.inner_side_mm[-1])
-    inner = bd.loft([_square(s, 0.0, z) for s, z in zip(inner_s, inner_z)], ruled=True)
-    r = flange_diameter_mm / 2.0
-    lower = bd.Solid.make_cylinder(r, p.flange_thickness_mm)
-    upper = bd.Solid.make_cylinder(r, p.flange_thickness_mm, bd.Plane.XY.offset(p.height_mm - p.flange_thickness_mm))
-    body = lower.fuse(outer, upper).cut(inner)
+    body = soa_envelope(soa, flange_diameter_mm).cut(soa_interior(soa, flange_diameter_mm))
     return single_solid(body, "SOA body")

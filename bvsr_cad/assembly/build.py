@@ -16,7 +16,7 @@ import build123d as bd
 import numpy as np
 
 from .. import units
-from ..parts._kernel import location
+from ..parts._kernel import PrintPosed, location
 from ..parts.panel import panel
 from ..parts.soa import soa_body
 from ..parts.vertebra import rod
@@ -29,7 +29,7 @@ Progress = Callable[[str], None]
 
 
 @dataclass(frozen=True)
-class PartDef:
+class PartDef(PrintPosed):
     """One unique part: its solid in the part frame and in print orientation."""
 
     name: str
@@ -39,10 +39,6 @@ class PartDef:
     solid: bd.Solid
     print_transform: tuple[tuple[float, ...], ...]  # 4x4, part frame -> print frame (mm)
     info: dict = field(default_factory=dict, hash=False, compare=False)
-
-    @property
-    def print_solid(self) -> bd.Solid:
-        return self.solid.moved(location(self.print_transform))
 
 
 @dataclass(frozen=True)

@@ -162,22 +162,6 @@ class ActuationSI:
     rod_axial_stiffness_n_m: float  # E A / L of one joint's rod piece
     timestep_s: float
 
-    @property
-    def area_m2(self) -> float:
-        return self.law.area_m2
-
-    @property
-    def stiffness_slope_n_m_per_pa(self) -> float:
-        return self.law.stiffness_slope_n_per_m_per_pa
-
-    @property
-    def stiffness_offset_n_m(self) -> float:
-        return self.law.stiffness_offset_n_per_m
-
-    @property
-    def damping_n_s_m(self) -> float:
-        return self.law.damping_n_s_per_m
-
 
 def actuation_si(spec: TailSpec) -> ActuationSI:
     """The SOA law (models/actuator), the rod (models/rod) and the pressure range of ``spec`` in SI."""

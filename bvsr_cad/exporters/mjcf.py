@@ -191,11 +191,12 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
         n = len(soas)
         l0 = sum(s.rest_length_m for s in soas) + _panel_spans(robot, soas)
         k_share = 1.0 / n  # series tendon of n SOAs that stretch alike
-        m_a = act.stiffness_slope_n_m_per_pa * k_share
-        n_a = act.stiffness_offset_n_m * k_share
-        c = act.damping_n_s_m * k_share
+        law = act.law
+        m_a = law.stiffness_slope_n_per_m_per_pa * k_share
+        n_a = law.stiffness_offset_n_per_m * k_share
+        c = law.damping_n_s_per_m * k_share
         ET.SubElement(actuator, "general", name=name, tendon=f"{name}_tendon", ctrllimited="true", ctrlrange=ctrl,
-                      gaintype="affine", gainprm=_vec((act.area_m2 + m_a * l0, -m_a, 0.0)),
+                      gaintype="affine", gainprm=_vec((law.area_m2 + m_a * l0, -m_a, 0.0)),
                       biastype="affine", biasprm=_vec((n_a * l0, -n_a, -c)))
     ET.indent(root)
     facts = {"chord_polynomial_max_error_m": chord_err, "actuators": len(groups),

@@ -22,6 +22,17 @@ def location(t) -> bd.Location:
     return bd.Location(TopLoc_Location(trsf))
 
 
+class PrintPosed:
+    """A part with a ``solid`` in its own frame and a ``print_transform`` onto the print bed (mm)."""
+
+    solid: bd.Solid
+    print_transform: tuple[tuple[float, ...], ...]
+
+    @property
+    def print_solid(self) -> bd.Solid:
+        return self.solid.moved(location(self.print_transform))
+
+
 def cylinder_between(p0: Sequence[float], p1: Sequence[float], diameter_mm: float) -> bd.Solid:
     """A solid cylinder whose axis runs from p0 to p1 (mm)."""
     d = bd.Vector(*p1) - bd.Vector(*p0)

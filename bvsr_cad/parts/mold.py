@@ -46,7 +46,7 @@ import numpy as np
 
 from ..parameters.molds import PIN_ROOT_MM, SOCKET_EXTRA_DEPTH_MM, mold_dimensions, mold_problems
 from ..parameters.tables import Casting, SoaTable
-from ._kernel import GeometryError, cut_all, cylinder_between, fuse_all, location, single_solid
+from ._kernel import PrintPosed, GeometryError, cut_all, cylinder_between, fuse_all, location, single_solid
 from .soa import bellows_profile, soa_body, soa_envelope, soa_interior
 
 #: Pull direction of half_a (the side x - y > 0); half_b is pulled the other way.
@@ -58,7 +58,7 @@ Matrix = tuple[tuple[float, ...], ...]
 
 
 @dataclass(frozen=True)
-class MoldPart:
+class MoldPart(PrintPosed):
     """One printed (or cast) part of the mold set, in the cast frame (mm)."""
 
     name: str
@@ -72,10 +72,6 @@ class MoldPart:
     @property
     def sacrificial(self) -> bool:
         return self.pull_direction is None
-
-    @property
-    def print_solid(self) -> bd.Solid:
-        return self.solid.moved(location(self.print_transform))
 
 
 @dataclass(frozen=True)

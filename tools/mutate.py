@@ -1,0 +1,547 @@
+#!/usr/bin/env python
+"""Mutation check of the core numbers: do the tests catch a wrong answer?
+
+Each fault in :data:`FAULTS` is one deliberate mistake, written as an exact
+text substitution in one file of the working tree (a bore of 2 mm, d^3 in
+E I, a swapped axis, a wrong density, a dropped SOA, ...). For each fault
+this script
+
+1. checks that the old snippet occurs exactly once in its file (otherwise the
+   list has rotted: it stops and names the fault),
+2. keeps the file's bytes in ``<file>.mutate-orig``, writes the mutated file,
+3. runs the fast test suite (``python -m pytest -x -q -m "not slow"``) with a
+   timeout,
+4. restores the file byte for byte in a ``finally`` (also on Ctrl-C, SIGTERM
+   and SIGHUP), and removes the backup,
+5. records *caught* (the suite failed; the first failing test is named) or
+   *SURVIVED* (the suite passed with the fault in place).
+
+It prints a table and exits 1 if any fault survived (or timed out), 2 on a
+usage problem (a rotten snippet, a leftover backup, a failing baseline).
+
+If a run is killed hard (SIGKILL, power loss), the backup stays behind; the
+next run refuses to start until ``--restore`` has put the original back.
+
+Usage (from the repository root)::
+
+    .venv/bin/python tools/mutate.py                 # every fault
+    .venv/bin/python tools/mutate.py --list          # the faults and whether each still applies
+    .venv/bin/python tools/mutate.py --only rod_bore_2mm --only ei_d_cubed
+    .venv/bin/python tools/mutate.py --json          # one JSON object on stdout
+    .venv/bin/python tools/mutate.py --restore       # after a killed run
+
+The tree is shared: while a fault is applied, the file is wrong for anyone
+else importing it. Runs are short (one fault at a time, restored at once),
+and a restore never overwrites someone else's edit: if the file changed while
+the fault was in place, the fault alone is reversed in the current text.
+
+By default the suite is given ``tests/test_truth*.py`` first (pytest keeps
+each file once), so a caught fault fails within seconds; ``--plain-order``
+runs the suite in pytest's own order. Before the faults, the unmutated suite
+must pass (``--no-baseline`` skips that); after a caught fault the failing
+test is run again on the restored tree and must pass (``--no-confirm`` skips
+that), so a failure is the fault's and not the tree's.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+BACKUP_SUFFIX = ".mutate-orig"
+STATE_FILE = Path("tools") / ".mutate-state.json"
+PYTEST_ARGS = ["-m", "pytest", "-x", "-q", "-m", "not slow", "-p", "no:cacheprovider", "-rfE",
+               "--no-header", "-W", "ignore::DeprecationWarning"]
+
+
+@dataclass(frozen=True)
+class Fault:
+    name: str
+    file: str  # relative to the repository root
+    old: str  # must occur exactly once in the file
+    new: str
+    description: str
+
+
+# Every fault is a physically wrong answer that still imports, builds and runs.
+FAULTS: list[Fault] = [
+    # -- the four faults of the review ---------------------------------------------------------
+    Fault("rod_bore_2mm", "bvsr_cad/parameters/layout.py",
+          "def rod_bore_mm(spec: TailSpec) -> float:\n    d = spec.vertebra.diameter_mm\n",
+          "def rod_bore_mm(spec: TailSpec) -> float:\n    return 2.0\n    d = spec.vertebra.diameter_mm\n",
+          "the panels' rod bore is 2 mm for a 6 mm rod"),
+    Fault("ei_d_cubed", "bvsr_cad/models/rod.py",
+          "return math.pi * self.diameter_mm ** 4 / 64.0",
+          "return math.pi * self.diameter_mm ** 3 / 64.0",
+          "the rod's second moment of area is pi d^3 / 64 instead of pi d^4 / 64"),
+    Fault("robot_ei_x1.5", "bvsr_cad/assembly/robot.py",
+          "rod_bending_stiffness_nm_rad=rod.bending_stiffness_nm_per_rad(spec.joint.gap_mm)",
+          "rod_bending_stiffness_nm_rad=1.5 * rod.bending_stiffness_nm_per_rad(spec.joint.gap_mm)",
+          "the robot model's rod E I / L is 1.5 times the rod's"),
+    Fault("rod_panel_material", "bvsr_cad/models/rod.py",
+          "key = spec.vertebra.material\n",
+          "key = spec.use.panel\n",
+          "the rod's section (E, density) takes the panel's material"),
+    # -- more faults in the core numbers ------------------------------------------------------
+    Fault("rod_part_panel_material", "bvsr_cad/assembly/build.py",
+          'kind="rod", material=spec.vertebra.material',
+          'kind="rod", material=spec.use.panel',
+          "the rod part (its mass, its BOM line) is made of the panel's material"),
+    Fault("tap_drill_m6", "bvsr_cad/parameters/layout.py",
+          "ISO_TAP_DRILL_MM = {4.0: 3.3, 5.0: 4.2, 6.0: 5.0}",
+          "ISO_TAP_DRILL_MM = {4.0: 3.3, 5.0: 4.2, 6.0: 5.5}",
+          "the M6 tap drill is 5.5 mm (ISO 2306: 5.0 mm)"),
+    Fault("set_screw_bore_no_clearance", "bvsr_cad/parameters/layout.py",
+          "return hole_d(spec, d + spec.socket.rod_clearance_mm)",
+          "return hole_d(spec, d - spec.socket.rod_clearance_mm)",
+          "the set-screw bore is smaller than the rod (clearance subtracted)"),
+    Fault("polar_cos_sin_swapped", "bvsr_cad/parameters/layout.py",
+          "return (radius_mm * math.cos(a), radius_mm * math.sin(a))",
+          "return (radius_mm * math.sin(a), radius_mm * math.cos(a))",
+          "x and y swapped in the pentagon's polar(): SOA 1 lateral instead of dorsal"),
+    Fault("pentagon_clockwise", "bvsr_cad/parameters/layout.py",
+          "return 90.0 + 72.0 * np.arange(N_SOA)",
+          "return 90.0 - 72.0 * np.arange(N_SOA)",
+          "the SOAs are numbered clockwise (soa2 at 18 deg instead of 162 deg)"),
+    Fault("dropped_soa", "bvsr_cad/assembly/build.py",
+          "for i, a in enumerate(soa_angles_deg(), start=1):",
+          "for i, a in enumerate(soa_angles_deg()[:4], start=1):",
+          "each joint places 4 SOAs instead of N_SOA = 5"),
+    Fault("soa_stiffness_sign", "bvsr_cad/models/actuator.py",
+          "return p * self.area_m2 - self.stiffness_n_per_m(p) * stretch_m",
+          "return p * self.area_m2 + self.stiffness_n_per_m(p) * stretch_m",
+          "the SOA's spring pushes with its stretch instead of against it (Eq 3 sign)"),
+    Fault("soa_slope_kpa_as_pa", "bvsr_cad/models/actuator.py",
+          "stiffness_slope_n_per_m_per_pa=a.stiffness_slope_n_per_m_per_kpa / units.PA_PER_KPA,",
+          "stiffness_slope_n_per_m_per_pa=a.stiffness_slope_n_per_m_per_kpa,",
+          "m_a of Eq 4 given per kPa is used per Pa (1000 times too stiff under pressure)"),
+    Fault("chord_full_angle", "bvsr_cad/models/kinematics.py",
+          "S, _, _, _ = _series_coefficients(np.asarray(theta_rad, float) / 2)",
+          "S, _, _, _ = _series_coefficients(np.asarray(theta_rad, float))",
+          "the chord is L sin(theta) / theta instead of 2 L sin(theta / 2) / theta"),
+    Fault("parallel_axis_sign", "bvsr_cad/assembly/inertia.py",
+          "I += i.inertia + i.mass_kg * (np.dot(d, d) * np.eye(3) - np.outer(d, d))",
+          "I += i.inertia + i.mass_kg * (np.dot(d, d) * np.eye(3) + np.outer(d, d))",
+          "the parallel-axis term of compose() adds d d^T instead of subtracting it"),
+    Fault("density_mm3_per_cm3", "bvsr_cad/units.py",
+          "MM3_PER_CM3 = 1000.0",
+          "MM3_PER_CM3 = 100.0",
+          "1 cm^3 = 100 mm^3: every mass from a density is 10 times too large"),
+    Fault("density_kg_m3_factor", "bvsr_cad/units.py",
+          "return value_g_cm3 * 1000.0",
+          "return value_g_cm3 * 100.0",
+          "g/cm^3 -> kg/m^3 by 100 instead of 1000"),
+    Fault("inertia_mm2_to_m2", "bvsr_cad/units.py",
+          "return value_g_mm2 / G_PER_KG / (MM_PER_M * MM_PER_M)",
+          "return value_g_mm2 / G_PER_KG / MM_PER_M",
+          "g mm^2 -> kg m^2 divides by 1e6 instead of 1e9"),
+    Fault("panel_thickness", "bvsr_cad/parameters/tables.py",
+          "return self.joint_height_mm - self.gap_mm\n",
+          "return self.joint_height_mm - 0.95 * self.gap_mm\n",
+          "the panel thickness is H_j - 0.95 H_a instead of H_j - H_a"),
+    Fault("taper_upper_rim", "bvsr_cad/parameters/layout.py",
+          "r_rim_hi = j.panel_diameter_mm / 2 - (z0 + t) * tan_b",
+          "r_rim_hi = j.panel_diameter_mm / 2 - z0 * tan_b",
+          "the rim does not follow the cone across a panel's thickness"),
+    Fault("flange_thickness", "bvsr_cad/parameters/tables.py",
+          "return (self.height_mm - self.origami_height_mm) / 2.0",
+          "return (self.height_mm - self.origami_height_mm) / 4.0",
+          "each SOA flange is (H - H_o) / 4 thick instead of (H - H_o) / 2"),
+    Fault("mold_shrinkage_scale", "bvsr_cad/parameters/molds.py",
+          "k = 1.0 + c.shrinkage_percent / 100.0",
+          "k = 1.0 + c.shrinkage_percent / 10.0",
+          "the mold cavity scales by 1 + shrinkage / 10 instead of 1 + shrinkage / 100"),
+    Fault("twin_pin_hole", "bvsr_cad/parameters/twin.py",
+          "return fp.pin_diameter_mm + fp.pin_hole_clearance_mm",
+          "return fp.pin_diameter_mm - fp.pin_hole_clearance_mm",
+          "the rigid twin's dowel holes are smaller than the dowel"),
+]
+
+
+# -- file handling ------------------------------------------------------------------------------
+def _backup(path: Path) -> Path:
+    return path.with_name(path.name + BACKUP_SUFFIX)
+
+
+def _sha(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def _leftovers(root: Path) -> list[Path]:
+    out = []
+    for dirpath, dirnames, filenames in os.walk(root):
+        dirnames[:] = [d for d in dirnames if d not in (".git", ".venv", "node_modules", "exports", "__pycache__")]
+        out += [Path(dirpath) / f for f in filenames if f.endswith(BACKUP_SUFFIX)]
+    return sorted(out)
+
+
+def _atomic_write(path: Path, data: bytes) -> None:
+    tmp = path.with_name(path.name + ".mutate-tmp")
+    tmp.write_bytes(data)
+    try:
+        os.chmod(tmp, path.stat().st_mode & 0o7777)
+    except OSError:
+        pass
+    os.replace(tmp, path)
+
+
+class Mutation:
+    """One fault applied to one file; :meth:`restore` undoes it exactly once."""
+
+    def __init__(self, root: Path, fault: Fault):
+        self.root = root
+        self.fault = fault
+        self.path = root / fault.file
+        self.backup = _backup(self.path)
+        self.original: bytes | None = None
+        self.mutated: bytes | None = None
+
+    def apply(self) -> None:
+        original = self.path.read_bytes()
+        text = original.decode("utf-8")
+        n = text.count(self.fault.old)
+        if n != 1:
+            raise SnippetError(self.fault, n)
+        mutated = text.replace(self.fault.old, self.fault.new, 1).encode("utf-8")
+        # Backup first (fsynced), state second, mutation last: a kill at any point is recoverable.
+        with open(self.backup, "wb") as fh:
+            fh.write(original)
+            fh.flush()
+            os.fsync(fh.fileno())
+        _write_state(self.root, {"fault": self.fault.name, "file": self.fault.file,
+                                 "original_sha256": _sha(original), "mutated_sha256": _sha(mutated),
+                                 "pid": os.getpid(), "started": time.time()})
+        self.original, self.mutated = original, mutated
+        _atomic_write(self.path, mutated)
+
+    def restore(self) -> str:
+        """Put the original back; returns '' or a warning (the file was edited meanwhile)."""
+        if self.original is None:
+            return ""
+        warning = _restore_file(self.path, self.original, self.mutated, self.fault)
+        self.original = None
+        try:
+            self.backup.unlink()
+        except FileNotFoundError:
+            pass
+        _clear_state(self.root)
+        return warning
+
+
+def _restore_file(path: Path, original: bytes, mutated: bytes | None, fault: Fault | None) -> str:
+    """Original bytes back unless someone edited the mutated file: then reverse the fault only."""
+    current = path.read_bytes() if path.exists() else None
+    if current == original:
+        return ""
+    if current is None or mutated is None or current == mutated:
+        _atomic_write(path, original)
+        return ""
+    # Edited while the fault was in place (a colleague saved over it): never overwrite that edit.
+    text = current.decode("utf-8", errors="surrogateescape")
+    if fault is not None and text.count(fault.new) == 1 and text.count(fault.old) == 0:
+        _atomic_write(path, text.replace(fault.new, fault.old, 1).encode("utf-8", errors="surrogateescape"))
+        return f"{path}: edited while fault {fault.name} was applied; reversed the fault in the edited text"
+    return (f"{path}: edited while fault {fault.name if fault else '?'} was applied and the fault's text is gone; "
+            "left as it is (check it by hand)")
+
+
+def _state_path(root: Path) -> Path:
+    return root / STATE_FILE
+
+
+def _write_state(root: Path, state: dict) -> None:
+    p = _state_path(root)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    p.write_text(json.dumps(state, indent=1))
+
+
+def _clear_state(root: Path) -> None:
+    try:
+        _state_path(root).unlink()
+    except FileNotFoundError:
+        pass
+
+
+def restore_leftovers(root: Path) -> list[str]:
+    """After a killed run: put every ``*.mutate-orig`` back (reversing only the fault if the file was edited)."""
+    state = {}
+    if _state_path(root).exists():
+        try:
+            state = json.loads(_state_path(root).read_text())
+        except ValueError:
+            state = {}
+    fault = next((f for f in FAULTS if f.name == state.get("fault")), None)
+    messages = []
+    for backup in _leftovers(root):
+        target = backup.with_name(backup.name[: -len(BACKUP_SUFFIX)])
+        original = backup.read_bytes()
+        mutated = None
+        f = fault if fault is not None and (root / fault.file) == target else None
+        if f is not None and target.exists():
+            cur = target.read_bytes()
+            if _sha(cur) == state.get("mutated_sha256"):
+                mutated = cur
+        if f is None or mutated is not None or not target.exists():
+            _atomic_write(target, original)
+            messages.append(f"restored {target.relative_to(root)} from {backup.name}")
+        else:
+            messages.append(_restore_file(target, original, None if mutated is None else mutated, f)
+                            or f"restored {target.relative_to(root)}")
+        backup.unlink()
+    _clear_state(root)
+    return messages
+
+
+class SnippetError(Exception):
+    def __init__(self, fault: Fault, count: int):
+        where = "not found" if count == 0 else f"found {count} times"
+        super().__init__(f"fault {fault.name}: its snippet is {where} in {fault.file} "
+                         f"(it must occur exactly once; update FAULTS in tools/mutate.py):\n    {fault.old!r}")
+        self.fault = fault
+
+
+def snippet_problems(root: Path, faults: list[Fault]) -> list[str]:
+    out = []
+    for f in faults:
+        p = root / f.file
+        if not p.is_file():
+            out.append(f"fault {f.name}: {f.file} does not exist")
+            continue
+        n = p.read_text().count(f.old)
+        if n != 1:
+            out.append(str(SnippetError(f, n)))
+        elif f.old == f.new:
+            out.append(f"fault {f.name}: the new text equals the old")
+    return out
+
+
+# -- running the suite --------------------------------------------------------------------------
+class Interrupted(Exception):
+    pass
+
+
+_CHILD: subprocess.Popen | None = None
+
+
+def _on_signal(signum, _frame):
+    raise Interrupted(signal.Signals(signum).name)
+
+
+def _kill_child() -> None:
+    global _CHILD
+    if _CHILD is not None and _CHILD.poll() is None:
+        try:
+            os.killpg(_CHILD.pid, signal.SIGTERM)
+            try:
+                _CHILD.wait(10)
+            except subprocess.TimeoutExpired:
+                os.killpg(_CHILD.pid, signal.SIGKILL)
+                _CHILD.wait()
+        except ProcessLookupError:
+            pass
+    _CHILD = None
+
+
+_FAIL_RE = re.compile(r"^(FAILED|ERROR) (\S+)", re.M)
+
+
+def first_failure(output: str) -> str:
+    m = _FAIL_RE.search(output)
+    if m:
+        return m.group(2)
+    if "no tests ran" in output:
+        return "(no tests ran)"
+    for line in output.splitlines():
+        if "Error" in line or "error" in line:
+            return line.strip()[:120]
+    return "(see output)"
+
+
+def test_args(root: Path, plain_order: bool) -> list[str]:
+    if plain_order:
+        return []
+    first = sorted(str(p.relative_to(root)) for p in (root / "tests").glob("test_truth*.py"))
+    return first + (["tests"] if first else [])
+
+
+def run_suite(root: Path, timeout_s: float, extra: list[str], python: str) -> tuple[str, str, float, str]:
+    """(status: passed/failed/timeout, first failing test, seconds, output tail)."""
+    global _CHILD
+    env = dict(os.environ)
+    env["PYTHONDONTWRITEBYTECODE"] = "1"  # no stale bytecode of a mutated module can outlive it
+    env["PYTHONPATH"] = str(root) + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    t0 = time.monotonic()
+    _CHILD = subprocess.Popen([python, *PYTEST_ARGS, *extra], cwd=root, env=env, stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    try:
+        out, _ = _CHILD.communicate(timeout=timeout_s)
+        rc = _CHILD.returncode
+    except subprocess.TimeoutExpired:
+        _kill_child()
+        return "timeout", f"(over {timeout_s:g} s)", time.monotonic() - t0, ""
+    finally:
+        if _CHILD is not None and _CHILD.poll() is not None:
+            _CHILD = None
+    dt = time.monotonic() - t0
+    if rc == 0:
+        return "passed", "", dt, out[-3000:]
+    if rc == 5:
+        return "failed", "(no tests collected)", dt, out[-3000:]
+    return "failed", first_failure(out), dt, out[-3000:]
+
+
+def _python(root: Path) -> str:
+    venv = root / ".venv" / "bin" / "python"
+    return str(venv) if venv.exists() else sys.executable
+
+
+# -- main ---------------------------------------------------------------------------------------
+def _table(rows: list[dict]) -> str:
+    heads = ("fault", "file", "result", "first failing test", "s")
+    data = [(r["name"], r["file"], r["result"], r["first_failure"] or "-", f"{r['seconds']:.0f}") for r in rows]
+    widths = [max(len(h), *(len(d[i]) for d in data)) if data else len(h) for i, h in enumerate(heads)]
+    line = "  ".join(h.ljust(w) for h, w in zip(heads, widths))
+    out = [line, "  ".join("-" * w for w in widths)]
+    out += ["  ".join(c.ljust(w) for c, w in zip(d, widths)) for d in data]
+    return "\n".join(out)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--only", action="append", metavar="NAME", help="run only this fault (repeatable)")
+    ap.add_argument("--list", action="store_true", help="list the faults and whether each snippet applies")
+    ap.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
+    ap.add_argument("--restore", action="store_true", help="restore files left mutated by a killed run, then exit")
+    ap.add_argument("--timeout", type=float, default=420.0, help="seconds allowed per suite run (default 420)")
+    ap.add_argument("--no-baseline", action="store_true", help="skip the unmutated run of the suite")
+    ap.add_argument("--no-confirm", action="store_true",
+                    help="skip re-running a caught fault's failing test on the restored tree")
+    ap.add_argument("--plain-order", action="store_true", help="run the suite in pytest's own file order")
+    ap.add_argument("--root", type=Path, default=ROOT, help="repository to mutate (default: this one)")
+    ap.add_argument("-v", "--verbose", action="store_true", help="print pytest's output tail of every run")
+    args = ap.parse_args(argv)
+    root = args.root.resolve()
+    log = (lambda *a: print(*a, file=sys.stderr, flush=True))
+
+    if args.restore:
+        msgs = restore_leftovers(root)
+        for m in msgs:
+            log(m)
+        if not msgs:
+            log("nothing to restore")
+        return 0
+
+    leftovers = _leftovers(root)
+    if leftovers:
+        log("a killed run left backups behind (the files may still hold a fault):")
+        for p in leftovers:
+            log(f"    {p.relative_to(root)}")
+        log(f"run: {Path(sys.argv[0]).as_posix()} --restore")
+        return 2
+
+    faults = FAULTS
+    if args.only:
+        unknown = [n for n in args.only if n not in {f.name for f in FAULTS}]
+        if unknown:
+            log(f"unknown fault(s): {', '.join(unknown)}; known: {', '.join(f.name for f in FAULTS)}")
+            return 2
+        faults = [f for f in FAULTS if f.name in args.only]
+    names = [f.name for f in FAULTS]
+    dup = {n for n in names if names.count(n) > 1}
+    if dup:
+        log(f"duplicate fault names: {', '.join(sorted(dup))}")
+        return 2
+
+    problems = snippet_problems(root, faults)
+    if args.list:
+        bad = {p.split(":")[0].removeprefix("fault ") for p in problems}
+        for f in faults:
+            mark = "ROTTEN" if f.name in bad else "ok"
+            print(f"{f.name:28s} {mark:6s} {f.file:38s} {f.description}")
+        for p in problems:
+            log(p)
+        return 2 if problems else 0
+    if problems:
+        for p in problems:
+            log(p)
+        return 2
+
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, _on_signal)
+
+    python = _python(root)
+    extra = test_args(root, args.plain_order)
+    rows: list[dict] = []
+    warnings: list[str] = []
+    baseline = None
+    try:
+        if not args.no_baseline:
+            log("baseline: the unmutated suite ...")
+            status, first, dt, tail = run_suite(root, args.timeout, extra, python)
+            baseline = {"result": status, "first_failure": first, "seconds": round(dt, 1)}
+            log(f"baseline: {status} in {dt:.0f} s {first}")
+            if status != "passed":
+                log(tail)
+                log("the suite fails without any fault: fix the tree first (or --no-baseline)")
+                return 2
+        for f in faults:
+            log(f"{f.name}: {f.description} ...")
+            mut = Mutation(root, f)
+            try:
+                mut.apply()
+                status, first, dt, tail = run_suite(root, args.timeout, extra, python)
+            finally:
+                _kill_child()
+                w = mut.restore()
+                if w:
+                    warnings.append(w)
+                    log("WARNING:", w)
+            result = {"failed": "caught", "passed": "SURVIVED", "timeout": "TIMEOUT"}[status]
+            row = {"name": f.name, "file": f.file, "description": f.description, "result": result,
+                   "first_failure": first, "seconds": round(dt, 1)}
+            if args.verbose:
+                log(tail)
+            if result == "caught" and not args.no_confirm and "::" in first:
+                c_status, c_first, _, c_tail = run_suite(root, args.timeout, [first], python)
+                row["confirmed"] = c_status == "passed"
+                if c_status != "passed":
+                    row["result"] = "UNCONFIRMED"
+                    log(f"    {first} fails without the fault too:\n{c_tail}")
+            log(f"    {row['result']} in {dt:.0f} s {first}")
+            rows.append(row)
+    except Interrupted as e:
+        log(f"interrupted ({e}); every file restored")
+        _emit(args, rows, baseline, warnings, interrupted=True)
+        return 130
+    finally:
+        _kill_child()
+    _emit(args, rows, baseline, warnings)
+    return 0 if all(r["result"] == "caught" for r in rows) else 1
+
+
+def _emit(args, rows, baseline, warnings, interrupted=False) -> None:
+    survived = [r["name"] for r in rows if r["result"] != "caught"]
+    if args.json:
+        print(json.dumps({"faults": rows, "baseline": baseline, "survived": survived, "warnings": warnings,
+                          "interrupted": interrupted, "all_caught": not survived and not interrupted}, indent=1))
+        return
+    print(_table(rows))
+    print(f"\n{len(rows) - len(survived)} of {len(rows)} faults caught"
+          + (f"; not caught: {', '.join(survived)}" if survived else ""))
+    for w in warnings:
+        print("WARNING:", w)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -437,6 +437,13 @@ def validate_layout(spec: TailSpec) -> list[str]:
                         f"soa.short_side_mm = {spec.soa.short_side_mm}")
     depth = pocket_depth_mm(spec)
     floor = spec.fabrication.socket_floor_mm
+    if depth < 0:
+        problems.append(
+            f"soa.height_mm = {spec.soa.height_mm}: the SOA as built ({spec.soa.built_height_mm:.3f} mm, "
+            f"soa.fold_height_from = {spec.soa.fold_height_from!r}) is {-2 * depth:.3f} mm shorter than the gap "
+            f"joint.gap_mm = {j.gap_mm}, so its flanges cannot sit in the panels' pockets; allowed: an SOA at "
+            "least as long as the gap (change soa.height_mm, soa.origami_height_mm or joint.gap_mm)")
+        return problems
     if 2 * depth + floor > j.panel_thickness_mm + 1e-9:
         problems.append(
             f"joint.joint_height_mm = {j.joint_height_mm}: flange pockets deeper than the panel: two pockets of "

@@ -164,7 +164,6 @@ def mold_set(soa: SoaTable, flange_diameter_mm: float, casting: Casting) -> Mold
     z_lo, z_hi = dims.z_lo_mm, dims.z_hi_mm  # halves between the flanges
     r_fl = dims.cast_flange_radius_mm
     w = dims.block_half_mm  # half-width of the square block along u and e
-    t = dims.plate_mm  # plate and lid thickness beyond the flange faces
     socket_d = dims.socket_mm
     rho_pin = dims.pin_circle_mm
     bolt_uv = dims.bolt_uv_mm

@@ -10,6 +10,14 @@ ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / "params"
 
 
+def pytest_collection_modifyitems(config, items):
+    """A test that needs the full default build (``bvsr_export``, about 30 s or more) is slow by definition:
+    ``pytest -m "not slow"`` stays a fast suite of in-memory tests (tools/mutate.py runs it per fault)."""
+    for item in items:
+        if "bvsr_export" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.slow)
+
+
 @pytest.fixture(scope="session")
 def bvsr_data() -> dict:
     return tomllib.loads((PARAMS / "bvsr.toml").read_text())

@@ -53,7 +53,7 @@ def test_manifest_round_trips(bvsr_export, bvsr_spec):
         + by_name["rod_s1"]["mass_g"]
     assert m["mass_g"]["segment_standalone"] == pytest.approx(standalone, rel=1e-12)
     # Measured length equals Table I's N H_a + (N + 1) t.
-    assert m["length_mm"] == pytest.approx(bvsr_spec.length_mm, abs=1e-6)
+    assert m["length_mm"] == pytest.approx(6 * 36.51 + 7 * (42.51 - 36.51), abs=1e-6)
     assert all(c["passed"] is not False for c in m["checks"])
 
 

@@ -45,9 +45,10 @@ def test_soa_lengths_and_jacobian(bvsr_spec):
 
 def test_tail_tip_uniform_bend_closed_form(bvsr_spec):
     kin = TailKinematics.from_spec(bvsr_spec)
-    assert kin.rest_tip_mm() == pytest.approx([0, 0, bvsr_spec.length_mm])
+    n, t = 6, 42.51 - L  # Table I: six joints, panels H_j - H_a thick
+    assert kin.n_joints == n and kin.rest_tip_mm() == pytest.approx([0, 0, n * L + (n + 1) * t])
     # Every joint bent by theta in the YZ plane: the tip is a planar chain of arcs and slabs.
-    th, n, t = 0.1, kin.n_joints, kin.panel_thickness_mm
+    th = 0.1
     w = np.tile(uv_from_theta_phi(th, np.pi / 2), (n, 1))
     pos, ang = np.zeros(2), 0.0  # (y, z), angle of the local z axis from +Z towards +Y
     for _ in range(n):

@@ -76,7 +76,8 @@ def test_cast_is_the_soa_scaled_by_the_shrinkage(bvsr_spec):
     assert molds.cast.volume == pytest.approx(k ** 3 * molds.soa_volume_mm3, rel=1e-9)
     box = molds.cast.bounding_box()
     assert box.min.Z == pytest.approx(0.0, abs=1e-5)  # bounding boxes carry a 1e-7 gap
-    assert box.max.Z == pytest.approx(k * bvsr_spec.soa.built_height_mm, abs=1e-5)
+    # fold_height_from = "origami_height": the SOA is Table II's H = 37.60 mm tall.
+    assert box.max.Z == pytest.approx(k * 37.60, abs=1e-5)
     for part in molds.parts.values():
         assert part.solid.is_valid and len(part.solid.solids()) == 1
 

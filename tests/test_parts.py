@@ -113,7 +113,8 @@ def test_every_rod_diameter_and_socket_gives_valid_panels(bvsr_spec, diameter, s
         plain = dataclasses.replace(lay, cuts=tuple(c for c in lay.cuts if c.role != "rod"))
         z_lo = min([0.0] + [b.z_range[0] for b in lay.bosses])
         z_hi = max([lay.thickness_mm] + [b.z_range[1] for b in lay.bosses])
-        bore = layout.rod_bore_mm(spec)
+        # ISO 2306 tap drill of M4/M5/M6 (3.3, 4.2, 5.0) plus the printed-hole compensation; not rod_bore_mm().
+        bore = {4.0: 3.3, 5.0: 4.2, 6.0: 5.0}[diameter] + spec.fabrication.hole_compensation_mm
         expected = math.pi * bore ** 2 / 4 * (z_hi - z_lo)
         if socket == "set_screw":
             continue  # the set screw crosses the bore: checked by validity above

@@ -571,29 +571,54 @@ def test_urdf_compiles_in_mujoco_with_the_hand_masses(urdf_root, asm, raw):
 
 
 # -- fabrication products: published sizes ---------------------------------------------------------
-def test_rigid_twin_dowel_holes(asm, bvsr_data):
-    """ISO 2338 dowel 3 m6 in a hole of d + clearance, probed in the printed piece."""
-    import build123d as bd
-
+@pytest.fixture(scope="module")
+def twin(asm):
     from bvsr_cad.assembly.products import build_rigid_twin
 
+    return build_rigid_twin(asm)
+
+
+def _radial_probe(solid, x, y, z, r, directions=12):
+    """Whether points at distance r around (x, y) at height z are inside the solid, one per direction."""
+    import build123d as bd
+
+    return [solid.is_inside(bd.Vector(x + r * math.cos(a), y + r * math.sin(a), z))
+            for a in np.linspace(0, 2 * math.pi, directions, endpoint=False)]
+
+
+def test_rigid_twin_dowel_holes(twin, bvsr_data):
+    """ISO 2338 dowel 3 m6 in a hole of d + clearance (3.2 mm), probed in every piece's solid."""
     fp = bvsr_data["fabrication_package"]
     hole = fp["pin_diameter_mm"] + fp["pin_hole_clearance_mm"]
     assert hole == pytest.approx(3.2)
-    pieces = build_rigid_twin(asm)
-    assert len(pieces) == _n_joints_from(bvsr_data) + 1
-    piece = pieces[0]
-    pins = [f for f in piece.features if f.kind == "pin_hole"]
-    assert len(pins) == N_SOA
-    for f in pins:
-        assert f.diameter_mm == pytest.approx(hole, abs=1e-12)
+    assert len(twin) == _n_joints_from(bvsr_data) + 1
+    for piece in twin:
+        pins = [f for f in piece.features if f.kind == "pin_hole"]
+        # A column's top under the next panel, and (except at the ends) the panel's own from below.
+        assert len(pins) == (N_SOA if piece is twin[0] or piece is twin[-1] else 2 * N_SOA), piece.name
+        assert all(f.diameter_mm == pytest.approx(hole, abs=1e-12) for f in pins), piece.name
+    piece = twin[0]
+    for f in (f for f in piece.features if f.kind == "pin_hole"):
         lo, hi = sorted((f.p0[2], f.p1[2]))
         z = (lo + hi) / 2 - piece.z0_mm
-        x, y = f.p0[0], f.p0[1]
-        rr = math.hypot(x, y)
-        ux, uy = x / rr, y / rr
-        assert not piece.solid.is_inside(bd.Vector(x + ux * (hole / 2 - 0.05), y + uy * (hole / 2 - 0.05), z))
-        assert piece.solid.is_inside(bd.Vector(x + ux * (hole / 2 + 0.05), y + uy * (hole / 2 + 0.05), z))
+        assert not any(_radial_probe(piece.solid, f.p0[0], f.p0[1], z, hole / 2 - 0.05, 8)), f.name
+        assert all(_radial_probe(piece.solid, f.p0[0], f.p0[1], z, hole / 2 + 0.05, 8)), f.name
+
+
+def test_rigid_twin_tie_rod_and_nut_pocket(twin, bvsr_data):
+    """M3 tie rod (DIN 976-1) in a 3 + 0.4 mm hole; its ISO 4032 nut (5.5 mm across flats, 2.4 mm tall)
+    in a hexagonal pocket 0.3 mm wider and 0.5 mm deeper, in the root face."""
+    fp = bvsr_data["fabrication_package"]
+    assert fp["tie_rod_thread"] == 3.0
+    root = twin[0]
+    tie = next(f for f in root.features if f.kind == "tie_rod_hole")
+    assert tie.diameter_mm == pytest.approx(3.0 + fp["tie_rod_clearance_mm"])
+    af, m = 5.5 + 0.3, 2.4 + 0.5  # pocket across flats and depth
+    inscribed, circumscribed = af / 2, af / math.sqrt(3)
+    assert not any(_radial_probe(root.solid, 0, 0, 1.0, inscribed - 0.05))  # the nut fits every way round
+    assert all(_radial_probe(root.solid, 0, 0, 1.0, circumscribed + 0.05))  # and no wider than its corners
+    assert not any(_radial_probe(root.solid, 0, 0, m - 0.1, 2.0))  # as deep as the nut plus 0.5 mm
+    assert all(_radial_probe(root.solid, 0, 0, m + 0.1, 2.0))  # then the tie-rod hole only (1.7 mm)
 
 
 def _n_joints_from(data) -> int:

@@ -35,8 +35,8 @@ else importing it. Runs are short (one fault at a time, restored at once),
 and a restore never overwrites someone else's edit: if the file changed while
 the fault was in place, the fault alone is reversed in the current text.
 
-By default the suite is given ``tests/test_truth*.py`` first (pytest keeps
-each file once), so a caught fault fails within seconds; ``--plain-order``
+By default the suite's files are given explicitly, ``tests/test_truth*.py``
+first, so a caught fault usually fails within seconds; ``--plain-order``
 runs the suite in pytest's own order. Before the faults, the unmutated suite
 must pass (``--no-baseline`` skips that); after a caught fault the failing
 test is run again on the restored tree and must pass (``--no-confirm`` skips
@@ -85,8 +85,8 @@ FAULTS: list[Fault] = [
           "return math.pi * self.diameter_mm ** 3 / 64.0",
           "the rod's second moment of area is pi d^3 / 64 instead of pi d^4 / 64"),
     Fault("robot_ei_x1.5", "bvsr_cad/assembly/robot.py",
-          "rod_bending_stiffness_nm_rad=rod.bending_stiffness_nm_per_rad(spec.joint.gap_mm)",
-          "rod_bending_stiffness_nm_rad=1.5 * rod.bending_stiffness_nm_per_rad(spec.joint.gap_mm)",
+          "rod_bending_stiffness_nm_rad=rod.bending_stiffness_nm_per_rad(L_mm),",
+          "rod_bending_stiffness_nm_rad=1.5 * rod.bending_stiffness_nm_per_rad(L_mm),",
           "the robot model's rod E I / L is 1.5 times the rod's"),
     Fault("rod_panel_material", "bvsr_cad/models/rod.py",
           "key = spec.vertebra.material\n",
@@ -97,9 +97,9 @@ FAULTS: list[Fault] = [
           'kind="rod", material=spec.vertebra.material',
           'kind="rod", material=spec.use.panel',
           "the rod part (its mass, its BOM line) is made of the panel's material"),
-    Fault("tap_drill_m6", "bvsr_cad/parameters/layout.py",
-          "ISO_TAP_DRILL_MM = {4.0: 3.3, 5.0: 4.2, 6.0: 5.0}",
-          "ISO_TAP_DRILL_MM = {4.0: 3.3, 5.0: 4.2, 6.0: 5.5}",
+    Fault("tap_drill_m6", "bvsr_cad/parameters/data/iso_metric.toml",
+          "pitch_mm = 1.0\ntap_drill_mm = 5.0\n",
+          "pitch_mm = 1.0\ntap_drill_mm = 5.5\n",
           "the M6 tap drill is 5.5 mm (ISO 2306: 5.0 mm)"),
     Fault("set_screw_bore_no_clearance", "bvsr_cad/parameters/layout.py",
           "return hole_d(spec, d + spec.socket.rod_clearance_mm)",
@@ -126,8 +126,8 @@ FAULTS: list[Fault] = [
           "stiffness_slope_n_per_m_per_pa=a.stiffness_slope_n_per_m_per_kpa,",
           "m_a of Eq 4 given per kPa is used per Pa (1000 times too stiff under pressure)"),
     Fault("chord_full_angle", "bvsr_cad/models/kinematics.py",
-          "S, _, _, _ = _series_coefficients(np.asarray(theta_rad, float) / 2)",
-          "S, _, _, _ = _series_coefficients(np.asarray(theta_rad, float))",
+          "S, _, _, _ = _series_coefficients(np.abs(np.asarray(theta_rad, float)) / 2)",
+          "S, _, _, _ = _series_coefficients(np.abs(np.asarray(theta_rad, float)))",
           "the chord is L sin(theta) / theta instead of 2 L sin(theta / 2) / theta"),
     Fault("parallel_axis_sign", "bvsr_cad/assembly/inertia.py",
           "I += i.inertia + i.mass_kg * (np.dot(d, d) * np.eye(3) - np.outer(d, d))",
@@ -165,6 +165,10 @@ FAULTS: list[Fault] = [
           "return fp.pin_diameter_mm + fp.pin_hole_clearance_mm",
           "return fp.pin_diameter_mm - fp.pin_hole_clearance_mm",
           "the rigid twin's dowel holes are smaller than the dowel"),
+    Fault("m3_nut_across_flats", "bvsr_cad/parameters/data/iso_metric.toml",
+          "tap_drill_mm = 2.5\nnut_af_mm = 5.5\n",
+          "tap_drill_mm = 2.5\nnut_af_mm = 5.0\n",
+          "the M3 nut is 5.0 mm across flats (ISO 4032: 5.5 mm): the twin's nut pockets are too small"),
 ]
 
 
@@ -195,6 +199,20 @@ def _atomic_write(path: Path, data: bytes) -> None:
     os.replace(tmp, path)
 
 
+_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+
+class _SignalsHeld:
+    """Signals wait while a file is being mutated or restored (then arrive at once)."""
+
+    def __enter__(self):
+        signal.pthread_sigmask(signal.SIG_BLOCK, _SIGNALS)
+
+    def __exit__(self, *exc):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _SIGNALS)
+        return False
+
+
 class Mutation:
     """One fault applied to one file; :meth:`restore` undoes it exactly once."""
 
@@ -207,6 +225,10 @@ class Mutation:
         self.mutated: bytes | None = None
 
     def apply(self) -> None:
+        with _SignalsHeld():
+            self._apply()
+
+    def _apply(self) -> None:
         original = self.path.read_bytes()
         text = original.decode("utf-8")
         n = text.count(self.fault.old)
@@ -226,6 +248,10 @@ class Mutation:
 
     def restore(self) -> str:
         """Put the original back; returns '' or a warning (the file was edited meanwhile)."""
+        with _SignalsHeld():
+            return self._restore()
+
+    def _restore(self) -> str:
         if self.original is None:
             return ""
         warning = _restore_file(self.path, self.original, self.mutated, self.fault)
@@ -352,7 +378,7 @@ def _kill_child() -> None:
     _CHILD = None
 
 
-_FAIL_RE = re.compile(r"^(FAILED|ERROR) (\S+)", re.M)
+_FAIL_RE = re.compile(r"^(FAILED|ERROR) (.+?)(?: - .*)?$", re.M)
 
 
 def first_failure(output: str) -> str:
@@ -368,16 +394,20 @@ def first_failure(output: str) -> str:
 
 
 def test_args(root: Path, plain_order: bool) -> list[str]:
+    """Test files in the order to run: ``tests/test_truth*.py`` first, then the rest (pytest keeps
+    the order of explicit file arguments; given a folder it would sort them)."""
     if plain_order:
         return []
-    first = sorted(str(p.relative_to(root)) for p in (root / "tests").glob("test_truth*.py"))
-    return first + (["tests"] if first else [])
+    files = sorted(str(p.relative_to(root)) for p in (root / "tests").glob("test_*.py"))
+    first = [f for f in files if Path(f).name.startswith("test_truth")]
+    return first + [f for f in files if f not in first]
 
 
 def run_suite(root: Path, timeout_s: float, extra: list[str], python: str) -> tuple[str, str, float, str]:
     """(status: passed/failed/timeout, first failing test, seconds, output tail)."""
     global _CHILD
     env = dict(os.environ)
+    env["COLUMNS"] = "250"  # pytest's short summary keeps whole node ids
     env["PYTHONDONTWRITEBYTECODE"] = "1"  # no stale bytecode of a mutated module can outlive it
     env["PYTHONPATH"] = str(root) + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
     t0 = time.monotonic()
@@ -477,7 +507,7 @@ def main(argv: list[str] | None = None) -> int:
             log(p)
         return 2
 
-    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+    for sig in _SIGNALS:
         signal.signal(sig, _on_signal)
 
     python = _python(root)

@@ -372,6 +372,57 @@ def test_pockets_are_cut_on_the_pentagon_in_the_solid(asm, raw):
         assert solid.is_inside(bd.Vector(r * math.cos(b), r * math.sin(b), z)), i
 
 
+def test_features_between_the_pockets_sit_on_the_mid_angles(asm, raw):
+    """Lightening holes, segment-2 tubes and mount inserts half-way between SOAs: 126 + 72 (i - 1) deg."""
+    import build123d as bd
+
+    checked = 0
+    for lay in asm.panel_layouts:
+        for c in lay.cuts:
+            if c.role in ("lightening", "tube", "insert") and c.name.rsplit("_", 1)[-1].isdigit() \
+                    and not c.name.startswith(("payload", "tube_s3")):
+                i = int(c.name.rsplit("_", 1)[-1])
+                a = math.radians(126.0 + 72.0 * (i - 1))
+                x, y = c.xy
+                rho = math.hypot(x, y)
+                assert (x, y) == pytest.approx((rho * math.cos(a), rho * math.sin(a)), abs=1e-9), (lay.name, c.name)
+                checked += 1
+    assert checked >= 3 * N_SOA
+    # In the solid: panel 1's lightening holes are voids.
+    lay = asm.panel_layouts[1]
+    solid = asm.parts[asm.panel(1).part].solid
+    holes = [c for c in lay.cuts if c.role == "lightening"]
+    assert len(holes) == N_SOA
+    for c in holes:
+        i = int(c.name.rsplit("_", 1)[-1])
+        a = math.radians(126.0 + 72.0 * (i - 1))
+        rho = math.hypot(*c.xy)
+        assert not solid.is_inside(bd.Vector(rho * math.cos(a), rho * math.sin(a), lay.thickness_mm / 2)), c.name
+
+
+def test_flange_pockets_are_d_b_plus_clearance(asm, raw, bvsr_data):
+    """A pocket takes the D_b = 24.32 mm flange with the 0.10 mm bonding clearance: probed in the solid."""
+    import build123d as bd
+
+    d_pocket = raw["D_b"] + bvsr_data["fabrication"]["pocket_clearance_mm"]
+    assert d_pocket == pytest.approx(24.42)
+    for lay in asm.panel_layouts:
+        pockets = [c for c in lay.cuts if c.role == "pocket"]
+        assert len(pockets) == N_SOA * (int(lay.lower_pockets) + int(lay.upper_pockets))
+        assert all(c.diameter_mm == pytest.approx(d_pocket, abs=1e-12) for c in pockets), lay.name
+    lay = asm.panel_layouts[1]
+    solid = asm.parts[asm.panel(1).part].solid
+    depth = (raw["H"] - raw["H_a"]) / 2
+    for c in (c for c in lay.cuts if c.name.startswith("pocket_upper_")):
+        x, y = c.xy
+        rho = math.hypot(x, y)
+        ux, uy = -x / rho, -y / rho  # towards the tail axis: solid web beyond the pocket wall
+        z = lay.thickness_mm - depth / 2
+        r_in, r_out = d_pocket / 2 - 0.03, d_pocket / 2 + 0.03
+        assert not solid.is_inside(bd.Vector(x + r_in * ux, y + r_in * uy, z)), c.name
+        assert solid.is_inside(bd.Vector(x + r_out * ux, y + r_out * uy, z)), c.name
+
+
 def test_soa_body_height_and_pocket_depth(asm, raw):
     """The SOA is H tall (flanges (H - H_o) / 2 each) and its flanges sit (H - H_a) / 2 deep."""
     box = asm.parts["soa"].solid.bounding_box()
@@ -489,6 +540,43 @@ def test_mujoco_sockets_on_the_pentagon(mjcf, asm, raw):
                 r = raw["D_a"] / 2 - z_face * tan_b
                 p = _tail_frame(mjcf, d, d.site(site).xpos) * 1000
                 assert p == pytest.approx([r * math.cos(a), r * math.sin(a), z], abs=1e-6), site
+
+
+def test_mujoco_bent_joint_is_eq2_by_hand(mjcf, raw):
+    """Eq 2 in the sagittal plane (phi = 90 deg, the MJCF's rest phi): bent by theta, panel 1's lower face
+    centre sits at (0, L (1 - cos theta) / theta, t + L sin theta / theta) and its axis at (0, sin, cos)."""
+    d = mujoco.MjData(mjcf)
+    L, t = raw["H_a"] / 1000, (raw["H_j"] - raw["H_a"]) / 1000
+    for theta in (0.2, -0.35):
+        d.qpos[:] = mjcf.qpos0
+        assert d.qpos[mjcf.joint("j1_phi").qposadr[0]] == pytest.approx(math.pi / 2)
+        for half in ("theta_a", "theta_b"):
+            d.qpos[mjcf.joint(f"j1_{half}").qposadr[0]] = theta / 2
+        d.qpos[mjcf.joint("j1_chord").qposadr[0]] = 2 * L * math.sin(theta / 2) / theta - L
+        mujoco.mj_kinematics(mjcf, d)
+        p = _tail_frame(mjcf, d, d.body("panel1").xpos)
+        assert p == pytest.approx([0.0, L * (1 - math.cos(theta)) / theta, t + L * math.sin(theta) / theta],
+                                  abs=1e-12)
+        z_axis = R_WORLD_TAIL.T @ d.body("panel1").xmat.reshape(3, 3)[:, 2]
+        assert z_axis == pytest.approx([0.0, math.sin(theta), math.cos(theta)], abs=1e-12)
+
+
+def test_robot_limits_by_hand(urdf_root, raw, bvsr_data):
+    """Velocity: the segment's peak 678.6 deg/s shared by its three joints, x 1.5, half per half-angle joint.
+    Effort: five SOAs at the 6 bar pulse pressure on A, on the pitch radius (torque) or the chord (force)."""
+    rb = bvsr_data["robot"]
+    joint_rate = math.radians(rb["segment_velocity_deg_s"]) / raw["joints_per_segment"] * rb["velocity_margin"]
+    push = N_SOA * rb["pulse_pressure_max_kpa"] * 1000 * raw["A_mm2"] * 1e-6  # 414.6 N
+    assert push == pytest.approx(414.6)
+    torque = push * raw["D_a"] / 2 / 1000  # 9.509 N m
+    limits = {j.get("name"): j.find("limit") for j in urdf_root.iter("joint")}
+    for k in range(1, _n_joints(raw) + 1):
+        for half in ("theta_a", "theta_b"):
+            lim = limits[f"j{k}_{half}"]
+            assert float(lim.get("velocity")) == pytest.approx(joint_rate / 2, rel=1e-9)
+            assert float(lim.get("effort")) == pytest.approx(torque, rel=1e-9)
+            assert float(lim.get("upper")) == pytest.approx(THETA_MAX / 2, rel=1e-9)
+        assert float(limits[f"j{k}_chord"].get("effort")) == pytest.approx(push, rel=1e-9)
 
 
 def test_mujoco_soa_actuator_is_eq3_by_hand(mjcf, raw):

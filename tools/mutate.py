@@ -165,6 +165,46 @@ FAULTS: list[Fault] = [
           "return fp.pin_diameter_mm + fp.pin_hole_clearance_mm",
           "return fp.pin_diameter_mm - fp.pin_hole_clearance_mm",
           "the rigid twin's dowel holes are smaller than the dowel"),
+    Fault("robot_rod_panel_material", "bvsr_cad/assembly/robot.py",
+          "rod_mat = spec.material(spec.vertebra.material)",
+          "rod_mat = spec.material(spec.use.panel)",
+          "the robot model's rod pieces (links' mass and inertia) take the panel's density"),
+    Fault("robot_theta_about_x", "bvsr_cad/assembly/robot.py",
+          "names[0], names[1], _as_tuple(np.eye(4)), (0, 1, 0),",
+          "names[0], names[1], _as_tuple(np.eye(4)), (1, 0, 0),",
+          "the first half-angle joint turns about X instead of Y (swapped axis in the chain)"),
+    Fault("robot_phi_origin_in_mm", "bvsr_cad/assembly/robot.py",
+          "_as_tuple(translation_m(z=t)), (0, 0, 1),",
+          "_as_tuple(translation_m(z=t_mm)), (0, 0, 1),",
+          "each joint's chain starts t millimetres written as metres above its panel (mm -> m)"),
+    Fault("robot_top_site_frame", "bvsr_cad/assembly/robot.py",
+          "(top_mm - [0, 0, hi.z0_mm])",
+          "(top_mm - [0, 0, lo.z0_mm])",
+          "an SOA's top socket is placed in the lower panel's frame"),
+    Fault("robot_velocity_not_shared", "bvsr_cad/assembly/robot.py",
+          "return units.deg_s_to_rad_s(segment_deg_s) / joints_per_segment * margin",
+          "return units.deg_s_to_rad_s(segment_deg_s) * margin",
+          "a joint's velocity limit is the whole segment's rate (not shared by its joints)"),
+    Fault("robot_effort_on_diameter", "bvsr_cad/assembly/robot.py",
+          "effort_limit_nm = push_n * units.mm_to_m(spec.joint.pitch_diameter_mm / 2)",
+          "effort_limit_nm = push_n * units.mm_to_m(spec.joint.pitch_diameter_mm)",
+          "the SOAs' torque limit uses the pitch diameter as the lever arm"),
+    Fault("mjcf_soa_spring_sign", "bvsr_cad/exporters/mjcf.py",
+          "biasprm=_vec((n_a * l0, -n_a, -c))",
+          "biasprm=_vec((-n_a * l0, n_a, -c))",
+          "the MJCF actuator's SOA spring pushes with the stretch (Eq 3 sign in MuJoCo)"),
+    Fault("kinematics_xy_swapped", "bvsr_cad/models/kinematics.py",
+          "trans = length_mm * np.stack([u * C, v * C, S], -1)",
+          "trans = length_mm * np.stack([v * C, u * C, S], -1)",
+          "X and Y swapped in the translation of Eq 2"),
+    Fault("mid_angles_30", "bvsr_cad/parameters/layout.py",
+          "return soa_angles_deg() + 36.0",
+          "return soa_angles_deg() + 30.0",
+          "the features between the pockets (lightening, tubes, inserts) are 6 deg off the mid-angles"),
+    Fault("pocket_clearance_sign", "bvsr_cad/parameters/layout.py",
+          "return spec.joint.base_diameter_mm + spec.fabrication.pocket_clearance_mm",
+          "return spec.joint.base_diameter_mm - spec.fabrication.pocket_clearance_mm",
+          "a flange pocket is smaller than the D_b flange (clearance subtracted)"),
     Fault("m3_nut_across_flats", "bvsr_cad/parameters/data/iso_metric.toml",
           "tap_drill_mm = 2.5\nnut_af_mm = 5.5\n",
           "tap_drill_mm = 2.5\nnut_af_mm = 5.0\n",
@@ -459,6 +499,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="skip re-running a caught fault's failing test on the restored tree")
     ap.add_argument("--plain-order", action="store_true", help="run the suite in pytest's own file order")
     ap.add_argument("--root", type=Path, default=ROOT, help="repository to mutate (default: this one)")
+    ap.add_argument("--pytest-arg", action="append", default=[], metavar="ARG",
+                    help="one more argument for pytest, e.g. --pytest-arg=--deselect=tests/test_x.py::test_y")
     ap.add_argument("-v", "--verbose", action="store_true", help="print pytest's output tail of every run")
     args = ap.parse_args(argv)
     root = args.root.resolve()
@@ -511,7 +553,7 @@ def main(argv: list[str] | None = None) -> int:
         signal.signal(sig, _on_signal)
 
     python = _python(root)
-    extra = test_args(root, args.plain_order)
+    extra = list(args.pytest_arg) + test_args(root, args.plain_order)
     rows: list[dict] = []
     warnings: list[str] = []
     baseline = None
@@ -543,7 +585,7 @@ def main(argv: list[str] | None = None) -> int:
             if args.verbose:
                 log(tail)
             if result == "caught" and not args.no_confirm and "::" in first:
-                c_status, c_first, _, c_tail = run_suite(root, args.timeout, [first], python)
+                c_status, c_first, _, c_tail = run_suite(root, args.timeout, list(args.pytest_arg) + [first], python)
                 row["confirmed"] = c_status == "passed"
                 if c_status != "passed":
                     row["result"] = "UNCONFIRMED"

@@ -348,6 +348,15 @@ def restore_leftovers(root: Path) -> list[str]:
             state = {}
     fault = next((f for f in FAULTS if f.name == state.get("fault")), None)
     messages = []
+    pgid = state.get("pytest_pgid")
+    if pgid:  # the killed run's pytest (its own session) may still be running on the mutated file
+        try:
+            cmd = Path(f"/proc/{pgid}/cmdline").read_bytes().replace(b"\0", b" ")
+            if b"pytest" in cmd and os.getpgid(pgid) == pgid:
+                os.killpg(pgid, signal.SIGTERM)
+                messages.append(f"stopped the killed run's pytest (process group {pgid})")
+        except (OSError, ProcessLookupError):
+            pass
     for backup in _leftovers(root):
         target = backup.with_name(backup.name[: -len(BACKUP_SUFFIX)])
         original = backup.read_bytes()
@@ -453,6 +462,12 @@ def run_suite(root: Path, timeout_s: float, extra: list[str], python: str) -> tu
     t0 = time.monotonic()
     _CHILD = subprocess.Popen([python, *PYTEST_ARGS, *extra], cwd=root, env=env, stdout=subprocess.PIPE,
                               stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    state = _state_path(root)
+    if state.exists():  # a fault is applied: --restore can stop this run's pytest if we are killed
+        try:
+            _write_state(root, {**json.loads(state.read_text()), "pytest_pgid": _CHILD.pid})
+        except ValueError:
+            pass
     try:
         out, _ = _CHILD.communicate(timeout=timeout_s)
         rc = _CHILD.returncode

@@ -37,10 +37,11 @@ the fault was in place, the fault alone is reversed in the current text.
 
 By default the suite's files are given explicitly, ``tests/test_truth*.py``
 first, so a caught fault usually fails within seconds; ``--plain-order``
-runs the suite in pytest's own order. Before the faults, the unmutated suite
-must pass (``--no-baseline`` skips that); after a caught fault the failing
-test is run again on the restored tree and must pass (``--no-confirm`` skips
-that), so a failure is the fault's and not the tree's.
+runs the suite in pytest's own order. After a caught fault the failing test
+is run again on the restored tree and must pass (else the fault is reported
+UNCONFIRMED; ``--no-confirm`` skips that), so a failure is the fault's and
+not the tree's. ``--baseline`` also runs the whole unmutated suite first and
+stops if it fails.
 """
 
 from __future__ import annotations
@@ -509,7 +510,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     ap.add_argument("--restore", action="store_true", help="restore files left mutated by a killed run, then exit")
     ap.add_argument("--timeout", type=float, default=420.0, help="seconds allowed per suite run (default 420)")
-    ap.add_argument("--no-baseline", action="store_true", help="skip the unmutated run of the suite")
+    ap.add_argument("--baseline", action="store_true", help="first run the unmutated suite; stop if it fails")
     ap.add_argument("--no-confirm", action="store_true",
                     help="skip re-running a caught fault's failing test on the restored tree")
     ap.add_argument("--plain-order", action="store_true", help="run the suite in pytest's own file order")
@@ -573,14 +574,14 @@ def main(argv: list[str] | None = None) -> int:
     warnings: list[str] = []
     baseline = None
     try:
-        if not args.no_baseline:
+        if args.baseline:
             log("baseline: the unmutated suite ...")
             status, first, dt, tail = run_suite(root, args.timeout, extra, python)
             baseline = {"result": status, "first_failure": first, "seconds": round(dt, 1)}
             log(f"baseline: {status} in {dt:.0f} s {first}")
             if status != "passed":
                 log(tail)
-                log("the suite fails without any fault: fix the tree first (or --no-baseline)")
+                log("the suite fails without any fault: fix the tree first")
                 return 2
         for f in faults:
             log(f"{f.name}: {f.description} ...")

@@ -95,6 +95,9 @@ BAD = [
      "fabrication_package.printer_z_mm = 40.0"),
     ("tie rod through a 4 mm rod column", lambda d: d["vertebra"].__setitem__("diameter_mm", 4.0),
      "fabrication_package.tie_rod_thread = 3.0"),
+    ("a cone too slight for the kernel", lambda d: d["taper"].__setitem__("half_angle_deg", 0.0057),
+     "taper.half_angle_deg = 0.0057"),
+    ("an SOA shorter than the gap", lambda d: d["soa"].__setitem__("height_mm", 35.8), "soa.height_mm = 35.8"),
 ]
 
 

@@ -408,6 +408,10 @@ def soa_is_sound(spec: TailSpec) -> bool:
             and s.short_side_mm - 2 * s.wall_offset_mm > 0.5 and 2 * s.fillet_radius_mm < s.short_side_mm)
 
 
+#: Smallest cone the panels can be built with (other than none): below it the oblique air channels' end
+#: faces nearly coincide with the pocket floors and OCC's boolean cut returns the pockets as loose solids
+#: (found by the property tests: 1e-5 to 0.01 deg fail, 0.02 deg builds, for channels of 2 to 16 mm).
+MIN_BUILDABLE_TAPER_DEG = 0.05
 #: The [fabrication] minimums a panel rule can require (the message names the one that binds).
 _WEB_KEYS = ("min_pocket_gap_mm", "min_wall_mm", "min_rim_lip_mm", "socket_floor_mm")
 
@@ -474,6 +478,20 @@ def validate_layout(spec: TailSpec) -> list[str]:
                 f"taper.half_angle_deg = {spec.taper.half_angle_deg}: beyond the feasible cone; allowed: 0 to "
                 f"{beta_max:.4f} deg ('auto' picks it); limited by: {binding_constraint(spec)}")
             return problems
+    beta_deg = math.degrees(half_angle_rad(spec))
+    if 0.0 < beta_deg < MIN_BUILDABLE_TAPER_DEG and spec.joints_per_segment > 1:
+        why = (f"a cone below {MIN_BUILDABLE_TAPER_DEG:g} deg tilts the intermediate panels' air channels so "
+               "little that their end faces lie within micrometres of the flange pockets' floors, which the CAD "
+               "kernel cannot cut (the panel falls apart)")
+        beta_max = max_feasible_taper_deg(spec)
+        if spec.taper.half_angle_deg == AUTO:
+            problems.append(f"taper.half_angle_deg = 'auto': the largest feasible cone is {beta_deg:.4f} deg "
+                            f"(limited by: {binding_constraint(spec)}); {why}; allowed: 0 (no taper)")
+        else:
+            wider = f", or {MIN_BUILDABLE_TAPER_DEG:g} to {beta_max:.4f} deg" \
+                if beta_max >= MIN_BUILDABLE_TAPER_DEG else ""
+            problems.append(f"taper.half_angle_deg = {spec.taper.half_angle_deg}: {why}; allowed: 0{wider}")
+        return problems
     for desc, measured, need in _problems_at(spec, half_angle_rad(spec)):
         keys = " or ".join(f"fabrication.{k} = {getattr(spec.fabrication, k)!r}" for k in _WEB_KEYS
                            if getattr(spec.fabrication, k) == need) or f"{need:g} mm"

@@ -509,7 +509,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--list", action="store_true", help="list the faults and whether each snippet applies")
     ap.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
     ap.add_argument("--restore", action="store_true", help="restore files left mutated by a killed run, then exit")
-    ap.add_argument("--timeout", type=float, default=420.0, help="seconds allowed per suite run (default 420)")
+    ap.add_argument("--timeout", type=float, default=900.0, help="seconds allowed per suite run (default 900)")
     ap.add_argument("--baseline", action="store_true", help="first run the unmutated suite; stop if it fails")
     ap.add_argument("--no-confirm", action="store_true",
                     help="skip re-running a caught fault's failing test on the restored tree")

@@ -15,14 +15,15 @@ from dataclasses import dataclass
 import build123d as bd
 import numpy as np
 
+from ..parameters.twin import RIGID_TWIN_MATERIAL
 from ..parts._kernel import location
 from ..parts.mold import MoldSet, mold_set
 from ..parts.rigid_tail import RigidPiece, rigid_tail_pieces
 from .build import Assembly
 from .inertia import Inertial, compose, from_solid
 
-#: The rigid twin's material (SPEC section 4: a PLA print).
-RIGID_MATERIAL = "PLA"
+#: The rigid twin's material (SPEC section 4: a PLA print), checked at load.
+RIGID_MATERIAL = RIGID_TWIN_MATERIAL
 
 
 def build_mold_set(asm: Assembly) -> MoldSet:

@@ -31,7 +31,8 @@ from ..colors import rgb, rgba
 from ..assembly.build import Assembly
 from ..parameters.layout import N_SOA
 from ..assembly.products import RIGID_MATERIAL, RigidRobot, piece_transform_mm
-from ..parts.rigid_tail import KEPT_ROLES, RigidPiece, nut_pocket_depth_mm, pin_hole_mm, tie_rod_hole_mm, tie_rod_length_mm
+from ..parameters.twin import nut_pocket_depth_mm, pin_hole_mm, tie_rod_hole_mm, tie_rod_length_mm
+from ..parts.rigid_tail import KEPT_ROLES, RigidPiece
 from .bom import bom_rows, write_bom
 from .cad import write_step, write_stl
 from .xml import num as _f

@@ -21,9 +21,9 @@ from pathlib import Path
 from typing import Any
 
 from .tables import AUTO, Material, TailSpec
+from .twin import RIGID_TWIN_MATERIAL
 
 #: The rigid comparison tail (parts/rigid_tail.py, the fabrication package) is printed in this material.
-RIGID_TWIN_MATERIAL = "PLA"
 
 
 class ParamError(ValueError):

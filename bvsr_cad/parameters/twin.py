@@ -22,6 +22,9 @@ from .layout import PanelLayout, half_angle_rad, panel_layout, rounded_square_su
 from .standard_parts import metric
 from .tables import FabricationPackage, TailSpec
 
+#: The rigid comparison tail is printed in this material (a key of [materials], checked at load).
+RIGID_TWIN_MATERIAL = "PLA"
+
 #: Extra room around a nut in its printed pocket (FDM holes print small).
 NUT_POCKET_CLEARANCE_MM = 0.3
 #: A pin hole is this much deeper than half the pin so the pin never bottoms out.

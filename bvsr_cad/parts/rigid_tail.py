@@ -40,9 +40,8 @@ from ..parameters.layout import PanelLayout, soa_angles_deg, polar
 from ..parameters.standard_parts import metric
 from ..parameters.tables import TailSpec
 # The twin's derived dimensions (pin depths, nut pockets, the printer fit) live with the rules that validate them.
-from ..parameters.twin import (NUT_POCKET_CLEARANCE_MM, PANEL_PIN_FLOOR_MM,  # noqa: F401
-                               PIN_HOLE_EXTRA_MM, fits_printer, nut_pocket_depth_mm, pin_depths_mm, pin_hole_mm,
-                               tie_rod_hole_mm, tie_rod_length_mm, twin_problems)
+from ..parameters.twin import (NUT_POCKET_CLEARANCE_MM, fits_printer, nut_pocket_depth_mm, pin_depths_mm,
+                               pin_hole_mm, tie_rod_hole_mm, twin_problems)
 from .soa import soa_envelope
 from ._kernel import GeometryError, cut_all, cylinder_between, fuse_all, location, single_solid
 

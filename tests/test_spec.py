@@ -4,6 +4,8 @@ exit code 2 and a message naming the file, the key and what is allowed."""
 from __future__ import annotations
 
 import math
+import tomllib
+from pathlib import Path
 
 import pytest
 
@@ -56,54 +58,31 @@ def test_soa_fold_residual_is_computed_not_forced(bvsr_spec):
     assert shorter.soa.built_height_mm == pytest.approx(34.370 + 2.6, abs=1e-3)
 
 
-BAD = [
-    # (description, mutate(data), key expected in the message)
-    ("unknown key", lambda d: d["joint"].__setitem__("gap_mmm", 36.5), "joint.gap_mmm"),
-    ("unknown table", lambda d: d.__setitem__("extras", {"x": 1}), "extras"),
-    ("wrong type", lambda d: d["joint"].__setitem__("gap_mm", "36.51"), "joint.gap_mm"),
-    ("out of range", lambda d: d["soa"].__setitem__("pleats", 0), "soa.pleats"),
-    ("not a choice", lambda d: d["vertebra"].__setitem__("diameter_mm", 7.0), "vertebra.diameter_mm"),
-    ("missing key", lambda d: d["soa"].pop("long_side_mm"), "soa.long_side_mm"),
-    ("unknown material", lambda d: d["vertebra"].__setitem__("material", "steel"), "vertebra.material"),
-    ("pockets overlap on the pitch circle", lambda d: d["joint"].__setitem__("pitch_diameter_mm", 40.0),
-     "pocket_upper_1 and pocket_upper_2"),
-    ("rim inside the SOA envelope", lambda d: d["joint"].__setitem__("panel_diameter_mm", 68.0),
-     "joint.panel_diameter_mm"),
-    ("pockets deeper than the panel", lambda d: d["joint"].__setitem__("joint_height_mm", 38.0),
-     "deeper than the panel"),
-    ("taper beyond the feasible one", lambda d: d["taper"].__setitem__("half_angle_deg", 1.23),
-     "taper.half_angle_deg"),
-    ("set-screw collar into the tube holes", lambda d: (d["vertebra"].__setitem__("socket", "set_screw"),
-                                                        d["socket"].__setitem__("boss_wall_mm", 5.5)),
-     "set-screw collar"),
-    ("tube holes into the rod bore", lambda d: d["tubes"].__setitem__("inner_radius_mm", 4.0), "rod_bore"),
-    # Rules of the generators beyond the panels, checked at load (issue 10): they used to fail mid-build.
-    ("mold wall too thin for the pins", lambda d: d["casting"].__setitem__("cavity_wall_mm", 3.0),
-     "casting.cavity_wall_mm = 3.0"),
-    ("unknown core material", lambda d: d["fabrication_package"].__setitem__("core_material", "unobtainium"),
-     "fabrication_package.core_material = 'unobtainium'"),
-    ("unknown mold material", lambda d: d["fabrication_package"].__setitem__("mold_material", "unobtainium"),
-     "fabrication_package.mold_material = 'unobtainium'"),
-    ("rigid twin material missing", lambda d: d["materials"].pop("PLA"), "materials.PLA"),
-    ("mold gate wider than the flange face", lambda d: d["casting"].__setitem__("gate_diameter_mm", 6.0),
-     "casting.gate_diameter_mm = 6.0"),
-    ("mold pins meet in the halves", lambda d: d["casting"].__setitem__("pin_length_mm", 17.0),
-     "casting.pin_length_mm = 17.0"),
-    ("rigid twin wider than the printer", lambda d: d["fabrication_package"].__setitem__("printer_y_mm", 60.0),
-     "fabrication_package.printer_y_mm = 60.0"),
-    ("rigid twin taller than the printer", lambda d: d["fabrication_package"].__setitem__("printer_z_mm", 40.0),
-     "fabrication_package.printer_z_mm = 40.0"),
-    ("tie rod through a 4 mm rod column", lambda d: d["vertebra"].__setitem__("diameter_mm", 4.0),
-     "fabrication_package.tie_rod_thread = 3.0"),
-    ("a cone too slight for the kernel", lambda d: d["taper"].__setitem__("half_angle_deg", 0.0057),
-     "taper.half_angle_deg = 0.0057"),
-    ("an SOA shorter than the gap", lambda d: d["soa"].__setitem__("height_mm", 35.8), "soa.height_mm = 35.8"),
-]
+def _bad_cases() -> list:
+    """The cases of tests/data/bad_params.toml as pytest params (id: the case's description)."""
+    cases = tomllib.loads((Path(__file__).parent / "data" / "bad_params.toml").read_text())["case"]
+    return [pytest.param(c.get("set", {}), c.get("delete", []), c["expect"], id=c["desc"]) for c in cases]
 
 
-@pytest.mark.parametrize("desc,mutate,key", BAD, ids=[b[0] for b in BAD])
-def test_bad_parameters_exit_2_and_name_the_key(tmp_path, data, desc, mutate, key, capsys):
-    mutate(data)
+def _edit(data: dict, path: str) -> tuple[dict, str]:
+    """The table holding dotted ``path`` (created where missing) and the last key."""
+    *tables, key = path.split(".")
+    for name in tables:
+        data = data.setdefault(name, {})
+    return data, key
+
+
+BAD = _bad_cases()
+
+
+@pytest.mark.parametrize("edits,deletions,key", BAD)
+def test_bad_parameters_exit_2_and_name_the_key(tmp_path, data, edits, deletions, key, capsys):
+    for path, value in edits.items():
+        table, name = _edit(data, path)
+        table[name] = value
+    for path in deletions:
+        table, name = _edit(data, path)
+        del table[name]
     path = write_toml(tmp_path / "bad.toml", data)
     with pytest.raises(ParamError) as err:
         load_spec(path)

@@ -87,11 +87,13 @@ def cmd_simulate(args) -> int:
     spec = load_spec(args.params)
     check_inputs(spec, args.pressure_bar, args.payload_g)
     limits = joint_limits_rad(spec, say)
-    res = simulate(spec, limits, args.pressure_bar, args.payload_g, progress=say)
+    res = simulate(spec, limits, args.pressure_bar, args.payload_g, progress=say, supply=args.supply)
     out = Path(args.output) if args.output else Path("exports") / spec.name / "simulate"
     out.mkdir(parents=True, exist_ok=True)
     png = out / f"simulate_{args.pressure_bar:g}bar_{args.payload_g:g}g.png"
-    plot_simulation(res, png, f"{spec.name}: {args.pressure_bar:g} bar pulse (Eq 13 ramp, t0 = 40 ms)")
+    supply = args.supply or spec.pneumatics.model
+    how = "Eq 13 ramp" if supply == "ramp" else "ISO 6358 valve supply"
+    plot_simulation(res, png, f"{spec.name}: {args.pressure_bar:g} bar pulse ({how})")
     v_ref = paper.SEGMENT_PEAK_VELOCITY_EXTENSION
     peaks = paper.paper_root_peaks(args.payload_g) if args.pressure_bar == 6 else None
     comparison = {
@@ -103,7 +105,7 @@ def cmd_simulate(args) -> int:
     payload = {"pressure_bar": res.pressure_bar, "payload_g": res.payload_g,
                "peak_velocity_deg_s": res.peak_velocity_deg_s, "segment_angle_reached_deg": res.angle_reached_deg,
                "peak_root_torque_nm": res.peak_root_torque_nm, "peak_root_force_n": res.peak_root_force_n,
-               "joint_limits_rad": limits, "plot": str(png), "paper": comparison}
+               "joint_limits_rad": limits, "plot": str(png), "paper": comparison, "supply": supply}
     if args.json:
         print(json.dumps(payload))
     else:
@@ -113,6 +115,53 @@ def cmd_simulate(args) -> int:
             print(f"{key}: {c['computed']:.3g}  {ref}")
         print(f"segment reached {res.angle_reached_deg:.1f} deg; plot: {png}")
     return EXIT_OK
+
+
+def cmd_calibrate(args) -> int:
+    from .analysis.calibrate import calibrate
+    from .analysis.predict import Predictor
+    from .exporters.calibration_file import write_calibrated_params
+    from .parameters.load import load_spec
+    from .parameters.measurements import data_sha256, load_measurements
+
+    say = _progress(args.quiet or args.json)
+    spec = load_spec(args.params)
+    rows = load_measurements(args.data)
+    names = [n.strip() for n in args.fit.split(",") if n.strip()] if args.fit else None
+    if names is not None:
+        from .parameters.tables import CALIBRATABLE
+
+        bad = [n for n in names if n not in CALIBRATABLE]
+        if bad:
+            raise CalibrationInputError(f"--fit {args.fit}: unknown {', '.join(bad)}; allowed: "
+                                        f"{', '.join(CALIBRATABLE)}")
+    say(f"{len(rows)} measurements ({sum(m.role == 'fit' for m in rows)} fit, "
+        f"{sum(m.role == 'holdout' for m in rows)} holdout); building the geometry")
+    res = calibrate(spec, rows, names, Predictor.from_spec(spec), progress=say)
+    out = None
+    if args.output:
+        out = write_calibrated_params(args.params, args.output, res, str(args.data), data_sha256(args.data))
+    if args.json:
+        print(json.dumps({**res.as_json(), "output": None if out is None else str(out)}))
+        return EXIT_OK
+    print("fitted (95 % interval from the Jacobian; start = the tables' value):")
+    for name, v in res.fitted.items():
+        print(f"  {name} = {v.value:.4g} {v.unit}  [{v.low:.4g} .. {v.high:.4g}]  start {v.start:.4g}")
+    print(f"{'row':>4} {'role':8} {'quantity (conditions)':74} {'reported':>10} {'uncalib.':>10} {'calib.':>10} "
+          f"{'error':>7}")
+    for r in res.rows:
+        err = r["rel_calibrated"]
+        print(f"{r['row']:>4} {r['role']:8} {r['label'][:74]:74} {r['reported']:>10.4g} {r['uncalibrated']:>10.4g} "
+              f"{r['calibrated']:>10.4g} {100 * err:>+6.0f}%")
+    print(f"RMS relative error: fit {res.rms_rel_fit_uncalibrated:.3f} -> {res.rms_rel_fit:.3f}, "
+          f"holdout {res.rms_rel_holdout_uncalibrated:.3f} -> {res.rms_rel_holdout:.3f}")
+    if out:
+        print(f"wrote {out}")
+    return EXIT_OK
+
+
+class CalibrationInputError(ValueError):
+    """A bad `bvsr calibrate` argument (exit code 2)."""
 
 
 def _number(minimum: float, inclusive: bool, kind: type = float):
@@ -187,8 +236,17 @@ def make_parser() -> argparse.ArgumentParser:
     sm.add_argument("params", help="parameter file")
     sm.add_argument("--pressure-bar", type=_number(0.0, inclusive=False), default=6.0, help="pulse gauge pressure in bar (default 6)")
     sm.add_argument("--payload-g", type=_number(0.0, inclusive=True), default=0.0, help="tip payload in grams (default 0)")
+    sm.add_argument("--supply", choices=("ramp", "valve"),
+                    help="pressure input: Eq 13 ramp or the ISO 6358 valve supply (default: pneumatics.model)")
     sm.add_argument("-o", "--output", help="folder for the plot (default exports/<name>/simulate/)")
     sm.set_defaults(func=cmd_simulate)
+    ca = sub.add_parser("calibrate", parents=[common],
+                        help="fit the quantities no table gives to measurements; report fit and holdout errors")
+    ca.add_argument("params", help="parameter file")
+    ca.add_argument("data", help="measurements CSV (experiment,quantity,conditions,value,unit,role,source)")
+    ca.add_argument("-o", "--output", help="write the calibrated parameter file here ([calibration] table added)")
+    ca.add_argument("--fit", help="comma-separated quantities to fit (default: what the fit rows identify)")
+    ca.set_defaults(func=cmd_calibrate)
     wk = sub.add_parser("workspace", parents=[common], help="tip workspace by the paper's random chamber-state protocol")
     wk.add_argument("params", help="parameter file")
     wk.add_argument("--samples", type=_number(1, inclusive=True, kind=int), default=20000)
@@ -253,10 +311,12 @@ def main(argv: list[str] | None = None) -> int:
     from .pipeline import OutputError
     from .sim import SimulationInputError
     from .parameters.load import ParamError
+    from .parameters.measurements import MeasurementError
 
     try:
         return args.func(args)
-    except (ParamError, OutputError, ExportError, SimulationInputError, SlicerMissingError) as exc:
+    except (ParamError, MeasurementError, CalibrationInputError, OutputError, ExportError, SimulationInputError,
+            SlicerMissingError) as exc:
         print(f"bvsr: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except GeometryError as exc:

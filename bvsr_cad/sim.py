@@ -1,4 +1,4 @@
-"""`bvsr simulate`: the MJCF driven by a pressure pulse (the paper's Eq 13 ramp).
+"""`bvsr simulate`: the MJCF driven by a pressure pulse (the Eq 13 ramp or the valve supply model).
 
 Two runs, as in the paper's experiments (Sec. IV-A):
 
@@ -28,20 +28,32 @@ import numpy as np
 from . import units
 from .assembly.build import build_assembly
 from .assembly.robot import robot_model
+from .models.dynamics import ramp_pa
 from .exporters.mjcf import mjcf_tree, write_mjcf
 from .exporters.robot_meshes import write_robot_meshes
 from .parameters.tables import TailSpec
 
-RAMP_T0_S = 0.040  # Eq 13's t_0 (the paper's fit)
 VELOCITY_WINDOW_DEG = 38.0  # the paper measures the velocity up to this bending angle
 EXTENSION_LINES = (3, 4)
 SETTLE_S = 0.3  # the two ventral SOAs push: the tail bends dorsally (+Y)
 
 
-def ramp_pa(t_s: np.ndarray | float, p0_pa: float, t0_s: float = RAMP_T0_S):
-    """Eq 13: P(t) = P0 t^2 (3 / t0^2 - 2 t / t0^3) for t < t0, then P0."""
-    t = np.clip(np.asarray(t_s, float), 0.0, t0_s)
-    return p0_pa * t * t * (3.0 / t0_s ** 2 - 2.0 * t / t0_s ** 3)
+def pressure_input(spec: TailSpec, asm, p0_pa: float, supply: str) -> Callable[[float], float]:
+    """The gauge pressure of a pulsed line over time (s), for ``supply``:
+
+    - ``ramp``: the paper's Eq 13 with t_0 = ``pneumatics.ramp_time_s`` (or its calibrated value);
+    - ``valve``: the ISO 6358 supply model (:mod:`bvsr_cad.models.pneumatics`) filling one line's
+      tube and SOAs held at rest length, precomputed and played back as the actuators' control
+      (plain MuJoCo has no chamber state; the SOAs' growth during the motion is not fed back).
+    """
+    if supply == "ramp":
+        t0 = spec.fitted("ramp_time_s", spec.pneumatics.ramp_time_s)
+        return lambda t: float(ramp_pa(t, p0_pa, t0))
+    from .assembly.pneumatic_lines import line_supply
+    from .models.pneumatics import fill_curve
+
+    t_s, p_pa = fill_curve(line_supply(asm, 1, EXTENSION_LINES, p0_pa, spec), 1.0, samples=4001)
+    return lambda t: float(np.interp(t, t_s, p_pa))
 
 
 class SimulationInputError(ValueError):
@@ -90,7 +102,7 @@ def _model_xml(spec: TailSpec, theta_max_rad: list[float], folder: Path, payload
     return path, sorted({s.line for s in robot.soas if s.line_index in EXTENSION_LINES})
 
 
-def _run(model: tuple[Path, list[str]], spec: TailSpec, p0_pa: float, seconds: float,
+def _run(model: tuple[Path, list[str]], spec: TailSpec, pressure: Callable[[float], float], seconds: float,
          stop_angle_deg: float | None = None):
     import mujoco
 
@@ -111,7 +123,7 @@ def _run(model: tuple[Path, list[str]], spec: TailSpec, p0_pa: float, seconds: f
     force = np.zeros((steps, 3))
     torque = np.zeros((steps, 3))
     for n in range(steps):
-        d.ctrl[lines] = ramp_pa(d.time - t_start, p0_pa)
+        d.ctrl[lines] = pressure(d.time - t_start)
         mujoco.mj_step(m, d)
         t[n] = d.time - t_start
         z_tip = d.xmat[tip].reshape(3, 3)[:, 2]
@@ -148,7 +160,8 @@ def joint_limits_rad(spec: TailSpec, progress: Callable[[str], None] | None = No
 
 
 def simulate(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float, payload_g: float = 0.0,
-             seconds: float = 0.5, progress: Callable[[str], None] | None = None) -> SimResult:
+             seconds: float = 0.5, progress: Callable[[str], None] | None = None,
+             supply: str | None = None) -> SimResult:
     """Run the two experiments at a pulse pressure (gauge, bar).
 
     Raises:
@@ -156,18 +169,22 @@ def simulate(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float, pa
     """
     say = progress or (lambda _m: None)
     check_inputs(spec, pressure_bar, payload_g)
+    supply = supply or spec.pneumatics.model
+    if supply not in ("ramp", "valve"):
+        raise SimulationInputError(f"--supply {supply}: allowed ramp, valve")
     p0 = pressure_bar * units.PA_PER_BAR
+    pressure = pressure_input(spec, build_assembly(spec), p0, supply)
     one = dataclasses.replace(spec, name=f"{spec.name}_segment", segments=1)
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         say("segment model")
         seg_xml = _model_xml(one, theta_max_rad[: one.joints], folder / "segment", 0.0)
         say(f"segment extension at {pressure_bar:g} bar")
-        t, angle, _, _ = _run(seg_xml, one, p0, seconds, stop_angle_deg=VELOCITY_WINDOW_DEG)
+        t, angle, _, _ = _run(seg_xml, one, pressure, seconds, stop_angle_deg=VELOCITY_WINDOW_DEG)
         say("tail model")
         tail_xml = _model_xml(spec, theta_max_rad, folder / "tail", payload_g)
         say(f"tail extension at {pressure_bar:g} bar, payload {payload_g:g} g")
-        tt, _, force, torque = _run(tail_xml, spec, p0, seconds)
+        tt, _, force, torque = _run(tail_xml, spec, pressure, seconds)
     rate = np.gradient(angle, t)
     window = angle <= VELOCITY_WINDOW_DEG
     peak_v = float(np.max(rate[window])) if window.any() else float("nan")

@@ -65,3 +65,7 @@ def kpa_to_pa(value_kpa):
 
 def mm2_to_m2(value_mm2: float) -> float:
     return value_mm2 / (MM_PER_M * MM_PER_M)
+
+
+def mm3_to_m3(value_mm3: float) -> float:
+    return value_mm3 / MM_PER_M ** 3

@@ -135,7 +135,7 @@ def test_bom_counts_equal_the_assembly(manifest, bvsr_export):
 
 def test_segment_two_tubes_reach_the_boundary_port(manifest, bvsr_export):
     from bvsr_cad.assembly.build import build_assembly
-    from bvsr_cad.exporters.bom import tube_routes_mm
+    from bvsr_cad.assembly.pneumatic_lines import tube_routes_mm
     from bvsr_cad.parameters.load import load_spec
 
     spec = load_spec(bvsr_export / "params.toml")

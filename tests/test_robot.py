@@ -164,13 +164,15 @@ def test_pybullet_helper_couples_mimic_joints(robot_export):
 
 
 def test_eq13_ramp():
-    from bvsr_cad.sim import ramp_pa
+    from bvsr_cad.models.dynamics import ramp_pa
 
     t0, p0 = 0.04, 6e5
-    assert ramp_pa(0.0, p0) == 0.0 and ramp_pa(t0, p0) == pytest.approx(p0) and ramp_pa(0.2, p0) == pytest.approx(p0)
+    assert ramp_pa(0.0, p0, t0) == 0.0 and ramp_pa(t0, p0, t0) == pytest.approx(p0)
+    assert ramp_pa(0.2, p0, t0) == pytest.approx(p0)
+    assert ramp_pa(t0 / 2, p0, t0) == pytest.approx(p0 / 2)  # Eq 13 at t0/2: P0 (t0/2)^2 (3/t0^2 - 1/t0^2) = P0/2
     h = 1e-7
-    assert (ramp_pa(h, p0) - ramp_pa(0.0, p0)) / h == pytest.approx(0.0, abs=1e3)  # P'(0) = 0
-    assert (ramp_pa(t0, p0) - ramp_pa(t0 - h, p0)) / h == pytest.approx(0.0, abs=1e3)  # P'(t0) = 0
+    assert (ramp_pa(h, p0, t0) - ramp_pa(0.0, p0, t0)) / h == pytest.approx(0.0, abs=1e3)  # P'(0) = 0
+    assert (ramp_pa(t0, p0, t0) - ramp_pa(t0 - h, p0, t0)) / h == pytest.approx(0.0, abs=1e3)  # P'(t0) = 0
 
 
 @pytest.mark.slow

@@ -18,7 +18,7 @@ from .. import units
 from ..assembly.build import Assembly
 from ..models.rod import rod_section
 from ..parameters.layout import N_SOA
-from ..models.statics import LumpedMasses, TailStatics, quasi_static_segment
+from ..models.statics import Actuator, LumpedMasses, TailStatics, quasi_static_segment
 from ..parameters.tables import TailSpec
 
 Progress = Callable[[str], None]
@@ -86,7 +86,7 @@ def quasi_static_table(asm: Assembly, area_scale: tuple[float, ...] = (1.0,)) ->
     rows = []
     for scale in area_scale:
         st = TailStatics.from_spec(asm.spec, lumped_masses(asm),
-                                   area_mm2=asm.spec.actuation.effective_area_mm2 * scale).first_segment()
+                                   area_mm2=Actuator.from_spec(asm.spec).area_mm2 * scale).first_segment()
         for motion in ("extension", "flexion", "waggle"):
             q = quasi_static_segment(st, motion)
             rows.append({"motion": motion, "area_mm2": st.act.area_mm2, "max_angle_deg": q.max_angle_deg,

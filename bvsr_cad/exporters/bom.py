@@ -15,9 +15,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from ..assembly.build import Assembly
+from ..assembly.pneumatic_lines import line_tube_lengths_mm, tube_routes_mm
 from ..assembly.products import RIGID_MATERIAL
 from ..parameters.standard_parts import metric, size_for_clearance_hole, size_for_tap_drill
 
@@ -41,35 +40,6 @@ class BomRow:
     mass_each_g: float | None
     mass_total_g: float | None
     notes: str = ""
-
-
-def tube_routes_mm(asm: Assembly) -> dict[str, float]:
-    """Tube length inside the tail per pressure line at rest (mm), from the panel layouts.
-
-    Segment 1's lines start at the push-in fittings on the root mount (no tube
-    inside the tail). A line of segment s >= 2 runs from the root face through
-    the tube holes of every panel before boundary panel p_s into its bonded
-    port: the polyline through the hole centres at each panel's lower face,
-    ending at the port's bottom.
-    """
-    spec = asm.spec
-    routes: dict[str, float] = {}
-    for s in range(1, spec.segments + 1):
-        for i in range(1, 6):
-            line = f"s{s}_line{i}"
-            if s == 1:
-                routes[line] = 0.0
-                continue
-            pts = []
-            for lay in asm.panel_layouts:
-                for c in lay.cuts:
-                    if c.name == f"tube_s{s}_{i}":
-                        pts.append((c.p0[0], c.p0[1], lay.z0_mm))
-                    elif c.name == f"tube_port_s{s}_{i}":
-                        pts.append((c.p1[0], c.p1[1], lay.z0_mm + c.p1[2]))
-            p = np.asarray(pts, float)
-            routes[line] = float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) > 1 else 0.0
-    return routes
 
 
 def _mold_bolt_length_mm(manifest: dict[str, Any], thread: float) -> tuple[int, float]:
@@ -135,12 +105,13 @@ def bom_rows(asm: Assembly, manifest: dict[str, Any]) -> list[BomRow]:
                        f"push-in fitting M5 x tube {d_tube:g} mm, straight", fittings, "pcs", "", "bought", None, None,
                        "segment 1's five lines, in the root mount's tapped ports"))
     routes = tube_routes_mm(asm)
+    cut = line_tube_lengths_mm(asm)
     total_tube = 0.0
     for line, inside in routes.items():
-        length = round(inside * (1.0 + fp.tube_bend_allowance) + fp.tube_lead_mm, 1)  # cut to 0.1 mm
+        length = cut[line]
         total_tube += length
         rows.append(BomRow("pneumatics", "pneumatic", f"tube {line}", f"PU tube {d_tube:g} x "
-                           f"{d_tube - 1.5:g} mm, cut to {length:.1f} mm", length, "mm", "PU", "cut",
+                           f"{spec.tubes.inner_diameter_mm:g} mm, cut to {length:.1f} mm", length, "mm", "PU", "cut",
                            None, None, f"{inside:.1f} mm inside the tail (+{100 * fp.tube_bend_allowance:.0f} % for "
                            f"bending) + {fp.tube_lead_mm:g} mm lead to the valves"))
     rows.append(BomRow("pneumatics", "pneumatic", "tee", f"push-in tee, tube {d_tube:g} mm", lines, "pcs", "",

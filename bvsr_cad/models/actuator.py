@@ -40,9 +40,10 @@ class SoaForceLaw:
 
 
 def soa_force_law(spec: TailSpec) -> SoaForceLaw:
-    """The law of one SOA from the parameter file's ``[actuation]``."""
+    """The law of one SOA from the parameter file's ``[actuation]``, with the area and damping
+    that `bvsr calibrate` fitted where the file carries them (``[calibration.fitted]``)."""
     a = spec.actuation
-    return SoaForceLaw(area_m2=units.mm2_to_m2(a.effective_area_mm2),
+    return SoaForceLaw(area_m2=units.mm2_to_m2(spec.fitted("effective_area_mm2", a.effective_area_mm2)),
                        stiffness_slope_n_per_m_per_pa=a.stiffness_slope_n_per_m_per_kpa / units.PA_PER_KPA,
                        stiffness_offset_n_per_m=a.stiffness_offset_n_per_m,
-                       damping_n_s_per_m=a.damping_n_s_per_m)
+                       damping_n_s_per_m=spec.fitted("damping_n_s_per_m", a.damping_n_s_per_m))

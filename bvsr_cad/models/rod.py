@@ -23,6 +23,7 @@ class RodSection:
     diameter_mm: float
     youngs_modulus_mpa: float
     density_g_cm3: float
+    fitted_flexural_rigidity_n_mm2: float | None = None  # `bvsr calibrate`'s effective E I, if any
 
     @property
     def area_mm2(self) -> float:
@@ -36,7 +37,9 @@ class RodSection:
 
     @property
     def flexural_rigidity_n_mm2(self) -> float:
-        """E I in N mm^2."""
+        """E I in N mm^2: the material's E times pi d^4 / 64, or the calibrated effective value."""
+        if self.fitted_flexural_rigidity_n_mm2 is not None:
+            return self.fitted_flexural_rigidity_n_mm2
         return self.youngs_modulus_mpa * self.second_moment_mm4
 
     @property
@@ -68,7 +71,9 @@ def rod_section(spec: TailSpec) -> RodSection:
     """The vertebra rod of ``spec`` (its material, diameter, modulus and density)."""
     key = spec.vertebra.material
     mat = spec.material(key)
-    return RodSection(key, spec.vertebra.diameter_mm, mat.youngs_modulus_mpa, mat.density_g_cm3)
+    fitted = spec.calibration.fitted.get("rod_flexural_rigidity_n_mm2")
+    return RodSection(key, spec.vertebra.diameter_mm, mat.youngs_modulus_mpa, mat.density_g_cm3,
+                      None if fitted is None else float(fitted))
 
 
 def joint_rod_stiffness_nmm_per_rad(spec: TailSpec) -> float:

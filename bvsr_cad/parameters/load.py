@@ -20,7 +20,7 @@ import typing
 from pathlib import Path
 from typing import Any
 
-from .tables import AUTO, Material, TailSpec
+from .tables import _SCHEMA, AUTO, Material, TailSpec
 from .twin import RIGID_TWIN_MATERIAL
 
 #: The rigid comparison tail (parts/rigid_tail.py, the fabrication package) is printed in this material.
@@ -103,6 +103,8 @@ def _build(cls: type, data: Any, prefix: str, problems: list[str]) -> Any:
         if name not in data:
             if f.default is not dataclasses.MISSING:
                 values[name] = f.default
+            elif f.default_factory is not dataclasses.MISSING:
+                values[name] = f.default_factory()
             else:
                 problems.append(f"{key}: missing ({f.metadata.get('doc', '')})")
                 values[name] = None
@@ -110,6 +112,8 @@ def _build(cls: type, data: Any, prefix: str, problems: list[str]) -> Any:
         raw = data[name]
         if dataclasses.is_dataclass(typ):
             values[name] = _build(typ, raw, key, problems)
+        elif f.metadata.get("keys"):  # a table of named numbers, each with its own rule
+            values[name] = _named_values(key, raw, _SCHEMA[f.metadata["keys"]], problems)
         elif typing.get_origin(typ) is dict:
             if not isinstance(raw, dict) or not raw:
                 problems.append(f"{key}: expected a non-empty table of [{key}.<name>] entries")
@@ -121,6 +125,23 @@ def _build(cls: type, data: Any, prefix: str, problems: list[str]) -> Any:
     if any(v is None for v in values.values()):
         return None
     return cls(**values)
+
+
+def _named_values(key: str, raw: Any, rules: dict[str, dict[str, Any]], problems: list[str]) -> Any:
+    """A table of numbers whose names and rules come from ``rules`` (e.g. [calibration.fitted])."""
+    if not isinstance(raw, dict):
+        problems.append(f"{key} = {raw!r}: expected a table [{key}]")
+        return None
+    out = {}
+    for name, value in raw.items():
+        if name not in rules:
+            problems.append(f"{key}.{name}: unknown name; allowed: {', '.join(rules)}")
+            continue
+        meta = {k: rules[name].get(k) for k in ("gt", "ge", "lt", "le")}
+        checked = _check_value(f"{key}.{name}", value, float, meta, problems)
+        if checked is not None:
+            out[name] = checked
+    return out if len(out) == len(raw) else None
 
 
 def spec_from_dict(data: dict[str, Any], source: str | Path = "<dict>") -> TailSpec:

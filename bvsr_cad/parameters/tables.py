@@ -16,6 +16,7 @@ import sys
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
+from collections.abc import Mapping
 from typing import Any
 
 AUTO = "auto"
@@ -23,6 +24,8 @@ AUTO = "auto"
 _RULE_KEYS = ("gt", "ge", "lt", "le")
 _SCHEMA: dict[str, dict[str, dict[str, Any]]] = tomllib.loads(
     resources.files(__package__).joinpath("data/schema.toml").read_text(encoding="utf-8"))
+#: What `bvsr calibrate` may fit, by name: {doc, gt/ge/lt/le} (schema.toml [calibratable]).
+CALIBRATABLE: dict[str, dict[str, Any]] = _SCHEMA["calibratable"]
 
 
 def table(cls: type) -> Any:
@@ -40,7 +43,7 @@ def table(cls: type) -> Any:
     module = vars(sys.modules[cls.__module__])
     for name in declared:
         rule = dict(rules[name])
-        meta = {"doc": rule.pop("doc"), **{k: rule.pop(k, None) for k in _RULE_KEYS}}
+        meta = {"doc": rule.pop("doc"), **{k: rule.pop(k, None) for k in _RULE_KEYS}, "keys": rule.pop("keys", None)}
         choices = rule.pop("choices", None)
         meta["choices"] = tuple(choices) if choices is not None else None
         default = rule.pop("default", dataclasses.MISSING)
@@ -48,7 +51,10 @@ def table(cls: type) -> Any:
             raise RuntimeError(f"schema.toml [{cls.__name__}].{name}: unknown rule keys {sorted(rule)}")
         if default == "table":
             default = module[cls.__annotations__[name]]()
-        unhashable = str(cls.__annotations__[name]).startswith("dict")
+        if default == "empty":
+            setattr(cls, name, field(default_factory=dict, metadata=meta, hash=False))
+            continue
+        unhashable = str(cls.__annotations__[name]).startswith(("dict", "Mapping"))
         setattr(cls, name, field(default=default, metadata=meta, hash=not unhashable))
     return dataclass(frozen=True)(cls)
 
@@ -181,6 +187,7 @@ class Tubes:
     passage_diameter_mm: float
     inner_radius_mm: float
     second_radius_mm: float
+    inner_diameter_mm: float
 
 
 @table
@@ -305,6 +312,40 @@ class FabricationPackage:
 
 
 @table
+class Pneumatics:
+    """The pneumatic supply of a pulse: the paper's Eq 13 ramp, or valve, tube and chambers (ISO 6358)."""
+
+    model: str
+    ramp_time_s: float
+    valve_sonic_conductance_l_s_bar: float
+    valve_critical_pressure_ratio: float
+    polytropic_index: float
+    air_temperature_k: float
+
+
+@table
+class CartPlatform:
+    """The hinged cart of the paper's platform experiment (Eq 20-22)."""
+
+    mass_kg: float
+    length_m: float
+    width_m: float
+    tail_mount_behind_hinge_m: float
+
+
+@table
+class Calibration:
+    """What `bvsr calibrate` fitted, and to which data (empty: the tables' values hold)."""
+
+    data_file: str
+    data_sha256: str
+    rms_rel_fit: float
+    rms_rel_holdout: float
+    rms_rel_holdout_uncalibrated: float
+    fitted: Mapping[str, float]
+
+
+@table
 class TailSpec:
     """The whole tail: what a parameter file describes."""
 
@@ -328,6 +369,13 @@ class TailSpec:
     casting: Casting
     robot: RobotDescription
     fabrication_package: FabricationPackage
+    pneumatics: Pneumatics
+    cart: CartPlatform
+    calibration: Calibration
+
+    def fitted(self, name: str, table_value: float) -> float:
+        """A calibratable quantity's value: fitted by `bvsr calibrate` if the file says so, else the table's."""
+        return float(self.calibration.fitted.get(name, table_value))
 
     @property
     def joints(self) -> int:

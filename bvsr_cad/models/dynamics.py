@@ -1,0 +1,324 @@
+"""The paper's Euler-Lagrange model of a BVSR joint (Eq 6-12), for one joint and for a segment.
+
+Generalised coordinates q = [phi, theta] (bending plane, bending angle). The
+moving part is one rigid body whose centre of mass sits on the chord at
+d = (L / theta) sin(theta / 2) from the base and which turns by theta / 2
+(Fig. 2b). Then, in SI,
+
+    M(q) q'' + c(q, q') + D(q) q' + G(q) = K(q),                       (Eq 6)
+
+    M = diag(I_phi + m L^2 sin^2(theta/2) / theta^2,
+             I_theta / 4 + m L^2 (theta^2 - 2 theta sin theta - 2 cos theta + 2) / (4 theta^4))   (Eq 7)
+
+    c = [M_phi' phi' theta',  M_theta' theta'^2 / 2 - M_phi' phi'^2 / 2]   (Eq 8: the Christoffel
+        terms of M; ' on M is d/dtheta; :func:`paper_coriolis` is Eq 8 as printed, for the tests)
+    K = J^T F - [0, (E I / L) theta],  F = P A - (m_a P + n_a) dl           (Eq 3-4, 10)
+    D = c_a J^T J                                                        (Eq 11-12)
+
+with J = dl/dq (5 x 2), the SOA lengths of Eq 1 from the joint's real socket
+geometry (:mod:`bvsr_cad.models.kinematics`), and the SOA force law of
+:mod:`bvsr_cad.models.actuator` and the rod of :mod:`bvsr_cad.models.rod`
+(each quantity's one home). As in the statics, the actuators' generalised
+force is J^T F by virtual work; the paper's J^T F r with J = dq/dl is not
+dimensionally consistent.
+
+Gravity (Eq 9) is derived here from the body's height for a tail mounted
+horizontally with gravity along the base frame's -Y (the mount of the paper's
+experiments); Eq 9 as printed assumes another mount and is not reused.
+
+A *segment* of n joints is the same model with all its joints bending
+together (the paper's "equivalent single continuum", Sec. II-D): q is the
+joint's (phi, theta), the segment bends by n theta, the body is the whole
+distal part of the segment on the segment's arc of length n H_j, and the
+joints' actuator, rod and damper terms add up (each joint's own socket
+geometry, taper included).
+
+Pressure reaches the model as a function of time: the paper's Eq 13 ramp
+(:func:`ramp_pa`) or the pneumatic supply of :mod:`bvsr_cad.models.pneumatics`,
+whose chamber pressures are integrated with the motion.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import units
+from .actuator import SoaForceLaw
+from .kinematics import JointGeometry, joint_rotation_translation, joint_transform_derivatives
+
+#: Standard gravity, m/s^2.
+G_M_S2 = 9.80665
+#: The paper measures a segment's peak velocity before its angle passes this (Sec. IV-A-3).
+VELOCITY_WINDOW_DEG = 38.0
+
+
+def ramp_pa(t_s, p0_pa: float, t0_s: float):
+    """Eq 13: P(t) = P0 t^2 (3 / t0^2 - 2 t / t0^3) for 0 < t < t0, then P0 (and 0 before 0)."""
+    t = np.clip(np.asarray(t_s, float), 0.0, t0_s)
+    return p0_pa * t * t * (3.0 / t0_s ** 2 - 2.0 * t / t0_s ** 3)
+
+
+@dataclass(frozen=True)
+class RigidBody:
+    """The moving body of Fig. 2b: mass, inertias about its centre of mass, arc length it rides on."""
+
+    mass_kg: float
+    inertia_phi_kg_m2: float  # about the tail axis
+    inertia_theta_kg_m2: float  # about an axis normal to the bending plane
+    arc_length_m: float  # L of Eq 7-9 (one joint: H_a; a segment: its whole bending length)
+
+    def with_tip_mass(self, mass_kg: float, distance_m: float) -> "RigidBody":
+        """Add a point mass on the axis at ``distance_m`` from the base (a tip payload), keeping
+        the body's centre of mass at the chord midpoint (the model's premise): the payload's
+        offset from it enters the inertia by the parallel-axis rule."""
+        if mass_kg <= 0:
+            return self
+        m = self.mass_kg + mass_kg
+        com = 0.5 * self.arc_length_m
+        shift = distance_m - com
+        return RigidBody(m, self.inertia_phi_kg_m2, self.inertia_theta_kg_m2 + mass_kg * shift ** 2,
+                         self.arc_length_m)
+
+
+def _chord_factor(theta: float) -> float:
+    """sin(theta/2) / theta, with its series near 0 (d = L * this)."""
+    if abs(theta) < 1e-4:
+        return 0.5 - theta ** 2 / 48.0
+    return math.sin(theta / 2.0) / theta
+
+
+def _m_theta_factor(theta: float) -> float:
+    """(theta^2 - 2 theta sin theta - 2 cos theta + 2) / (4 theta^4), with its series near 0."""
+    if abs(theta) < 2e-2:
+        return 1.0 / 16.0 - theta ** 2 / 288.0
+    return (theta ** 2 - 2 * theta * math.sin(theta) - 2 * math.cos(theta) + 2) / (4 * theta ** 4)
+
+
+def mass_matrix(body: RigidBody, theta: float) -> np.ndarray:
+    """Eq 7 (diagonal)."""
+    L, m = body.arc_length_m, body.mass_kg
+    m_phi = body.inertia_phi_kg_m2 + m * (L * _chord_factor(theta)) ** 2
+    m_theta = body.inertia_theta_kg_m2 / 4.0 + m * L ** 2 * _m_theta_factor(theta)
+    return np.diag([m_phi, m_theta])
+
+
+def mass_matrix_derivative(body: RigidBody, theta: float, h: float = 1e-6) -> np.ndarray:
+    """dM/dtheta by central differences of Eq 7 (M is smooth and even in theta)."""
+    return (mass_matrix(body, theta + h) - mass_matrix(body, theta - h)) / (2 * h)
+
+
+def coriolis(body: RigidBody, theta: float, phi_dot: float, theta_dot: float) -> np.ndarray:
+    """c(q, q') of Eq 6 as the Christoffel terms of Eq 7's M (so energy is conserved without
+    damping and forcing)."""
+    dm = mass_matrix_derivative(body, theta)
+    return np.array([dm[0, 0] * phi_dot * theta_dot,
+                     0.5 * dm[1, 1] * theta_dot ** 2 - 0.5 * dm[0, 0] * phi_dot ** 2])
+
+
+def paper_coriolis(body: RigidBody, theta: float, phi_dot: float, theta_dot: float) -> np.ndarray:
+    """Eq 8 exactly as printed (the I_theta term of M has no theta-dependence, so it drops out)."""
+    L, m = body.arc_length_m, body.mass_kg
+    s2, c2 = math.sin(theta / 2), math.cos(theta / 2)
+    a = m * L ** 2 / theta ** 3 * (theta / 2 * math.sin(theta) - 2 * s2 ** 2)
+    b = m * L ** 2 / theta ** 5 * (theta * math.sin(theta) - 2 * s2 ** 2 - theta ** 2 / 2 * c2 ** 2)
+    return np.array([a * phi_dot * theta_dot, b * theta_dot ** 2 - a / 2 * phi_dot ** 2])
+
+
+def com_position_m(body: RigidBody, phi: float, theta: float) -> np.ndarray:
+    """The body's centre of mass in the base frame: on the chord, d from the base (Eq 6's premise)."""
+    d = body.arc_length_m * _chord_factor(theta)
+    s, c = math.sin(theta / 2), math.cos(theta / 2)
+    return d * np.array([s * math.cos(phi), s * math.sin(phi), c])
+
+
+def gravity_force(body: RigidBody, phi: float, theta: float, gravity_m_s2: np.ndarray) -> np.ndarray:
+    """G(q) = dU/dq with U = -m g . p_com (central differences of the exact potential)."""
+    def potential(p_, t_):
+        return -body.mass_kg * float(np.dot(gravity_m_s2, com_position_m(body, p_, t_)))
+
+    h = 1e-7
+    return np.array([(potential(phi + h, theta) - potential(phi - h, theta)) / (2 * h),
+                     (potential(phi, theta + h) - potential(phi, theta - h)) / (2 * h)])
+
+
+@dataclass(frozen=True)
+class JointModel:
+    """Eq 6-12 for n identical-in-motion joints (n = 1: one joint; n = joints per segment: a segment).
+
+    ``joints`` are the socket geometries of the joints that bend together
+    (mm, from :func:`bvsr_cad.models.kinematics.joint_geometries`); ``rod``
+    is one joint's E I / L (N m/rad); ``body`` the moving rigid body.
+    """
+
+    joints: tuple[JointGeometry, ...]
+    law: SoaForceLaw
+    rod_nm_per_rad: float
+    body: RigidBody
+    gravity_m_s2: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    @property
+    def n(self) -> int:
+        return len(self.joints)
+
+    def __post_init__(self) -> None:
+        # Stacked socket centres (n, 5, 3) in m and the rest lengths: evaluated once, not per step.
+        object.__setattr__(self, "_base_m", units.mm_to_m(np.stack([g.base_mm for g in self.joints])))
+        object.__setattr__(self, "_moving_m", units.mm_to_m(np.stack([g.moving_mm for g in self.joints])))
+        object.__setattr__(self, "_rest_m", units.mm_to_m(np.stack([g.rest_lengths_mm for g in self.joints])))
+        lengths = {g.length_mm for g in self.joints}
+        if len(lengths) != 1:
+            raise ValueError(f"joints that bend together need one arc length; got {sorted(lengths)} mm")
+        object.__setattr__(self, "_arc_m", units.mm_to_m(lengths.pop()))
+
+    def soa_terms(self, phi: float, theta: float) -> tuple[np.ndarray, np.ndarray]:
+        """Per joint: stretch dl (n, 5) in m and dl/dq (n, 5, 2) in m/rad, q = (phi, theta) (Eq 1)."""
+        u, v = theta * math.cos(phi), theta * math.sin(phi)
+        rot, trans = joint_rotation_translation(np.array(u), np.array(v), self._arc_m)
+        d_ru, d_rv, d_pu, d_pv = joint_transform_derivatives(np.array(u), np.array(v), self._arc_m)
+        d = np.einsum("ij,nsj->nsi", rot, self._moving_m) + trans - self._base_m
+        length = np.linalg.norm(d, axis=-1)
+        e = d / length[..., None]
+        # d(u, v)/d(phi, theta) = [[-v, cos phi], [u, sin phi]]
+        dd_phi = np.einsum("ij,nsj->nsi", -v * d_ru + u * d_rv, self._moving_m) + (-v * d_pu + u * d_pv)
+        dd_theta = np.einsum("ij,nsj->nsi", math.cos(phi) * d_ru + math.sin(phi) * d_rv, self._moving_m) \
+            + (math.cos(phi) * d_pu + math.sin(phi) * d_pv)
+        jac = np.stack([np.sum(e * dd_phi, -1), np.sum(e * dd_theta, -1)], -1)
+        return length - self._rest_m, jac
+
+    def generalized_forces(self, phi: float, theta: float, phi_dot: float, theta_dot: float,
+                           soa_pa: np.ndarray, terms: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+        """K(q) - D q' (Eq 10-12) summed over the joints, for gauge pressures (5,) or (n, 5), Pa.
+
+        The joints share q, so their generalised forces add; expressed per joint
+        coordinate (each joint turns by theta) the segment's equation is the sum.
+        """
+        dl, jac = self.soa_terms(phi, theta) if terms is None else terms
+        p = np.broadcast_to(np.asarray(soa_pa, float), dl.shape)
+        dl_dot = jac @ np.array([phi_dot, theta_dot])  # (n, 5)
+        force = self.law.force_n(p, dl, dl_dot)
+        q = np.einsum("jsi,js->i", jac, force)
+        q[1] -= self.n * self.rod_nm_per_rad * theta
+        return q
+
+    def rhs(self, phi: float, theta: float, phi_dot: float, theta_dot: float, soa_pa: np.ndarray,
+            terms: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+        """(phi'', theta'') of one joint coordinate.
+
+        The body is described on the segment's coordinate Theta = n theta, so its
+        inertia and gravity terms per joint coordinate carry the chain rule:
+        M_theta scales with n^2 on theta (Theta' = n theta'), gravity with n.
+        """
+        n = self.n
+        big = n * theta
+        m = mass_matrix(self.body, big)
+        m_q = np.diag([m[0, 0], m[1, 1] * n * n])
+        cor = coriolis(self.body, big, phi_dot, n * theta_dot) * np.array([1.0, n])
+        grav = gravity_force(self.body, phi, big, self.gravity_m_s2) * np.array([1.0, n])
+        rhs = self.generalized_forces(phi, theta, phi_dot, theta_dot, soa_pa, terms) - cor - grav
+        if abs(theta) < 1e-9:  # phi is undefined at the straight pose: hold it
+            return np.array([0.0, rhs[1] / m_q[1, 1]])
+        return rhs / np.diag(m_q)
+
+
+@dataclass
+class Trajectory:
+    """A solved motion: time (s), the joint's phi and theta (rad) and rates, the segment angle."""
+
+    time_s: np.ndarray
+    phi_rad: np.ndarray
+    theta_rad: np.ndarray
+    phi_rate_rad_s: np.ndarray
+    theta_rate_rad_s: np.ndarray
+    n_joints: int
+    pressure_pa: np.ndarray  # (steps, 5) gauge pressure of the joint's SOAs
+
+    @property
+    def bend_angle_deg(self) -> np.ndarray:
+        """The tilt of the distal panel: n theta."""
+        return np.degrees(self.n_joints * self.theta_rad)
+
+    @property
+    def bend_rate_deg_s(self) -> np.ndarray:
+        return np.degrees(self.n_joints * self.theta_rate_rad_s)
+
+    def peak_velocity_deg_s(self, window_deg: float = VELOCITY_WINDOW_DEG) -> float:
+        """Largest bending rate while the angle has not yet passed ``window_deg`` (the paper's measure)."""
+        angle = np.abs(self.bend_angle_deg)
+        passed = np.nonzero(angle > window_deg)[0]
+        end = passed[0] if passed.size else angle.size
+        return float(np.max(np.abs(self.bend_rate_deg_s[: max(end, 1)])))
+
+    def time_to_deg_s(self, angle_deg: float = VELOCITY_WINDOW_DEG) -> float:
+        """First time the bend angle reaches ``angle_deg`` (nan if never): the paper's motion time T."""
+        idx = np.nonzero(np.abs(self.bend_angle_deg) >= angle_deg)[0]
+        if not idx.size:
+            return float("nan")
+        i = idx[0]
+        if i == 0:
+            return float(self.time_s[0])
+        a0, a1 = np.abs(self.bend_angle_deg[i - 1]), np.abs(self.bend_angle_deg[i])
+        return float(self.time_s[i - 1] + (angle_deg - a0) / (a1 - a0) * (self.time_s[i] - self.time_s[i - 1]))
+
+
+PressureInput = Callable[[float], np.ndarray]  # t (s) -> gauge Pa of the five SOAs
+
+
+def simulate_joint(model: JointModel, pressure: PressureInput | None = None, seconds: float = 0.3,
+                   phi0_rad: float = 0.0, supply=None, sample_s: float = 2.5e-4,
+                   stop_angle_deg: float | None = None) -> Trajectory:
+    """Integrate Eq 6 from rest with scipy (LSODA, tight tolerances).
+
+    Exactly one of ``pressure`` (a function of time: the Eq 13 ramp or any
+    other trace) and ``supply`` (a :class:`bvsr_cad.models.pneumatics.LineSupply`,
+    whose chamber pressures become part of the state) drives the SOAs.
+    ``stop_angle_deg`` ends the run once the segment has bent 5 deg past it.
+    """
+    from scipy.integrate import solve_ivp
+
+    if (pressure is None) == (supply is None):
+        raise ValueError("give exactly one of pressure and supply")
+    n_p = 0 if supply is None else supply.n_states
+    # Bend towards the pressurised side's opposite: start a hair off straight in the plane phi0,
+    # so that phi is defined; the motion stays in that plane by symmetry of the patterns.
+    y0 = np.concatenate([[phi0_rad, 0.0, 0.0, 0.0], [] if supply is None else supply.initial_state()])
+
+    def soa_pressures(t: float, y: np.ndarray) -> np.ndarray:
+        if supply is None:
+            return np.asarray(pressure(t), float)
+        return supply.soa_gauge_pa(y[4:])
+
+    def f(t, y):
+        phi, theta, dphi, dtheta = y[:4]
+        p = soa_pressures(t, y)
+        terms = model.soa_terms(phi, theta)
+        acc = model.rhs(phi, theta, dphi, dtheta, p, terms)
+        out = [dphi, dtheta, acc[0], acc[1]]
+        if supply is not None:
+            dl, jac = terms
+            dl_dot = jac @ np.array([dphi, dtheta])
+            out = np.concatenate([out, supply.state_rates(t, y[4:], dl, dl_dot)])
+        return out
+
+    events = None
+    if stop_angle_deg is not None:
+        def passed(t, y):
+            return abs(model.n * y[1]) - math.radians(stop_angle_deg + 5.0)
+        passed.terminal = True
+        events = [passed]
+    t_eval = np.arange(0.0, seconds + 0.5 * sample_s, sample_s)
+    scale = np.concatenate([[1e-6, 1e-6, 1e-3, 1e-3], np.full(n_p, 1.0)])  # rad, rad/s, Pa
+    sol = solve_ivp(f, (0.0, seconds), y0, method="LSODA", t_eval=t_eval, rtol=1e-6, atol=scale,
+                    max_step=2e-3, events=events)
+    if sol.status < 0:
+        raise RuntimeError(f"Eq 6 integration failed: {sol.message}")
+    y = sol.y
+    p = np.array([soa_pressures(t, y[:, i]) for i, t in enumerate(sol.t)]).reshape(len(sol.t), -1)
+    return Trajectory(sol.t, y[0], y[1], y[2], y[3], model.n, p)
+
+
+__all__ = ["RigidBody", "JointModel", "Trajectory", "simulate_joint", "ramp_pa", "mass_matrix", "coriolis",
+           "paper_coriolis", "gravity_force", "com_position_m", "G_M_S2", "VELOCITY_WINDOW_DEG"]

@@ -1,0 +1,87 @@
+"""`bvsr calibrate`: bad data files exit 2 naming the row and the column; holdout rows never move a
+fitted value; fitted values reach the models through their one home."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import pytest
+
+from bvsr_cad.cli import main
+
+from .conftest import PARAMS
+
+HEADER = "experiment,quantity,conditions,value,unit,role,source\n"
+GOOD = "T3,segment_max_angle,motion=extension,51.9,deg,fit,Table III\n"
+
+
+@pytest.mark.parametrize("row,expected", [
+    ("T3,segment_max_angel,motion=extension,51.9,deg,fit,s\n", "row 2, column quantity = 'segment_max_angel'"),
+    ("T3,segment_max_angle,motion=extension,51.9,,fit,s\n", "row 2, column unit: missing"),
+    ("T3,segment_max_angle,motion=extension,fifty,deg,fit,s\n", "row 2, column value = 'fifty': not a number"),
+    ("T3,segment_max_angle,motion=sideways,51.9,deg,fit,s\n", "row 2, column conditions: motion = 'sideways'"),
+    ("T3,segment_max_angle,motion=extension,51.9,deg,maybe,s\n", "row 2, column role = 'maybe'"),
+    ("T3,segment_max_angle,motion=extension,51.9,rad,fit,s\n", "row 2, column unit = 'rad'"),
+])
+def test_bad_data_exits_2_naming_row_and_column(tmp_path, capsys, row, expected):
+    data = tmp_path / "bad.csv"
+    data.write_text(HEADER + row)
+    out = tmp_path / "cal.toml"
+    assert main(["calibrate", str(PARAMS / "bvsr.toml"), str(data), "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert expected in err and "bad.csv" in err
+    assert not out.exists()
+
+
+def test_no_fit_rows_exits_2(tmp_path, capsys):
+    data = tmp_path / "holdout_only.csv"
+    data.write_text(HEADER + GOOD.replace(",fit,", ",holdout,"))
+    assert main(["calibrate", str(PARAMS / "bvsr.toml"), str(data), "-q"]) == 2
+    assert "column role: no row is 'fit'" in capsys.readouterr().err
+
+
+def test_missing_column_exits_2(tmp_path, capsys):
+    data = tmp_path / "no_unit.csv"
+    data.write_text("experiment,quantity,conditions,value,role,source\nT3,segment_max_angle,motion=extension,51.9,fit,s\n")
+    assert main(["calibrate", str(PARAMS / "bvsr.toml"), str(data), "-q"]) == 2
+    assert "row 1 (header): missing column(s) unit" in capsys.readouterr().err
+
+
+def test_holdout_rows_do_not_move_the_fit(tmp_path, capsys):
+    """Two data files that differ only in their holdout rows give the same fitted values to the bit."""
+    rows = ("T3,segment_max_angle,motion=extension,51.9,deg,fit,Table III\n"
+            "T3,segment_blocked_force,motion=extension,19.7,N,fit,Table III\n")
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    a.write_text(HEADER + rows + "T3,segment_max_angle,motion=flexion,46.5,deg,holdout,Table III\n")
+    b.write_text(HEADER + rows + "T3,segment_max_angle,motion=flexion,10.0,deg,holdout,changed\n"
+                 "T3,segment_blocked_force,motion=waggle,99.0,N,holdout,added\n")
+    fits = []
+    for data in (a, b):
+        assert main(["calibrate", str(PARAMS / "bvsr.toml"), str(data), "--json", "-q",
+                     "--fit", "effective_area_mm2,rod_flexural_rigidity_n_mm2"]) == 0
+        fits.append(json.loads(capsys.readouterr().out))
+    assert fits[0]["fitted"] == fits[1]["fitted"]
+    assert fits[0]["rms_rel_fit"] == fits[1]["rms_rel_fit"]
+    assert fits[0]["rms_rel_holdout"] != fits[1]["rms_rel_holdout"]
+    # The fit moved the values and improved the fit rows.
+    assert fits[0]["rms_rel_fit"] < 0.5 * fits[0]["rms_rel_fit_uncalibrated"]
+    assert {r["role"] for r in fits[1]["rows"]} == {"fit", "holdout"} and len(fits[1]["rows"]) == 4
+
+
+def test_fitted_values_reach_every_home(bvsr_spec):
+    from bvsr_cad.assembly.robot import actuation_si
+    from bvsr_cad.models.actuator import soa_force_law
+    from bvsr_cad.models.rod import rod_section
+    from bvsr_cad.models.statics import TailStatics
+
+    spec = bvsr_spec
+    fitted = {"effective_area_mm2": 200.0, "rod_flexural_rigidity_n_mm2": 5.0e4, "damping_n_s_per_m": 10.0}
+    cal = dataclasses.replace(spec, calibration=dataclasses.replace(spec.calibration, fitted=fitted))
+    assert soa_force_law(cal).area_m2 == pytest.approx(200e-6)
+    assert soa_force_law(cal).damping_n_s_per_m == 10.0
+    assert rod_section(cal).flexural_rigidity_n_mm2 == 5.0e4
+    assert TailStatics.from_spec(cal).rod_nmm_per_rad == pytest.approx(5.0e4 / spec.joint.gap_mm)
+    si = actuation_si(cal)
+    assert si.law.area_m2 == pytest.approx(200e-6)
+    assert si.rod_bending_stiffness_nm_rad == pytest.approx(5.0e4 / spec.joint.gap_mm / 1e3)

@@ -1,0 +1,112 @@
+"""The Eq 6-12 dynamics, the ISO 6358 supply, the platform of Eq 20-22 and the measurement files:
+each against a closed form, a second method or the paper's printed equation."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from bvsr_cad.models import dynamics as dyn
+from bvsr_cad.models import pneumatics as pn
+from bvsr_cad.models.actuator import soa_force_law
+from bvsr_cad.models.kinematics import joint_geometries
+from bvsr_cad.models.platform import Platform, TailOnPlatform, platform_motion
+from bvsr_cad.models.rod import rod_section
+from bvsr_cad.models.statics import TailStatics, pressure_pattern_kpa
+
+BODY = dyn.RigidBody(mass_kg=0.1, inertia_phi_kg_m2=5e-5, inertia_theta_kg_m2=1.6e-4, arc_length_m=0.13)
+
+
+def test_mass_matrix_closed_forms():
+    """Eq 7 at the straight pose by hand: CoM at L/2 turning at theta'/2 -> I/4 + m L^2 / 16; M_phi = I_phi + m L^2 / 4."""
+    m = dyn.mass_matrix(BODY, 0.0)
+    assert m[1, 1] == pytest.approx(1.6e-4 / 4 + 0.1 * 0.13 ** 2 / 16, rel=1e-12)
+    assert m[0, 0] == pytest.approx(5e-5 + 0.1 * 0.13 ** 2 / 4, rel=1e-12)
+    # Away from 0: the kinetic energy of the chord-midpoint body, |dp/dtheta|^2, by finite differences.
+    th, h = 0.9, 1e-6
+    p = lambda t: np.array(dyn.com_position_m(BODY, 0.0, t))  # noqa: E731
+    v2 = float(np.sum(((p(th + h) - p(th - h)) / (2 * h)) ** 2))
+    assert dyn.mass_matrix(BODY, th)[1, 1] == pytest.approx(1.6e-4 / 4 + 0.1 * v2, rel=1e-7)
+    # The series branch meets the closed form.
+    assert dyn.mass_matrix(BODY, 0.0199)[1, 1] == pytest.approx(dyn.mass_matrix(BODY, 0.0201)[1, 1], rel=1e-6)
+
+
+@pytest.mark.parametrize("theta", [0.2, 0.7, 1.3])
+def test_coriolis_is_eq8_as_printed(theta):
+    """The Christoffel terms of Eq 7's M are the paper's Eq 8."""
+    ours = dyn.coriolis(BODY, theta, 0.7, 1.3)
+    paper = dyn.paper_coriolis(BODY, theta, 0.7, 1.3)
+    assert ours == pytest.approx(paper, rel=1e-4)  # finite differences of M against the closed form
+
+
+def test_gravity_is_the_potential_gradient_by_hand():
+    """Tail horizontal, gravity -Y: U = m g d sin(theta/2) sin(phi), d = L sin(theta/2) / theta."""
+    g = np.array([0.0, -dyn.G_M_S2, 0.0])
+    phi, th = 1.1, 0.6
+    dU_dth = BODY.mass_kg * dyn.G_M_S2 * BODY.arc_length_m * math.sin(phi) * (
+        math.sin(th) / (2 * th) - (1 - math.cos(th)) / (2 * th ** 2))
+    assert dyn.gravity_force(BODY, phi, th, g)[1] == pytest.approx(dU_dth, rel=1e-6)
+
+
+def test_equilibrium_of_eq6_is_the_statics(bvsr_spec):
+    spec = bvsr_spec
+    """A held pressure: Eq 6 settles where the quasi-static model (a second method: Newton on the
+    potential's gradient, models/statics.py) puts the joint; one joint, no gravity."""
+    geom = joint_geometries(spec)[:1]
+    law = soa_force_law(spec)
+    rod = rod_section(spec).bending_stiffness_nm_per_rad(spec.joint.gap_mm)
+    model = dyn.JointModel(geom, law, rod, dyn.RigidBody(0.03, 2e-5, 1.5e-5, spec.joint.gap_mm / 1e3))
+    pat = pressure_pattern_kpa(math.pi / 2, -95.0, 150.0)
+    tr = dyn.simulate_joint(model, lambda t: pat * 1e3, seconds=0.6, phi0_rad=math.pi / 2)
+    st = TailStatics.from_spec(spec)
+    kin = st.kin
+    one = TailStatics(type(kin)(kin.joints[:1], kin.panel_thickness_mm, 1), st.act, st.rod_nmm_per_rad)
+    w = one.forward(pat[None, :])[0]
+    assert tr.theta_rad[-1] == pytest.approx(float(np.hypot(*w)), rel=1e-4)
+    assert abs(tr.theta_rate_rad_s[-1]) < 1e-3
+
+
+def test_iso6358_flow_by_hand():
+    c, b = 0.5 * pn.M3_S_PA_PER_L_S_BAR, 0.4
+    q = pn.iso6358_mass_flow_kg_s(7e5, 1e5, c, b)  # r = 0.14 < b: choked
+    assert q == pytest.approx(c * pn.RHO_0_KG_M3 * 7e5, rel=1e-12)
+    # Subsonic: phi = sqrt(1 - ((0.7 - 0.4) / 0.6)^2) = sqrt(0.75)
+    assert pn.iso6358_mass_flow_kg_s(1e6, 7e5, c, b) == pytest.approx(c * pn.RHO_0_KG_M3 * 1e6 * math.sqrt(0.75))
+    assert pn.iso6358_mass_flow_kg_s(1e5, 1e5, c, b) == 0.0
+    assert pn.iso6358_mass_flow_kg_s(1e5, 7e5, c, b) == pytest.approx(-q)  # reverses
+
+
+def test_isothermal_choked_filling_rises_linearly():
+    """n = 1, closed rigid volume, choked inflow: dp/dt = R T C rho_0 p_s / V (constant)."""
+    c = 0.2 * pn.M3_S_PA_PER_L_S_BAR
+    sup = pn.LineSupply(pn.Valve(c, 0.5), 7.01e5, 1.01e5, (2e-6,), 4e-6, 1e-4, 3, (-1, -1, 0, -1, -1),
+                        polytropic_index=1.0)
+    volume = 2e-6 + 3 * 4e-6
+    slope = pn.R_AIR_J_KG_K * pn.T_0_K * c * pn.RHO_0_KG_M3 * 7.01e5 / volume
+    t, p = pn.fill_curve(sup, 0.004, samples=81)
+    assert np.all(p + 1.01e5 < 0.5 * 7.01e5)  # still choked
+    assert p[-1] == pytest.approx(slope * t[-1], rel=1e-5)
+    tau = pn.first_order_time_constant_s(sup)
+    assert 0 < tau < 0.5
+
+
+def test_platform_conserves_angular_momentum_without_gravity():
+    """Eq 22 with g = 0 from rest: (I_r + m_r L_r^2 + J_t) alpha = J_t beta, J_t = I_t + m_t L_t^2."""
+    plat = Platform(0.7, 2e-3, 0.1, 0.2)
+    tail = TailOnPlatform(0.2, 1e-3, 0.12)
+    t = np.linspace(0, 0.2, 201)
+    beta = 0.5 * (1 - np.cos(np.pi * t / 0.2))
+    res = platform_motion(plat, tail, t, beta, gravity=False)
+    j_t = 1e-3 + 0.2 * 0.12 ** 2
+    assert beta[-1] == pytest.approx(1.0)
+    assert res.alpha_rad[-1] == pytest.approx(j_t / (2e-3 + 0.7 * 0.01 + j_t) * beta[-1], rel=2e-3)
+
+
+def test_platform_on_the_ground_stays_down_for_a_slow_tail():
+    plat = Platform(0.7, 2e-3, 0.1, 0.2)
+    tail = TailOnPlatform(0.2, 1e-3, 0.12)
+    t = np.linspace(0, 2.0, 201)
+    res = platform_motion(plat, tail, t, 0.3 * t / 2.0, gravity=True)
+    assert res.lift_mm(0.2) == 0.0

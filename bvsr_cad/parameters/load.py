@@ -190,6 +190,16 @@ def material_problems(spec: TailSpec) -> list[str]:
     return out
 
 
+def read_input_text(path: Path, error: type) -> str:
+    """A user's input file as text; ``error(path, [problem])`` when it is missing or unreadable."""
+    try:
+        return path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise error(path, ["file not found"]) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise error(path, [f"cannot read the file: {exc}"]) from None
+
+
 def load_spec(path: str | Path) -> TailSpec:
     """Read and validate a TOML parameter file.
 
@@ -198,12 +208,7 @@ def load_spec(path: str | Path) -> TailSpec:
             impossible tail.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ParamError(path, ["file not found"]) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ParamError(path, [f"cannot read the file: {exc}"]) from None
+    text = read_input_text(path, ParamError)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -119,13 +119,10 @@ def load_measurements(path: str | Path) -> list[Measurement]:
     Raises:
         MeasurementError: naming the row and the column of every problem.
     """
+    from .load import read_input_text
+
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise MeasurementError(path, ["file not found"]) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MeasurementError(path, [f"cannot read the file: {exc}"]) from None
+    text = read_input_text(path, MeasurementError)
     rows = list(csv.reader(line for line in text.splitlines() if not line.lstrip().startswith("#")))
     if not rows:
         raise MeasurementError(path, ["empty file: expected a header row " + ",".join(COLUMNS)])

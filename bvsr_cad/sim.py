@@ -38,7 +38,7 @@ EXTENSION_LINES = (3, 4)
 SETTLE_S = 0.3  # the two ventral SOAs push: the tail bends dorsally (+Y)
 
 
-def pressure_input(spec: TailSpec, asm, p0_pa: float, supply: str) -> Callable[[float], float]:
+def pressure_input(spec: TailSpec, p0_pa: float, supply: str) -> Callable[[float], float]:
     """The gauge pressure of a pulsed line over time (s), for ``supply``:
 
     - ``ramp``: the paper's Eq 13 with t_0 = ``pneumatics.ramp_time_s`` (or its calibrated value);
@@ -52,7 +52,7 @@ def pressure_input(spec: TailSpec, asm, p0_pa: float, supply: str) -> Callable[[
     from .assembly.pneumatic_lines import line_supply
     from .models.pneumatics import fill_curve
 
-    t_s, p_pa = fill_curve(line_supply(asm, 1, EXTENSION_LINES, p0_pa, spec), 1.0, samples=4001)
+    t_s, p_pa = fill_curve(line_supply(build_assembly(spec), 1, EXTENSION_LINES, p0_pa, spec), 1.0, samples=4001)
     return lambda t: float(np.interp(t, t_s, p_pa))
 
 
@@ -173,7 +173,7 @@ def simulate(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float, pa
     if supply not in ("ramp", "valve"):
         raise SimulationInputError(f"--supply {supply}: allowed ramp, valve")
     p0 = pressure_bar * units.PA_PER_BAR
-    pressure = pressure_input(spec, build_assembly(spec), p0, supply)
+    pressure = pressure_input(spec, p0, supply)
     one = dataclasses.replace(spec, name=f"{spec.name}_segment", segments=1)
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)

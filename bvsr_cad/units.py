@@ -14,6 +14,8 @@ MM3_PER_CM3 = 1000.0
 PA_PER_KPA = 1000.0
 PA_PER_BAR = 100_000.0
 PA_PER_MPA = 1_000_000.0
+#: Standard gravity (CGPM 1901), m/s^2 = N/kg.
+STANDARD_GRAVITY_M_S2 = 9.80665
 
 
 def mm_to_m(value_mm: float) -> float:

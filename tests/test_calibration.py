@@ -85,3 +85,16 @@ def test_fitted_values_reach_every_home(bvsr_spec):
     si = actuation_si(cal)
     assert si.law.area_m2 == pytest.approx(200e-6)
     assert si.rod_bending_stiffness_nm_rad == pytest.approx(5.0e4 / spec.joint.gap_mm / 1e3)
+
+
+def test_every_quantity_has_a_prediction_with_its_conditions():
+    """The measurement schema and the predictor agree name for name, condition for condition."""
+    import inspect
+
+    from bvsr_cad.analysis.predict import Predictor
+    from bvsr_cad.parameters.measurements import QUANTITIES
+
+    for name, (_unit, conditions, _doc) in QUANTITIES.items():
+        method = getattr(Predictor, name)
+        params = [p for p in inspect.signature(method).parameters if p != "self"]
+        assert sorted(params) == sorted(conditions), name

@@ -39,6 +39,10 @@ DYNAMIC_QUANTITIES = ("segment_peak_velocity", "velocity_pressure_exponent", "ti
                       "root_peak_torque", "root_peak_force", "cart_lift", "cart_peak_angle")
 
 
+class CalibrationError(ValueError):
+    """A calibration that cannot be asked for (an unknown quantity to fit): exit code 2."""
+
+
 def uncalibrated(spec: TailSpec) -> TailSpec:
     """The spec with its tables' values (any ``[calibration]`` dropped)."""
     return dataclasses.replace(spec, calibration=Calibration())
@@ -129,20 +133,20 @@ def calibrate(spec: TailSpec, rows: list[Measurement], parameters: list[str] | N
     names = parameters if parameters is not None else default_parameters(spec, rows)
     unknown = [n for n in names if n not in CALIBRATABLE]
     if unknown:
-        raise ValueError(f"cannot fit {', '.join(unknown)}; calibratable: {', '.join(CALIBRATABLE)}")
+        raise CalibrationError(f"--fit {','.join(names)}: cannot fit {', '.join(unknown)}; "
+                               f"allowed: {', '.join(CALIBRATABLE)}")
     fit_rows = [m for m in rows if m.role == "fit"]
     base = uncalibrated(spec)
     pred = predictor.with_spec(base) if predictor is not None else Predictor.from_spec(base)
     start = {n: table_value(spec, n) for n in names}
     lo_hi = [_bounds(n) for n in names]
     # Unknowns: x = log(value), starting at the tables' values; the Jacobian steps 1 % in each value.
-    ref = np.ones(len(names))
     x0 = np.array([math.log(min(max(start[n], lo * 1.000001), hi * 0.999999)) for n, (lo, hi) in zip(names, lo_hi)])
     count = [0]
 
     def residuals(x: np.ndarray) -> np.ndarray:
         count[0] += 1
-        values = {n: float(r0 * math.exp(v)) for n, v, r0 in zip(names, x, ref)}
+        values = {n: float(math.exp(v)) for n, v in zip(names, x)}
         p = pred.with_spec(with_values(spec, values))
         out = []
         for m in fit_rows:
@@ -156,8 +160,7 @@ def calibrate(spec: TailSpec, rows: list[Measurement], parameters: list[str] | N
         return r
 
     if names:
-        sol = least_squares(residuals, x0, bounds=([math.log(a / r0) for (a, _), r0 in zip(lo_hi, ref)],
-                                                   [math.log(b / r0) for (_, b), r0 in zip(lo_hi, ref)]),
+        sol = least_squares(residuals, x0, bounds=([math.log(a) for a, _ in lo_hi], [math.log(b) for _, b in lo_hi]),
                             x_scale=1.0, diff_step=0.01 / np.maximum(1.0, np.abs(x0)), xtol=1e-4, ftol=1e-6,
                             max_nfev=60)
         x, jac, res, message = sol.x, sol.jac, sol.fun, sol.message
@@ -170,9 +173,8 @@ def calibrate(spec: TailSpec, rows: list[Measurement], parameters: list[str] | N
             sd = np.full(n, np.inf)
     else:
         x, sd, message = np.array([]), np.array([]), "nothing to fit"
-    fitted = {name: FittedValue(r0 * math.exp(v), r0 * math.exp(v - 1.96 * s), r0 * math.exp(v + 1.96 * s),
-                                UNITS[name], start[name])
-              for name, v, s, r0 in zip(names, x, sd, ref)} if names else {}
+    fitted = {name: FittedValue(math.exp(v), math.exp(v - 1.96 * s), math.exp(v + 1.96 * s), UNITS[name], start[name])
+              for name, v, s in zip(names, x, sd)}
     calibrated = with_values(spec, {k: v.value for k, v in fitted.items()})
     say("calibrate: every row before and after")
     p_before, p_after = pred.with_spec(base), pred.with_spec(calibrated)
@@ -199,4 +201,4 @@ def _safe(pred: Predictor, m: Measurement) -> float:
         return float("nan")
 
 
-__all__ = ["calibrate", "CalibrationResult", "FittedValue", "uncalibrated", "default_parameters", "with_values"]
+__all__ = ["calibrate", "CalibrationError", "CalibrationResult", "FittedValue", "uncalibrated", "default_parameters", "with_values"]

@@ -16,7 +16,6 @@ the others open; the quasi-static figures are at the lines' pressure limits
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -31,10 +30,10 @@ from ..models.dynamics import G_M_S2, JointModel, Trajectory, com_position_m, ra
 from ..models.kinematics import joint_geometries
 from ..models.platform import Platform, TailOnPlatform, platform_motion
 from ..models.rod import rod_section
-from ..models.statics import MOTION_PHI_RAD, TailStatics, pressure_pattern_kpa, quasi_static_segment
+from ..models.statics import MOTION_PHI_RAD, pressure_pattern_kpa, quasi_static_segment
 from ..parameters.measurements import Measurement
 from ..parameters.tables import TailSpec
-from .workspace import lumped_masses, sample_line_pressures_kpa
+from .workspace import run_workspace, tail_statics
 
 GRAVITY_M_S2 = np.array([0.0, -G_M_S2, 0.0])
 PULSE_SECONDS = 0.3
@@ -103,7 +102,7 @@ class Predictor:
         return self._quasi_static(motion).blocked_force_n
 
     def _quasi_static(self, motion: str):
-        st = TailStatics.from_spec(self.spec, lumped_masses(self.asm)).first_segment()
+        st = tail_statics(self.asm, spec=self.spec).first_segment()
         return quasi_static_segment(st, motion)
 
     def soa_stiffness(self, pressure_kpa: float) -> float:
@@ -140,10 +139,9 @@ class Predictor:
             if key not in self._other:
                 self._other[key] = build_assembly(dataclasses.replace(self.spec, segments=key))
             asm = self._other[key]
-        st = TailStatics.from_spec(spec, lumped_masses(asm))
-        rng = np.random.default_rng(spec.analysis.seed)
-        p = sample_line_pressures_kpa(spec, spec.analysis.build_workspace_samples, rng)
-        tips = st.kin.tip_point_mm(st.forward(p))
+        ws = run_workspace(asm, spec.analysis.build_workspace_samples, spec.analysis.seed, spec=spec)
+        st = tail_statics(asm, spec=spec)
+        tips = ws.tip_mm
         rest = st.kin.tip_point_mm(st.forward(np.zeros((spec.segments, 5))))
         return float(np.max(np.hypot(tips[:, 0] - rest[0], tips[:, 1] - rest[1])))
 

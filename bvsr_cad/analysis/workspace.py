@@ -62,17 +62,20 @@ class Workspace:
         return float(np.max(np.hypot(self.w[..., 0], self.w[..., 1])))
 
 
-def tail_statics(asm: Assembly, gravity: bool = True) -> TailStatics:
-    return TailStatics.from_spec(asm.spec, lumped_masses(asm) if gravity else None)
+def tail_statics(asm: Assembly, gravity: bool = True, spec: TailSpec | None = None) -> TailStatics:
+    """The statics of the assembled tail; ``spec`` (default the assembly's, same geometry) may carry
+    fitted values or another workspace protocol."""
+    return TailStatics.from_spec(spec or asm.spec, lumped_masses(asm) if gravity else None)
 
 
 def run_workspace(asm: Assembly, samples: int, seed: int, progress: Progress | None = None,
-                  chunk: int = 2000) -> Workspace:
-    """Sample the protocol and solve the forward statics of every sample."""
+                  chunk: int = 2000, spec: TailSpec | None = None) -> Workspace:
+    """Sample the protocol and solve the forward statics of every sample (``spec``: see :func:`tail_statics`)."""
     say = progress or (lambda _m: None)
-    st = tail_statics(asm)
+    spec = spec or asm.spec
+    st = tail_statics(asm, spec=spec)
     rng = np.random.default_rng(seed)
-    p = sample_line_pressures_kpa(asm.spec, samples, rng)
+    p = sample_line_pressures_kpa(spec, samples, rng)
     ws = []
     for i in range(0, samples, chunk):
         say(f"workspace: forward statics {i}..{min(samples, i + chunk)} of {samples}")

@@ -48,10 +48,10 @@ import numpy as np
 
 from .. import units
 from .actuator import SoaForceLaw
-from .kinematics import JointGeometry, joint_rotation_translation, joint_transform_derivatives
+from .kinematics import JointGeometry, socket_lengths_and_jacobian
 
 #: Standard gravity, m/s^2.
-G_M_S2 = 9.80665
+G_M_S2 = units.STANDARD_GRAVITY_M_S2
 #: The paper measures a segment's peak velocity before its angle passes this (Sec. IV-A-3).
 VELOCITY_WINDOW_DEG = 38.0
 
@@ -177,17 +177,10 @@ class JointModel:
     def soa_terms(self, phi: float, theta: float) -> tuple[np.ndarray, np.ndarray]:
         """Per joint: stretch dl (n, 5) in m and dl/dq (n, 5, 2) in m/rad, q = (phi, theta) (Eq 1)."""
         u, v = theta * math.cos(phi), theta * math.sin(phi)
-        rot, trans = joint_rotation_translation(np.array(u), np.array(v), self._arc_m)
-        d_ru, d_rv, d_pu, d_pv = joint_transform_derivatives(np.array(u), np.array(v), self._arc_m)
-        d = np.einsum("ij,nsj->nsi", rot, self._moving_m) + trans - self._base_m
-        length = np.linalg.norm(d, axis=-1)
-        e = d / length[..., None]
-        # d(u, v)/d(phi, theta) = [[-v, cos phi], [u, sin phi]]
-        dd_phi = np.einsum("ij,nsj->nsi", -v * d_ru + u * d_rv, self._moving_m) + (-v * d_pu + u * d_pv)
-        dd_theta = np.einsum("ij,nsj->nsi", math.cos(phi) * d_ru + math.sin(phi) * d_rv, self._moving_m) \
-            + (math.cos(phi) * d_pu + math.sin(phi) * d_pv)
-        jac = np.stack([np.sum(e * dd_phi, -1), np.sum(e * dd_theta, -1)], -1)
-        return length - self._rest_m, jac
+        length, jac_uv = socket_lengths_and_jacobian(self._base_m, self._moving_m, np.array(u), np.array(v),
+                                                     self._arc_m)
+        duv = np.array([[-v, math.cos(phi)], [u, math.sin(phi)]])  # d(u, v)/d(phi, theta)
+        return length - self._rest_m, jac_uv @ duv
 
     def generalized_forces(self, phi: float, theta: float, phi_dot: float, theta_dot: float,
                            soa_pa: np.ndarray, terms: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
@@ -270,7 +263,7 @@ PressureInput = Callable[[float], np.ndarray]  # t (s) -> gauge Pa of the five S
 def simulate_joint(model: JointModel, pressure: PressureInput | None = None, seconds: float = 0.3,
                    phi0_rad: float = 0.0, supply=None, sample_s: float = 2.5e-4,
                    stop_angle_deg: float | None = None) -> Trajectory:
-    """Integrate Eq 6 from rest with scipy (LSODA, tight tolerances).
+    """Integrate Eq 6 from rest with scipy (LSODA, rtol 1e-6; absolute tolerances per state's unit).
 
     Exactly one of ``pressure`` (a function of time: the Eq 13 ramp or any
     other trace) and ``supply`` (a :class:`bvsr_cad.models.pneumatics.LineSupply`,
@@ -282,8 +275,7 @@ def simulate_joint(model: JointModel, pressure: PressureInput | None = None, sec
     if (pressure is None) == (supply is None):
         raise ValueError("give exactly one of pressure and supply")
     n_p = 0 if supply is None else supply.n_states
-    # Bend towards the pressurised side's opposite: start a hair off straight in the plane phi0,
-    # so that phi is defined; the motion stays in that plane by symmetry of the patterns.
+    # Start straight with the bending plane phi0 (held while theta = 0, see JointModel.rhs).
     y0 = np.concatenate([[phi0_rad, 0.0, 0.0, 0.0], [] if supply is None else supply.initial_state()])
 
     def soa_pressures(t: float, y: np.ndarray) -> np.ndarray:

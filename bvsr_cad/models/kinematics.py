@@ -173,18 +173,25 @@ def soa_lengths_mm(geom: JointGeometry, u: np.ndarray, v: np.ndarray) -> np.ndar
     return np.linalg.norm(d, axis=-1)
 
 
+def socket_lengths_and_jacobian(base: np.ndarray, moving: np.ndarray, u: np.ndarray, v: np.ndarray,
+                                length: float) -> tuple[np.ndarray, np.ndarray]:
+    """Eq 1 and its derivative for socket centres ``base``/``moving`` (..., 5, 3), broadcast against
+    the bending vectors (u, v) (...,): (l (..., 5), dl/dw (..., 5, 2)), in the sockets' length unit."""
+    rot, trans = joint_rotation_translation(u, v, length)
+    dR_u, dR_v, dp_u, dp_v = joint_transform_derivatives(u, v, length)
+    d = np.einsum("...ij,...sj->...si", rot, moving) + trans[..., None, :] - base
+    lengths = np.linalg.norm(d, axis=-1)
+    e = d / lengths[..., None]
+    dd_u = np.einsum("...ij,...sj->...si", dR_u, moving) + dp_u[..., None, :]
+    dd_v = np.einsum("...ij,...sj->...si", dR_v, moving) + dp_v[..., None, :]
+    jac = np.stack([np.sum(e * dd_u, -1), np.sum(e * dd_v, -1)], -1)
+    return lengths, jac
+
+
 def soa_lengths_and_jacobian(geom: JointGeometry, u: np.ndarray, v: np.ndarray
                              ) -> tuple[np.ndarray, np.ndarray]:
     """(l (..., 5), dl/dw (..., 5, 2)) with w = (u, v)."""
-    rot, trans = joint_rotation_translation(u, v, geom.length_mm)
-    dR_u, dR_v, dp_u, dp_v = joint_transform_derivatives(u, v, geom.length_mm)
-    d = np.einsum("...ij,sj->...si", rot, geom.moving_mm) + trans[..., None, :] - geom.base_mm
-    length = np.linalg.norm(d, axis=-1)
-    e = d / length[..., None]
-    dd_u = np.einsum("...ij,sj->...si", dR_u, geom.moving_mm) + dp_u[..., None, :]
-    dd_v = np.einsum("...ij,sj->...si", dR_v, geom.moving_mm) + dp_v[..., None, :]
-    jac = np.stack([np.sum(e * dd_u, -1), np.sum(e * dd_v, -1)], -1)
-    return length, jac
+    return socket_lengths_and_jacobian(geom.base_mm, geom.moving_mm, u, v, geom.length_mm)
 
 
 def uv_from_theta_phi(theta_rad: np.ndarray, phi_rad: np.ndarray) -> np.ndarray:

@@ -27,7 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-G_M_S2 = 9.80665
+from .. import units
+
+G_M_S2 = units.STANDARD_GRAVITY_M_S2
 
 
 @dataclass(frozen=True)

@@ -34,7 +34,7 @@ from .rod import joint_rod_stiffness_nmm_per_rad
 from .kinematics import TailKinematics, soa_lengths_and_jacobian, theta_phi_from_uv, uv_from_theta_phi
 
 #: Standard gravity, m/s^2 (N per kg).
-G_N_PER_KG = 9.80665
+G_N_PER_KG = units.STANDARD_GRAVITY_M_S2
 #: Motions of SPEC section 2 as the bending-plane angle phi: towards +Y, -Y, +X.
 MOTION_PHI_RAD = {"extension": math.pi / 2, "flexion": -math.pi / 2, "waggle": 0.0}
 

@@ -87,6 +87,8 @@ def cmd_simulate(args) -> int:
     spec = load_spec(args.params)
     check_inputs(spec, args.pressure_bar, args.payload_g)
     limits = joint_limits_rad(spec, say)
+    if args.platform == "cart":
+        return _simulate_cart(args, spec, limits, say)
     res = simulate(spec, limits, args.pressure_bar, args.payload_g, progress=say, supply=args.supply)
     out = Path(args.output) if args.output else Path("exports") / spec.name / "simulate"
     out.mkdir(parents=True, exist_ok=True)
@@ -117,6 +119,43 @@ def cmd_simulate(args) -> int:
     return EXIT_OK
 
 
+def _simulate_cart(args, spec, limits, say) -> int:
+    from .analysis.predict import Predictor
+    from .exporters.plots import plot_cart
+    from .parameters import paper
+    from .sim import simulate_cart
+
+    runs = simulate_cart(spec, limits, args.pressure_bar, progress=say, supply=args.supply)
+    say("Eq 20-22 on the Eq 6-12 tail model")
+    pred = Predictor.from_spec(spec)
+    reported = {("extension", "angle"): paper.CART_ANGLE_EXTENSION_5BAR, ("waggle", "angle"): paper.CART_ANGLE_WAGGLE_5BAR,
+                ("extension", "lift"): paper.CART_LIFT_9MM}
+    rows = []
+    for r in runs:
+        items = [("angle", "deg", r.peak_angle_deg, pred.cart_peak_angle(args.pressure_bar, r.motion))]
+        if r.motion != "waggle":
+            items.append(("lift", "mm", r.lift_mm, pred.cart_lift(args.pressure_bar, r.motion)))
+        for what, unit, mj, eq in items:
+            ref = reported.get((r.motion, what)) if args.pressure_bar == 5 else None
+            rows.append({"motion": r.motion, "quantity": f"cart_{what}", "unit": unit, "mujoco": mj, "eq20_22": eq,
+                         "paper": None if ref is None else ref.value})
+    out = Path(args.output) if args.output else Path("exports") / spec.name / "simulate"
+    out.mkdir(parents=True, exist_ok=True)
+    png = out / f"cart_{args.pressure_bar:g}bar.png"
+    plot_cart(runs, png, f"{spec.name} on the hinged cart: {args.pressure_bar:g} bar pulses")
+    if args.json:
+        print(json.dumps({"pressure_bar": args.pressure_bar, "rows": rows, "plot": str(png),
+                          "supply": args.supply or spec.pneumatics.model}))
+        return EXIT_OK
+    print(f"{'motion':10} {'quantity':17} {'MuJoCo':>8} {'Eq 20-22':>9} {'paper':>7}")
+    for row in rows:
+        ref = "" if row["paper"] is None else f"{row['paper']:7.3g}"
+        print(f"{row['motion']:10} {row['quantity'] + ' (' + row['unit'] + ')':17} {row['mujoco']:8.3g} "
+              f"{row['eq20_22']:9.3g} {ref:>7}")
+    print(f"plot: {png}")
+    return EXIT_OK
+
+
 def cmd_calibrate(args) -> int:
     from .analysis.calibrate import calibrate
     from .analysis.predict import Predictor
@@ -133,7 +172,8 @@ def cmd_calibrate(args) -> int:
     res = calibrate(spec, rows, names, Predictor.from_spec(spec), progress=say)
     out = None
     if args.output:
-        out = write_calibrated_params(args.params, args.output, res, str(args.data), data_sha256(args.data))
+        out = write_calibrated_params(args.params, args.output, res, args.data, data_sha256(args.data),
+                                      spec.name)
     if args.json:
         print(json.dumps({**res.as_json(), "output": None if out is None else str(out)}))
         return EXIT_OK
@@ -227,6 +267,9 @@ def make_parser() -> argparse.ArgumentParser:
     sm.add_argument("--payload-g", type=_number(0.0, inclusive=True), default=0.0, help="tip payload in grams (default 0)")
     sm.add_argument("--supply", choices=("ramp", "valve"),
                     help="pressure input: Eq 13 ramp or the ISO 6358 valve supply (default: pneumatics.model)")
+    sm.add_argument("--platform", choices=("none", "cart"), default="none",
+                    help="cart: the tail on the paper's hinged 700 g cart (robot/scene_cart.xml), extension "
+                         "and waggle; the cart's lift and angles beside Eq 20-22 and the paper")
     sm.add_argument("-o", "--output", help="folder for the plot (default exports/<name>/simulate/)")
     sm.set_defaults(func=cmd_simulate)
     ca = sub.add_parser("calibrate", parents=[common],

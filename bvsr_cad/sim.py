@@ -38,7 +38,8 @@ EXTENSION_LINES = (3, 4)
 SETTLE_S = 0.3  # the two ventral SOAs push: the tail bends dorsally (+Y)
 
 
-def pressure_input(spec: TailSpec, p0_pa: float, supply: str) -> Callable[[float], float]:
+def pressure_input(spec: TailSpec, p0_pa: float, supply: str, places: tuple[int, ...] = EXTENSION_LINES,
+                   asm=None) -> Callable[[float], float]:
     """The gauge pressure of a pulsed line over time (s), for ``supply``:
 
     - ``ramp``: the paper's Eq 13 with t_0 = ``pneumatics.ramp_time_s`` (or its calibrated value);
@@ -52,7 +53,7 @@ def pressure_input(spec: TailSpec, p0_pa: float, supply: str) -> Callable[[float
     from .assembly.pneumatic_lines import line_supply
     from .models.pneumatics import fill_curve
 
-    t_s, p_pa = fill_curve(line_supply(build_assembly(spec), 1, EXTENSION_LINES, p0_pa, spec), 1.0, samples=4001)
+    t_s, p_pa = fill_curve(line_supply(asm or build_assembly(spec), 1, places, p0_pa, spec), 1.0, samples=4001)
     return lambda t: float(np.interp(t, t_s, p_pa))
 
 
@@ -94,6 +95,11 @@ def _model_xml(spec: TailSpec, theta_max_rad: list[float], folder: Path, payload
         m = units.g_to_kg(payload_g)
         i = 0.4 * m * r * r
         ET.SubElement(payload, "inertial", pos="0 0 0.01", mass=f"{m:.6g}", diaginertia=f"{i:.6g} {i:.6g} {i:.6g}")
+    # The pressure input below is the chamber pressure itself (Eq 13 or the supply model's trace):
+    # the actuators' own supply lag would filter it a second time.
+    for act in root.iter("general"):
+        act.attrib.pop("dyntype", None)
+        act.attrib.pop("dynprm", None)
     sensor = ET.SubElement(root, "sensor")
     ET.SubElement(sensor, "force", name="root_force", site="root_ft")
     ET.SubElement(sensor, "torque", name="root_torque", site="root_ft")
@@ -159,6 +165,23 @@ def joint_limits_rad(spec: TailSpec, progress: Callable[[str], None] | None = No
     return [min(j.theta_max_rad) for j in lims]
 
 
+def segment_extension(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float, supply: str,
+                      seconds: float = 0.5, progress: Callable[[str], None] | None = None):
+    """One standalone segment of ``spec`` pulsed in extension: (time s, bending angle deg, its rate
+    deg/s, the peak rate before the angle passes 38 deg)."""
+    say = progress or (lambda _m: None)
+    pressure = pressure_input(spec, pressure_bar * units.PA_PER_BAR, supply)
+    one = dataclasses.replace(spec, name=f"{spec.name}_segment", segments=1)
+    with tempfile.TemporaryDirectory() as tmp:
+        say("segment model")
+        seg_xml = _model_xml(one, theta_max_rad[: one.joints], Path(tmp) / "segment", 0.0)
+        say(f"segment extension at {pressure_bar:g} bar")
+        t, angle, _, _ = _run(seg_xml, one, pressure, seconds, stop_angle_deg=VELOCITY_WINDOW_DEG)
+    rate = np.gradient(angle, t)
+    window = angle <= VELOCITY_WINDOW_DEG
+    return t, angle, rate, float(np.max(rate[window])) if window.any() else float("nan")
+
+
 def simulate(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float, payload_g: float = 0.0,
              seconds: float = 0.5, progress: Callable[[str], None] | None = None,
              supply: str | None = None) -> SimResult:
@@ -174,19 +197,81 @@ def simulate(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float, pa
         raise SimulationInputError(f"--supply {supply}: allowed ramp, valve")
     p0 = pressure_bar * units.PA_PER_BAR
     pressure = pressure_input(spec, p0, supply)
-    one = dataclasses.replace(spec, name=f"{spec.name}_segment", segments=1)
+    t, angle, rate, peak_v = segment_extension(spec, theta_max_rad, pressure_bar, supply, seconds, say)
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        say("segment model")
-        seg_xml = _model_xml(one, theta_max_rad[: one.joints], folder / "segment", 0.0)
-        say(f"segment extension at {pressure_bar:g} bar")
-        t, angle, _, _ = _run(seg_xml, one, pressure, seconds, stop_angle_deg=VELOCITY_WINDOW_DEG)
         say("tail model")
         tail_xml = _model_xml(spec, theta_max_rad, folder / "tail", payload_g)
         say(f"tail extension at {pressure_bar:g} bar, payload {payload_g:g} g")
         tt, _, force, torque = _run(tail_xml, spec, pressure, seconds)
-    rate = np.gradient(angle, t)
-    window = angle <= VELOCITY_WINDOW_DEG
-    peak_v = float(np.max(rate[window])) if window.any() else float("nan")
     return SimResult(pressure_bar, payload_g, t, angle, rate, peak_v, float(angle.max()), tt, force, torque,
                      float(np.max(np.linalg.norm(force, axis=1))), float(np.max(np.linalg.norm(torque, axis=1))))
+
+
+@dataclass
+class CartRun:
+    motion: str
+    time_s: np.ndarray
+    pitch_deg: np.ndarray
+    yaw_deg: np.ndarray
+    wheelbase_m: float
+
+    @property
+    def peak_angle_deg(self) -> float:
+        """The cart's largest turn: pitch for extension and flexion, yaw for waggle."""
+        trace = self.yaw_deg if self.motion == "waggle" else self.pitch_deg
+        return float(np.max(np.abs(trace)))
+
+    @property
+    def lift_mm(self) -> float:
+        return float(1e3 * self.wheelbase_m * math.sin(math.radians(max(0.0, float(np.max(self.pitch_deg))))))
+
+
+def simulate_cart(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float,
+                  motions: tuple[str, ...] = ("extension", "waggle"), seconds: float = 0.5,
+                  progress: Callable[[str], None] | None = None, supply: str | None = None) -> list[CartRun]:
+    """The tail on the paper's hinged cart (``robot/scene_cart.xml``) pulsed at ``pressure_bar``:
+    the cart's pitch (front lift) and yaw over time for each motion."""
+    import mujoco
+
+    from .analysis.predict import pulse_places
+    from .exporters.mjcf import cart_scene_tree
+
+    say = progress or (lambda _m: None)
+    check_inputs(spec, pressure_bar, 0.0)
+    supply = supply or spec.pneumatics.model
+    if supply not in ("ramp", "valve"):
+        raise SimulationInputError(f"--supply {supply}: allowed ramp, valve")
+    asm = build_assembly(spec)
+    robot = robot_model(asm, theta_max_rad)
+    runs = []
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        mesh_files = write_robot_meshes(robot, folder / "meshes")
+        tree = cart_scene_tree(robot, mesh_files, spec.cart)
+        for act in tree.getroot().iter("general"):  # the input below is the chamber pressure itself
+            act.attrib.pop("dyntype", None)
+            act.attrib.pop("dynprm", None)
+        path = folder / "scene_cart.xml"
+        write_mjcf(path, tree)
+        m = mujoco.MjModel.from_xml_path(str(path))
+        for motion in motions:
+            places = pulse_places(motion)
+            say(f"cart: {motion} at {pressure_bar:g} bar (lines {places})")
+            p_of_t = pressure_input(spec, pressure_bar * units.PA_PER_BAR, supply, places, asm)
+            lines = [m.actuator(f"s{s}_line{i}").id for s in range(1, spec.segments + 1) for i in places]
+            d = mujoco.MjData(m)
+            for _ in range(int(round(SETTLE_S / m.opt.timestep))):
+                mujoco.mj_step(m, d)
+            pitch0, yaw0 = float(d.joint("cart_pitch").qpos[0]), float(d.joint("cart_yaw").qpos[0])
+            t0 = d.time
+            steps = int(round(seconds / m.opt.timestep))
+            t, pitch, yaw = np.zeros(steps), np.zeros(steps), np.zeros(steps)
+            for n in range(steps):
+                d.ctrl[lines] = p_of_t(d.time - t0)
+                mujoco.mj_step(m, d)
+                t[n] = d.time - t0
+                pitch[n] = math.degrees(float(d.joint("cart_pitch").qpos[0]) - pitch0)
+                yaw[n] = math.degrees(float(d.joint("cart_yaw").qpos[0]) - yaw0)
+            runs.append(CartRun(motion, t, pitch, yaw, spec.cart.length_m))
+    return runs

@@ -98,3 +98,57 @@ def test_every_quantity_has_a_prediction_with_its_conditions():
         method = getattr(Predictor, name)
         params = [p for p in inspect.signature(method).parameters if p != "self"]
         assert sorted(params) == sorted(conditions), name
+
+
+def test_shipped_files_carry_the_calibration_of_the_shipped_data(bvsr_data):
+    """params/bvsr.toml was calibrated on data/paper_bvsr.csv as it is now (same SHA-256), and BVSR_L
+    inherits the same fitted values (same SOAs, rods and valves)."""
+    import tomllib
+
+    from bvsr_cad.parameters.measurements import data_sha256
+
+    from .conftest import PARAMS, ROOT
+
+    bvsr_l = tomllib.loads((PARAMS / "bvsr_l.toml").read_text())
+    cal, cal_l = bvsr_data["calibration"], bvsr_l["calibration"]
+    assert (PARAMS / cal["data_file"]).resolve() == ROOT / "data" / "paper_bvsr.csv"
+    assert cal["data_sha256"] == data_sha256(ROOT / "data" / "paper_bvsr.csv")
+    assert cal["measured_tail"] == bvsr_data["name"] == "bvsr" and cal_l["measured_tail"] == "bvsr"
+    assert cal_l["fitted"] == cal["fitted"] and cal_l["data_sha256"] == cal["data_sha256"]
+    assert set(cal["fitted"]) == {"effective_area_mm2", "rod_flexural_rigidity_n_mm2",
+                                  "valve_sonic_conductance_l_s_bar"}
+    assert cal["rms_rel_holdout"] < 0.5 * cal["rms_rel_holdout_uncalibrated"]
+
+
+def test_shipped_fitted_rigidity_reaches_the_mjcf(bvsr_data, bvsr_spec):
+    """The MJCF's half-angle hinges carry 2 E I / L with the file's fitted E I (hand calculation, SI)."""
+    import mujoco
+
+    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.robot import robot_model
+    from bvsr_cad.exporters.mjcf import mjcf_tree
+
+    from .test_truth import _mesh_files, _without_meshes
+
+    ei_nmm2 = bvsr_data["calibration"]["fitted"]["rod_flexural_rigidity_n_mm2"]
+    ei_l = ei_nmm2 * 1e-6 / (bvsr_data["joint"]["gap_mm"] / 1000.0)  # N mm^2 = 1e-6 N m^2
+    robot = robot_model(build_assembly(bvsr_spec), [0.5] * bvsr_spec.joints)
+    tree, _ = mjcf_tree(robot, _mesh_files(robot), False)
+    m = mujoco.MjModel.from_xml_string(_without_meshes(tree.getroot()))
+    assert m.jnt_stiffness[m.joint("j1_theta_a").id] == pytest.approx(2 * ei_l, rel=1e-9)
+    assert m.jnt_stiffness[m.joint(f"j{bvsr_spec.joints}_theta_b").id] == pytest.approx(2 * ei_l, rel=1e-9)
+
+
+def test_inherited_calibration_is_noted_not_compared(bvsr_spec):
+    """A tail that takes another tail's fitted values (BVSR_L) gets a note, not predictions of the
+    other tail's measurements."""
+    from types import SimpleNamespace
+
+    from bvsr_cad.analysis.calibrate import uncalibrated
+    from bvsr_cad.analysis.measured import compare_measurements
+
+    other = dataclasses.replace(bvsr_spec, name="bvsr_l")
+    res = compare_measurements(SimpleNamespace(spec=other), "params/bvsr_l.toml")
+    assert res is not None and not res.rows and "inherited from the bvsr tail" in res.note
+    assert res.fitted == dict(bvsr_spec.calibration.fitted)
+    assert compare_measurements(SimpleNamespace(spec=uncalibrated(bvsr_spec)), None) is None

@@ -281,6 +281,30 @@ def test_rigid_robot_loads_in_mujoco(manifest, bvsr_export):
     assert rt["robot"]["mass_kg"] * 1000 == pytest.approx(solid_g, rel=2e-3)
 
 
+def test_model_against_measurements(manifest, bvsr_export):
+    """The shipped file is calibrated on data/paper_bvsr.csv: the build predicts every row with the
+    tables' and the fitted values; the SOA stiffness rows are the paper's k = 9.4 P + 2918 N/m (P in
+    kPa, a closed form); the counts and RMS in the report are those of the rows."""
+    import csv
+
+    from .conftest import ROOT
+
+    meas = json.loads((bvsr_export / manifest["analysis"]["measurements"]).read_text())
+    with open(ROOT / "data" / "paper_bvsr.csv", newline="") as fh:
+        data = [r for r in csv.reader(line for line in fh if not line.startswith("#"))][1:]
+    assert len(meas["rows"]) == len(data)
+    for r in meas["rows"]:
+        if r["quantity"] == "soa_stiffness":
+            p_kpa = float(r["label"].split("pressure_kpa=")[1].rstrip(")"))
+            assert r["calibrated"] == pytest.approx(9.4 * p_kpa + 2918, rel=1e-9)
+    hold = [r for r in meas["rows"] if r["role"] == "holdout"]
+    assert meas["holdout_landed"] == [sum(abs(r["rel_calibrated"]) <= 0.30 for r in hold), len(hold)]
+    assert meas["rms_rel_holdout"] < 0.5 * meas["rms_rel_holdout_uncalibrated"]
+    html = (bvsr_export / "report.html").read_text()
+    assert "Model against measurements" in html
+    assert f"{meas['holdout_landed'][0]} of {meas['holdout_landed'][1]} holdout rows" in html
+
+
 def test_report_has_its_pictures(manifest, bvsr_export):
     html = (bvsr_export / "report.html").read_text()
     import re
@@ -289,8 +313,8 @@ def test_report_has_its_pictures(manifest, bvsr_export):
     assert srcs and all((bvsr_export / s).is_file() for s in srcs)
     for part in manifest["parts"]:
         assert f"report/parts/{part['name']}.png" in srcs or f"report/parts/{part['name']}.png" in html
-    assert "Against the paper" in html and "not modelled" in html and "678.6" in html
-    for png in ("analysis/workspace.png", "molds/exploded.png"):
+    assert "Against the paper" in html and "not computed here" in html and "678.6" in html
+    for png in ("analysis/workspace.png", "molds/exploded.png", "analysis/measurements.png"):
         if (bvsr_export / png).is_file():
             assert png in srcs
     assert manifest["report"]["problems"] == []

@@ -177,21 +177,34 @@ def calibrate(spec: TailSpec, rows: list[Measurement], parameters: list[str] | N
               for name, v, s in zip(names, x, sd)}
     calibrated = with_values(spec, {k: v.value for k, v in fitted.items()})
     say("calibrate: every row before and after")
-    p_before, p_after = pred.with_spec(base), pred.with_spec(calibrated)
-    table = []
-    for m in rows:
-        before, after = _safe(p_before, m), _safe(p_after, m)
-        table.append({"row": m.row, "experiment": m.experiment, "quantity": m.quantity, "label": m.label,
-                      "role": m.role, "unit": m.unit, "reported": m.value, "uncalibrated": before,
-                      "calibrated": after, "rel_uncalibrated": _relative(before, m.value),
-                      "rel_calibrated": _relative(after, m.value), "source": m.source})
+    table = compare_rows(pred.with_spec(base), pred.with_spec(calibrated), rows)
 
     def rms(role: str, key: str) -> float:
-        return _rms([r[key] for r in table if r["role"] == role])
+        return rms_relative(table, role, key)
 
     return CalibrationResult(fitted, table, rms("fit", "rel_calibrated"), rms("holdout", "rel_calibrated"),
                              rms("fit", "rel_uncalibrated"), rms("holdout", "rel_uncalibrated"), calibrated,
                              count[0], str(message))
+
+
+def compare_rows(before: Predictor, after: Predictor, rows: list[Measurement],
+                 progress: Callable[[str], None] | None = None) -> list[dict]:
+    """Every row predicted by ``before`` (uncalibrated) and ``after`` (calibrated), with relative errors."""
+    say = progress or (lambda _m: None)
+    table = []
+    for m in rows:
+        say(f"row {m.row}: {m.label}")
+        b, a = _safe(before, m), _safe(after, m)
+        table.append({"row": m.row, "experiment": m.experiment, "quantity": m.quantity, "label": m.label,
+                      "role": m.role, "unit": m.unit, "reported": m.value, "uncalibrated": b,
+                      "calibrated": a, "rel_uncalibrated": _relative(b, m.value),
+                      "rel_calibrated": _relative(a, m.value), "source": m.source})
+    return table
+
+
+def rms_relative(table: list[dict], role: str, key: str) -> float:
+    """RMS of ``key`` (``rel_uncalibrated`` or ``rel_calibrated``) over the rows of ``role``."""
+    return _rms([r[key] for r in table if r["role"] == role])
 
 
 def _safe(pred: Predictor, m: Measurement) -> float:
@@ -201,4 +214,4 @@ def _safe(pred: Predictor, m: Measurement) -> float:
         return float("nan")
 
 
-__all__ = ["calibrate", "CalibrationError", "CalibrationResult", "FittedValue", "uncalibrated", "default_parameters", "with_values"]
+__all__ = ["calibrate", "compare_rows", "rms_relative", "CalibrationError", "CalibrationResult", "FittedValue", "uncalibrated", "default_parameters", "with_values"]

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..assembly.build import Assembly
+from .measured import MeasuredComparison, compare_measurements
 from .clearance import ClearanceResult, clearance_map, clearance_over, posed_tail
 from .limits import JointLimits, fold_stack, joint_limits, stack_limit_rad
 from .workspace import Workspace, quasi_static_table, run_workspace
@@ -52,6 +53,7 @@ class AnalysisResults:
     limits: list[JointLimits]
     fold_stack_lambda: float
     clearance_map: ClearanceMap
+    measured: MeasuredComparison | None
     seconds: float
 
     def theta_max_per_joint(self) -> list[float]:
@@ -59,7 +61,10 @@ class AnalysisResults:
         return [float(np.min(lim.theta_max_rad)) for lim in self.limits]
 
 
-def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None) -> AnalysisResults:
+def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
+                 params_path: str | None = None) -> AnalysisResults:
+    """``params_path``: the parameter file ``asm`` was built from (its calibration's data file is
+    resolved relative to it)."""
     say = progress or (lambda _m: None)
     spec = asm.spec
     cfg = spec.analysis
@@ -82,10 +87,11 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None) -
     phis = np.asarray(lims[tip].phi_rad)
     cmap = ClearanceMap(tip + 1, th, ph, bound, phis, np.asarray(lims[tip].theta_max_rad),
                         stack_limit_rad(pt, tip, phis, *stack))
+    measured = compare_measurements(asm, params_path, say)
     seconds = time.perf_counter() - t0
     say(f"analysis: {seconds:.1f} s")
     return AnalysisResults(ws, quasi, clearance, "poses resampled from the build's workspace samples",
-                           cfg.min_clearance_mm, lims, stack[0], cmap, seconds)
+                           cfg.min_clearance_mm, lims, stack[0], cmap, measured, seconds)
 
 
 def _from_params(params: str, sha256: str) -> AnalysisResults:
@@ -102,7 +108,7 @@ def _from_params(params: str, sha256: str) -> AnalysisResults:
     def say(msg: str) -> None:
         print(f"(second process) {msg}", file=sys.stderr, flush=True)
 
-    return run_analyses(build_assembly(load_spec(params)), say)
+    return run_analyses(build_assembly(load_spec(params)), say, params)
 
 
 if __name__ == "__main__":

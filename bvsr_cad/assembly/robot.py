@@ -28,6 +28,8 @@ import numpy as np
 
 from .. import units
 from ..models.actuator import SoaForceLaw, soa_force_law
+from ..models.dynamics import ramp_pa
+from ..models.pneumatics import first_order_time_constant_s
 from ..models.kinematics import chord_length_mm
 from ..models.rod import rod_section
 from ..parameters.layout import N_SOA
@@ -36,6 +38,7 @@ from ..colors import rgba
 from ..parts.vertebra import rod
 from .build import Assembly, Instance, rod_span_mm
 from .inertia import Inertial, compose, from_solid
+from .pneumatic_lines import line_supply
 
 VIRTUAL_MASS_KG = 1e-7  # 0.1 mg: valid for every simulator, negligible, and counted in the totals
 VIRTUAL_INERTIA_KG_M2 = 1e-12
@@ -186,6 +189,9 @@ class RobotModel:
     sites: list[Site]
     soas: list[SoaActuator]
     actuation: ActuationSI
+    #: Each line's supply lag tau (s) by line name (``s{segment}_line{i}``): the MJCF actuators'
+    #: first-order dynamics, fitted to the supply model (:func:`supply_lags_s`).
+    supply_lag_s: dict[str, float] = field(default_factory=dict)
     root: str = "panel0"
 
     @property
@@ -331,7 +337,22 @@ def robot_model(asm: Assembly, theta_max_rad: list[float]) -> RobotModel:
             rest = units.mm_to_m(float(np.linalg.norm(top_mm - bottom_mm)))
             soas.append(SoaActuator(inst.name, k, inst.line_name, inst.pressure_line, b_site.name,
                                     t_site.name, rest))
-    return RobotModel(spec.name, links, joints, bending, sites, soas, actuation)
+    return RobotModel(spec.name, links, joints, bending, sites, soas, actuation, supply_lags_s(asm))
+
+
+def supply_lags_s(asm: Assembly) -> dict[str, float]:
+    """tau of p' = (u - p) / tau per line, u the commanded (supply) pressure, fitted to the spec's
+    supply model for a pulse at ``robot.pulse_pressure_max_kpa`` filling that line's SOAs
+    (``pneumatics.model = "valve"``: ISO 6358 through the line's own tube; ``"ramp"``: Eq 13)."""
+    spec = asm.spec
+    p0 = units.kpa_to_pa(spec.robot.pulse_pressure_max_kpa)
+    if spec.pneumatics.model == "ramp":
+        t0 = spec.fitted("ramp_time_s", spec.pneumatics.ramp_time_s)
+        t = np.linspace(0.0, t0, 20001)
+        tau = float(t[np.argmax(ramp_pa(t, 1.0, t0) >= 1.0 - np.exp(-1.0))])  # its 63 % time
+        return {f"s{s}_line{i}": tau for s in range(1, spec.segments + 1) for i in range(1, N_SOA + 1)}
+    return {f"s{s}_line{i}": first_order_time_constant_s(line_supply(asm, s, (i,), p0))
+            for s in range(1, spec.segments + 1) for i in range(1, N_SOA + 1)}
 
 
 def _top_socket(asm: Assembly, inst: Instance) -> np.ndarray:

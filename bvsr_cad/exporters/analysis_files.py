@@ -7,7 +7,8 @@ from pathlib import Path
 from typing import Any
 
 from ..analysis.run import LIMIT_RESOLUTION_RAD, THETA_SEARCH_MAX_RAD, AnalysisResults
-from .plots import plot_clearance_map, plot_workspace
+from ..analysis.measured import LANDS_WITHIN_REL
+from .plots import plot_clearance_map, plot_measurements, plot_workspace
 
 
 def write_analyses(res: AnalysisResults, root: Path, name: str) -> dict[str, Any]:
@@ -37,6 +38,14 @@ def write_analyses(res: AnalysisResults, root: Path, name: str) -> dict[str, Any
                           "theta_bound_rad (stage-1 bounds), exact distances above it (analysis/limits.py)",
                 "joints": [vars(lim) for lim in res.limits], "workspace_max_theta_rad": ws.max_theta_rad}
     (out / "limits.json").write_text(json.dumps(lim_json, indent=1))
-    return {"analysis": {"limits": "analysis/limits.json", "workspace": "analysis/workspace.json",
-                         "clearance": "analysis/clearance.json", "workspace_png": "analysis/workspace.png",
-                         "clearance_map_png": "analysis/clearance_map.png"}}
+    files = {"limits": "analysis/limits.json", "workspace": "analysis/workspace.json",
+             "clearance": "analysis/clearance.json", "workspace_png": "analysis/workspace.png",
+             "clearance_map_png": "analysis/clearance_map.png"}
+    if res.measured is not None:
+        (out / "measurements.json").write_text(json.dumps(res.measured.to_json(), indent=1))
+        files["measurements"] = "analysis/measurements.json"
+        if res.measured.rows:
+            plot_measurements(res.measured.rows, out / "measurements.png",
+                              f"{name}: model against {Path(res.measured.data_file).name}", LANDS_WITHIN_REL)
+            files["measurements_png"] = "analysis/measurements.png"
+    return {"analysis": files}

@@ -32,12 +32,13 @@ def strip_calibration(text: str) -> str:
     return "\n".join(out) + "\n"
 
 
-def calibration_text(result: CalibrationResult, data_file: str, data_sha256: str) -> str:
+def calibration_text(result: CalibrationResult, data_file: str, data_sha256: str, measured_tail: str) -> str:
     lines = ["", "# Written by `bvsr calibrate`: the values below replace, in their one home, the values the",
              "# tables above give (models/actuator, models/rod, models/pneumatics). Delete these tables to",
              "# return to the uncalibrated model.",
              "[calibration]",
              f'data_file = "{data_file}"',
+             f'measured_tail = "{measured_tail}"',
              f'data_sha256 = "{data_sha256}"',
              f"rms_rel_fit = {result.rms_rel_fit:.6g}",
              f"rms_rel_holdout = {result.rms_rel_holdout:.6g}",
@@ -49,11 +50,13 @@ def calibration_text(result: CalibrationResult, data_file: str, data_sha256: str
     return "\n".join(lines) + "\n"
 
 
-def write_calibrated_params(source: str | Path, out: str | Path, result: CalibrationResult, data_file: str,
-                            data_sha256: str) -> Path:
+def write_calibrated_params(source: str | Path, out: str | Path, result: CalibrationResult, data_file: str | Path,
+                            data_sha256: str, measured_tail: str) -> Path:
+    """``data_file`` is recorded relative to ``out``'s folder (where the loader resolves it)."""
     out = Path(out)
-    text = strip_calibration(Path(source).read_text(encoding="utf-8")) + calibration_text(result, data_file,
-                                                                                           data_sha256)
+    rel = Path(os.path.relpath(Path(data_file).resolve(), out.resolve().parent)).as_posix()
+    text = strip_calibration(Path(source).read_text(encoding="utf-8")) + calibration_text(result, rel, data_sha256,
+                                                                                           measured_tail)
     out.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
     try:

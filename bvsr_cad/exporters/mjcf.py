@@ -15,7 +15,14 @@ it through a general actuator whose control is the gauge pressure in Pa:
           = P A - (m_a P + n_a)(l - l0) - c dl/dt          (Eq 3-4 and the SOA damper)
 
 so the SOA's stiffness and damping live in the actuator alone and are not
-counted again on the joints. In the per-segment model the three joints of a
+counted again on the joints. The pressure P in the chamber is the actuator's
+activation, a first-order lag of the commanded (supply) pressure u,
+P' = (u - P) / tau (``dyntype="filterexact"``), with each line's tau the
+least-squares fit to the supply model's fill curve
+(:func:`bvsr_cad.assembly.robot.supply_lags_s`; RMS 7 %, worst 13 % of the supply pressure):
+a step in ``ctrl`` is a valve opening. A controller that computes the chamber
+pressure itself (``bvsr simulate`` plays the supply model's trace) sets
+``dyntype="none"``. In the per-segment model the three joints of a
 segment share theta and phi (equality constraints) and one actuator drives
 each line's tendon through its three SOAs, whose stiffness and damping are
 divided by three (the three SOAs of a line stretch alike, so the series
@@ -195,12 +202,17 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
         m_a = law.stiffness_slope_n_per_m_per_pa * k_share
         n_a = law.stiffness_offset_n_per_m * k_share
         c = law.damping_n_s_per_m * k_share
+        lag = robot.supply_lag_s.get(soas[0].line)
+        dyn = {"dyntype": "filterexact", "dynprm": _vec((lag,))} if lag else {}
         ET.SubElement(actuator, "general", name=name, tendon=f"{name}_tendon", ctrllimited="true", ctrlrange=ctrl,
-                      gaintype="affine", gainprm=_vec((law.area_m2 + m_a * l0, -m_a, 0.0)),
+                      **dyn, gaintype="affine", gainprm=_vec((law.area_m2 + m_a * l0, -m_a, 0.0)),
                       biastype="affine", biasprm=_vec((n_a * l0, -n_a, -c)))
     ET.indent(root)
+    lags = sorted(set(robot.supply_lag_s.values()))
     facts = {"chord_polynomial_max_error_m": chord_err, "actuators": len(groups),
-             "actuator_control": "gauge pressure, Pa", "per_segment": per_segment}
+             "actuator_control": "commanded (supply) gauge pressure, Pa; the chamber pressure is the "
+                                 "actuator's activation, a first-order lag of it" if lags else "gauge pressure, Pa",
+             "supply_lag_s": [lags[0], lags[-1]] if lags else None, "per_segment": per_segment}
     return ET.ElementTree(root), facts
 
 
@@ -236,6 +248,59 @@ def scene_tree(model_file: str, name: str) -> ET.ElementTree:
                   pos=_vec((-0.03, 0.0, MOUNT_HEIGHT_M / 2)), rgba="0.3 0.3 0.3 1", contype="0", conaffinity="0")
     ET.indent(root)
     return ET.ElementTree(root)
+
+
+#: The cart of the platform experiment: wheel radius and deck thickness are drawing choices (they
+#: set heights, not the Eq 20-22 dynamics, which take the cart's mass, length and width).
+CART_WHEEL_RADIUS_M = 0.02
+CART_DECK_THICKNESS_M = 0.015
+
+
+def cart_scene_tree(robot: RobotModel, mesh_files: dict[str, str], cart, mesh_dir: str = "meshes"
+                    ) -> ET.ElementTree:
+    """The paper's hinged-cart experiment (Sec. IV-B, V-B; Eq 20-22) as one MJCF file.
+
+    The cart (``cart``: :class:`bvsr_cad.parameters.tables.CartPlatform`) turns about its rear axle
+    (hinge ``cart_pitch``, the front lifts for a positive angle) and about a vertical shaft through
+    the axle (hinge ``cart_yaw``); it rests on its front wheel, a sphere on the floor. Its mass sits
+    at mid-length with the inertias Eq 20-22 uses (m l^2 / 12 in pitch, m (l^2 + w^2) / 12 in yaw).
+    The per-segment tail is mounted ``tail_mount_behind_hinge_m`` behind the axle, pointing away
+    from the cart, high enough that no panel touches the floor at rest.
+    """
+    tree, _ = mjcf_tree(robot, mesh_files, per_segment=True, mesh_dir=mesh_dir)
+    root = tree.getroot()
+    root.set("model", f"{robot.name}_cart")
+    world = root.find("worldbody")
+    mount = world.find("body[@name='bvsr_mount']")
+    world.remove(mount)
+    visual = ET.Element("visual")
+    ET.SubElement(visual, "headlight", diffuse="0.6 0.6 0.6", ambient="0.3 0.3 0.3", specular="0 0 0")
+    root.insert(list(root).index(root.find("asset")), visual)
+    ET.SubElement(world, "light", pos="0 0 1.5", dir="0 0 -1", directional="true")
+    ET.SubElement(world, "geom", name="floor", size="0 0 0.05", type="plane", rgba="0.25 0.3 0.35 1")
+    r, t = CART_WHEEL_RADIUS_M, CART_DECK_THICKNESS_M
+    length, width, m = cart.length_m, cart.width_m, cart.mass_kg
+    body = ET.SubElement(world, "body", name="cart", pos=_vec((0.0, 0.0, r)))
+    ET.SubElement(body, "joint", name="cart_pitch", type="hinge", axis="0 1 0", damping="0")
+    ET.SubElement(body, "joint", name="cart_yaw", type="hinge", axis="0 0 1", damping="0")
+    ET.SubElement(body, "inertial", pos=_vec((-length / 2, 0.0, 0.0)), mass=_f(m),
+                  diaginertia=_vec((m * width ** 2 / 12, m * length ** 2 / 12, m * (length ** 2 + width ** 2) / 12)))
+    ET.SubElement(body, "geom", name="cart_deck", type="box", size=_vec((length / 2, width / 2, t / 2)),
+                  pos=_vec((-length / 2, 0.0, r + t / 2)), density="0", contype="0", conaffinity="0",
+                  rgba="0.8 0.55 0.2 1")
+    # A hard wheel on a hard floor: the stiffest contact the step allows (time constant two steps).
+    ET.SubElement(body, "geom", name="cart_front_wheel", type="sphere", size=_f(r), pos=_vec((-length, 0.0, 0.0)),
+                  density="0", rgba="0.15 0.15 0.15 1",
+                  solref=_vec((2.0 * robot.actuation.timestep_s, 1.0)))
+    for side in (-1.0, 1.0):
+        ET.SubElement(body, "geom", name=f"cart_rear_wheel_{'lr'[side > 0]}", type="cylinder", size=_vec((r, 0.004)),
+                      pos=_vec((0.0, side * width / 2, 0.0)), euler="1.5707963 0 0", density="0",
+                      contype="0", conaffinity="0", rgba="0.15 0.15 0.15 1")
+    rim_m = max((c.radius_m for link in robot.links.values() for c in link.collisions), default=0.03)
+    mount.set("pos", _vec((cart.tail_mount_behind_hinge_m, 0.0, rim_m + 0.005)))
+    body.append(mount)
+    ET.indent(root)
+    return tree
 
 
 def write_mjcf(path: Path, tree: ET.ElementTree) -> None:

@@ -76,3 +76,59 @@ def plot_simulation(res, path: Path, title: str) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def plot_measurements(rows: list[dict], path: Path, title: str, band_rel: float) -> None:
+    """Predicted against reported, one point per data row (|value|, log-log: the rows span
+    exponents to newtons per metre), the tables' values hollow, the fitted ones filled, fit rows
+    blue and holdout rows orange; the grey band is +/- ``band_rel``."""
+    fig, ax = plt.subplots(figsize=(7.2, 6.4))
+    values = [abs(v) for r in rows for v in (r["reported"], r["uncalibrated"], r["calibrated"])
+              if np.isfinite(v) and v != 0]
+    lo, hi = min(values) / 2, max(values) * 2
+    line = np.geomspace(lo, hi, 50)
+    ax.fill_between(line, line * (1 - band_rel), line * (1 + band_rel), color="0.85",
+                    label=f"within +/-{100 * band_rel:.0f} %")
+    ax.plot(line, line, color="0.4", lw=0.8)
+    for role, color in (("fit", "tab:blue"), ("holdout", "tab:orange")):
+        for r in (r for r in rows if r["role"] == role):
+            x, u, c = abs(r["reported"]), abs(r["uncalibrated"]), abs(r["calibrated"])
+            if np.isfinite(u) and np.isfinite(c) and u > 0 and c > 0:
+                ax.plot([x, x], [u, c], color=color, lw=0.6, alpha=0.6)
+            if np.isfinite(u) and u > 0:
+                ax.scatter([x], [u], facecolors="none", edgecolors=color, s=28)
+            if np.isfinite(c) and c > 0:
+                ax.scatter([x], [c], color=color, s=28)
+                ax.annotate(str(r["row"]), (x, c), fontsize=7, xytext=(3, 2), textcoords="offset points")
+    ax.scatter([], [], color="tab:blue", s=28, label="fit row, calibrated")
+    ax.scatter([], [], color="tab:orange", s=28, label="holdout row, calibrated")
+    ax.scatter([], [], facecolors="none", edgecolors="0.3", s=28, label="uncalibrated (tables' values)")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlim(lo, hi)
+    ax.set_ylim(lo, hi)
+    ax.set_xlabel("reported |value| (each row in its own unit)")
+    ax.set_ylabel("predicted |value|")
+    ax.set_title(title, fontsize=10)
+    ax.grid(True, which="both", lw=0.3)
+    ax.legend(loc="upper left", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_cart(runs, path: Path, title: str) -> None:
+    """The cart's pitch (front lift) and yaw over time, one panel per motion."""
+    fig, axes = plt.subplots(1, len(runs), figsize=(6 * len(runs), 4), squeeze=False)
+    for ax, r in zip(axes[0], runs):
+        ax.plot(r.time_s * 1000, r.pitch_deg, label="pitch (front up +)")
+        ax.plot(r.time_s * 1000, r.yaw_deg, label="yaw")
+        ax.set_title(f"{r.motion}: peak {r.peak_angle_deg:.2f} deg")
+        ax.set_xlabel("time (ms)")
+        ax.set_ylabel("cart angle (deg)")
+        ax.grid(True, lw=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

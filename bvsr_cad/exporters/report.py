@@ -29,8 +29,8 @@ from ..colors import rgb
 from ..parameters import paper
 
 
-_SIM = "`bvsr simulate` computes it; not run by `bvsr build`"
-_PLATFORM = "needs the platform model (Eq 20-22): not modelled yet"
+_MODEL = "the Eq 6-12 model predicts it: see Model against measurements (and `bvsr simulate` in MuJoCo)"
+_CART = "the Eq 20-22 cart model predicts it: see Model against measurements"
 #: SPEC section 6: quantity, the paper's figure (parameters/paper.py), the check that computes it (or None), a note.
 PAPER_ROWS: tuple[tuple[str, paper.PaperFigure, str | None, str], ...] = (
     ("mass", paper.SEGMENT_STANDALONE_MASS, "paper:segment_standalone_mass", ""),
@@ -41,18 +41,17 @@ PAPER_ROWS: tuple[tuple[str, paper.PaperFigure, str | None, str], ...] = (
      "paper:taper_half_angle", ""),
     *((f"quasi-static max angle, {m}", f, f"paper:qs_max_angle:{m}", "") for m, f in paper.QS_MAX_ANGLE_DEG.items()),
     *((f"blocked force, {m}", f, f"paper:qs_blocked_force:{m}", "") for m, f in paper.QS_BLOCKED_FORCE_N.items()),
-    ("peak angular velocity at 6 bar, extension", paper.SEGMENT_PEAK_VELOCITY_EXTENSION, None, _SIM),
-    ("peak angular velocity at 6 bar, flexion", paper.SEGMENT_PEAK_VELOCITY_FLEXION, None, _SIM),
-    ("peak angular velocity at 6 bar, waggle", paper.SEGMENT_PEAK_VELOCITY_WAGGLE, None, _SIM),
-    ("motion time exponent T ~ P^n", paper.MOTION_TIME_EXPONENT, None, "not modelled yet"),
-    ("velocity exponent V ~ P^n", paper.VELOCITY_EXPONENT, None, "not modelled yet"),
-    ("peak inertial torque, 6 bar, no payload", paper.TAIL_PEAK_TORQUE_NO_PAYLOAD, None, _SIM),
-    ("peak inertial torque, 6 bar, 100 g tip", paper.TAIL_PEAK_TORQUE_100G, None,
-     "`bvsr simulate --payload-g 100`; not run by `bvsr build`"),
-    ("peak root force, 500 g tip", paper.TAIL_PEAK_500G[0], None, _PLATFORM),
-    ("peak root torque, 500 g tip", paper.TAIL_PEAK_500G[1], None, _PLATFORM),
+    ("peak angular velocity at 6 bar, extension", paper.SEGMENT_PEAK_VELOCITY_EXTENSION, None, _MODEL),
+    ("peak angular velocity at 6 bar, flexion", paper.SEGMENT_PEAK_VELOCITY_FLEXION, None, _MODEL),
+    ("peak angular velocity at 6 bar, waggle", paper.SEGMENT_PEAK_VELOCITY_WAGGLE, None, _MODEL),
+    ("motion time exponent T ~ P^n", paper.MOTION_TIME_EXPONENT, None, _MODEL),
+    ("velocity exponent V ~ P^n", paper.VELOCITY_EXPONENT, None, _MODEL),
+    ("peak inertial torque, 6 bar, no payload", paper.TAIL_PEAK_TORQUE_NO_PAYLOAD, None, _MODEL),
+    ("peak inertial torque, 6 bar, 100 g tip", paper.TAIL_PEAK_TORQUE_100G, None, _MODEL),
+    ("peak root force, 500 g tip", paper.TAIL_PEAK_500G[0], None, "not in the data file: Table IV gives it without a pressure"),
+    ("peak root torque, 500 g tip", paper.TAIL_PEAK_500G[1], None, _MODEL),
     ("workspace half-width", paper.WORKSPACE_HALF_WIDTH_BVSR, "paper:workspace_half_width", ""),
-    ("cart lift over a 9 mm obstacle (700 g cart)", paper.CART_LIFT_9MM, None, "not modelled yet"),
+    ("cart lift over a 9 mm obstacle (700 g cart)", paper.CART_LIFT_9MM, None, _CART),
 )
 
 CSS = """
@@ -190,10 +189,46 @@ def _paper_table(manifest: dict[str, Any]) -> str:
                         f"<td>{_e(c.get('note', ''))}</td></tr>")
         else:
             rows.append(f"<tr><td>{_e(qty)}</td><td>{_e(on)}</td><td class=num>{_num(value)}</td>"
-                        f"<td class=info>not modelled</td><td></td><td>{_e(unit)}</td>"
+                        f"<td class=info>not computed here</td><td></td><td>{_e(unit)}</td>"
                         f"<td>{_e(why or 'not computed by this build')}</td></tr>")
     rows.append("</table>")
     return "\n".join(rows)
+
+
+def _measurements_section(root: Path, manifest: dict[str, Any]) -> str:
+    """Reported, uncalibrated and calibrated per data row, fit or holdout, and the plot."""
+    ana = manifest.get("analysis", {})
+    if "measurements" not in ana:
+        return ("<p class=muted>This parameter file carries no calibration: the model uses the tables' values. "
+                "<code>bvsr calibrate PARAMS DATA -o OUT.toml</code> fits it to measurements.</p>")
+    try:
+        meas = json.loads((root / ana["measurements"]).read_text())
+    except (OSError, ValueError):
+        return "<p class=fail>analysis/measurements.json is unreadable.</p>"
+    h = ["<p>Fitted values (they replace the tables' values in their one home): "
+         + ", ".join(f"<code>{_e(k)}</code> = {_num(v)}" for k, v in meas["fitted"].items()) + ".</p>",
+         f"<p class=muted>{_e(meas['note'])}.</p>"]
+    if not meas["rows"]:
+        return "\n".join(h)
+    band = 100 * meas["lands_within_rel"]
+    landed, total = meas["holdout_landed"]
+    h.append(f"<p>RMS relative error: fit rows {meas['rms_rel_fit_uncalibrated']:.3f} uncalibrated, "
+             f"{meas['rms_rel_fit']:.3f} calibrated; holdout rows {meas['rms_rel_holdout_uncalibrated']:.3f} "
+             f"uncalibrated, {meas['rms_rel_holdout']:.3f} calibrated. {landed} of {total} holdout rows land "
+             f"within +/-{band:.0f} %.</p>")
+    h.append("<table><tr><th>row</th><th>role</th><th>quantity (conditions)</th><th>unit</th><th>reported</th>"
+             "<th>uncalibrated</th><th>calibrated</th><th>error</th><th>source</th></tr>")
+    for r in meas["rows"]:
+        err = r["rel_calibrated"]
+        cls = "pass" if abs(err) <= meas["lands_within_rel"] else "fail"
+        h.append(f"<tr><td class=num>{r['row']}</td><td>{_e(r['role'])}</td><td>{_e(r['label'])}</td>"
+                 f"<td>{_e(r['unit'])}</td><td class=num>{_num(r['reported'])}</td>"
+                 f"<td class=num>{_num(r['uncalibrated'])}</td><td class=num>{_num(r['calibrated'])}</td>"
+                 f"<td class='num {cls}'>{100 * err:+.0f} %</td><td class=muted>{_e(r['source'])}</td></tr>")
+    h.append("</table>")
+    if "measurements_png" in ana:
+        h.append("<div class=grid>" + _fig(ana["measurements_png"], "predicted against reported", 640) + "</div>")
+    return "\n".join(h)
 
 
 def _mass_table(manifest: dict[str, Any]) -> str:
@@ -331,7 +366,7 @@ def write_report(root: Path, manifest: dict[str, Any]) -> dict[str, Any]:
         h.append(_fig(molds["exploded_png"], "mold set, exploded along the pull directions"))
         h.append("</div>")
 
-    pngs = _pngs(manifest.get("analysis", {}))
+    pngs = [p for p in _pngs(manifest.get("analysis", {})) if p != manifest.get("analysis", {}).get("measurements_png")]
     h.append("<h2>Analyses</h2>")
     h.append(_analysis_table(root, manifest))
     if pngs:
@@ -341,6 +376,8 @@ def write_report(root: Path, manifest: dict[str, Any]) -> dict[str, Any]:
 
     h.append("<h2>Against the paper (SPEC section 6)</h2>")
     h.append(_paper_table(manifest))
+    h.append("<h2>Model against measurements</h2>")
+    h.append(_measurements_section(root, manifest))
     h.append("<h2>Mass budget</h2>")
     h.append(_mass_table(manifest))
 

@@ -4,6 +4,7 @@
 ``robot/bvsr.xml``             MJCF, one bending joint per joint, one actuator per SOA
 ``robot/bvsr_segments.xml``    MJCF, the joints of a segment share theta and phi, one actuator per line
 ``robot/scene.xml``, ``robot/scene_segments.xml``   menagerie-style scenes that include them
+``robot/scene_cart.xml``       the per-segment tail on the paper's hinged cart (Eq 20-22's experiment)
 ``robot/meshes/*.stl``         visual meshes in metres, in their link's frame
 """
 
@@ -14,13 +15,15 @@ from pathlib import Path
 from typing import Any
 
 from ..assembly.robot import RobotModel, chord_joint_value
-from .mjcf import mjcf_tree, scene_tree, write_mjcf
+from .mjcf import cart_scene_tree, mjcf_tree, scene_tree, write_mjcf
 from .robot_meshes import write_robot_meshes
 from .urdf import write_urdf
 
 
-def write_robot(robot: RobotModel, root: Path, progress: Callable[[str], None]) -> dict[str, Any]:
-    """Write the robot model's URDF, MJCF and scenes; returns the manifest's ``robot`` section."""
+def write_robot(robot: RobotModel, root: Path, progress: Callable[[str], None], cart=None) -> dict[str, Any]:
+    """Write the robot model's URDF, MJCF and scenes (with ``cart``, a
+    :class:`~bvsr_cad.parameters.tables.CartPlatform`, also ``scene_cart.xml``); returns the
+    manifest's ``robot`` section."""
     folder = root / "robot"
     folder.mkdir(exist_ok=True)  # the fabrication package may have put the rigid twin there
     progress("robot meshes")
@@ -33,6 +36,8 @@ def write_robot(robot: RobotModel, root: Path, progress: Callable[[str], None]) 
         tree, facts[stem] = mjcf_tree(robot, mesh_files, per_segment)
         write_mjcf(folder / f"{stem}.xml", tree)
         write_mjcf(folder / scene, scene_tree(f"{stem}.xml", stem))
+    if cart is not None:
+        write_mjcf(folder / "scene_cart.xml", cart_scene_tree(robot, mesh_files, cart))
     urdf_chord_err = max(float(-chord_joint_value(b.theta_max_rad, b.arc_length_m)) for b in robot.bending)
     links = []
     for link in robot.links.values():
@@ -45,8 +50,10 @@ def write_robot(robot: RobotModel, root: Path, progress: Callable[[str], None]) 
         })
     return {"robot": {
         "urdf": f"robot/{name}.urdf", "mjcf": "robot/scene.xml", "mjcf_model": f"robot/{name}.xml",
-        "mjcf_per_segment": "robot/scene_segments.xml", "mjcf_per_segment_model": f"robot/{name}_segments.xml",
-        "units": "SI (m, kg, s, rad); actuator control: gauge pressure in Pa",
+        "mjcf_per_segment": "robot/scene_segments.xml", "mjcf_cart": None if cart is None else "robot/scene_cart.xml", "mjcf_per_segment_model": f"robot/{name}_segments.xml",
+        "units": "SI (m, kg, s, rad); actuator control: commanded gauge pressure in Pa (the chamber "
+                 "pressure lags it by supply_lag_s)",
+        "supply_lag_s": robot.supply_lag_s,
         "mass_kg": robot.mass_kg,
         "virtual_link_mass_kg": sum(l.inertial.mass_kg for l in robot.links.values() if l.virtual),
         "bending_joints": [{"name": b.name, "arc_length_m": b.arc_length_m, "urdf_joints": list(b.urdf_joints),

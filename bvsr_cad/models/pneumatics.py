@@ -153,8 +153,10 @@ def fill_curve(supply: LineSupply, seconds: float, samples: int = 2000) -> tuple
 
 
 def first_order_time_constant_s(supply: LineSupply) -> float:
-    """The lag tau of p' = (P0 - p) / tau with the same 63 % rise time as the supply filling
-    its SOAs at rest (the MJCF actuators' ``dynprm``)."""
+    """The lag tau of p' = (P0 - p) / tau fitted to the supply filling its SOAs at rest: least squares
+    of P0 (1 - exp(-t / tau)) against the fill curve up to 95 % of P0 (the MJCF actuators' ``dynprm``)."""
+    from scipy.optimize import minimize_scalar
+
     p0 = supply.source_pa_abs - supply.atmospheric_pa
     horizon = 0.05
     for _ in range(12):
@@ -162,8 +164,15 @@ def first_order_time_constant_s(supply: LineSupply) -> float:
         if p[-1] >= 0.95 * p0:
             break
         horizon *= 2
-    idx = int(np.argmax(p >= (1 - math.exp(-1)) * p0))
-    return float(t[idx])
+    end = int(np.argmax(p >= 0.95 * p0)) + 1 if p[-1] >= 0.95 * p0 else p.size
+    t, p = t[:end], p[:end]
+    t63 = float(t[int(np.argmax(p >= (1 - math.exp(-1)) * p0))])
+
+    def rms(tau: float) -> float:
+        return float(np.sqrt(np.mean((p0 * (1 - np.exp(-t / tau)) - p) ** 2)))
+
+    return float(minimize_scalar(rms, bounds=(0.3 * t63, 3.0 * t63), method="bounded",
+                                 options={"xatol": 1e-4 * t63}).x)
 
 
 __all__ = ["Valve", "LineSupply", "iso6358_mass_flow_kg_s", "fill_curve", "first_order_time_constant_s",

@@ -338,6 +338,7 @@ class Calibration:
     """What `bvsr calibrate` fitted, and to which data (empty: the tables' values hold)."""
 
     data_file: str
+    measured_tail: str
     data_sha256: str
     rms_rel_fit: float
     rms_rel_holdout: float

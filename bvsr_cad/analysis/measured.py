@@ -1,0 +1,83 @@
+"""The model against the measurements its calibration was fitted to (the report's section).
+
+A parameter file calibrated by `bvsr calibrate` names its data file
+(``calibration.data_file``, relative to the parameter file) and the tail the
+data measured (``calibration.measured_tail``). For that tail the build
+predicts every data row twice, with the tables' values and with the fitted
+ones, exactly as `bvsr calibrate` does (:func:`bvsr_cad.analysis.calibrate.compare_rows`);
+a tail that inherits the values (BVSR_L takes BVSR's) or whose data file is
+missing or changed gets a note instead of rows.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..assembly.build import Assembly
+from ..parameters.measurements import MeasurementError, data_sha256, load_measurements
+from .calibrate import compare_rows, rms_relative, uncalibrated
+from .predict import Predictor
+
+#: A row "lands" when the calibrated prediction is within this relative error of the reported figure.
+LANDS_WITHIN_REL = 0.30
+
+
+@dataclass(frozen=True)
+class MeasuredComparison:
+    data_file: str
+    note: str  # why there are no rows, or what the rows are
+    rows: list[dict] = field(default_factory=list)
+    fitted: dict[str, float] = field(default_factory=dict)
+
+    def rms(self, role: str, key: str) -> float:
+        return rms_relative(self.rows, role, key)
+
+    def landed(self, role: str = "holdout") -> tuple[int, int]:
+        """(rows of ``role`` within :data:`LANDS_WITHIN_REL`, rows of ``role``)."""
+        rows = [r for r in self.rows if r["role"] == role]
+        return sum(abs(r["rel_calibrated"]) <= LANDS_WITHIN_REL for r in rows), len(rows)
+
+    def to_json(self) -> dict:
+        out = {"data_file": self.data_file, "note": self.note, "fitted": self.fitted, "rows": self.rows,
+               "lands_within_rel": LANDS_WITHIN_REL}
+        if self.rows:
+            out |= {f"rms_rel_{role}{suffix}": self.rms(role, key) for role in ("fit", "holdout")
+                    for suffix, key in (("", "rel_calibrated"), ("_uncalibrated", "rel_uncalibrated"))}
+            out["holdout_landed"] = list(self.landed("holdout"))
+        return out
+
+
+def compare_measurements(asm: Assembly, params_path: str | Path | None,
+                         progress: Callable[[str], None] | None = None) -> MeasuredComparison | None:
+    """The comparison for ``asm``'s spec, or None when the file carries no calibration."""
+    spec = asm.spec
+    cal = spec.calibration
+    if not cal.fitted:
+        return None
+    fitted = dict(cal.fitted)
+    if cal.measured_tail and cal.measured_tail != spec.name:
+        return MeasuredComparison(cal.data_file, f"fitted values inherited from the {cal.measured_tail} tail's "
+                                  "calibration; its report compares every row", fitted=fitted)
+    if not cal.data_file or params_path is None:
+        return MeasuredComparison(cal.data_file, "the calibration names no data file", fitted=fitted)
+    data = (Path(params_path).resolve().parent / cal.data_file)
+    if not data.is_file():
+        return MeasuredComparison(cal.data_file, f"data file {data} not found (it is resolved relative to the "
+                                  "parameter file)", fitted=fitted)
+    if cal.data_sha256 and data_sha256(data) != cal.data_sha256:
+        return MeasuredComparison(cal.data_file, "the data file changed since the calibration (SHA-256 differs): "
+                                  "run `bvsr calibrate` again", fitted=fitted)
+    try:
+        rows = load_measurements(data)
+    except MeasurementError as exc:
+        return MeasuredComparison(cal.data_file, f"data file unreadable: {exc}", fitted=fitted)
+    pred = Predictor(asm, spec)
+    table = compare_rows(pred.with_spec(uncalibrated(spec)), pred, rows,
+                         None if progress is None else (lambda m: progress(f"measurements: {m}")))
+    return MeasuredComparison(cal.data_file, f"every row of {cal.data_file}, predicted with the tables' values and "
+                              "with the fitted ones", table, fitted)
+
+
+__all__ = ["MeasuredComparison", "compare_measurements", "LANDS_WITHIN_REL"]

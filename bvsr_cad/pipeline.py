@@ -116,7 +116,10 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         molds = write_molds(asm, mold_set, tmp, say)
         say("rigid comparison tail")
         pieces = build_rigid_twin(asm)
-        fabrication = write_fabrication(asm, pieces, rigid_robot_model(asm, pieces), tmp, manifest | molds, say)
+        mold_files = {e["name"]: e["files"] for e in molds["molds"]["parts"]}
+        fabrication = write_fabrication(asm, pieces, rigid_robot_model(asm, pieces), mold_set, files, mold_files,
+                                        tmp, say)
+        manifest["parts"] += fabrication.pop("rigid_parts")
         results = result_or(analyses, lambda: run_analyses(asm, say, str(params)), say, "analyses")
         manifest.update(write_analyses(results, tmp, spec.name))
         say("robot model (B-rep inertials)")

@@ -1,7 +1,9 @@
 """Bill of materials: ``bom.csv`` and ``bom.md`` with a quantity column.
 
-Every row is computed from the assembly and the manifest: parts with their
-counts, materials, processes and masses; rods with cut lengths; fasteners by
+Every row is computed from the typed products (the assembly, the rigid
+twin's pieces, the mold set; quantities from
+:func:`bvsr_cad.assembly.fabrication.made_items`, the list the print jobs
+read too): parts with their counts, materials, processes and masses; rods with cut lengths; fasteners by
 standard designation; pneumatic items with the tube length of every line
 from the panel layout (the tube rings) and the tail length; valves per the
 paper's system (pressure and vacuum per line); totals per product.
@@ -11,14 +13,19 @@ from __future__ import annotations
 
 import csv
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 from ..assembly.build import Assembly
+from ..assembly.fabrication import made_items
 from ..assembly.pneumatic_lines import line_tube_lengths_mm, tube_routes_mm
 from ..assembly.products import RIGID_MATERIAL
 from ..parameters.standard_parts import metric, size_for_clearance_hole, size_for_tap_drill
+from ..parameters.twin import rigid_joining
+from ..parts.mold import MoldSet
+from ..parts.rigid_tail import RigidPiece
 
 #: Preferred lengths of ISO 4762 socket head cap screws, mm.
 ISO_4762_LENGTHS_MM = (6, 8, 10, 12, 16, 20, 25, 30, 35, 40, 45, 50, 55, 60, 65, 70, 80, 90, 100)
@@ -42,8 +49,8 @@ class BomRow:
     notes: str = ""
 
 
-def _mold_bolt_length_mm(manifest: dict[str, Any], thread: float) -> tuple[int, float]:
-    block = manifest.get("molds", {}).get("info", {}).get("block_mm")
+def _mold_bolt_length_mm(mold_set: MoldSet, thread: float) -> tuple[int, float]:
+    block = mold_set.info.get("block_mm")
     grip = float(block[2]) if block else 0.0
     need = grip + metric(thread).nut_height_mm + 1.0
     for length in ISO_4762_LENGTHS_MM:
@@ -52,29 +59,30 @@ def _mold_bolt_length_mm(manifest: dict[str, Any], thread: float) -> tuple[int, 
     return int(math.ceil(need / 5.0) * 5), grip
 
 
-def bom_rows(asm: Assembly, manifest: dict[str, Any]) -> list[BomRow]:
-    """Every BOM row of an export (parts, rods, fasteners, pneumatics, totals)."""
+def bom_rows(asm: Assembly, pieces: Sequence[RigidPiece] = (), mold_set: MoldSet | None = None) -> list[BomRow]:
+    """Every BOM row of the three products (parts, rods, fasteners, pneumatics, totals)."""
     spec = asm.spec
     fp = spec.fabrication_package
+    items = made_items(asm, pieces, mold_set)
     rows: list[BomRow] = []
     bvsr_mass = 0.0
-    for p in manifest["parts"]:
-        if p["kind"] == "rigid_tail":
-            continue
-        m_each = float(p["mass_g"])
-        bvsr_mass += p["count"] * m_each
-        if p["kind"] == "rod":
-            info = p["info"]
-            rows.append(BomRow("BVSR", "rod", p["name"], f"{p['material_name']} rod, D {info['diameter_mm']:g} mm, "
-                               f"cut to {info['cut_length_mm']:.2f} mm", p["count"], "pcs", p["material"], "cut",
-                               m_each, p["count"] * m_each,
+    for it in (i for i in items if i.product == "BVSR"):
+        part = asm.parts[it.source]
+        bvsr_mass += it.quantity * it.mass_each_g
+        if it.kind == "rod":
+            info = part.info
+            rows.append(BomRow("BVSR", "rod", it.label, f"{spec.material(it.material).name} rod, D "
+                               f"{info['diameter_mm']:g} mm, cut to {info['cut_length_mm']:.2f} mm", it.quantity, "pcs",
+                               it.material, "cut", it.mass_each_g, it.quantity * it.mass_each_g,
                                "thread both ends to match the panel sockets" if spec.vertebra.socket == "threaded"
                                else "held by set screws"))
         else:
-            rows.append(BomRow("BVSR", "part", p["name"], p["kind"] + (f" ({p['info']['panel_kind']})"
-                                                                         if p["kind"] == "panel" else ""),
-                               p["count"], "pcs", p["material"], p["process"], m_each, p["count"] * m_each,
-                               ", ".join(p["instances"][:3]) + (" ..." if len(p["instances"]) > 3 else "")))
+            names = [i.name for i in asm.instances_of(it.source)]
+            rows.append(BomRow("BVSR", "part", it.label, it.kind + (f" ({part.info['panel_kind']})"
+                                                                     if it.kind == "panel" else ""),
+                               it.quantity, "pcs", it.material, it.process, it.mass_each_g,
+                               it.quantity * it.mass_each_g,
+                               ", ".join(names[:3]) + (" ..." if len(names) > 3 else "")))
 
     # Fasteners of the BVSR, counted from the panel layouts (what the panels are built with).
     roles: dict[str, int] = {}
@@ -124,41 +132,36 @@ def bom_rows(asm: Assembly, manifest: dict[str, Any]) -> list[BomRow]:
                        f"{fp.valves_per_line} per line x {lines} lines (paper: 20 valves for 10 channels)"))
 
     # Rigid comparison tail.
-    rt = manifest.get("rigid_tail")
     rigid_mass = 0.0
-    if rt:
-        for p in manifest["parts"]:
-            if p["kind"] == "rigid_tail":
-                rigid_mass += p["mass_g"]
-                size = p["info"]["size_mm"]
-                rows.append(BomRow("rigid tail", "part", p["name"], f"rigid tail piece {size[0]:.1f} x {size[1]:.1f} x "
-                                   f"{size[2]:.1f} mm", 1, "pcs", RIGID_MATERIAL, "FDM", p["mass_g"], p["mass_g"],
-                                   "mass at solid density; infill lowers it"))
-        j = rt["joining"]
-        rows.append(BomRow("rigid tail", "fastener", "dowel pin", j["pins"]["designation"], j["pins"]["count"],
+    if pieces:
+        size = {p.name: p.size_mm for p in pieces}
+        for it in (i for i in items if i.product == "rigid tail"):
+            rigid_mass += it.mass_each_g
+            sx, sy, sz = size[it.source]
+            rows.append(BomRow("rigid tail", "part", it.label, f"rigid tail piece {sx:.1f} x {sy:.1f} x {sz:.1f} mm",
+                               it.quantity, "pcs", it.material, it.process, it.mass_each_g, it.mass_each_g,
+                               "mass at solid density; infill lowers it"))
+        j = rigid_joining(spec)
+        rows.append(BomRow("rigid tail", "fastener", "dowel pin", j.pin_designation, j.pin_count,
                            "pcs", "steel", "bought", None, None, "one per SOA column end"))
-        rows.append(BomRow("rigid tail", "fastener", "tie rod", f"{j['tie_rod']['designation']} threaded rod, cut to "
-                           f"{j['tie_rod']['cut_length_mm']:.1f} mm", 1, "pcs", "steel", "cut", None, None,
+        rows.append(BomRow("rigid tail", "fastener", "tie rod", f"{j.tie_rod_designation} threaded rod, cut to "
+                           f"{j.tie_rod_cut_length_mm:.1f} mm", 1, "pcs", "steel", "cut", None, None,
                            "through the rod column, clamps every piece"))
-        rows.append(BomRow("rigid tail", "fastener", "tie rod nut", j["nuts"]["designation"] + " hex nut",
-                           j["nuts"]["count"], "pcs", "steel", "bought", None, None, "in the root and tip nut pockets"))
+        rows.append(BomRow("rigid tail", "fastener", "tie rod nut", j.nut_designation + " hex nut",
+                           j.nut_count, "pcs", "steel", "bought", None, None, "in the root and tip nut pockets"))
 
     # Molds.
-    molds = manifest.get("molds", {})
     mold_mass = 0.0
-    soa_count = sum(p["count"] for p in manifest["parts"] if p["kind"] == "soa")
-    for mp in molds.get("parts", []):
-        sac = bool(mp.get("sacrificial"))
-        mat = fp.core_material if sac else fp.mold_material
-        qty = soa_count if sac else fp.mold_sets
-        m_each = float(mp["volume_mm3"]) * spec.material(mat).density_g_cm3 / 1000.0
-        mold_mass += qty * m_each
-        rows.append(BomRow("molds", "part", f"mold_{mp['name']}", "sacrificial core (dissolve after casting)" if sac
-                           else f"mold {mp['role']}", qty, "pcs", mat, "FDM", m_each, qty * m_each,
+    for it in (i for i in items if i.product == "molds"):
+        sac = it.kind == "mold_core"
+        mold_mass += it.quantity * it.mass_each_g
+        rows.append(BomRow("molds", "part", it.label, "sacrificial core (dissolve after casting)" if sac
+                           else f"mold {mold_set.parts[it.source].role}", it.quantity, "pcs", it.material, "FDM",
+                           it.mass_each_g, it.quantity * it.mass_each_g,
                            "one per SOA cast" if sac else f"{fp.mold_sets} mold sets"))
-    if molds.get("parts"):
+    if mold_set is not None and mold_set.parts:
         thread = size_for_clearance_hole(spec.casting.bolt_hole_diameter_mm).diameter_mm
-        length, grip = _mold_bolt_length_mm(manifest, thread)
+        length, grip = _mold_bolt_length_mm(mold_set, thread)
         rows.append(BomRow("molds", "fastener", "mold bolt", f"ISO 4762 M{thread:g} x {length}", 4 * fp.mold_sets,
                            "pcs", "steel", "bought", None, None, f"four per set through lid, halves and plate "
                            f"(grip {grip:.1f} mm)"))
@@ -168,10 +171,10 @@ def bom_rows(asm: Assembly, manifest: dict[str, Any]) -> list[BomRow]:
     # Totals.
     rows.append(BomRow("BVSR", "total", "BVSR modelled mass", "panels + SOAs + rods", 1, "", "", "", bvsr_mass,
                        bvsr_mass, "fittings, tubes, adhesive and inserts not weighed"))
-    if rt:
+    if pieces:
         rows.append(BomRow("rigid tail", "total", "rigid tail mass", "all pieces, solid PLA", 1, "", RIGID_MATERIAL, "FDM",
                            rigid_mass, rigid_mass, "infill lowers it"))
-    if molds.get("parts"):
+    if mold_set is not None and mold_set.parts:
         rows.append(BomRow("molds", "total", "mold material", "rigid sets + cores", 1, "", "", "FDM", mold_mass,
                            mold_mass, ""))
     rows.append(BomRow("pneumatics", "total", "tube", f"PU tube {d_tube:g} mm, all lines", round(total_tube, 1),

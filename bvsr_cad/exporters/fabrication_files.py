@@ -29,9 +29,10 @@ import trimesh
 from .. import units
 from ..colors import rgb, rgba
 from ..assembly.build import Assembly
-from ..parameters.layout import N_SOA
+from ..assembly.fabrication import MadeItem, made_items
 from ..assembly.products import RIGID_MATERIAL, RigidRobot, piece_transform_mm
-from ..parameters.twin import nut_pocket_depth_mm, pin_hole_mm, tie_rod_hole_mm, tie_rod_length_mm
+from ..parameters.twin import rigid_joining
+from ..parts.mold import MoldSet
 from ..parts.rigid_tail import KEPT_ROLES, RigidPiece
 from .bom import bom_rows, write_bom
 from .cad import write_step, write_stl
@@ -177,30 +178,17 @@ def _layout_3mf(items: list[tuple[str, Path]], path: Path) -> None:
     path.write_bytes(scene.export(file_type="3mf"))
 
 
-def _print_jobs(asm: Assembly, root: Path, manifest: dict[str, Any], rigid: list[dict[str, Any]]) -> list[dict]:
+def _print_jobs(asm: Assembly, root: Path, items: list[MadeItem], stl_of: dict[str, str]) -> list[dict]:
+    """One job per (process, material) of the printed items (MJF and FDM); ``stl_of`` maps an item's
+    label to the STL its writer wrote."""
     spec = asm.spec
     fp = spec.fabrication_package
     jobs: dict[tuple[str, str], list[dict[str, Any]]] = {}
-
-    def add(process: str, material: str, name: str, kind: str, stl: str, quantity: int, volume_mm3: float) -> None:
-        dens = spec.material(material).density_g_cm3
-        jobs.setdefault((process, material), []).append(
-            {"part": name, "kind": kind, "source": stl, "quantity": quantity, "volume_mm3": volume_mm3,
-             "mass_g": units.mass_g(volume_mm3, dens)})
-
-    for p in manifest["parts"]:
-        if p["process"] == "MJF":
-            add("MJF", p["material"], p["name"], p["kind"], p["files"]["stl"], p["count"], p["volume_mm3"])
-    for p in rigid:
-        add("FDM", RIGID_MATERIAL, p["name"], p["kind"], p["files"]["stl"], p["count"], p["volume_mm3"])
-    soa_count = sum(p["count"] for p in manifest["parts"] if p["kind"] == "soa")
-    for mp in manifest.get("molds", {}).get("parts", []):
-        if mp.get("sacrificial"):
-            add("FDM", fp.core_material, f"mold_{mp['name']}", "mold_core", mp["files"]["stl"], soa_count,
-                mp["volume_mm3"])
-        else:
-            add("FDM", fp.mold_material, f"mold_{mp['name']}", "mold", mp["files"]["stl"], fp.mold_sets,
-                mp["volume_mm3"])
+    for it in items:
+        if it.process in ("MJF", "FDM"):
+            jobs.setdefault((it.process, it.material), []).append(
+                {"part": it.label, "kind": it.kind, "source": stl_of[it.label], "quantity": it.quantity,
+                 "volume_mm3": it.volume_mm3, "mass_g": it.mass_each_g})
     out = []
     volumes = {"FDM": (fp.printer_x_mm, fp.printer_y_mm, fp.printer_z_mm),
                "MJF": (fp.mjf_x_mm, fp.mjf_y_mm, fp.mjf_z_mm)}
@@ -230,10 +218,13 @@ def _print_jobs(asm: Assembly, root: Path, manifest: dict[str, Any], rigid: list
     return out
 
 
-def write_fabrication(asm: Assembly, pieces: list[RigidPiece], rigid_robot: RigidRobot, root: Path,
-                      manifest: dict[str, Any], progress: Callable[[str], None]) -> dict[str, Any]:
+def write_fabrication(asm: Assembly, pieces: list[RigidPiece], rigid_robot: RigidRobot, mold_set: MoldSet | None,
+                      part_files: dict[str, dict[str, str]], mold_files: dict[str, dict[str, str]], root: Path,
+                      progress: Callable[[str], None]) -> dict[str, Any]:
     """Write the rigid tail (built by :mod:`bvsr_cad.assembly.products`), print files and the BOM
-    under ``root``; returns keys to merge into the manifest."""
+    under ``root``. ``part_files`` and ``mold_files`` name the files the part and mold writers wrote
+    (by part and mold-part name). Returns keys to merge into the manifest (``rigid_parts``: the
+    twin's entries of the manifest's ``parts``)."""
     spec = asm.spec
     fp = spec.fabrication_package
     progress("rigid comparison tail (PLA pieces)")
@@ -242,18 +233,23 @@ def write_fabrication(asm: Assembly, pieces: list[RigidPiece], rigid_robot: Rigi
     progress("rigid tail robot description")
     robot_rigid = _rigid_robot(rigid_robot, root, visual)
     progress("print files (STL, 3MF per process and material)")
-    jobs = _print_jobs(asm, root, manifest, rigid)
+    items = made_items(asm, pieces, mold_set)
+    stl_of = {name: f["stl"] for name, f in part_files.items()}
+    stl_of |= {p["name"]: p["files"]["stl"] for p in rigid}
+    stl_of |= {f"mold_{name}": f["stl"] for name, f in mold_files.items()}
+    jobs = _print_jobs(asm, root, items, stl_of)
+    joining = rigid_joining(spec)
     rigid_section = {
         "pieces": [p["name"] for p in rigid],
         "printer_volume_mm": [fp.printer_x_mm, fp.printer_y_mm, fp.printer_z_mm],
         "split": "one piece per joint at each panel's lower face (panel on the bed, SOA columns and rod on it); "
                  "the tip panel alone",
-        "joining": {"pins": {"designation": f"ISO 2338 {fp.pin_diameter_mm:g} m6 x {fp.pin_length_mm:g}",
-                             "count": N_SOA * (spec.panels - 1), "hole_mm": pin_hole_mm(spec)},
-                    "tie_rod": {"designation": f"DIN 976-1 M{fp.tie_rod_thread:g}",
-                                "cut_length_mm": tie_rod_length_mm(spec), "hole_mm": tie_rod_hole_mm(spec)},
-                    "nuts": {"designation": f"ISO 4032 M{fp.tie_rod_thread:g}", "count": 2,
-                             "pocket_depth_mm": nut_pocket_depth_mm(spec)}},
+        "joining": {"pins": {"designation": joining.pin_designation, "count": joining.pin_count,
+                             "hole_mm": joining.pin_hole_mm},
+                    "tie_rod": {"designation": joining.tie_rod_designation,
+                                "cut_length_mm": joining.tie_rod_cut_length_mm, "hole_mm": joining.tie_rod_hole_mm},
+                    "nuts": {"designation": joining.nut_designation, "count": joining.nut_count,
+                             "pocket_depth_mm": joining.nut_pocket_depth_mm}},
         "simplified": "SOA pockets, air channels, fitting and tube ports, feed passages and the rod socket are "
                       "filled; lightening holes, tube pass-throughs and mount/payload insert bores are kept",
         "envelope_tolerance_mm": fp.envelope_tolerance_mm,
@@ -262,7 +258,7 @@ def write_fabrication(asm: Assembly, pieces: list[RigidPiece], rigid_robot: Rigi
         "robot": robot_rigid,
     }
     fragment: dict[str, Any] = {
-        "parts": list(manifest["parts"]) + rigid,
+        "rigid_parts": rigid,
         "rigid_tail": rigid_section,
         "print_jobs": jobs,
         "fabrication": {"max_overhang_deg": fp.max_overhang_deg, "max_bridge_mm": fp.max_bridge_mm,
@@ -277,7 +273,6 @@ def write_fabrication(asm: Assembly, pieces: list[RigidPiece], rigid_robot: Rigi
                         "slicer_timeout_s": fp.slicer_timeout_s},
     }
     progress("bill of materials")
-    merged = {**manifest, **fragment}
-    rows = bom_rows(asm, merged)
+    rows = bom_rows(asm, pieces, mold_set)
     fragment["bom"] = write_bom(root, rows)
     return fragment

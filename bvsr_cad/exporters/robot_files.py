@@ -6,6 +6,7 @@
 ``robot/scene.xml``, ``robot/scene_segments.xml``   menagerie-style scenes that include them
 ``robot/scene_cart.xml``       the per-segment tail on the paper's hinged cart (Eq 20-22's experiment)
 ``robot/meshes/*.stl``         visual meshes in metres, in their link's frame
+``robot/ros2/<name>_description/``  the URDF and meshes as a ROS 2 (ament) package with a display launch
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from typing import Any
 from ..assembly.robot import RobotModel, chord_joint_value
 from .mjcf import cart_scene_tree, mjcf_tree, scene_tree, write_mjcf
 from .robot_meshes import write_robot_meshes
+from .ros2_package import write_ros2_package
 from .urdf import write_urdf
 
 
@@ -30,6 +32,8 @@ def write_robot(robot: RobotModel, root: Path, progress: Callable[[str], None], 
     mesh_files = write_robot_meshes(robot, folder / "meshes")
     name = robot.name
     write_urdf(robot, folder / f"{name}.urdf", mesh_files)
+    progress("ROS 2 description package")
+    ros2 = write_ros2_package(folder / f"{name}.urdf", folder / "meshes", folder / "ros2", name)
     act = robot.actuation
     facts = {}
     for per_segment, stem, scene in ((False, name, "scene.xml"), (True, f"{name}_segments", "scene_segments.xml")):
@@ -50,6 +54,7 @@ def write_robot(robot: RobotModel, root: Path, progress: Callable[[str], None], 
         })
     return {"robot": {
         "urdf": f"robot/{name}.urdf", "mjcf": "robot/scene.xml", "mjcf_model": f"robot/{name}.xml",
+        "ros2_package": {"path": f"robot/ros2/{ros2['name']}", "urdf": ros2["urdf"], "meshes": ros2["meshes"]},
         "mjcf_per_segment": "robot/scene_segments.xml", "mjcf_cart": None if cart is None else "robot/scene_cart.xml", "mjcf_per_segment_model": f"robot/{name}_segments.xml",
         "units": "SI (m, kg, s, rad); actuator control: commanded gauge pressure in Pa (the chamber "
                  "pressure lags it by supply_lag_s)",

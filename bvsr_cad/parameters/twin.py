@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .layout import PanelLayout, half_angle_rad, panel_layout, rounded_square_support
+from .layout import N_SOA, PanelLayout, half_angle_rad, panel_layout, rounded_square_support
 from .standard_parts import metric
 from .tables import FabricationPackage, TailSpec
 
@@ -52,6 +52,29 @@ def nut_pocket_depth_mm(spec: TailSpec) -> float:
 def tie_rod_length_mm(spec: TailSpec) -> float:
     """Cut length of the tie rod: through the tail, nut pockets at both ends, flush with the nuts' outer faces."""
     return spec.length_mm - 2.0 * nut_pocket_depth_mm(spec) + 2.0 * metric(spec.fabrication_package.tie_rod_thread).nut_height_mm
+
+
+@dataclass(frozen=True)
+class RigidJoining:
+    """The bought hardware that joins the rigid twin's pieces (ISO 2338 pins, DIN 976-1 tie rod, ISO 4032 nuts)."""
+
+    pin_designation: str
+    pin_count: int
+    pin_hole_mm: float
+    tie_rod_designation: str
+    tie_rod_cut_length_mm: float
+    tie_rod_hole_mm: float
+    nut_designation: str
+    nut_count: int
+    nut_pocket_depth_mm: float
+
+
+def rigid_joining(spec: TailSpec) -> RigidJoining:
+    """One dowel pin per SOA column end (N_SOA per joint), one tie rod and a nut at each end."""
+    fp = spec.fabrication_package
+    return RigidJoining(f"ISO 2338 {fp.pin_diameter_mm:g} m6 x {fp.pin_length_mm:g}", N_SOA * (spec.panels - 1),
+                        pin_hole_mm(spec), f"DIN 976-1 M{fp.tie_rod_thread:g}", tie_rod_length_mm(spec),
+                        tie_rod_hole_mm(spec), f"ISO 4032 M{fp.tie_rod_thread:g}", 2, nut_pocket_depth_mm(spec))
 
 
 def pin_depths_mm(spec: TailSpec, panel_thickness_mm: float) -> tuple[float, float]:

@@ -6,11 +6,13 @@ off-screen with pyvista (VTK's OSMesa/EGL build needs no display); if
 rendering fails the report says so in place of the pictures instead of
 failing the build.
 
-Sections: summary, the assembly and every part (print orientation), the
-rigid comparison tail, the mold set, the analysis plots the manifest lists,
-the paper comparison of SPEC section 6 (computed beside reported, with the
-difference; figures the build does not model are marked so), the mass
-budget, print jobs and BOM totals, and the table of checks.
+Sections: summary, the interactive 3D view (when the manifest has a
+``viewer``: :mod:`bvsr_cad.exporters.viewer`), the assembly and every part
+(print orientation), the rigid comparison tail, the mold set, the analysis
+plots the manifest lists, the paper comparison of SPEC section 6 (computed
+beside reported, with the difference; figures the build does not model are
+marked so), the mass budget, print jobs and BOM totals, and the table of
+checks.
 """
 
 from __future__ import annotations
@@ -293,6 +295,43 @@ def _checks_table(checks: list[dict[str, Any]]) -> str:
     return "\n".join(rows)
 
 
+#: The viewer section's style (self-contained: a page holding only the section looks the same).
+VIEWER_CSS = """
+.viewer-buttons button{font:inherit;margin:0 6px 6px 0;padding:4px 12px;border:1px solid #bbb;border-radius:6px;
+background:#f6f8fa;cursor:pointer}.viewer-buttons button.active{background:#0969da;color:#fff;border-color:#0969da}
+canvas.viewer{width:100%;height:560px;display:block;box-sizing:border-box;border:1px solid #ccc;border-radius:4px;
+touch-action:none;background:rgb(237,242,247)}.viewer-info{font-size:0.85em;margin:4px 0 0;min-height:2.6em}
+.viewer-info .swatch{display:inline-block;width:0.9em;height:0.9em;border:1px solid #999;margin:0 3px 0 8px;
+vertical-align:middle}
+"""
+
+
+def viewer_section(manifest: dict[str, Any]) -> str:
+    """The interactive 3D view (``manifest["viewer"]``, written by :mod:`bvsr_cad.exporters.viewer`): scene
+    buttons, a canvas and the viewer's script, all from the export folder; empty without a viewer."""
+    viewer = manifest.get("viewer")
+    if not viewer or not viewer.get("scenes"):
+        return ""
+    scenes = [{"name": s["name"], "title": s["title"], "file": s["file"]} for s in viewer["scenes"]]
+    config = {"canvas": "bvsr-viewer", "info": "bvsr-viewer-info", "buttons": "bvsr-viewer-buttons",
+              "scenes": scenes, "initial": scenes[0]["name"]}
+    mb = viewer.get("bytes", 0) / 1e6
+    buttons = "".join(f'<button type=button data-scene="{_e(s["name"])}">{_e(s["title"])}</button>'
+                      for s in scenes)
+    return "\n".join([
+        f"<style>{VIEWER_CSS}</style>",
+        "<h2>Interactive 3D view</h2>",
+        "<p class=muted>Drag to orbit, wheel to zoom, shift-drag or right-drag to pan, double-click to reset. "
+        f"Runs offline: the viewer (<code>{_e(viewer['script'])}</code>) and its scenes "
+        f"(<code>report/viewer_*.js</code>, {mb:.1f} MB) are part of this export.</p>",
+        f"<div class=viewer-buttons id=bvsr-viewer-buttons>{buttons}</div>",
+        "<canvas class=viewer id=bvsr-viewer></canvas><div class=viewer-info id=bvsr-viewer-info>"
+        "The 3D view needs JavaScript and WebGL.</div>",
+        f'<script src="{_e(viewer["script"])}"></script>',
+        "<script>BVSRViewer.start(" + json.dumps(config).replace("</", "<\\/") + ");</script>",
+    ])
+
+
 def write_report(root: Path, manifest: dict[str, Any]) -> dict[str, Any]:
     """Write ``report.html`` and its pictures (``report/``) under ``root``; returns the manifest's ``report``."""
     out = root / "report"
@@ -328,6 +367,8 @@ def write_report(root: Path, manifest: dict[str, Any]) -> dict[str, Any]:
              f"params sha256 <code>{_e(manifest['params_sha256'][:12])}</code>.</p>")
     for p in problems:
         h.append(f"<p class=fail>{_e(p)} (install the system GL libraries VTK needs, e.g. libgl1 / libosmesa6)</p>")
+
+    h.append(viewer_section(manifest))
 
     h.append("<h2>Assembly at rest</h2><div class=grid>")
     prev = manifest.get("previews", {})

@@ -57,17 +57,28 @@ def _print_results(results, as_json: bool, extra: dict | None = None) -> int:
 def cmd_build(args) -> int:
     from .pipeline import build_export
 
-    res = build_export(args.params, args.output, _progress(args.quiet))
+    res = build_export(args.params, args.output, _progress(args.quiet or args.json), use_cache=not args.no_cache)
     failed = [r for r in res.results if r.passed is False]
     summary = {"out": str(res.out_dir), "seconds": round(res.seconds, 2),
-               "passed": not failed, "failed_checks": [r.name for r in failed]}
+               "passed": not failed, "failed_checks": [r.name for r in failed], "stages": res.stages}
     if args.json:
         print(json.dumps(summary))
     else:
-        print(f"wrote {res.out_dir}/ in {res.seconds:.1f} s; {len(res.results)} checks, {len(failed)} failed")
+        reused = [s["stage"] for s in res.stages if s["status"] == "reused"]
+        print(f"wrote {res.out_dir}/ in {res.seconds:.1f} s; {len(res.results)} checks, {len(failed)} failed"
+              + (f"; reused from the cache: {', '.join(reused)}" if reused else ""))
         for r in failed:
             print(r.line())
     return EXIT_FAILED if failed else EXIT_OK
+
+
+def cmd_watch(args) -> int:
+    from .watch import watch
+
+    def say(msg: str) -> None:
+        print(msg, flush=True)
+
+    return watch(args.params, args.output, say, _progress(args.quiet))
 
 
 def cmd_check(args) -> int:
@@ -235,7 +246,8 @@ def cmd_clearance(args) -> int:
     pt = posed_tail(asm, say)
     say(f"clearance over {args.poses} workspace poses")
     res = clearance_over(pt, ws.w)
-    out = res.to_json() | {"required_mm": spec.analysis.min_clearance_mm}
+    out = res.to_json() | {"required_mm": spec.analysis.min_clearance_mm, "seconds": res.seconds,
+                           "poses_per_s": res.poses_per_s}
     ok = res.min_clearance_mm >= spec.analysis.min_clearance_mm
     print(json.dumps(out) if args.json else
           f"min clearance {res.min_clearance_mm:.4f} mm between {res.pair[0]} and {res.pair[1]} over "
@@ -254,7 +266,14 @@ def make_parser() -> argparse.ArgumentParser:
     b = sub.add_parser("build", parents=[common], help="build every part of a tail into an export folder")
     b.add_argument("params", nargs="?", default="params/bvsr.toml", help="parameter file (default params/bvsr.toml)")
     b.add_argument("-o", "--output", help="export folder (default exports/<name>/)")
+    b.add_argument("--no-cache", action="store_true",
+                   help="build every stage from scratch (the cache is $BVSR_CACHE/artifacts, default "
+                        "~/.cache/bvsr_cad/artifacts)")
     b.set_defaults(func=cmd_build)
+    w = sub.add_parser("watch", parents=[common], help="rebuild the export each time the parameter file is saved")
+    w.add_argument("params", help="parameter file")
+    w.add_argument("-o", "--output", help="export folder (default exports/<name>/)")
+    w.set_defaults(func=cmd_watch)
     c = sub.add_parser("check", parents=[common], help="run every check on an export folder")
     c.add_argument("export", help="export folder made by `bvsr build`")
     c.add_argument("--slice", action="store_true",

@@ -8,17 +8,22 @@ partial one.
 
 from __future__ import annotations
 
+import json
+import os
+import pickle
 import shutil
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
+from .analysis.poses import viewer_scenes
 from .analysis.run import run_analyses
 from .assembly.build import build_assembly
 from .assembly.products import build_mold_set, build_rigid_twin, rigid_robot_model
 from .assembly.robot import robot_model
+from .cache import ArtifactCache, copy_tree, spec_without, stage_key
 from .checks.result import CheckResult
 from .checks.run import run_checks
 from .exporters.analysis_files import write_analyses
@@ -27,8 +32,11 @@ from .exporters.manifest import manifest_dict, write_manifest
 from .exporters.mold_files import write_molds
 from .exporters.fabrication_files import write_fabrication
 from .exporters.render import render_previews
+from .checks.printability import environment_state
 from .exporters.report import write_report
+from .exporters.reproducible import make_reproducible
 from .exporters.robot_files import write_robot
+from .exporters.viewer import write_viewer
 from .parameters.load import load_spec, params_sha256
 from .worker import SecondProcess, result_or
 
@@ -44,6 +52,7 @@ class BuildResult:
     out_dir: Path
     results: list[CheckResult]
     seconds: float
+    stages: list[dict] = field(default_factory=list)  # {"stage", "status": reused|built, "seconds"}
 
 
 def _check_output(out_dir: Path) -> None:
@@ -55,7 +64,68 @@ def _check_output(out_dir: Path) -> None:
                               "refusing to replace it; choose another -o")
 
 
+#: Inside a build's temporary folder: the building process's PID and start time (PID reuse safe).
+OWNER_FILE = ".bvsr-build-owner"
+#: A replaced export is renamed away and deleted within seconds; one older than this was orphaned.
+ORPHAN_AGE_S = 60.0
+
+
+def _process_start(pid: int) -> str | None:
+    """The process's start time in clock ticks (Linux /proc), or None if there is no such process."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        if not Path("/proc/self/stat").exists():  # no /proc: fall back to a signal-0 probe
+            try:
+                os.kill(pid, 0)
+            except ProcessLookupError:
+                return None
+            except PermissionError:
+                return "?"
+            return "?"
+        return None
+    return stat.rsplit(")", 1)[1].split()[19]
+
+
+def _claim(tmp: Path) -> None:
+    pid = os.getpid()
+    (tmp / OWNER_FILE).write_text(f"{pid} {_process_start(pid)}\n")
+
+
+def _owner_alive(folder: Path) -> bool:
+    try:
+        pid_s, start = (folder / OWNER_FILE).read_text().split()
+    except (OSError, ValueError):
+        return time.time() - folder.stat().st_mtime < ORPHAN_AGE_S  # just created, not yet claimed
+    now = _process_start(int(pid_s))
+    return now is not None and (now == start or now == "?")
+
+
+def clean_leftovers(out_dir: Path) -> list[Path]:
+    """Remove what dead builds of ``out_dir`` left beside it: temporary folders whose building
+    process is gone (killed with SIGKILL, a power cut) and replaced exports never deleted. A live
+    build's folders are kept. Returns what was removed."""
+    removed = []
+    parent = out_dir.parent
+    if not parent.is_dir():
+        return removed
+    for folder in parent.glob(f".{out_dir.name}.tmp-*"):
+        if folder.is_dir() and not _owner_alive(folder):
+            shutil.rmtree(folder, ignore_errors=True)
+            removed.append(folder)
+    for folder in parent.glob(f".{out_dir.name}.old-*"):
+        try:
+            renamed_s = int(folder.name.rsplit("-", 1)[1]) / 1000.0  # _publish names it by the time, in ms
+        except ValueError:
+            continue
+        if folder.is_dir() and time.time() - renamed_s > ORPHAN_AGE_S:
+            shutil.rmtree(folder, ignore_errors=True)
+            removed.append(folder)
+    return removed
+
+
 def _publish(tmp: Path, out_dir: Path) -> None:
+    (tmp / OWNER_FILE).unlink(missing_ok=True)
     old = None
     if out_dir.exists():
         old = out_dir.with_name(f".{out_dir.name}.old-{int(time.time() * 1000)}")
@@ -70,9 +140,47 @@ def _publish(tmp: Path, out_dir: Path) -> None:
         shutil.rmtree(old, ignore_errors=True)
 
 
+#: What each cached stage does not read (``table`` or ``table.key``); everything else of the
+#: parameters is part of its key. The part files are geometry: no material property, no physics.
+PART_FILES_IGNORE = ("name", "materials", "use", "vertebra.material", "actuation", "analysis", "robot", "casting",
+                     "fabrication_package", "pneumatics", "cart", "calibration")
+#: The analyses read the whole tail but for its name, the robot description, the molds and the
+#: fabrication package (of which only the tube lengths, for the supply model).
+ANALYSES_IGNORE = ("name", "robot", "casting", "fabrication_package")
+
+
+@dataclass
+class StageLog:
+    """Per stage: reused from the cache or built, and the seconds it took (``bvsr build`` prints it)."""
+
+    say: Progress
+    stages: list[dict] = field(default_factory=list)
+
+    def record(self, stage: str, reused: bool, seconds: float) -> None:
+        self.stages.append({"stage": stage, "status": "reused" if reused else "built", "seconds": round(seconds, 3)})
+        self.say(f"stage {stage}: {'reused' if reused else 'built'} in {seconds:.2f} s")
+
+
+def _volatile(t0: float, log: StageLog) -> dict:
+    """The manifest's one place for what changes from build to build of the same file."""
+    return {"built_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "build_seconds": time.perf_counter() - t0,
+            "stages": log.stages}
+
+
+def _data_bytes(spec, params: Path) -> bytes:
+    """The calibration's data file (read by the measurement comparison), or nothing."""
+    if not spec.calibration.data_file:
+        return b""
+    path = params.resolve().parent / spec.calibration.data_file
+    return path.read_bytes() if path.is_file() else b""
+
+
 def build_export(params: str | Path, out_dir: str | Path | None = None,
-                 progress: Progress | None = None) -> BuildResult:
+                 progress: Progress | None = None, use_cache: bool = True) -> BuildResult:
     """Build every part of the tail described by ``params`` into ``out_dir``.
+
+    With ``use_cache`` the stages whose inputs are unchanged are taken from the artifact cache
+    (:mod:`bvsr_cad.cache`): the whole export, the analyses, the parts' files and previews.
 
     Raises:
         ParamError: the parameter file is unreadable or describes an impossible tail.
@@ -86,41 +194,100 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
     out = Path(out_dir) if out_dir is not None else Path("exports") / spec.name
     _check_output(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    say(f"building {spec.name}: {spec.segments} segments, {spec.joints} joints, {spec.panels} panels")
+    for folder in clean_leftovers(out):
+        say(f"removed {folder.name}: left by a build that did not finish")
+    cache = ArtifactCache() if use_cache else None
+    log = StageLog(say)
+    data = _data_bytes(spec, params)
+    export_key = stage_key("export", params=params.read_bytes(), data=data, environment=environment_state())
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
+    _claim(tmp)
     analyses = None
     try:
-        # The analyses (workspace, clearance, limits) need only the parameters: a second process
-        # runs them from the file while this one builds, exports and fabricates.
-        analyses = SecondProcess.start("bvsr_cad.analysis.run", [str(params.resolve()), params_sha256(params)],
-                                       tmp, say)
-        if analyses is not None:
-            say("analyses: started in a second process")
+        hit = cache.get(export_key) if cache else None
+        if hit is not None:
+            t = time.perf_counter()
+            copy_tree(hit, tmp)
+            manifest = json.loads((tmp / "manifest.json").read_text())
+            log.record("export", True, time.perf_counter() - t)
+            results = [CheckResult(**c) for c in manifest["checks"]]
+            manifest["volatile"] = _volatile(t0, log)
+            write_manifest(tmp, manifest)
+            _publish(tmp, out)
+            return BuildResult(out, results, time.perf_counter() - t0, log.stages)
+        say(f"building {spec.name}: {spec.segments} segments, {spec.joints} joints, {spec.panels} panels")
+        analyses_key = stage_key("analyses", spec=spec_without(spec, *ANALYSES_IGNORE), data=data,
+                                 tubes=(spec.fabrication_package.tube_lead_mm,
+                                        spec.fabrication_package.tube_bend_allowance))
+        cached_analyses = cache.get(analyses_key) if cache else None
+        t_analyses = time.perf_counter()
+        if cached_analyses is None:
+            # The analyses (workspace, clearance, limits) need only the parameters: a second process
+            # runs them from the file while this one builds, exports and fabricates.
+            analyses = SecondProcess.start("bvsr_cad.analysis.run", [str(params.resolve()), params_sha256(params)],
+                                           tmp, say)
+            if analyses is not None:
+                say("analyses: started in a second process")
+        t = time.perf_counter()
         asm = build_assembly(spec, say)
-        (tmp / "step").mkdir()
-        (tmp / "stl").mkdir()
-        files: dict[str, dict[str, str]] = {}
-        for name, part in asm.parts.items():
-            say(f"export {name} (STEP, STL)")
-            files[name] = {"step": f"step/{name}.step", "stl": f"stl/{name}.stl"}
-            write_part_step(part, tmp / files[name]["step"])
-            write_part_stl(part, tmp / files[name]["stl"])
-        say("export assembly STEP")
-        write_assembly_step(asm, tmp / "step" / "assembly.step")
+        log.record("assembly", False, time.perf_counter() - t)
+        t = time.perf_counter()
+        files: dict[str, dict[str, str]] = {name: {"step": f"step/{name}.step", "stl": f"stl/{name}.stl"}
+                                             for name in asm.parts}
+        part_key = stage_key("part_files", spec=spec_without(spec, *PART_FILES_IGNORE))
+        part_hit = cache.get(part_key) if cache else None
+        if part_hit is not None:
+            copy_tree(part_hit, tmp)
+            previews = json.loads((tmp / "previews.json").read_text())
+            (tmp / "previews.json").unlink()
+        else:
+            def write_parts(folder: Path) -> dict[str, str]:
+                (folder / "step").mkdir()
+                (folder / "stl").mkdir()
+                for name, part in asm.parts.items():
+                    say(f"export {name} (STEP, STL)")
+                    write_part_step(part, folder / files[name]["step"])
+                    write_part_stl(part, folder / files[name]["stl"])
+                say("export assembly STEP")
+                write_assembly_step(asm, folder / "step" / "assembly.step")
+                say("previews (off-screen renders)")
+                return render_previews(asm, folder)
+
+            if cache is not None:
+                def fill(folder: Path) -> None:
+                    (folder / "previews.json").write_text(json.dumps(write_parts(folder)))
+
+                copy_tree(cache.put(part_key, fill), tmp)
+                previews = json.loads((tmp / "previews.json").read_text())
+                (tmp / "previews.json").unlink()
+            else:
+                previews = write_parts(tmp)
+        log.record("part files and previews", part_hit is not None, time.perf_counter() - t)
         shutil.copyfile(params, tmp / "params.toml")
         manifest = manifest_dict(asm, params_sha256(params), files, "step/assembly.step")
-        say("previews (off-screen renders)")
-        manifest["previews"] = render_previews(asm, tmp)
+        manifest["previews"] = previews
+        t = time.perf_counter()
         say("SOA mold set")
         mold_set = build_mold_set(asm)
         molds = write_molds(asm, mold_set, tmp, say)
+        log.record("molds", False, time.perf_counter() - t)
+        t = time.perf_counter()
         say("rigid comparison tail")
         pieces = build_rigid_twin(asm)
         mold_files = {e["name"]: e["files"] for e in molds["molds"]["parts"]}
         fabrication = write_fabrication(asm, pieces, rigid_robot_model(asm, pieces), mold_set, files, mold_files,
                                         tmp, say)
         manifest["parts"] += fabrication.pop("rigid_parts")
-        results = result_or(analyses, lambda: run_analyses(asm, say, str(params)), say, "analyses")
+        log.record("rigid twin, print jobs, BOM", False, time.perf_counter() - t)
+        if cached_analyses is not None:
+            with (cached_analyses / "analyses.pkl").open("rb") as fh:
+                results = pickle.load(fh)
+        else:
+            results = result_or(analyses, lambda: run_analyses(asm, say, str(params)), say, "analyses")
+            if cache is not None:
+                cache.put(analyses_key, lambda folder: (folder / "analyses.pkl").write_bytes(pickle.dumps(results)))
+        log.record("analyses", cached_analyses is not None, time.perf_counter() - t_analyses)
+        t = time.perf_counter()
         manifest.update(write_analyses(results, tmp, spec.name))
         say("robot model (B-rep inertials)")
         robot = robot_model(asm, results.theta_max_per_joint())
@@ -128,17 +295,29 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         manifest.update(molds)
         manifest.update(fabrication)
         write_manifest(tmp, manifest)
+        make_reproducible(tmp)  # STEP and 3MF time stamps: the build time is in the manifest's volatile section
+        log.record("analysis files and robot descriptions", False, time.perf_counter() - t)
+        t = time.perf_counter()
         say("checks")
         results = run_checks(tmp, say)
         manifest["checks"] = [r.to_json() for r in results]
+        log.record("checks", False, time.perf_counter() - t)
+        t = time.perf_counter()
+        say("interactive 3D view")
+        manifest.update(write_viewer(tmp, viewer_scenes(asm, mold_set, pieces, progress=say)))
+        log.record("interactive 3D view", False, time.perf_counter() - t)
+        t = time.perf_counter()
         say("report")
         manifest.update(write_report(tmp, manifest))
-        manifest["build_seconds"] = time.perf_counter() - t0
+        log.record("report", False, time.perf_counter() - t)
+        manifest["volatile"] = _volatile(t0, log)
         write_manifest(tmp, manifest)
+        if cache is not None:
+            cache.put(export_key, lambda folder: copy_tree(tmp, folder, skip=(OWNER_FILE,)))
         _publish(tmp, out)
     except BaseException:
         if analyses is not None:
             analyses.close()
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    return BuildResult(out, results, time.perf_counter() - t0)
+    return BuildResult(out, results, time.perf_counter() - t0, log.stages)

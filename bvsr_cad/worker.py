@@ -31,10 +31,40 @@ class WorkerLost(RuntimeError):
     """The second process ended without a result (killed, crashed); the caller may do the work itself."""
 
 
+#: The parent's PID, handed to the child so that it dies with the parent (even a SIGKILLed one).
+PARENT_PID_ENV = "BVSR_PARENT_PID"
+
+
+def _die_with_parent() -> None:
+    """Linux: the kernel sends SIGKILL to this process when its parent dies (PR_SET_PDEATHSIG);
+    elsewhere, or if that fails, a daemon thread polls the parent. Either way a build killed with
+    SIGKILL leaves no second process running."""
+    import signal
+
+    parent = int(os.environ.get(PARENT_PID_ENV, "0") or 0)
+    if not parent:
+        return
+    try:
+        import ctypes
+
+        if ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL), 0, 0, 0) != 0:  # 1 = PR_SET_PDEATHSIG
+            raise OSError("prctl failed")
+    except (OSError, AttributeError):
+        def watch() -> None:
+            while os.getppid() == parent:
+                time.sleep(0.5)
+            os._exit(1)
+
+        threading.Thread(target=watch, daemon=True).start()
+    if os.getppid() != parent:  # the parent died before the request took effect
+        os._exit(1)
+
+
 def serve(_out: str, fn: Callable[..., Any], *args: Any) -> int:
     """Run ``fn(*args)`` and pickle its result, or its exception, onto stdout (the child's side).
 
     ``_out`` is the placeholder argument the parent passes (``-``)."""
+    _die_with_parent()
     result_fd = os.dup(1)
     os.dup2(2, 1)  # stray prints (a library's banner) must not corrupt the pickle
     sys.stdout = sys.stderr
@@ -73,7 +103,7 @@ class SecondProcess:
         if (os.cpu_count() or 1) < 2:
             return None
         package_root = str(Path(__file__).resolve().parents[1])  # the bvsr_cad this process runs
-        env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        env = {**os.environ, PARENT_PID_ENV: str(os.getpid()), "PYTHONPATH": os.pathsep.join(
             [package_root] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])}
         try:
             proc = subprocess.Popen([sys.executable, "-m", module, "-", *args], cwd=cwd, env=env,

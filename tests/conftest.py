@@ -10,6 +10,16 @@ ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / "params"
 
 
+def pytest_configure(config):
+    """Every test session gets its own, empty artifact cache (never the user's ~/.cache/bvsr_cad): a
+    test that means a cold build gets one, and tests cannot see a cache filled by other code."""
+    import os
+    import tempfile
+
+    if "BVSR_TEST_KEEP_CACHE" not in os.environ:
+        os.environ["BVSR_CACHE"] = tempfile.mkdtemp(prefix="bvsr-test-cache-")
+
+
 def pytest_collection_modifyitems(config, items):
     """A test that needs the full default build (``bvsr_export``, about 30 s or more) is slow by definition:
     ``pytest -m "not slow"`` stays a fast suite of in-memory tests (tools/mutate.py runs it per fault)."""

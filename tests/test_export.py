@@ -144,7 +144,7 @@ def test_failed_build_leaves_earlier_export_untouched(bvsr_export, tmp_path, dat
 
     monkeypatch.setattr(pipeline, "write_part_stl", flaky)
     with pytest.raises(OSError, match="simulated"):
-        pipeline.build_export(PARAMS / "bvsr.toml", out)
+        pipeline.build_export(PARAMS / "bvsr.toml", out, use_cache=False)
     assert _tree_digest(out) == before
     assert sorted(p.name for p in out.parent.iterdir()) == ["bvsr"]
 

@@ -314,6 +314,10 @@ def test_report_has_its_pictures(manifest, bvsr_export):
     for part in manifest["parts"]:
         assert f"report/parts/{part['name']}.png" in srcs or f"report/parts/{part['name']}.png" in html
     assert "Against the paper" in html and "not computed here" in html and "678.6" in html
+    # The interactive view: its scripts are in the export, nothing is fetched from a network.
+    assert "bvsr-viewer" in html and "http://" not in html.replace('xmlns="http://', "") and "https://" not in html
+    assert (bvsr_export / "report" / "viewer.js").is_file() and {s["name"] for s in manifest["viewer"]["scenes"]} >= {
+        "rest", "extension", "flexion", "waggle", "molds", "rigid_twin"}
     for png in ("analysis/workspace.png", "molds/exploded.png", "analysis/measurements.png"):
         if (bvsr_export / png).is_file():
             assert png in srcs

@@ -380,7 +380,7 @@ class ClearanceResult:
                 "pose": {"theta_rad": self.theta_rad, "phi_rad": self.phi_rad},
                 "lower_bound_mm": float(self.lower_bound_mm), "stage1_min_mm": float(self.stage1_min_mm),
                 "refined_candidates": int(self.refined), "exact_evaluations": int(self.confirmed),
-                "certified": bool(self.certified), "seconds": self.seconds, "poses_per_s": self.poses_per_s}
+                "certified": bool(self.certified)}
 
 
 def clearance_over(pt: PosedTail, w: np.ndarray, max_exact: int = 8, seed_candidates: int = 64) -> ClearanceResult:

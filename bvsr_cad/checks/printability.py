@@ -338,13 +338,19 @@ def _slice(stl: Path, volume: list[float], timeout_s: float, exe: str = SLICER) 
 
 
 def _slice_command(exp: Export) -> str:
-    """The command that slices this export. A build checks its export in a temporary folder
-    ``.<name>.tmp-*`` beside the output (``pipeline.build_export``) and publishes it as ``<name>``."""
-    root = exp.root
-    name = root.name
-    if name.startswith(".") and ".tmp-" in name:
-        root = root.with_name(name[1:name.rindex(".tmp-")])
-    return SLICE_COMMAND.format(export=root)
+    """The command that slices this export, naming it as ``EXPORT``: the checks' results (kept in the
+    manifest and the report, and reused from the build cache) must not depend on the folder."""
+    return SLICE_COMMAND.format(export="EXPORT")
+
+
+def environment_state() -> dict[str, Any]:
+    """What outside the export the checks' results depend on: the installed slicer and the slice
+    cache, and Debian's ``check_urdf`` (a cached export is reused only while these are unchanged)."""
+    exe = _slicer_exe()
+    cache = _cache_path()
+    return {"slicer": _slicer_identity(exe) if exe else None,
+            "slice_cache": cache.read_bytes() if cache.is_file() else b"",
+            "check_urdf": shutil.which("check_urdf")}
 
 
 def slice_stls(exp: Export, items: list[SliceItem] | None = None, progress: Callable[[str], None] | None = None,

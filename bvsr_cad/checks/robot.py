@@ -112,15 +112,16 @@ def _compare(exp: Export, name: str, mine, visuals, where: str) -> CheckResult:
 
 
 def check_urdf_tools(exp: Export) -> list[CheckResult]:
-    urdf = exp.root / exp.manifest["robot"]["urdf"]
+    rel = exp.manifest["robot"]["urdf"]  # results name the file relative to the export
+    urdf = exp.root / rel
     out = []
     tool = shutil.which("check_urdf")
     if tool:
         res = subprocess.run([tool, str(urdf)], capture_output=True, text=True)
-        out.append(CheckResult("urdf_check_urdf", res.returncode == 0, res.returncode, 0, "exit code", str(urdf),
+        out.append(CheckResult("urdf_check_urdf", res.returncode == 0, res.returncode, 0, "exit code", rel,
                                (res.stderr or res.stdout).strip().splitlines()[-1] if res.returncode else ""))
     else:
-        out.append(CheckResult("urdf_check_urdf", None, None, 0, "exit code", str(urdf),
+        out.append(CheckResult("urdf_check_urdf", None, None, 0, "exit code", rel,
                                "check_urdf not installed (Debian: liburdfdom-tools)"))
     import yourdfpy
 
@@ -130,7 +131,7 @@ def check_urdf_tools(exp: Export) -> list[CheckResult]:
         note = f"{len(model.robot.links)} links, {len(model.robot.joints)} joints"
     except Exception as exc:  # noqa: BLE001 - report what the tool said
         ok, note = False, f"{type(exc).__name__}: {exc}"
-    out.append(CheckResult("urdf_yourdfpy", ok, int(ok), 1, "", str(urdf), note))
+    out.append(CheckResult("urdf_yourdfpy", ok, int(ok), 1, "", rel, note))
     return out
 
 
@@ -249,7 +250,7 @@ def check_pybullet(exp: Export) -> list[CheckResult]:
     finally:
         pb.disconnect(cid)
     worst = max(abs(masses.get(n, -1.0) - m) / max(m, 1e-12) for n, m in expected.items())
-    return [CheckResult("pybullet_masses", worst <= 1e-6, worst, 1e-6, "relative", str(urdf),
+    return [CheckResult("pybullet_masses", worst <= 1e-6, worst, 1e-6, "relative", exp.manifest["robot"]["urdf"],
                         f"{len(masses)} links loaded with URDF_USE_INERTIA_FROM_FILE")]
 
 

@@ -1,0 +1,95 @@
+"""Cold, no-op and one-edit rebuild times of `bvsr build` with the artifact cache.
+
+    python benchmarks/rebuild_bench.py [PARAMS] [--edits a,b,...]
+
+Runs in a private cache (a temporary ``BVSR_CACHE``) and a temporary output
+folder: first a cold build (empty cache), then the same file again (no-op),
+then each one-parameter edit of the base file, each from the cache the cold
+build filled. Prints one row per build: seconds, ratio to cold, and which
+stages were reused.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: name -> (table, key, new value as TOML)
+EDITS = {
+    "rod material": ("vertebra", "material", '"PVC"'),
+    "rod diameter": ("vertebra", "diameter_mm", "5.0"),
+    "pocket clearance": ("fabrication", "pocket_clearance_mm", "0.15"),
+    "taper": ("taper", "half_angle_deg", "1.0"),
+    "segment count": ("", "segments", "3"),
+    "casting shrinkage": ("casting", "shrinkage_percent", "0.4"),
+    "printer volume": ("fabrication_package", "printer_x_mm", "220.0"),
+    "effective area": ("actuation", "effective_area_mm2", "150.0"),
+}
+
+
+def edited(text: str, table: str, key: str, value: str) -> str:
+    """The parameter text with ``table.key`` set to ``value`` (the first such line of the table)."""
+    lines = text.splitlines()
+    current = ""
+    for i, line in enumerate(lines):
+        head = re.match(r"^\s*\[([^\]]+)\]", line)
+        if head:
+            current = head.group(1).strip()
+            continue
+        m = re.match(rf"^(\s*{re.escape(key)}\s*=\s*)([^#]*?)(\s*#.*)?$", line)
+        if m and current == table:
+            lines[i] = f"{m.group(1)}{value}{m.group(3) or ''}"
+            return "\n".join(lines) + "\n"
+    raise KeyError(f"{table}.{key} not in the file")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("params", nargs="?", default=str(ROOT / "params" / "bvsr.toml"))
+    ap.add_argument("--edits", default=",".join(EDITS), help="comma-separated edit names (default: all)")
+    args = ap.parse_args()
+    work = Path(tempfile.mkdtemp(prefix="bvsr-rebuild-bench-"))
+    os.environ["BVSR_CACHE"] = str(work / "cache")
+    from bvsr_cad.pipeline import build_export
+
+    base = Path(args.params).resolve()
+    text = base.read_text()
+    rows = []
+
+    def run(label: str, path: Path) -> float:
+        t0 = time.perf_counter()
+        res = build_export(path, work / "out")
+        seconds = time.perf_counter() - t0
+        reused = [s["stage"] for s in res.stages if s["status"] == "reused"]
+        rows.append((label, seconds, reused))
+        print(f"{label:18} {seconds:7.1f} s  reused: {', '.join(reused) or '-'}", flush=True)
+        return seconds
+
+    try:
+        cold = run("cold", base)
+        run("no-op", base)
+        for name in (n.strip() for n in args.edits.split(",") if n.strip()):
+            table, key, value = EDITS[name]
+            path = base.parent / f".bench-{name.replace(' ', '_')}.toml"  # beside the base: data_file resolves
+            path.write_text(edited(text, table, key, value))
+            try:
+                run(name, path)
+            finally:
+                path.unlink()
+        print()
+        print(f"{'build':18} {'seconds':>8} {'/ cold':>7}")
+        for label, seconds, _ in rows:
+            print(f"{label:18} {seconds:8.1f} {seconds / cold:7.2f}")
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()

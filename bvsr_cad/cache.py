@@ -1,0 +1,166 @@
+"""The content-addressed artifact cache of `bvsr build`.
+
+A stage's entry is keyed by the SHA-256 of exactly what the stage reads:
+its name, the fingerprint of this package's code (every ``.py`` and data
+file of ``bvsr_cad``, so an edited model never serves a stale result) and
+the inputs the stage declares where it is defined (a projection of the
+parameters, the bytes of a data file). An entry is a folder of files written
+into a temporary folder and renamed into place, so two builds at once never
+see a half-written entry; the first to finish wins and the other's copy is
+dropped. The cache is bounded: after every write the least recently used
+entries go until it fits (``BVSR_CACHE_MAX_MB``, default 2048 MB).
+
+Where: ``$BVSR_CACHE/artifacts`` (default ``~/.cache/bvsr_cad/artifacts``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+import time
+from collections.abc import Callable
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+DEFAULT_MAX_MB = 2048.0
+_DONE = ".done"
+
+
+def cache_root() -> Path:
+    return Path(os.environ.get("BVSR_CACHE", Path.home() / ".cache" / "bvsr_cad")) / "artifacts"
+
+
+@lru_cache(maxsize=1)
+def code_fingerprint() -> str:
+    """SHA-256 over this package's source and data files (path and bytes, sorted)."""
+    pkg = Path(__file__).resolve().parent
+    h = hashlib.sha256()
+    for p in sorted(pkg.rglob("*")):
+        if p.is_file() and p.suffix in (".py", ".toml", ".json", ".csv") and "__pycache__" not in p.parts:
+            h.update(p.relative_to(pkg).as_posix().encode())
+            h.update(p.read_bytes())
+    return h.hexdigest()
+
+
+def _plain(value: Any) -> Any:
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, bytes):
+        return hashlib.sha256(value).hexdigest()
+    if isinstance(value, Path):
+        return str(value)
+    return value
+
+
+def stage_key(stage: str, **inputs: Any) -> str:
+    """The key of ``stage`` for ``inputs`` (dataclasses, dicts, numbers, strings, bytes), with the code."""
+    text = json.dumps({"stage": stage, "code": code_fingerprint(), "inputs": _plain(inputs)}, sort_keys=True,
+                      allow_nan=True, default=repr)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def spec_without(spec: Any, *fields: str) -> dict[str, Any]:
+    """A stage's view of the parameters: every table but ``fields`` (``"table"`` or ``"table.key"``)."""
+    plain = _plain(spec)
+    for name in fields:
+        table, _, key = name.partition(".")
+        if key:
+            plain.get(table, {}).pop(key, None)
+        else:
+            plain.pop(table, None)
+    return plain
+
+
+class ArtifactCache:
+    """Entries are folders ``<root>/<key[:2]>/<key>/`` with a ``.done`` marker written last."""
+
+    def __init__(self, root: Path | None = None, max_bytes: float | None = None):
+        self.root = Path(root) if root is not None else cache_root()
+        mb = float(os.environ.get("BVSR_CACHE_MAX_MB", DEFAULT_MAX_MB))
+        self.max_bytes = max_bytes if max_bytes is not None else mb * 1e6
+
+    def _entry(self, key: str) -> Path:
+        return self.root / key[:2] / key
+
+    def get(self, key: str) -> Path | None:
+        """The entry's folder, marked as just used, or None."""
+        entry = self._entry(key)
+        done = entry / _DONE
+        if not done.is_file():
+            return None
+        try:
+            os.utime(done)
+        except OSError:
+            return None
+        return entry
+
+    def put(self, key: str, fill: Callable[[Path], None]) -> Path:
+        """Make the entry by ``fill(folder)`` in a temporary folder, then rename it into place."""
+        entry = self._entry(key)
+        entry.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".{key[:12]}.tmp-", dir=entry.parent))
+        try:
+            fill(tmp)
+            (tmp / _DONE).write_text(f"{time.time():.3f}\n")
+            try:
+                tmp.rename(entry)
+            except OSError:  # another build put it first: theirs is as good
+                shutil.rmtree(tmp, ignore_errors=True)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+        self.evict()
+        return entry
+
+    def entries(self) -> list[tuple[float, int, Path]]:
+        """(last use, size in bytes, folder) of every complete entry."""
+        out = []
+        if not self.root.is_dir():
+            return out
+        for done in self.root.glob(f"*/*/{_DONE}"):
+            folder = done.parent
+            try:
+                size = sum(p.stat().st_size for p in folder.rglob("*") if p.is_file())
+                out.append((done.stat().st_mtime, size, folder))
+            except OSError:
+                continue
+        return out
+
+    def evict(self) -> list[Path]:
+        """Remove least recently used entries until the cache fits; returns what went."""
+        entries = sorted(self.entries())
+        total = sum(size for _, size, _ in entries)
+        removed = []
+        for _, size, folder in entries:
+            if total <= self.max_bytes:
+                break
+            shutil.rmtree(folder, ignore_errors=True)
+            total -= size
+            removed.append(folder)
+        return removed
+
+
+def copy_tree(src: Path, dst: Path, skip: tuple[str, ...] = (_DONE,)) -> None:
+    """Copy the files of ``src`` into ``dst`` (created), keeping relative paths."""
+    for p in src.rglob("*"):
+        rel = p.relative_to(src)
+        if rel.parts[0] in skip:
+            continue
+        target = dst / rel
+        if p.is_dir():
+            target.mkdir(parents=True, exist_ok=True)
+        else:
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(p, target)
+
+
+__all__ = ["ArtifactCache", "stage_key", "spec_without", "code_fingerprint", "cache_root", "copy_tree"]

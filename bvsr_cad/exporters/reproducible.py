@@ -1,0 +1,71 @@
+"""Byte-reproducible files: the same parameter file gives the same bytes in every build.
+
+Two writers stamp the time or chance into their files: OCCT's STEP writer
+(the header's ``FILE_NAME`` time stamp) and the 3MF writer (each zip entry's
+date, and a random ``p:UUID`` per object and build item).
+:func:`make_reproducible` rewrites both, over a whole export folder, to a
+fixed time and to UUIDs derived from the file's name and the item's place
+(still unique within the file); the real build time lives in the manifest's ``volatile``
+section with the other fields that change from build to build.
+"""
+
+from __future__ import annotations
+
+import re
+import uuid
+import zipfile
+from pathlib import Path
+
+#: The time stamp every STEP header carries (ISO 8601, as OCCT writes it).
+FIXED_STEP_TIME = "1970-01-01T00:00:00"
+#: The date of every zip entry (the earliest a zip can hold).
+FIXED_ZIP_TIME = (1980, 1, 1, 0, 0, 0)
+_STEP_STAMP = re.compile(rb"(FILE_NAME\('(?:[^']|'')*',\s*')[^']*(')")
+
+
+def fix_step(path: Path) -> bool:
+    data = path.read_bytes()
+    fixed = _STEP_STAMP.sub(rb"\g<1>" + FIXED_STEP_TIME.encode() + rb"\g<2>", data, count=1)
+    if fixed != data:
+        path.write_bytes(fixed)
+        return True
+    return False
+
+
+_UUID = re.compile(rb'(p:UUID=")[0-9a-fA-F-]{36}(")')
+
+
+def _fixed_uuids(name: str, data: bytes) -> bytes:
+    count = iter(range(1 << 30))
+    return _UUID.sub(lambda m: m.group(1) + str(uuid.uuid5(uuid.NAMESPACE_URL, f"bvsr_cad/{name}/{next(count)}"))
+                     .encode() + m.group(2), data)
+
+
+def fix_zip(path: Path) -> bool:
+    with zipfile.ZipFile(path) as zin:
+        entries = [(info, zin.read(info.filename)) for info in zin.infolist()]
+    entries = [(info, _fixed_uuids(f"{path.name}/{info.filename}", data) if info.filename.endswith(".model")
+                else data) for info, data in entries]
+    with zipfile.ZipFile(path) as zin:
+        same = all(info.date_time == FIXED_ZIP_TIME and data == zin.read(info.filename) for info, data in entries)
+    if same:
+        return False
+    tmp = path.with_name(path.name + ".tmp")
+    with zipfile.ZipFile(tmp, "w") as zout:
+        for info, data in entries:
+            fixed = zipfile.ZipInfo(info.filename, date_time=FIXED_ZIP_TIME)
+            fixed.compress_type = info.compress_type
+            fixed.external_attr = info.external_attr
+            zout.writestr(fixed, data)
+    tmp.replace(path)
+    return True
+
+
+def make_reproducible(root: Path) -> dict[str, int]:
+    """Fix the time stamps of every STEP and 3MF file under ``root``; returns how many of each changed."""
+    steps = sum(fix_step(p) for p in sorted(root.rglob("*")) if p.suffix.lower() in (".step", ".stp"))
+    zips = sum(fix_zip(p) for p in sorted(root.rglob("*.3mf")))
+    return {"step": steps, "3mf": zips}
+
+
+__all__ = ["make_reproducible", "fix_step", "fix_zip", "FIXED_STEP_TIME"]

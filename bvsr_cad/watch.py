@@ -1,0 +1,87 @@
+"""`bvsr watch`: rebuild an export each time its parameter file (or calibration data) is saved.
+
+It watches the file's folder with watchfiles (editors save by writing a new
+file and renaming it over the old one), waits until the saves settle
+(debounce), prints which keys changed, rebuilds through the cache (so only
+the stages whose inputs changed run again) and says which stages it reused.
+A bad edit prints the error and leaves the last good export in place; the
+next save tries again. Ctrl-C stops it; a build in progress is abandoned and
+its temporary folder removed, as for `bvsr build`.
+"""
+
+from __future__ import annotations
+
+import threading
+import tomllib
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from .parameters.load import ParamError
+from .pipeline import BuildResult, OutputError, build_export
+
+DEBOUNCE_MS = 400
+
+
+def changed_keys(old: dict[str, Any], new: dict[str, Any], prefix: str = "") -> list[str]:
+    """``table.key: old -> new`` for every value that differs between two parsed parameter files."""
+    out = []
+    for key in sorted(set(old) | set(new)):
+        a, b = old.get(key), new.get(key)
+        name = f"{prefix}{key}"
+        if isinstance(a, dict) and isinstance(b, dict):
+            out += changed_keys(a, b, name + ".")
+        elif a != b:
+            out.append(f"{name}: {a!r} -> {b!r}" if key in old and key in new
+                       else f"{name}: {'added' if key in new else 'removed'}")
+    return out
+
+
+def _read(path: Path) -> dict[str, Any] | None:
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError):
+        return None
+
+
+def watch(params: str | Path, out_dir: str | Path | None, say: Callable[[str], None],
+          progress: Callable[[str], None] | None = None, stop: threading.Event | None = None,
+          debounce_ms: int = DEBOUNCE_MS, build: Callable[..., BuildResult] = build_export) -> int:
+    """Build once, then after every save; returns 0 when stopped (Ctrl-C or ``stop`` set)."""
+    from watchfiles import watch as watch_files
+
+    params = Path(params).resolve()
+    last = _read(params) or {}
+
+    def rebuild() -> None:
+        try:
+            res = build(params, out_dir, progress)
+        except (ParamError, OutputError) as exc:
+            say(f"not rebuilt, the last good export stays: {exc}")
+            return
+        failed = [r for r in res.results if r.passed is False]
+        reused = [s["stage"] for s in res.stages if s["status"] == "reused"]
+        built = [s["stage"] for s in res.stages if s["status"] == "built"]
+        say(f"wrote {res.out_dir}/ in {res.seconds:.1f} s; {len(failed)} failed checks; "
+            f"rebuilt: {', '.join(built) or 'nothing'}; reused: {', '.join(reused) or 'nothing'}")
+
+    try:
+        rebuild()
+        say(f"watching {params} (Ctrl-C stops)")
+        for changes in watch_files(params.parent, debounce=debounce_ms, stop_event=stop, raise_interrupt=False,
+                                   watch_filter=lambda _change, path: Path(path).resolve() == params):
+            new = _read(params)
+            diff = changed_keys(last, new) if new is not None else ["(the file is not valid TOML yet)"]
+            if new is not None and not diff:
+                continue  # saved without a change
+            say(f"{params.name} changed: " + "; ".join(diff))
+            if new is not None:
+                last = new
+            rebuild()
+    except KeyboardInterrupt:
+        pass
+    say("stopped")
+    return 0
+
+
+__all__ = ["watch", "changed_keys"]

@@ -1,0 +1,122 @@
+"""The artifact cache: atomic entries, least-recently-used eviction, keys that follow their inputs,
+and cached builds equal to builds from scratch, file for file."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from bvsr_cad.cache import ArtifactCache, spec_without, stage_key
+
+from .conftest import PARAMS, write_toml
+
+
+def test_put_get_and_concurrent_puts_of_one_key(tmp_path):
+    cache = ArtifactCache(tmp_path / "c", max_bytes=1e9)
+    assert cache.get("ab" * 32) is None
+    started = threading.Barrier(2)
+
+    def fill(folder: Path, text: str) -> None:
+        started.wait()
+        (folder / "f.txt").write_text(text)
+        time.sleep(0.05)
+
+    threads = [threading.Thread(target=cache.put, args=("ab" * 32, lambda d, t=t: fill(d, t))) for t in "xy"]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    entry = cache.get("ab" * 32)
+    assert entry is not None and (entry / "f.txt").read_text() in ("x", "y")
+    assert not list(entry.parent.glob("*.tmp-*"))  # the loser's copy is gone
+
+
+def test_a_failed_fill_leaves_no_entry(tmp_path):
+    cache = ArtifactCache(tmp_path / "c")
+
+    def fill(folder: Path) -> None:
+        (folder / "half.txt").write_text("half")
+        raise OSError("disk full (simulated)")
+
+    with pytest.raises(OSError):
+        cache.put("cd" * 32, fill)
+    assert cache.get("cd" * 32) is None and not list((tmp_path / "c").rglob("half.txt"))
+
+
+def test_least_recently_used_entries_go_first(tmp_path):
+    cache = ArtifactCache(tmp_path / "c", max_bytes=2500)
+    for i, key in enumerate(("a1" * 32, "b2" * 32)):
+        cache.put(key, lambda d: (d / "blob").write_bytes(b"x" * 1000))
+        os.utime(cache.get(key) / ".done", (1000 + i, 1000 + i))
+    cache.get("a1" * 32)  # used now: b2 is the least recently used
+    cache.put("c3" * 32, lambda d: (d / "blob").write_bytes(b"x" * 1000))
+    assert cache.get("b2" * 32) is None
+    assert cache.get("a1" * 32) is not None and cache.get("c3" * 32) is not None
+
+
+def test_keys_follow_exactly_the_declared_inputs(bvsr_spec):
+    import dataclasses
+
+    base = stage_key("part_files", spec=spec_without(bvsr_spec, "materials", "vertebra.material"))
+    pvc = dataclasses.replace(bvsr_spec, vertebra=dataclasses.replace(bvsr_spec.vertebra, material="PVC"))
+    thin = dataclasses.replace(bvsr_spec, vertebra=dataclasses.replace(bvsr_spec.vertebra, diameter_mm=5.0))
+    assert stage_key("part_files", spec=spec_without(pvc, "materials", "vertebra.material")) == base
+    assert stage_key("part_files", spec=spec_without(thin, "materials", "vertebra.material")) != base
+    assert stage_key("analyses", spec=spec_without(bvsr_spec, "name")) != base
+
+
+def _files(root: Path) -> dict[str, bytes]:
+    out = {}
+    for p in sorted(root.rglob("*")):
+        if p.is_file():
+            data = p.read_bytes()
+            if p.name == "manifest.json" and p.parent == root:
+                m = json.loads(data)
+                m.pop("volatile")
+                data = json.dumps(m, sort_keys=True).encode()
+            out[p.relative_to(root).as_posix()] = data
+    return out
+
+
+def _differences(a: Path, b: Path) -> list[str]:
+    fa, fb = _files(a), _files(b)
+    return sorted(set(fa) ^ set(fb)) + sorted(k for k in set(fa) & set(fb) if fa[k] != fb[k])
+
+
+@pytest.mark.slow
+def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(bvsr_export, tmp_path, data):
+    """bvsr_export (this session's first build) filled the session's cache. The same file again is one
+    reused stage; a rod-material edit built by two builds at once through the shared cache equals,
+    file for file, the same edit built with --no-cache (the manifest's volatile section aside)."""
+    from bvsr_cad.pipeline import build_export
+
+    noop = build_export(PARAMS / "bvsr.toml", tmp_path / "noop")
+    assert [(s["stage"], s["status"]) for s in noop.stages] == [("export", "reused")]
+    assert _differences(bvsr_export, tmp_path / "noop") == []
+
+    data["vertebra"]["material"] = "PVC"
+    edit = write_toml(tmp_path / "pvc.toml", data)
+    bvsr = Path(sys.executable).with_name("bvsr")
+    cmd = [str(bvsr)] if bvsr.exists() else [sys.executable, "-m", "bvsr_cad.cli"]
+    runs = [subprocess.Popen([*cmd, "build", str(edit), "-o", str(tmp_path / f"cached{i}"), "--json", "-q"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for i in (1, 2)]
+    outs = [r.communicate(timeout=1200) for r in runs]
+    assert [r.returncode for r in runs] == [0, 0], [o[1][-2000:] for o in outs]
+    stages = {s["stage"]: s["status"] for s in json.loads(outs[0][0])["stages"]}
+    assert stages["part files and previews"] == "reused"  # the rod's material moves no solid
+    assert main_no_cache(edit, tmp_path / "fresh") == 0
+    for i in (1, 2):
+        assert _differences(tmp_path / f"cached{i}", tmp_path / "fresh") == []
+
+
+def main_no_cache(params: Path, out: Path) -> int:
+    from bvsr_cad.cli import main
+
+    return main(["build", str(params), "-o", str(out), "--no-cache", "-q"])

@@ -5,8 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import build123d as bd
+from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 
-from ..assembly.build import Assembly, PartDef, instance_solid
+from ..assembly.build import Assembly, PartDef
+from ..assembly.placed import labelled_compound, placed_instances
 from ..colors import rgb
 
 #: Tessellation for print STLs: fine enough that the mesh volume stays within
@@ -50,14 +52,31 @@ def write_part_stl(part: PartDef, path: Path) -> None:
     write_stl(part.print_solid, path)
 
 
-def write_assembly_step(asm: Assembly, path: Path) -> None:
-    """The tail at rest as one STEP assembly with named, coloured instances."""
-    children = []
-    for inst in asm.instances:
-        solid = instance_solid(asm, inst)
-        solid.label = inst.name
-        solid.color = bd.Color(*rgb(asm.part_of(inst).kind))
-        children.append(solid)
-    compound = bd.Compound(children=children, label=asm.spec.name)
-    if not bd.export_step(compound, path, unit=bd.Unit.MM):
+def write_labelled_step(compound: bd.Compound, path: Path) -> None:
+    """A compound of labelled, coloured, located children as one STEP assembly in millimetres.
+
+    Each child is written with its own copy of its geometry, so that it is its
+    own product, named after it. Shared geometry would be written once, as one
+    product named after one of its instances, and readers that name objects
+    after products (FreeCAD's importer without link groups) would then show
+    the thirty SOAs under one name. Placements stay transforms, not moved
+    geometry. A child with children of its own (a posed SOA: its slices) is
+    written as a sub-assembly of its pieces.
+    """
+    if not bd.export_step(_own_copy(compound), path, unit=bd.Unit.MM):
         raise OSError(f"STEP export failed: {path}")
+
+
+def _own_copy(node: bd.Shape) -> bd.Shape:
+    """The labelled tree with every leaf's geometry copied (locations kept)."""
+    if isinstance(node, bd.Compound) and node.children:
+        out = bd.Compound(children=[_own_copy(c) for c in node.children])
+    else:
+        out = bd.Shape.cast(BRepBuilderAPI_Copy(node.wrapped).Shape())  # keeps the location
+    out.label, out.color = node.label, node.color
+    return out
+
+
+def write_assembly_step(asm: Assembly, path: Path) -> None:
+    """The tail at rest as one STEP assembly: every instance a named, coloured product at its place."""
+    write_labelled_step(labelled_compound(placed_instances(asm), asm.spec.name), path)

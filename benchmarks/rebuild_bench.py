@@ -70,6 +70,7 @@ def main() -> None:
         reused = [s["stage"] for s in res.stages if s["status"] == "reused"]
         rows.append((label, seconds, reused))
         print(f"{label:18} {seconds:7.1f} s  reused: {', '.join(reused) or '-'}", flush=True)
+        print("    " + "; ".join(f"{s['stage']} {s['status']} {s['seconds']:.1f} s" for s in res.stages), flush=True)
         return seconds
 
     try:

@@ -177,7 +177,7 @@ def test_slicing_not_in_the_cache_is_null_with_the_command(bvsr_export, manifest
     assert len(results) == sum(len(j["items"]) for j in manifest["print_jobs"])
     for r in results:
         assert r.name.startswith("slice:") and r.passed is None and r.value is None, r.line()
-        assert f"bvsr check {bvsr_export.resolve()} --slice" in r.note, r.note
+        assert "bvsr check EXPORT --slice" in r.note, r.note  # the same in every folder (reused builds)
         assert "not sliced in the build" in r.note or "not installed" in r.note
 
 

@@ -47,7 +47,7 @@ def test_sigkill_leaves_no_second_process_and_the_next_build_cleans_up(tmp_path)
     out = tmp_path / "exp"
     bvsr = Path(sys.executable).with_name("bvsr")
     cmd = [str(bvsr)] if bvsr.exists() else [sys.executable, "-m", "bvsr_cad.cli"]
-    build = subprocess.Popen([*cmd, "build", str(PARAMS / "bvsr.toml"), "-o", str(out)],
+    build = subprocess.Popen([*cmd, "build", str(PARAMS / "bvsr.toml"), "-o", str(out), "--no-cache"],
                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     child = None
     deadline = time.time() + 120

@@ -155,7 +155,7 @@ def test_generator_failure_exits_2_with_advice_not_a_traceback(tmp_path, monkeyp
 
     _generator_fails(monkeypatch, eval(error))
     out = tmp_path / "out"
-    assert main(["build", str(PARAMS / "bvsr.toml"), "-o", str(out), "-q"]) == 2
+    assert main(["build", str(PARAMS / "bvsr.toml"), "-o", str(out), "--no-cache", "-q"]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and err.count("\n") == 1  # one paragraph
     assert "bvsr.toml passed validation, but building a panel failed" in err

@@ -1,7 +1,8 @@
 """Byte-reproducible files: the same parameter file gives the same bytes in every build.
 
 Two writers stamp the time or chance into their files: OCCT's STEP writer
-(the header's ``FILE_NAME`` time stamp) and the 3MF writer (each zip entry's
+(the header's ``FILE_NAME`` time stamp, and assembly usage ids counted across the
+process's writes) and the 3MF writer (each zip entry's
 date, and a random ``p:UUID`` per object and build item).
 :func:`make_reproducible` rewrites both, over a whole export folder, to a
 fixed time and to UUIDs derived from the file's name and the item's place
@@ -23,9 +24,24 @@ FIXED_ZIP_TIME = (1980, 1, 1, 0, 0, 0)
 _STEP_STAMP = re.compile(rb"(FILE_NAME\('(?:[^']|'')*',\s*')[^']*(')")
 
 
+_NAUO = re.compile(rb"(NEXT_ASSEMBLY_USAGE_OCCURRENCE\(')([^']*)(',')((?:[^']|'')*)(')")
+
+
+def _fixed_nauo_ids(data: bytes) -> bytes:
+    """OCCT numbers assembly usages with a counter that runs on across a process's STEP writes; number
+    them by their instance names' order instead (unique names: 1..n), so the id follows the file."""
+    names = [m.group(4) for m in _NAUO.finditer(data)]
+    if len(set(names)) != len(names):
+        return data
+    order = {name: i + 1 for i, name in enumerate(sorted(names))}
+    return _NAUO.sub(lambda m: m.group(1) + str(order[m.group(4)]).encode() + m.group(3) + m.group(4) + m.group(5),
+                     data)
+
+
 def fix_step(path: Path) -> bool:
     data = path.read_bytes()
     fixed = _STEP_STAMP.sub(rb"\g<1>" + FIXED_STEP_TIME.encode() + rb"\g<2>", data, count=1)
+    fixed = _fixed_nauo_ids(fixed)
     if fixed != data:
         path.write_bytes(fixed)
         return True

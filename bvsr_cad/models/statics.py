@@ -199,14 +199,25 @@ class TailStatics:
         free = np.ones(2 * n, bool) if fixed is None else ~np.repeat(np.asarray(fixed, bool), 2)
         h = 1e-6
         eye = np.eye(2 * n)
+        pert = (eye * h).reshape(2 * n, n, 2)
+        # Newton on the samples still moving only: one sample's slow convergence costs only itself.
+        count = int(np.prod(lead, dtype=int))
+        flat_w = w.reshape((count, n, 2))
+        flat_p = np.broadcast_to(line_kpa, lead + line_kpa.shape[-2:]).reshape((count,) + line_kpa.shape[-2:])
+        force = None if tip_force_n is None else np.asarray(tip_force_n, float)
+        per_sample = force is not None and force.ndim > 1
+        if per_sample:
+            force = np.broadcast_to(force, lead + (3,)).reshape((count, 3))
+        active = np.arange(count)
+        last = 0.0
         for _ in range(max_iter):
-            r = self.residual(w, line_kpa, tip_force_n).reshape(lead + (2 * n,))
-            pert = (eye * h).reshape(2 * n, n, 2)
-            wp = w[..., None, :, :] + pert
-            wm = w[..., None, :, :] - pert
-            lk = line_kpa[..., None, :, :]
-            hess = (self.residual(wp, lk, tip_force_n) - self.residual(wm, lk, tip_force_n)).reshape(
-                lead + (2 * n, 2 * n)) / (2 * h)
+            wa, pa = flat_w[active], flat_p[active]
+            fa = force[active] if per_sample else force
+            r = self.residual(wa, pa, fa).reshape((active.size, 2 * n))
+            lk = pa[:, None, :, :]
+            fk = fa[:, None, :] if per_sample else fa
+            hess = (self.residual(wa[:, None] + pert, lk, fk) - self.residual(wa[:, None] - pert, lk, fk)).reshape(
+                (active.size, 2 * n, 2 * n)) / (2 * h)
             hess = np.swapaxes(hess, -1, -2)  # rows: residual component, columns: variable
             hess = 0.5 * (hess + np.swapaxes(hess, -1, -2))  # a Hessian: symmetric up to rounding
             hess = np.where(free[:, None] & free[None, :], hess, eye)
@@ -214,12 +225,15 @@ class TailStatics:
             step = -np.linalg.solve(hess, r[..., None])[..., 0]
             big = np.max(np.abs(step), -1, keepdims=True)
             step = step * np.minimum(1.0, 0.2 / np.maximum(big, 1e-300))  # at most 0.2 rad per step
-            w = w + step.reshape(w.shape)
-            if np.all(np.abs(step) < tol_rad):
-                return w
-        if np.max(np.abs(step)) < 1e-8:
-            return w
-        raise RuntimeError(f"forward statics did not converge (last step {np.max(np.abs(step)):.2e} rad)")
+            flat_w[active] = wa + step.reshape(wa.shape)
+            moving = np.max(np.abs(step), -1) >= tol_rad
+            last = float(np.max(np.abs(step))) if step.size else 0.0
+            active = active[moving]
+            if active.size == 0:
+                return flat_w.reshape(w.shape)
+        if last < 1e-8:
+            return flat_w.reshape(w.shape)
+        raise RuntimeError(f"forward statics did not converge (last step {last:.2e} rad)")
 
     def forward_theta_phi(self, line_kpa: np.ndarray, tip_force_n: np.ndarray | None = None
                           ) -> tuple[np.ndarray, np.ndarray]:

@@ -263,17 +263,16 @@ def make_parser() -> argparse.ArgumentParser:
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--json", action="store_true", help="print the result as one JSON object on stdout")
     common.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
-    b = sub.add_parser("build", parents=[common], help="build every part of a tail into an export folder")
-    b.add_argument("params", nargs="?", default="params/bvsr.toml", help="parameter file (default params/bvsr.toml)")
-    b.add_argument("-o", "--output", help="export folder (default exports/<name>/)")
-    b.add_argument("--no-cache", action="store_true",
-                   help="build every stage from scratch (the cache is $BVSR_CACHE/artifacts, default "
-                        "~/.cache/bvsr_cad/artifacts)")
-    b.set_defaults(func=cmd_build)
-    w = sub.add_parser("watch", parents=[common], help="rebuild the export each time the parameter file is saved")
-    w.add_argument("params", help="parameter file")
-    w.add_argument("-o", "--output", help="export folder (default exports/<name>/)")
-    w.set_defaults(func=cmd_watch)
+    for name, func, helptext in (("build", cmd_build, "build every part of a tail into an export folder"),
+                                 ("watch", cmd_watch, "rebuild the export each time the parameter file is saved")):
+        b = sub.add_parser(name, parents=[common], help=helptext)
+        b.add_argument("params", nargs="?", default="params/bvsr.toml", help="parameter file (default params/bvsr.toml)")
+        b.add_argument("-o", "--output", help="export folder (default exports/<name>/)")
+        if name == "build":
+            b.add_argument("--no-cache", action="store_true",
+                           help="build every stage from scratch (the cache is $BVSR_CACHE/artifacts, default "
+                                "~/.cache/bvsr_cad/artifacts)")
+        b.set_defaults(func=func)
     c = sub.add_parser("check", parents=[common], help="run every check on an export folder")
     c.add_argument("export", help="export folder made by `bvsr build`")
     c.add_argument("--slice", action="store_true",
@@ -281,15 +280,20 @@ def make_parser() -> argparse.ArgumentParser:
                         "(prusa-slicer, 2 at a time); `bvsr build` and `bvsr check` never slice otherwise")
     c.set_defaults(func=cmd_check)
     sm = sub.add_parser("simulate", parents=[common], help="drive the MJCF with a pressure pulse; peak velocity and root torque")
-    sm.add_argument("params", help="parameter file")
-    sm.add_argument("--pressure-bar", type=_number(0.0, inclusive=False), default=6.0, help="pulse gauge pressure in bar (default 6)")
-    sm.add_argument("--payload-g", type=_number(0.0, inclusive=True), default=0.0, help="tip payload in grams (default 0)")
-    sm.add_argument("--supply", choices=("ramp", "valve"),
-                    help="pressure input: Eq 13 ramp or the ISO 6358 valve supply (default: pneumatics.model)")
-    sm.add_argument("--platform", choices=("none", "cart"), default="none",
-                    help="cart: the tail on the paper's hinged 700 g cart (robot/scene_cart.xml), extension "
-                         "and waggle; the cart's lift and angles beside Eq 20-22 and the paper")
-    sm.add_argument("-o", "--output", help="folder for the plot (default exports/<name>/simulate/)")
+    simulate_args = {
+        "params": {"help": "parameter file"},
+        "--pressure-bar": {"type": _number(0.0, inclusive=False), "default": 6.0,
+                           "help": "pulse gauge pressure in bar (default 6)"},
+        "--payload-g": {"type": _number(0.0, inclusive=True), "default": 0.0, "help": "tip payload in grams (default 0)"},
+        "--supply": {"choices": ("ramp", "valve"),
+                     "help": "pressure input: Eq 13 ramp or the ISO 6358 valve supply (default: pneumatics.model)"},
+        "--platform": {"choices": ("none", "cart"), "default": "none",
+                       "help": "cart: the tail on the paper's hinged 700 g cart (robot/scene_cart.xml), extension "
+                               "and waggle; the cart's lift and angles beside Eq 20-22 and the paper"},
+        "--output": {"help": "folder for the plot (default exports/<name>/simulate/)"},
+    }
+    for flag, options in simulate_args.items():
+        sm.add_argument(*(("-o", flag) if flag == "--output" else (flag,)), **options)
     sm.set_defaults(func=cmd_simulate)
     ca = sub.add_parser("calibrate", parents=[common],
                         help="fit the quantities no table gives to measurements; report fit and holdout errors")

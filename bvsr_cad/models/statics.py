@@ -346,6 +346,9 @@ def segment_bend_angle_rad(kin: TailKinematics, w: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class QuasiStatic:
+    """Table III for one motion: the free bending angle and the blocked tip force at the pressure
+    limits, and the line pressures (kPa gauge) that produce them."""
+
     motion: str
     max_angle_deg: float
     blocked_force_n: float

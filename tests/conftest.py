@@ -17,7 +17,17 @@ def pytest_configure(config):
     import tempfile
 
     if "BVSR_TEST_KEEP_CACHE" not in os.environ:
-        os.environ["BVSR_CACHE"] = tempfile.mkdtemp(prefix="bvsr-test-cache-")
+        config._bvsr_test_cache = tempfile.mkdtemp(prefix="bvsr-test-cache-")
+        os.environ["BVSR_CACHE"] = config._bvsr_test_cache
+
+
+def pytest_unconfigure(config):
+    """The session's cache holds whole exports (tens of MB each): it goes with the session."""
+    import shutil
+
+    folder = getattr(config, "_bvsr_test_cache", None)
+    if folder:
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 def pytest_collection_modifyitems(config, items):

@@ -141,12 +141,14 @@ def _publish(tmp: Path, out_dir: Path) -> None:
 
 
 #: What each cached stage does not read (``table`` or ``table.key``); everything else of the
-#: parameters is part of its key. The part files are geometry: no material property, no physics.
-PART_FILES_IGNORE = ("name", "materials", "use", "vertebra.material", "actuation", "analysis", "robot", "casting",
+#: parameters is part of its key. The part files are geometry (the assembly STEP is named after the
+#: tail): no material property, no physics.
+PART_FILES_IGNORE = ("materials", "use", "vertebra.material", "actuation", "analysis", "robot", "casting",
                      "fabrication_package", "pneumatics", "cart", "calibration")
-#: The analyses read the whole tail but for its name, the robot description, the molds and the
-#: fabrication package (of which only the tube lengths, for the supply model).
-ANALYSES_IGNORE = ("name", "robot", "casting", "fabrication_package")
+#: The analyses read the whole tail but for the robot description, the molds and the fabrication
+#: package (of which only the tube lengths, for the supply model); the name decides whether the
+#: calibration's measurements are this tail's.
+ANALYSES_IGNORE = ("robot", "casting", "fabrication_package")
 
 
 @dataclass

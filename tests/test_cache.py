@@ -64,14 +64,24 @@ def test_least_recently_used_entries_go_first(tmp_path):
 
 
 def test_keys_follow_exactly_the_declared_inputs(bvsr_spec):
+    """The pipeline's declarations: the rod's material moves no solid (the part files' key stays), its
+    diameter and the tail's name (the assembly STEP's product) do; the analyses read the material."""
     import dataclasses
 
-    base = stage_key("part_files", spec=spec_without(bvsr_spec, "materials", "vertebra.material"))
+    from bvsr_cad.pipeline import ANALYSES_IGNORE, PART_FILES_IGNORE
+
+    def key(stage, spec, ignore):
+        return stage_key(stage, spec=spec_without(spec, *ignore))
+
     pvc = dataclasses.replace(bvsr_spec, vertebra=dataclasses.replace(bvsr_spec.vertebra, material="PVC"))
     thin = dataclasses.replace(bvsr_spec, vertebra=dataclasses.replace(bvsr_spec.vertebra, diameter_mm=5.0))
-    assert stage_key("part_files", spec=spec_without(pvc, "materials", "vertebra.material")) == base
-    assert stage_key("part_files", spec=spec_without(thin, "materials", "vertebra.material")) != base
-    assert stage_key("analyses", spec=spec_without(bvsr_spec, "name")) != base
+    renamed = dataclasses.replace(bvsr_spec, name="other")
+    base = key("part_files", bvsr_spec, PART_FILES_IGNORE)
+    assert key("part_files", pvc, PART_FILES_IGNORE) == base
+    assert key("part_files", thin, PART_FILES_IGNORE) != base
+    assert key("part_files", renamed, PART_FILES_IGNORE) != base
+    assert key("analyses", pvc, ANALYSES_IGNORE) != key("analyses", bvsr_spec, ANALYSES_IGNORE)
+    assert key("analyses", renamed, ANALYSES_IGNORE) != key("analyses", bvsr_spec, ANALYSES_IGNORE)
 
 
 def _files(root: Path) -> dict[str, bytes]:

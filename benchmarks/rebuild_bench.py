@@ -25,8 +25,8 @@ ROOT = Path(__file__).resolve().parents[1]
 EDITS = {
     "rod material": ("vertebra", "material", '"PVC"'),
     "rod diameter": ("vertebra", "diameter_mm", "5.0"),
-    "pocket clearance": ("fabrication", "pocket_clearance_mm", "0.15"),
-    "taper": ("taper", "half_angle_deg", "1.0"),
+    "pocket clearance": ("fabrication", "pocket_clearance_mm", "0.08"),
+    "taper": ("taper", "half_angle_deg", "0.2"),
     "segment count": ("", "segments", "3"),
     "casting shrinkage": ("casting", "shrinkage_percent", "0.4"),
     "printer volume": ("fabrication_package", "printer_x_mm", "220.0"),
@@ -82,6 +82,8 @@ def main() -> None:
             path.write_text(edited(text, table, key, value))
             try:
                 run(name, path)
+            except ValueError as exc:  # a ParamError: the edit makes an infeasible tail
+                print(f"{name:18} refused at load: {str(exc).splitlines()[-1].strip()}", flush=True)
             finally:
                 path.unlink()
         print()

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from .parameters.load import ParamError
+from .parts._kernel import GeometryError
 from .pipeline import BuildResult, OutputError, build_export
 
 DEBOUNCE_MS = 400
@@ -56,8 +57,8 @@ def watch(params: str | Path, out_dir: str | Path | None, say: Callable[[str], N
     def rebuild() -> None:
         try:
             res = build(params, out_dir, progress)
-        except (ParamError, OutputError) as exc:
-            say(f"not rebuilt, the last good export stays: {exc}")
+        except (ParamError, OutputError, GeometryError) as exc:
+            say(f"not rebuilt, the last good export stays: {' '.join(str(exc).split())}")
             return
         failed = [r for r in res.results if r.passed is False]
         reused = [s["stage"] for s in res.stages if s["status"] == "reused"]

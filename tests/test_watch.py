@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 from bvsr_cad.parameters.load import ParamError
+from bvsr_cad.parts._kernel import GeometryError
 from bvsr_cad.pipeline import BuildResult
 from bvsr_cad.watch import changed_keys, watch
 
@@ -38,6 +39,8 @@ def test_watch_rebuilds_on_save_and_survives_a_bad_edit(tmp_path):
         calls.append(text)
         if "oops" in text:
             raise ParamError(path, ["vertebra.material = 'oops': not a material"])
+        if "kernel" in text:
+            raise GeometryError("panel0: the kernel produced 2 solids instead of one")
         return BuildResult(tmp_path / "out", [], 0.01, [{"stage": "part files", "status": "reused", "seconds": 0.0},
                                                          {"stage": "analyses", "status": "built", "seconds": 0.0}])
 
@@ -52,6 +55,8 @@ def test_watch_rebuilds_on_save_and_survives_a_bad_edit(tmp_path):
     assert _wait(lambda: any("rebuilt: analyses; reused: part files" in line for line in lines))
     params.write_text('name = "t"\n[vertebra]\nmaterial = "oops"\n')
     assert _wait(lambda: any("the last good export stays" in line and "oops" in line for line in lines))
+    params.write_text('name = "t"\n[vertebra]\nmaterial = "kernel"\n')
+    assert _wait(lambda: any("the last good export stays" in line and "2 solids" in line for line in lines))
     stop.set()
     th.join(10)
     assert not th.is_alive() and lines[-1] == "stopped"

@@ -131,25 +131,12 @@ def cmd_simulate(args) -> int:
 
 
 def _simulate_cart(args, spec, limits, say) -> int:
-    from .analysis.predict import Predictor
     from .exporters.plots import plot_cart
-    from .parameters import paper
-    from .sim import simulate_cart
+    from .sim import cart_comparison, simulate_cart
 
     runs = simulate_cart(spec, limits, args.pressure_bar, progress=say, supply=args.supply)
     say("Eq 20-22 on the Eq 6-12 tail model")
-    pred = Predictor.from_spec(spec)
-    reported = {("extension", "angle"): paper.CART_ANGLE_EXTENSION_5BAR, ("waggle", "angle"): paper.CART_ANGLE_WAGGLE_5BAR,
-                ("extension", "lift"): paper.CART_LIFT_9MM}
-    rows = []
-    for r in runs:
-        items = [("angle", "deg", r.peak_angle_deg, pred.cart_peak_angle(args.pressure_bar, r.motion))]
-        if r.motion != "waggle":
-            items.append(("lift", "mm", r.lift_mm, pred.cart_lift(args.pressure_bar, r.motion)))
-        for what, unit, mj, eq in items:
-            ref = reported.get((r.motion, what)) if args.pressure_bar == 5 else None
-            rows.append({"motion": r.motion, "quantity": f"cart_{what}", "unit": unit, "mujoco": mj, "eq20_22": eq,
-                         "paper": None if ref is None else ref.value})
+    rows = cart_comparison(spec, runs, args.pressure_bar)
     out = Path(args.output) if args.output else Path("exports") / spec.name / "simulate"
     out.mkdir(parents=True, exist_ok=True)
     png = out / f"cart_{args.pressure_bar:g}bar.png"

@@ -237,32 +237,26 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
                                              for name in asm.parts}
         part_key = stage_key("part_files", spec=spec_without(spec, *PART_FILES_IGNORE))
         part_hit = cache.get(part_key) if cache else None
-        if part_hit is not None:
-            copy_tree(part_hit, tmp)
-            previews = json.loads((tmp / "previews.json").read_text())
-            (tmp / "previews.json").unlink()
+
+        def write_parts(folder: Path) -> None:
+            """The parts' STEP and STL, the assembly STEP and the previews (their paths in previews.json)."""
+            (folder / "step").mkdir()
+            (folder / "stl").mkdir()
+            for name, part in asm.parts.items():
+                say(f"export {name} (STEP, STL)")
+                write_part_step(part, folder / files[name]["step"])
+                write_part_stl(part, folder / files[name]["stl"])
+            say("export assembly STEP")
+            write_assembly_step(asm, folder / "step" / "assembly.step")
+            say("previews (off-screen renders)")
+            (folder / "previews.json").write_text(json.dumps(render_previews(asm, folder)))
+
+        if cache is None:
+            write_parts(tmp)
         else:
-            def write_parts(folder: Path) -> dict[str, str]:
-                (folder / "step").mkdir()
-                (folder / "stl").mkdir()
-                for name, part in asm.parts.items():
-                    say(f"export {name} (STEP, STL)")
-                    write_part_step(part, folder / files[name]["step"])
-                    write_part_stl(part, folder / files[name]["stl"])
-                say("export assembly STEP")
-                write_assembly_step(asm, folder / "step" / "assembly.step")
-                say("previews (off-screen renders)")
-                return render_previews(asm, folder)
-
-            if cache is not None:
-                def fill(folder: Path) -> None:
-                    (folder / "previews.json").write_text(json.dumps(write_parts(folder)))
-
-                copy_tree(cache.put(part_key, fill), tmp)
-                previews = json.loads((tmp / "previews.json").read_text())
-                (tmp / "previews.json").unlink()
-            else:
-                previews = write_parts(tmp)
+            copy_tree(part_hit if part_hit is not None else cache.put(part_key, write_parts), tmp)
+        previews = json.loads((tmp / "previews.json").read_text())
+        (tmp / "previews.json").unlink()
         log.record("part files and previews", part_hit is not None, time.perf_counter() - t)
         shutil.copyfile(params, tmp / "params.toml")
         manifest = manifest_dict(asm, params_sha256(params), files, "step/assembly.step")

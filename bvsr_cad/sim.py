@@ -29,6 +29,7 @@ from . import units
 from .assembly.build import build_assembly
 from .assembly.robot import robot_model
 from .models.dynamics import ramp_pa
+from .models.platform import front_lift_mm
 from .exporters.mjcf import mjcf_tree, write_mjcf
 from .exporters.robot_meshes import write_robot_meshes
 from .parameters.tables import TailSpec
@@ -59,6 +60,22 @@ def pressure_input(spec: TailSpec, p0_pa: float, supply: str, places: tuple[int,
 
 class SimulationInputError(ValueError):
     """A simulation argument outside what the model allows (exit code 2)."""
+
+
+def _supply(spec: TailSpec, supply: str | None) -> str:
+    """The pressure input asked for, or the spec's (``pneumatics.model``)."""
+    supply = supply or spec.pneumatics.model
+    if supply not in ("ramp", "valve"):
+        raise SimulationInputError(f"--supply {supply}: allowed ramp, valve")
+    return supply
+
+
+def _without_supply_lag(root: ET.Element) -> None:
+    """The inputs here are the chamber pressure itself (Eq 13 or the supply model's trace): the
+    exported actuators' own supply lag would filter it a second time."""
+    for act in root.iter("general"):
+        act.attrib.pop("dyntype", None)
+        act.attrib.pop("dynprm", None)
 
 
 @dataclass
@@ -95,11 +112,7 @@ def _model_xml(spec: TailSpec, theta_max_rad: list[float], folder: Path, payload
         m = units.g_to_kg(payload_g)
         i = 0.4 * m * r * r
         ET.SubElement(payload, "inertial", pos="0 0 0.01", mass=f"{m:.6g}", diaginertia=f"{i:.6g} {i:.6g} {i:.6g}")
-    # The pressure input below is the chamber pressure itself (Eq 13 or the supply model's trace):
-    # the actuators' own supply lag would filter it a second time.
-    for act in root.iter("general"):
-        act.attrib.pop("dyntype", None)
-        act.attrib.pop("dynprm", None)
+    _without_supply_lag(root)
     sensor = ET.SubElement(root, "sensor")
     ET.SubElement(sensor, "force", name="root_force", site="root_ft")
     ET.SubElement(sensor, "torque", name="root_torque", site="root_ft")
@@ -166,11 +179,13 @@ def joint_limits_rad(spec: TailSpec, progress: Callable[[str], None] | None = No
 
 
 def segment_extension(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float, supply: str,
-                      seconds: float = 0.5, progress: Callable[[str], None] | None = None):
-    """One standalone segment of ``spec`` pulsed in extension: (time s, bending angle deg, its rate
-    deg/s, the peak rate before the angle passes 38 deg)."""
+                      seconds: float = 0.5, progress: Callable[[str], None] | None = None,
+                      pressure: Callable[[float], float] | None = None):
+    """One standalone segment of ``spec`` pulsed in extension (``pressure``: the line's input, by
+    default :func:`pressure_input` of ``supply``): (time s, bending angle deg, its rate deg/s, the
+    peak rate before the angle passes 38 deg)."""
     say = progress or (lambda _m: None)
-    pressure = pressure_input(spec, pressure_bar * units.PA_PER_BAR, supply)
+    pressure = pressure or pressure_input(spec, pressure_bar * units.PA_PER_BAR, _supply(spec, supply))
     one = dataclasses.replace(spec, name=f"{spec.name}_segment", segments=1)
     with tempfile.TemporaryDirectory() as tmp:
         say("segment model")
@@ -192,12 +207,9 @@ def simulate(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float, pa
     """
     say = progress or (lambda _m: None)
     check_inputs(spec, pressure_bar, payload_g)
-    supply = supply or spec.pneumatics.model
-    if supply not in ("ramp", "valve"):
-        raise SimulationInputError(f"--supply {supply}: allowed ramp, valve")
-    p0 = pressure_bar * units.PA_PER_BAR
-    pressure = pressure_input(spec, p0, supply)
-    t, angle, rate, peak_v = segment_extension(spec, theta_max_rad, pressure_bar, supply, seconds, say)
+    supply = _supply(spec, supply)
+    pressure = pressure_input(spec, pressure_bar * units.PA_PER_BAR, supply)
+    t, angle, rate, peak_v = segment_extension(spec, theta_max_rad, pressure_bar, supply, seconds, say, pressure)
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         say("tail model")
@@ -224,7 +236,7 @@ class CartRun:
 
     @property
     def lift_mm(self) -> float:
-        return float(1e3 * self.wheelbase_m * math.sin(math.radians(max(0.0, float(np.max(self.pitch_deg))))))
+        return front_lift_mm(self.wheelbase_m, np.radians(self.pitch_deg))
 
 
 def simulate_cart(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float,
@@ -239,9 +251,7 @@ def simulate_cart(spec: TailSpec, theta_max_rad: list[float], pressure_bar: floa
 
     say = progress or (lambda _m: None)
     check_inputs(spec, pressure_bar, 0.0)
-    supply = supply or spec.pneumatics.model
-    if supply not in ("ramp", "valve"):
-        raise SimulationInputError(f"--supply {supply}: allowed ramp, valve")
+    supply = _supply(spec, supply)
     asm = build_assembly(spec)
     robot = robot_model(asm, theta_max_rad)
     runs = []
@@ -249,9 +259,7 @@ def simulate_cart(spec: TailSpec, theta_max_rad: list[float], pressure_bar: floa
         folder = Path(tmp)
         mesh_files = write_robot_meshes(robot, folder / "meshes")
         tree = cart_scene_tree(robot, mesh_files, spec.cart)
-        for act in tree.getroot().iter("general"):  # the input below is the chamber pressure itself
-            act.attrib.pop("dyntype", None)
-            act.attrib.pop("dynprm", None)
+        _without_supply_lag(tree.getroot())
         path = folder / "scene_cart.xml"
         write_mjcf(path, tree)
         m = mujoco.MjModel.from_xml_path(str(path))
@@ -275,3 +283,24 @@ def simulate_cart(spec: TailSpec, theta_max_rad: list[float], pressure_bar: floa
                 yaw[n] = math.degrees(float(d.joint("cart_yaw").qpos[0]) - yaw0)
             runs.append(CartRun(motion, t, pitch, yaw, spec.cart.length_m))
     return runs
+
+
+def cart_comparison(spec: TailSpec, runs: list[CartRun], pressure_bar: float) -> list[dict]:
+    """Each run's cart figures from MuJoCo beside Eq 20-22 on the Eq 6-12 tail model, and the
+    paper's figure where it reports one at this pressure (Sec. IV-B, V-B: 5 bar)."""
+    from .analysis.predict import Predictor
+    from .parameters import paper
+
+    pred = Predictor.from_spec(spec)
+    reported = {("extension", "angle"): paper.CART_ANGLE_EXTENSION_5BAR, ("waggle", "angle"): paper.CART_ANGLE_WAGGLE_5BAR,
+                ("extension", "lift"): paper.CART_LIFT_9MM}
+    rows = []
+    for r in runs:
+        items = [("angle", "deg", r.peak_angle_deg, pred.cart_peak_angle(pressure_bar, r.motion))]
+        if r.motion != "waggle":
+            items.append(("lift", "mm", r.lift_mm, pred.cart_lift(pressure_bar, r.motion)))
+        for what, unit, mj, eq in items:
+            ref = reported.get((r.motion, what)) if pressure_bar == 5 else None
+            rows.append({"motion": r.motion, "quantity": f"cart_{what}", "unit": unit, "mujoco": mj, "eq20_22": eq,
+                         "paper": None if ref is None else ref.value})
+    return rows

@@ -228,22 +228,27 @@ def _panel_spans(robot: RobotModel, soas) -> float:
     return total
 
 
+def _dress(visual: ET.Element, asset: ET.Element, world: ET.Element) -> None:
+    """A scene's headlight, checker floor and overhead light."""
+    ET.SubElement(visual, "headlight", diffuse="0.6 0.6 0.6", ambient="0.3 0.3 0.3", specular="0 0 0")
+    ET.SubElement(asset, "texture", type="2d", name="groundplane", builtin="checker", mark="edge",
+                  rgb1="0.2 0.3 0.4", rgb2="0.1 0.2 0.3", markrgb="0.8 0.8 0.8", width="300", height="300")
+    ET.SubElement(asset, "material", name="groundplane", texture="groundplane", texuniform="true",
+                  texrepeat="5 5", reflectance="0.2")
+    ET.SubElement(world, "light", pos="0 0 1.5", dir="0 0 -1", directional="true")
+    ET.SubElement(world, "geom", name="floor", size="0 0 0.05", type="plane", material="groundplane")
+
+
 def scene_tree(model_file: str, name: str) -> ET.ElementTree:
     """A menagerie-style scene: the model, a floor, light and a mount block."""
     root = ET.Element("mujoco", model=f"{name} scene")
     ET.SubElement(root, "include", file=model_file)
     ET.SubElement(root, "statistic", center="0.15 0 0.4", extent="0.5")
     visual = ET.SubElement(root, "visual")
-    ET.SubElement(visual, "headlight", diffuse="0.6 0.6 0.6", ambient="0.3 0.3 0.3", specular="0 0 0")
-    ET.SubElement(visual, "global", azimuth="120", elevation="-20")
     asset = ET.SubElement(root, "asset")
-    ET.SubElement(asset, "texture", type="2d", name="groundplane", builtin="checker", mark="edge",
-                  rgb1="0.2 0.3 0.4", rgb2="0.1 0.2 0.3", markrgb="0.8 0.8 0.8", width="300", height="300")
-    ET.SubElement(asset, "material", name="groundplane", texture="groundplane", texuniform="true",
-                  texrepeat="5 5", reflectance="0.2")
     world = ET.SubElement(root, "worldbody")
-    ET.SubElement(world, "light", pos="0 0 1.5", dir="0 0 -1", directional="true")
-    ET.SubElement(world, "geom", name="floor", size="0 0 0.05", type="plane", material="groundplane")
+    _dress(visual, asset, world)
+    ET.SubElement(visual, "global", azimuth="120", elevation="-20")
     ET.SubElement(world, "geom", name="mount_block", type="box", size="0.03 0.05 0.225",
                   pos=_vec((-0.03, 0.0, MOUNT_HEIGHT_M / 2)), rgba="0.3 0.3 0.3 1", contype="0", conaffinity="0")
     ET.indent(root)
@@ -274,10 +279,8 @@ def cart_scene_tree(robot: RobotModel, mesh_files: dict[str, str], cart, mesh_di
     mount = world.find("body[@name='bvsr_mount']")
     world.remove(mount)
     visual = ET.Element("visual")
-    ET.SubElement(visual, "headlight", diffuse="0.6 0.6 0.6", ambient="0.3 0.3 0.3", specular="0 0 0")
     root.insert(list(root).index(root.find("asset")), visual)
-    ET.SubElement(world, "light", pos="0 0 1.5", dir="0 0 -1", directional="true")
-    ET.SubElement(world, "geom", name="floor", size="0 0 0.05", type="plane", rgba="0.25 0.3 0.35 1")
+    _dress(visual, root.find("asset"), world)
     r, t = CART_WHEEL_RADIUS_M, CART_DECK_THICKNESS_M
     length, width, m = cart.length_m, cart.width_m, cart.mass_kg
     body = ET.SubElement(world, "body", name="cart", pos=_vec((0.0, 0.0, r)))

@@ -58,7 +58,12 @@ class PlatformMotion:
         return float(np.degrees(np.max(np.abs(self.alpha_rad))))
 
     def lift_mm(self, wheelbase_m: float) -> float:
-        return float(1e3 * wheelbase_m * np.sin(np.max(self.alpha_rad)))
+        return front_lift_mm(wheelbase_m, self.alpha_rad)
+
+
+def front_lift_mm(wheelbase_m: float, pitch_rad: np.ndarray) -> float:
+    """How high the front wheel rises over a pitch trace (rear axle as hinge; 0 while it rests)."""
+    return float(units.m_to_mm(wheelbase_m * np.sin(max(0.0, float(np.max(pitch_rad))))))
 
 
 def platform_motion(platform: Platform, tail: TailOnPlatform, time_s: np.ndarray, beta_rad: np.ndarray,
@@ -94,4 +99,4 @@ def platform_motion(platform: Platform, tail: TailOnPlatform, time_s: np.ndarray
     return PlatformMotion(fine, out, spline(fine))
 
 
-__all__ = ["Platform", "TailOnPlatform", "PlatformMotion", "platform_motion"]
+__all__ = ["Platform", "TailOnPlatform", "PlatformMotion", "platform_motion", "front_lift_mm"]

@@ -28,13 +28,12 @@ import numpy as np
 from . import units
 from .assembly.build import build_assembly
 from .assembly.robot import robot_model
-from .models.dynamics import ramp_pa
+from .models.dynamics import VELOCITY_WINDOW_DEG, ramp_pa
 from .models.platform import front_lift_mm
 from .exporters.mjcf import mjcf_tree, write_mjcf
 from .exporters.robot_meshes import write_robot_meshes
 from .parameters.tables import TailSpec
 
-VELOCITY_WINDOW_DEG = 38.0  # the paper measures the velocity up to this bending angle
 EXTENSION_LINES = (3, 4)
 SETTLE_S = 0.3  # the two ventral SOAs push: the tail bends dorsally (+Y)
 

@@ -26,7 +26,8 @@ from ..assembly.bodies import moving_body, tip_distance_m
 from ..assembly.build import Assembly, build_assembly
 from ..assembly.pneumatic_lines import line_supply
 from ..models.actuator import soa_force_law
-from ..models.dynamics import G_M_S2, JointModel, Trajectory, com_position_m, ramp_pa, simulate_joint
+from ..models.dynamics import (G_M_S2, VELOCITY_WINDOW_DEG, JointModel, Trajectory, com_position_m, ramp_pa,
+                               simulate_joint)
 from ..models.kinematics import joint_geometries
 from ..models.platform import Platform, TailOnPlatform, platform_motion
 from ..models.rod import rod_section
@@ -87,7 +88,7 @@ class Predictor:
 
     def segment_pulse(self, motion: str, pressure_bar: float) -> Trajectory:
         model = self.joint_model(1, self.spec.joints_per_segment)
-        return self.pulse(model, motion, pressure_bar, stop_angle_deg=38.0)
+        return self.pulse(model, motion, pressure_bar, stop_angle_deg=VELOCITY_WINDOW_DEG)
 
     def tail_pulse(self, motion: str, pressure_bar: float, payload_g: float, seconds: float = PULSE_SECONDS
                    ) -> tuple[JointModel, Trajectory]:

@@ -11,6 +11,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from ..models.dynamics import VELOCITY_WINDOW_DEG  # noqa: E402
 from ..parameters import paper  # noqa: E402
 
 
@@ -57,7 +58,7 @@ def plot_simulation(res, path: Path, title: str) -> None:
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
     ax = axes[0]
     ax.plot(res.time_s * 1000, res.segment_angle_deg, color="tab:orange")
-    ax.axhline(38.0, color="grey", lw=0.8, ls="--", label="38 deg window")
+    ax.axhline(VELOCITY_WINDOW_DEG, color="grey", lw=0.8, ls="--", label=f"{VELOCITY_WINDOW_DEG:g} deg window")
     ax.set(xlabel="time [ms]", ylabel="segment bending angle [deg]", title="one segment, extension")
     ax.legend(loc="lower right")
     ax = axes[1]

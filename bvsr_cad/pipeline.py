@@ -28,6 +28,7 @@ from .checks.result import CheckResult
 from .checks.run import run_checks
 from .exporters.analysis_files import write_analyses
 from .exporters.cad import write_assembly_step, write_part_step, write_part_stl
+from .exporters.drawings import stamp_drawings, write_drawing_sheets
 from .exporters.manifest import manifest_dict, write_manifest
 from .exporters.mold_files import write_molds
 from .exporters.fabrication_files import write_fabrication
@@ -149,6 +150,10 @@ PART_FILES_IGNORE = ("materials", "use", "vertebra.material", "actuation", "anal
 #: package (of which only the tube lengths, for the supply model); the name decides whether the
 #: calibration's measurements are this tail's.
 ANALYSES_IGNORE = ("robot", "casting", "fabrication_package")
+#: The drawings' views and hole tables are the panels' and the mold set's geometry: the part files'
+#: inputs and the molds' (``casting``); the title block (tail name, materials, processes, the params
+#: SHA-256) is stamped at every build, outside the cache.
+DRAWINGS_IGNORE = tuple(k for k in PART_FILES_IGNORE if k != "casting") + ("name",)
 
 
 @dataclass
@@ -266,6 +271,17 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         mold_set = build_mold_set(asm)
         molds = write_molds(asm, mold_set, tmp, say)
         log.record("molds", False, time.perf_counter() - t)
+        t = time.perf_counter()
+        say("drawings (SVG sheets)")
+        drawings_key = stage_key("drawings", spec=spec_without(spec, *DRAWINGS_IGNORE))
+        drawings_hit = cache.get(drawings_key) if cache else None
+        draw = lambda folder: write_drawing_sheets(asm, mold_set, folder)  # noqa: E731
+        if cache is None:
+            draw(tmp)
+        else:
+            copy_tree(drawings_hit if drawings_hit is not None else cache.put(drawings_key, draw), tmp)
+        manifest.update(stamp_drawings(tmp, asm, mold_set, params_sha256(params)))
+        log.record("drawings", drawings_hit is not None, time.perf_counter() - t)
         t = time.perf_counter()
         say("rigid comparison tail")
         pieces = build_rigid_twin(asm)

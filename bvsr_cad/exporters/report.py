@@ -332,6 +332,19 @@ def viewer_section(manifest: dict[str, Any]) -> str:
     ])
 
 
+def drawings_section(manifest: dict[str, Any]) -> str:
+    """Links to the drawing sheets (one per panel and mold part), or nothing for an export without them."""
+    sheets = manifest.get("drawings", {}).get("sheets", [])
+    if not sheets:
+        return ""
+    rows = "".join(f"<tr><td><a href='{_e(s['svg'])}'>{_e(s['item'])}</a></td><td>{_e(s['kind'])}</td>"
+                   f"<td class=num>{s['holes']}</td><td><code>{_e(s['sha256'][:12])}</code></td></tr>" for s in sheets)
+    return ("<h2>Drawings</h2><p class=muted>One A3 sheet per panel and mold part: outline views, overall "
+            "dimensions, the hole table (position, diameter, through or blind, thread and tap drill) and the title "
+            "block with the params SHA-256.</p><table><tr><th>sheet</th><th>kind</th><th>hole-table rows</th>"
+            f"<th>sha256</th></tr>{rows}</table>")
+
+
 def write_report(root: Path, manifest: dict[str, Any]) -> dict[str, Any]:
     """Write ``report.html`` and its pictures (``report/``) under ``root``; returns the manifest's ``report``."""
     out = root / "report"
@@ -406,6 +419,8 @@ def write_report(root: Path, manifest: dict[str, Any]) -> dict[str, Any]:
         h.append("<h2>SOA mold set</h2><div class=grid>")
         h.append(_fig(molds["exploded_png"], "mold set, exploded along the pull directions"))
         h.append("</div>")
+
+    h.append(drawings_section(manifest))
 
     pngs = [p for p in _pngs(manifest.get("analysis", {})) if p != manifest.get("analysis", {}).get("measurements_png")]
     h.append("<h2>Analyses</h2>")

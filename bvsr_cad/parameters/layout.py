@@ -20,7 +20,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .standard_parts import metric
+from .standard_parts import MetricSize, metric, size_for_tap_drill
 from .tables import AUTO, TailSpec
 
 N_SOA = 5
@@ -42,14 +42,28 @@ def polar(radius_mm: float, angle_deg: float) -> tuple[float, float]:
 
 
 @dataclass(frozen=True)
+class Tapped:
+    """A bore drilled (printed) at a tap drill and tapped after printing."""
+
+    size: MetricSize
+    drill_mm: float  #: the nominal tap drill (the printed bore adds fabrication.hole_compensation_mm)
+
+    @property
+    def designation(self) -> str:
+        return f"M{self.size.diameter_mm:g}x{self.size.pitch_mm:g}"
+
+
+@dataclass(frozen=True)
 class Cyl:
-    """A cylinder from p0 to p1 (panel frame, mm): a cut unless ``boss``."""
+    """A cylinder from p0 to p1 (part frame, mm): a cut unless ``boss`` or ``pin``."""
 
     name: str
-    role: str  # pocket, channel, port, tube, tube_port, feed, rod, setscrew, insert, lightening, boss
+    role: str  # pocket, channel, port, tube, tube_port, feed, rod, setscrew, insert, lightening, boss; molds: bolt,
+    #            pin, pin_socket, gate, vent, flange_pocket
     p0: tuple[float, float, float]
     p1: tuple[float, float, float]
     diameter_mm: float
+    thread: Tapped | None = None  #: tapped after printing (the drawings' hole tables)
 
     @property
     def xy(self) -> tuple[float, float]:
@@ -113,11 +127,24 @@ def hole_d(spec: TailSpec, nominal_mm: float) -> float:
     return nominal_mm + spec.fabrication.hole_compensation_mm
 
 
+def rod_thread(spec: TailSpec) -> Tapped | None:
+    """The rod socket's thread (a ``threaded`` socket), or None (a set-screw socket)."""
+    if spec.vertebra.socket != "threaded":
+        return None
+    size = metric(spec.vertebra.diameter_mm)
+    return Tapped(size, size.tap_drill_mm)
+
+
+def tapped(drill_mm: float) -> Tapped:
+    """The thread a parameter file's tap drill is for (the nearest ISO size)."""
+    return Tapped(size_for_tap_drill(drill_mm), drill_mm)
+
+
 def rod_bore_mm(spec: TailSpec) -> float:
-    d = spec.vertebra.diameter_mm
-    if spec.vertebra.socket == "threaded":
-        return hole_d(spec, metric(d).tap_drill_mm)
-    return hole_d(spec, d + spec.socket.rod_clearance_mm)
+    thread = rod_thread(spec)
+    if thread is not None:
+        return hole_d(spec, thread.drill_mm)
+    return hole_d(spec, spec.vertebra.diameter_mm + spec.socket.rod_clearance_mm)
 
 
 def tube_hole_mm(spec: TailSpec) -> float:
@@ -186,7 +213,7 @@ def panel_layout(spec: TailSpec, k: int, half_angle: float | None = None) -> Pan
                             hole_d(spec, j.channel_diameter_mm)))
         elif kind == "root":
             cuts.append(Cyl(f"fitting_port_{i}", "port", (*hi_xy, -1e-3), (*hi_xy, t + 1e-3),
-                            hole_d(spec, spec.mount.fitting_tap_drill_mm)))
+                            hole_d(spec, spec.mount.fitting_tap_drill_mm), tapped(spec.mount.fitting_tap_drill_mm)))
 
     # Tubes of the distal segments: segment s >= 2 starts at boundary panel p_s.
     d_tube = tube_hole_mm(spec)
@@ -216,7 +243,7 @@ def panel_layout(spec: TailSpec, k: int, half_angle: float | None = None) -> Pan
 
     # Vertebra socket.
     d_rod = rod_bore_mm(spec)
-    cuts.append(Cyl("rod_bore", "rod", (0.0, 0.0, -1e-3), (0.0, 0.0, t + 1e-3), d_rod))
+    cuts.append(Cyl("rod_bore", "rod", (0.0, 0.0, -1e-3), (0.0, 0.0, t + 1e-3), d_rod, rod_thread(spec)))
     if spec.vertebra.socket == "set_screw":
         boss_d = d_rod + 2 * spec.socket.boss_wall_mm
         h = spec.socket.boss_height_mm
@@ -229,7 +256,7 @@ def panel_layout(spec: TailSpec, k: int, half_angle: float | None = None) -> Pan
             zc = t + h / 2.0
         # Radial set screw along -Y (ventral midline, between SOA 3 and SOA 4).
         cuts.append(Cyl("set_screw", "setscrew", (0.0, 0.0, zc), (0.0, -boss_d, zc),
-                        hole_d(spec, spec.socket.set_screw_tap_drill_mm)))
+                        hole_d(spec, spec.socket.set_screw_tap_drill_mm), tapped(spec.socket.set_screw_tap_drill_mm)))
         z_lo, z_hi = bosses[-1].z_range
         cuts.append(Cyl("rod_bore_boss", "rod", (0.0, 0.0, z_lo - 1e-3), (0.0, 0.0, z_hi + 1e-3), d_rod))
 

@@ -44,6 +44,7 @@ from dataclasses import dataclass, field
 import build123d as bd
 import numpy as np
 
+from ..parameters.layout import Cyl
 from ..parameters.molds import PIN_ROOT_MM, SOCKET_EXTRA_DEPTH_MM, mold_dimensions, mold_problems
 from ..parameters.tables import Casting, SoaTable
 from ._kernel import PrintPosed, GeometryError, cut_all, cylinder_between, fuse_all, location, single_solid
@@ -68,6 +69,7 @@ class MoldPart(PrintPosed):
     print_transform: Matrix  # 4x4, cast frame -> print frame
     parting_planes: tuple[tuple[tuple[float, float, float], tuple[float, float, float]], ...]  # (point, normal)
     note: str = ""
+    features: tuple[Cyl, ...] = ()  #: its round holes and pins, as cut and fused (the drawings' hole tables)
 
     @property
     def sacrificial(self) -> bool:
@@ -170,32 +172,42 @@ def mold_set(soa: SoaTable, flange_diameter_mm: float, casting: Casting) -> Mold
     r_gate = dims.channel_radius_mm(c.gate_diameter_mm)
     r_vent = dims.channel_radius_mm(c.vent_diameter_mm)
 
-    # --- Features shared by several parts.
+    # --- Features shared by several parts (declared once: the solids are cut and fused from these).
     z_bot, z_top = dims.z_bottom_mm, dims.z_top_mm
-    bolts = [cylinder_between(_uez(su * bolt_uv, se * bolt_uv, z_bot - 1.0), _uez(su * bolt_uv, se * bolt_uv,
-                                                                                     z_top + 1.0),
-                              c.bolt_hole_diameter_mm)
-             for su in (1, -1) for se in (1, -1)]
+    bolts_f = [Cyl(f"bolt_{i}", "bolt", _uez(su * bolt_uv, se * bolt_uv, z_bot - 1.0),
+                   _uez(su * bolt_uv, se * bolt_uv, z_top + 1.0), c.bolt_hole_diameter_mm)
+               for i, (su, se) in enumerate(((1, 1), (1, -1), (-1, 1), (-1, -1)), start=1)]
     pin_len, sock_len = c.pin_length_mm, c.pin_length_mm + SOCKET_EXTRA_DEPTH_MM
     z_mid = (z_lo + z_hi) / 2.0
     # half_a -> half_b pins on the parting plane, either side of the cavity.
-    ab_pins = [cylinder_between(_uez(PIN_ROOT_MM, se * rho_pin, z_mid), _uez(-pin_len, se * rho_pin, z_mid),
-                                c.pin_diameter_mm) for se in (1, -1)]
-    ab_sockets = [cylinder_between(_uez(0.1, se * rho_pin, z_mid), _uez(-sock_len, se * rho_pin, z_mid), socket_d)
-                  for se in (1, -1)]
+    ab_pins_f = [Cyl(f"pin_{i}", "pin", _uez(PIN_ROOT_MM, se * rho_pin, z_mid), _uez(-pin_len, se * rho_pin, z_mid),
+                     c.pin_diameter_mm) for i, se in enumerate((1, -1), start=1)]
+    ab_sockets_f = [Cyl(f"socket_{i}", "pin_socket", _uez(0.1, se * rho_pin, z_mid),
+                        _uez(-sock_len, se * rho_pin, z_mid), socket_d) for i, se in enumerate((1, -1), start=1)]
     # Bottom plate and lid pins, one into each half on the pull axis.
-    plate_pins = [cylinder_between(_uez(su * rho_pin, 0, z_lo - PIN_ROOT_MM), _uez(su * rho_pin, 0, z_lo + pin_len),
-                                   c.pin_diameter_mm) for su in (1, -1)]
-    lid_pins = [cylinder_between(_uez(su * rho_pin, 0, z_hi + PIN_ROOT_MM), _uez(su * rho_pin, 0, z_hi - pin_len),
-                                 c.pin_diameter_mm) for su in (1, -1)]
-    plate_sockets = [cylinder_between(_uez(su * rho_pin, 0, z_lo - 0.1), _uez(su * rho_pin, 0, z_lo + sock_len),
-                                      socket_d) for su in (1, -1)]
-    lid_sockets = [cylinder_between(_uez(su * rho_pin, 0, z_hi + 0.1), _uez(su * rho_pin, 0, z_hi - sock_len),
-                                    socket_d) for su in (1, -1)]
-
-    gate = cylinder_between((r_gate, 0.0, z_bot - 1.0), (r_gate, 0.0, 0.0), c.gate_diameter_mm)
+    plate_pins_f = [Cyl(f"pin_{i}", "pin", _uez(su * rho_pin, 0, z_lo - PIN_ROOT_MM),
+                        _uez(su * rho_pin, 0, z_lo + pin_len), c.pin_diameter_mm) for i, su in enumerate((1, -1), 1)]
+    lid_pins_f = [Cyl(f"pin_{i}", "pin", _uez(su * rho_pin, 0, z_hi + PIN_ROOT_MM),
+                      _uez(su * rho_pin, 0, z_hi - pin_len), c.pin_diameter_mm) for i, su in enumerate((1, -1), 1)]
+    plate_sockets_f = [Cyl(f"plate_socket_{i}", "pin_socket", _uez(su * rho_pin, 0, z_lo - 0.1),
+                           _uez(su * rho_pin, 0, z_lo + sock_len), socket_d) for i, su in enumerate((1, -1), 1)]
+    lid_sockets_f = [Cyl(f"lid_socket_{i}", "pin_socket", _uez(su * rho_pin, 0, z_hi + 0.1),
+                         _uez(su * rho_pin, 0, z_hi - sock_len), socket_d) for i, su in enumerate((1, -1), 1)]
+    gate_f = Cyl("gate", "gate", (r_gate, 0.0, z_bot - 1.0), (r_gate, 0.0, 0.0), c.gate_diameter_mm)
     vents_xy = [(r_vent, 0.0), (0.0, r_vent), (-r_vent, 0.0), (0.0, -r_vent)]
-    vents = [cylinder_between((x, y, h), (x, y, z_top + 1.0), c.vent_diameter_mm) for x, y in vents_xy]
+    vents_f = [Cyl(f"vent_{i}", "vent", (x, y, h), (x, y, z_top + 1.0), c.vent_diameter_mm)
+               for i, (x, y) in enumerate(vents_xy, start=1)]
+    # The flange pockets the cast envelope leaves in the bottom plate and the lid (not cut from these).
+    d_fl = 2.0 * r_fl
+    plate_flange_f = Cyl("flange_pocket", "flange_pocket", (0.0, 0.0, 0.0), (0.0, 0.0, z_lo), d_fl)
+    lid_flange_f = Cyl("flange_pocket", "flange_pocket", (0.0, 0.0, h), (0.0, 0.0, z_hi), d_fl)
+
+    def solids(features: list[Cyl]) -> list[bd.Solid]:
+        return [cylinder_between(f.p0, f.p1, f.diameter_mm) for f in features]
+
+    bolts, ab_pins = solids(bolts_f), solids(ab_pins_f)
+    plate_pins, lid_pins = solids(plate_pins_f), solids(lid_pins_f)
+    gate, vents = solids([gate_f])[0], solids(vents_f)
     block = _uez_box(-w, w, -w, w, z_bot, z_top)
 
     # --- The parts.
@@ -205,13 +217,17 @@ def mold_set(soa: SoaTable, flange_diameter_mm: float, casting: Casting) -> Mold
     plane_lo = ((0.0, 0.0, z_lo), (0.0, 0.0, 1.0))
     plane_hi = ((0.0, 0.0, z_hi), (0.0, 0.0, 1.0))
 
+    def shell_features(side: int) -> tuple[Cyl, ...]:
+        mine = [f for f, su in zip(plate_sockets_f + lid_sockets_f + bolts_f, (1, -1, 1, -1, 1, 1, -1, -1))
+                if su == side]
+        return tuple(mine + (ab_pins_f if side > 0 else ab_sockets_f))
+
     def shell(side: int) -> bd.Solid:
         u0, u1 = (0.0, w) if side > 0 else (-w, 0.0)
         body = _uez_box(u0, u1, -w, w, z_lo, z_hi).cut(envelope)
-        mine = [s for s, su in zip(plate_sockets + lid_sockets, (1, -1, 1, -1)) if su == side]
-        body = cut_all(body, mine + [b for b, (su, _) in zip(bolts, ((1, 1), (1, -1), (-1, 1), (-1, -1)))
-                                     if su == side])
-        body = fuse_all(body, ab_pins) if side > 0 else cut_all(body, ab_sockets)
+        mine = [f for f in shell_features(side) if f.role != "pin"]
+        body = cut_all(body, solids(mine))
+        body = fuse_all(body, ab_pins) if side > 0 else body
         return single_solid(body, f"mold half_{'a' if side > 0 else 'b'}")
 
     half_a, half_b = shell(1), shell(-1)
@@ -223,16 +239,20 @@ def mold_set(soa: SoaTable, flange_diameter_mm: float, casting: Casting) -> Mold
     parts = {
         "half_a": MoldPart("half_a", "shell", half_a, tuple(float(v) for v in pull_a),
                            _as_matrix(_print_transform(z_axis, -pull_a, half_a)),
-                           (plane_diag, plane_lo, plane_hi), "printed lying on its back face, pins up"),
+                           (plane_diag, plane_lo, plane_hi), "printed lying on its back face, pins up",
+                           shell_features(1)),
         "half_b": MoldPart("half_b", "shell", half_b, tuple(float(v) for v in -pull_a),
                            _as_matrix(_print_transform(z_axis, pull_a, half_b)),
-                           (plane_diag, plane_lo, plane_hi), "printed lying on its back face"),
+                           (plane_diag, plane_lo, plane_hi), "printed lying on its back face",
+                           shell_features(-1)),
         "bottom_plate": MoldPart("bottom_plate", "bottom_plate", plate, (0.0, 0.0, -1.0),
                                  _as_matrix(_print_transform(pull_a, z_axis, plate)),
-                                 (plane_lo,), "forms the lower flange; gate from below"),
+                                 (plane_lo,), "forms the lower flange; gate from below",
+                                 (gate_f, plate_flange_f, *bolts_f, *plate_pins_f)),
         "lid": MoldPart("lid", "lid", lid, (0.0, 0.0, 1.0),
                         _as_matrix(_print_transform(pull_a, -z_axis, lid)),
-                        (plane_hi,), "forms the upper flange; printed upside down"),
+                        (plane_hi,), "forms the upper flange; printed upside down",
+                        (*vents_f, lid_flange_f, *bolts_f, *lid_pins_f)),
         "core": MoldPart("core", "core", core, None,
                          _as_matrix(_print_transform(np.array([1.0, 0, 0]), z_axis, core)),
                          (), "sacrificial: print in PVA/BVOH and dissolve, or cast in wax and melt out"),

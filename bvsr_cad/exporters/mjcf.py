@@ -1,6 +1,21 @@
 """MJCF writer: the tail for MuJoCo, driven by pressures, plus a scene.
 
-The chain of every bending joint is the URDF's, with equality constraints:
+Two chains (``chain`` of :func:`mjcf_tree`). The default files carry the *reduced* chain, a
+pseudo-rigid-body model that holds at a legged robot's 2-4 ms step: each bending joint is two
+universal joints on the arc's axis at L/6 from its ends (hinges ``jk_ax``, ``jk_ay`` at the first,
+``jk_by``, ``jk_bx`` at the second, held equal to the first by equality constraints) joined by a
+middle link ``jk_soft`` that carries the joint's whole deformable body (its B-rep inertia at rest);
+the chord and phi are consequences (:func:`bvsr_cad.models.kinematics.joint_transform_prb`: the
+rotation is Eq 2's exactly, the end point within 3.5e-4 L theta^4). Each hinge carries 2 E I / L
+(the two pivots' energies add up to (1/2)(E I / L) theta^2). The pivots turning opposite ways (a
+shear the exact chain does not have) are held by the equalities alone, and the SOAs' thrust pushes
+them over: stepped at 2 ms with the links' own inertia that mode grows. A fixed tendon per axis,
+``jk_shear_x`` = ``jk_ax`` - ``jk_bx`` (zero whenever the equalities hold), damps it with the
+SOAs' own bending damping c N r^2 / 2, so it adds nothing to the constant-curvature motion.
+The *exact* chain (``robot/bvsr_exact.xml``) is the URDF's,
+stepped at ``robot.timestep_s``.
+
+The exact chain of every bending joint is the URDF's, with equality constraints:
 ``jk_theta_b`` = ``jk_theta_a``, ``jk_phi_b`` = -``jk_phi``, and ``jk_chord``
 following ``jk_theta_a`` through an even quartic fitted to
 L (sin(theta_a) / theta_a - 1) (its largest error over the joint range is
@@ -31,13 +46,16 @@ tendon's energy 1/2 (k/3) (3 dl)^2 equals their sum 3 (1/2) k dl^2).
 
 from __future__ import annotations
 
+import dataclasses
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..assembly.robot import RobotModel, chord_joint_value
+from ..assembly.collision import Collision
+from ..assembly.robot import RobotModel, chord_joint_value, rest_pair
+from ..models.kinematics import PRB_PIVOT_FRACTION
 from .xml import num as _f
 from .xml import quat_wxyz as _quat
 from .xml import vec as _vec
@@ -59,6 +77,19 @@ PHI_DAMPING_NMS = 1e-4
 #: 90 deg, the same straight tail): extension and flexion, the tail's main
 #: motions, start without passing the singularity.
 PHI_REST_RAD = 1.5707963267948966
+#: The reduced chain's step: the largest of a legged robot's steps (1, 2, 3, 4 ms) at which, after
+#: 0.3 s of a held pressure pattern from rest, its tip stays within 2 mm of the same model stepped at
+#: 0.05 ms (tests/test_robot.py measures it; at 4 ms it stays within 5 mm). The exact chain keeps
+#: ``robot.timestep_s``: its chord slide and 0.1 mg virtual links need 0.2 ms (at 1 ms its tip ends
+#: 41 mm off, at 2 ms it explodes: issue 17). The per-segment model's couplings between the joints
+#: of a segment are soft too: it meets the 2 mm at 1 ms (1.5 mm; 3.3 mm at 2 ms).
+REDUCED_CHAIN_TIMESTEP_S = 2e-3
+REDUCED_PER_SEGMENT_TIMESTEP_S = 1e-3
+#: The chains an MJCF file can carry (``chain`` of :func:`mjcf_tree`).
+CHAINS = ("reduced", "exact")
+#: Per-segment model: the joints of a segment follow its first joint's (joint suffix, equality tag).
+SEGMENT_COUPLED = {"reduced": (("ax", "ay"), ("x", "y")), "exact": (("theta_a", "phi"), ("theta", "phi"))}
+_AXES = {"x": "1 0 0", "y": "0 1 0"}
 
 
 def chord_polynomial(arc_length_m: float, theta_a_max_rad: float) -> tuple[np.ndarray, float]:
@@ -73,20 +104,32 @@ def chord_polynomial(arc_length_m: float, theta_a_max_rad: float) -> tuple[np.nd
 
 
 def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
-              mesh_dir: str = "meshes") -> tuple[ET.ElementTree, dict]:
-    """The model as an element tree, and facts to record (chord error, counts)."""
+              mesh_dir: str = "meshes", chain: str = "reduced") -> tuple[ET.ElementTree, dict]:
+    """The model as an element tree, and facts to record (chord error, counts).
+
+    ``chain``: ``reduced``, the pseudo-rigid-body chain of the default files (see
+    module docstring), stepped at :data:`REDUCED_CHAIN_TIMESTEP_S` (per segment
+    :data:`REDUCED_PER_SEGMENT_TIMESTEP_S`); ``exact``, the URDF's chain with
+    its chord slide and couplings, stepped at ``robot.timestep_s``."""
+    if chain not in CHAINS:
+        raise ValueError(f"chain {chain!r}: allowed {', '.join(CHAINS)}")
     act = robot.actuation
     model = f"{robot.name}_segments" if per_segment else robot.name
-    root = ET.Element("mujoco", model=f"{robot.name}{'_per_segment' if per_segment else ''}")
+    root = ET.Element("mujoco", model=f"{robot.name}{'_per_segment' if per_segment else ''}"
+                                      f"{'_exact' if chain == 'exact' else ''}")
     ET.SubElement(root, "compiler", angle="radian", meshdir=mesh_dir, autolimits="true")
-    ET.SubElement(root, "option", timestep=_f(act.timestep_s), integrator="implicitfast")
+    timestep_s = act.timestep_s if chain == "exact" else (REDUCED_PER_SEGMENT_TIMESTEP_S if per_segment
+                                                          else REDUCED_CHAIN_TIMESTEP_S)
+    ET.SubElement(root, "option", timestep=_f(timestep_s), integrator="implicitfast")
     default = ET.SubElement(root, "default")
     top = ET.SubElement(default, "default", {"class": model})
     ET.SubElement(top, "joint", armature="1e-7")
     vis = ET.SubElement(top, "default", {"class": "visual"})
     ET.SubElement(vis, "geom", type="mesh", contype="0", conaffinity="0", group="2", density="0")
     col = ET.SubElement(top, "default", {"class": "collision"})
-    ET.SubElement(col, "geom", group="3", density="0", rgba="0.5 0.5 0.5 0.3")
+    # Self-contacts off (contype 1, conaffinity 0): see collision_geom. Anything with the default
+    # conaffinity 1 (a floor, a ball, a robot's legs) still collides with the tail.
+    ET.SubElement(col, "geom", group="3", density="0", rgba="0.5 0.5 0.5 0.3", contype="1", conaffinity="0")
     ET.SubElement(top, "site", size="0.001", rgba="1 0 0 1", group="4")
     asset = ET.SubElement(root, "asset")
     mats = {}
@@ -95,6 +138,9 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
             mats.setdefault(v.material, v.rgba)
             if not any(m.get("name") == v.name for m in asset.findall("mesh")):
                 ET.SubElement(asset, "mesh", name=v.name, file=mesh_files[v.name])
+        for c in link.collisions:
+            if c.kind == "mesh":
+                ET.SubElement(asset, "mesh", name=collision_mesh_name(c), file=mesh_files[collision_mesh_name(c)])
     for name, rgba in mats.items():
         ET.SubElement(asset, "material", name=name, rgba=_vec(rgba))
 
@@ -109,6 +155,20 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
         sites_by_link.setdefault(s.link, []).append(s)
     theta_lim = {b.name: b.theta_max_rad / 2 for b in robot.bending}
     stiff_half = 2.0 * act.rod_bending_stiffness_nm_rad
+
+    def contents(body, link, offset_m=0.0):
+        """A link's inertial, visuals, collisions and sites, ``offset_m`` along the body's Z."""
+        shift = np.array([0.0, 0.0, offset_m])
+        I = link.inertial.inertia
+        ET.SubElement(body, "inertial", pos=_vec(link.inertial.com + shift), mass=_f(link.inertial.mass_kg),
+                      fullinertia=_vec((I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])))
+        for v in link.visuals:
+            ET.SubElement(body, "geom", {"class": "visual", "mesh": v.name, "material": v.material,
+                                         "name": f"{link.name}_{v.name}_visual"})
+        for c in link.collisions:
+            collision_geom(body, c, shift)
+        for s in sites_by_link.get(link.name, []):
+            ET.SubElement(body, "site", name=s.name, pos=_vec(s.pos_m))
 
     def add_body(parent_el, link_name: str, joint=None):
         link = robot.links[link_name]
@@ -140,28 +200,49 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
                     lim = theta_lim[bj[0]]
                     jattrs.update(range=_vec((-lim, lim)), stiffness=_f(stiff_half))
             ET.SubElement(body, "joint", jattrs)
-        I = link.inertial.inertia
-        ET.SubElement(body, "inertial", pos=_vec(link.inertial.com), mass=_f(link.inertial.mass_kg),
-                      fullinertia=_vec((I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])))
-        for v in link.visuals:
-            ET.SubElement(body, "geom", {"class": "visual", "mesh": v.name, "material": v.material,
-                                         "name": f"{link_name}_{v.name}_visual"})
-        for i, c in enumerate(link.collisions):
-            T = np.asarray(c.T_link_geom)
-            ET.SubElement(body, "geom", {"class": "collision", "type": "cylinder", "name": f"{link_name}_collision{i}",
-                                         "size": _vec((c.radius_m, c.length_m / 2)), "pos": _vec(T[:3, 3])})
-        for s in sites_by_link.get(link_name, []):
-            ET.SubElement(body, "site", name=s.name, pos=_vec(s.pos_m))
+        contents(body, link)
         for j in children.get(link_name, []):
             add_body(body, j.child, j)
 
-    add_body(mount, robot.root)
+    def add_reduced(parent_el, k: int):
+        """Joint k's middle link (the whole deformable body) and panel k on it, then the rest."""
+        b = robot.bending[k - 1]
+        lim = _vec((-b.theta_max_rad / 2, b.theta_max_rad / 2))
+        d = PRB_PIVOT_FRACTION * b.arc_length_m
+        t_m = np.asarray(next(j for j in robot.joints if j.child == f"{b.name}_after_phi").T_parent_joint)[2, 3]
+        half_a, half_b = robot.links[f"{b.name}_after_theta_a"], robot.links[f"{b.name}_after_chord"]
+        soft = dataclasses.replace(half_a, name=f"{b.name}_soft",
+                                   inertial=rest_pair(half_a.inertial, half_b.inertial, b.arc_length_m))
+        body = ET.SubElement(parent_el, "body", name=soft.name, pos=_vec((0, 0, t_m)))
+        for axis in "xy":
+            ET.SubElement(body, "joint", name=f"{b.name}_a{axis}", type="hinge", axis=_AXES[axis],
+                          pos=_vec((0, 0, d)), range=lim, stiffness=_f(stiff_half))
+        contents(body, soft)
+        panel = ET.SubElement(body, "body", name=b.tip_link, pos=_vec((0, 0, b.arc_length_m)))
+        for axis in "yx":
+            ET.SubElement(panel, "joint", name=f"{b.name}_b{axis}", type="hinge", axis=_AXES[axis],
+                          pos=_vec((0, 0, -d)), range=lim, stiffness=_f(stiff_half))
+        contents(panel, robot.links[b.tip_link])
+        if k < len(robot.bending):
+            add_reduced(panel, k + 1)
+
+    if chain == "exact":
+        add_body(mount, robot.root)
+    else:
+        root_body = ET.SubElement(mount, "body", name=robot.root)
+        contents(root_body, robot.links[robot.root])
+        add_reduced(root_body, 1)
 
     eq = ET.SubElement(root, "equality")
     # As stiff as the step allows (MuJoCo needs a time constant of at least two steps).
-    solref = _vec((2.0 * act.timestep_s, 1.0))
+    solref = _vec((2.0 * timestep_s, 1.0))
     chord_err = 0.0
     for b in robot.bending:
+        if chain == "reduced":
+            for axis in "xy":
+                ET.SubElement(eq, "joint", name=f"{b.name}_b{axis}_eq", joint1=f"{b.name}_b{axis}",
+                              joint2=f"{b.name}_a{axis}", polycoef="0 1 0 0 0", solref=solref)
+            continue
         phi, tha, chord, thb, phib = b.urdf_joints
         coef, err = chord_polynomial(b.arc_length_m, b.theta_max_rad / 2)
         chord_err = max(chord_err, err)
@@ -178,12 +259,18 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
                 first[b.segment] = b.name
                 continue
             lead = first[b.segment]
-            ET.SubElement(eq, "joint", name=f"{b.name}_theta_seg", joint1=f"{b.name}_theta_a",
-                          joint2=f"{lead}_theta_a", polycoef="0 1 0 0 0", solref=solref)
-            ET.SubElement(eq, "joint", name=f"{b.name}_phi_seg", joint1=f"{b.name}_phi",
-                          joint2=f"{lead}_phi", polycoef="0 1 0 0 0", solref=solref)
+            for kind, tag in zip(*(SEGMENT_COUPLED[chain])):
+                ET.SubElement(eq, "joint", name=f"{b.name}_{tag}_seg", joint1=f"{b.name}_{kind}",
+                              joint2=f"{lead}_{kind}", polycoef="0 1 0 0 0", solref=solref)
 
     tendon = ET.SubElement(root, "tendon")
+    if chain == "reduced":
+        shear_damping = _f(_soa_bending_damping(robot))
+        for b in robot.bending:
+            for axis in "xy":
+                fixed = ET.SubElement(tendon, "fixed", name=f"{b.name}_shear_{axis}", damping=shear_damping)
+                ET.SubElement(fixed, "joint", joint=f"{b.name}_a{axis}", coef="1")
+                ET.SubElement(fixed, "joint", joint=f"{b.name}_b{axis}", coef="-1")
     actuator = ET.SubElement(root, "actuator")
     ctrl = _vec((act.pressure_min_pa, act.pressure_max_pa))
     groups: dict[str, list] = {}
@@ -212,8 +299,40 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
     facts = {"chord_polynomial_max_error_m": chord_err, "actuators": len(groups),
              "actuator_control": "commanded (supply) gauge pressure, Pa; the chamber pressure is the "
                                  "actuator's activation, a first-order lag of it" if lags else "gauge pressure, Pa",
-             "supply_lag_s": [lags[0], lags[-1]] if lags else None, "per_segment": per_segment}
+             "supply_lag_s": [lags[0], lags[-1]] if lags else None, "per_segment": per_segment,
+             "chain": chain, "timestep_s": timestep_s}
     return ET.ElementTree(root), facts
+
+
+def collision_mesh_name(c: Collision) -> str:
+    """A mesh collision's asset (and file stem): the convex hull of its piece."""
+    return f"{c.name}_collision"
+
+
+def collision_geom(body: ET.Element, c: Collision, shift=(0.0, 0.0, 0.0), **attrs) -> ET.Element:
+    """One collision shape of :mod:`bvsr_cad.assembly.collision` as a geom of class ``collision``.
+
+    The tail's shapes never collide with one another: those of neighbouring panels meet in every
+    pose (the two halves of each SOA and rod column, at mid-gap), and the clearance analysis's joint
+    limits keep all others apart; so the tail's contacts are with the world only, which also keeps
+    the scene's contact set (and MJX's compile) small.
+    """
+    T = np.asarray(c.T_link_geom)
+    geom = {"class": "collision", "name": f"{c.name}_collision", "pos": _vec(T[:3, 3] + np.asarray(shift))}
+    if c.kind == "mesh":
+        geom.update(type="mesh", mesh=collision_mesh_name(c))
+    else:
+        geom.update(type="cylinder", size=_vec((c.radius_m, c.length_m / 2)), quat=_quat(T[:3, :3]))
+    geom.update(attrs)
+    return ET.SubElement(body, "geom", geom)
+
+
+def _soa_bending_damping(robot: RobotModel) -> float:
+    """c N r^2 / 2 (N m s/rad): a joint's SOA dampers against bending, r the sockets' mean radius."""
+    pos = {s.name: np.asarray(s.pos_m) for s in robot.sites}
+    joint1 = [s for s in robot.soas if s.joint == 1]
+    r2 = float(np.mean([np.sum(pos[s.bottom_site][:2] ** 2) for s in joint1]))
+    return robot.actuation.law.damping_n_s_per_m * len(joint1) * r2 / 2
 
 
 def _panel_spans(robot: RobotModel, soas) -> float:
@@ -294,7 +413,7 @@ def cart_scene_tree(robot: RobotModel, mesh_files: dict[str, str], cart, mesh_di
     # A hard wheel on a hard floor: the stiffest contact the step allows (time constant two steps).
     ET.SubElement(body, "geom", name="cart_front_wheel", type="sphere", size=_f(r), pos=_vec((-length, 0.0, 0.0)),
                   density="0", rgba="0.15 0.15 0.15 1",
-                  solref=_vec((2.0 * robot.actuation.timestep_s, 1.0)))
+                  solref=_vec((2.0 * float(root.find("option").get("timestep")), 1.0)))
     for side in (-1.0, 1.0):
         ET.SubElement(body, "geom", name=f"cart_rear_wheel_{'lr'[side > 0]}", type="cylinder", size=_vec((r, 0.004)),
                       pos=_vec((0.0, side * width / 2, 0.0)), euler="1.5707963 0 0", density="0",

@@ -1,9 +1,10 @@
 """Writes the robot descriptions of a tail into an export (``robot/``).
 
 ``robot/bvsr.urdf``            URDF (mimic joints; MuJoCo reads its <mujoco> block)
-``robot/bvsr.xml``             MJCF, one bending joint per joint, one actuator per SOA
-``robot/bvsr_segments.xml``    MJCF, the joints of a segment share theta and phi, one actuator per line
+``robot/bvsr.xml``             MJCF, reduced chain (two universal joints per bending joint), one actuator per SOA
+``robot/bvsr_segments.xml``    MJCF, reduced chain, the joints of a segment bend alike, one actuator per line
 ``robot/scene.xml``, ``robot/scene_segments.xml``   menagerie-style scenes that include them
+``robot/bvsr_exact.xml``, ``robot/scene_exact.xml``   MJCF with the URDF's exact chain (a 0.2 ms step)
 ``robot/scene_cart.xml``       the per-segment tail on the paper's hinged cart (Eq 20-22's experiment)
 ``robot/meshes/*.stl``         visual meshes in metres, in their link's frame
 ``robot/ros2/<name>_description/``  the URDF and meshes as a ROS 2 (ament) package with a display launch
@@ -15,7 +16,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from .. import units
 from ..assembly.robot import RobotModel, chord_joint_value
+from ..models.kinematics import chain_tip_error_mm, joint_transform_chain, joint_transform_prb
 from .mjcf import cart_scene_tree, mjcf_tree, scene_tree, write_mjcf
 from .robot_meshes import write_robot_meshes
 from .ros2_package import write_ros2_package
@@ -36,10 +39,13 @@ def write_robot(robot: RobotModel, root: Path, progress: Callable[[str], None], 
     ros2 = write_ros2_package(folder / f"{name}.urdf", folder / "meshes", folder / "ros2", name)
     act = robot.actuation
     facts = {}
-    for per_segment, stem, scene in ((False, name, "scene.xml"), (True, f"{name}_segments", "scene_segments.xml")):
-        tree, facts[stem] = mjcf_tree(robot, mesh_files, per_segment)
+    for per_segment, stem, scene, chain in ((False, name, "scene.xml", "reduced"),
+                                            (True, f"{name}_segments", "scene_segments.xml", "reduced"),
+                                            (False, f"{name}_exact", "scene_exact.xml", "exact")):
+        tree, facts[stem] = mjcf_tree(robot, mesh_files, per_segment, chain=chain)
         write_mjcf(folder / f"{stem}.xml", tree)
         write_mjcf(folder / scene, scene_tree(f"{stem}.xml", stem))
+    error_mm = chain_errors_mm(robot)
     if cart is not None:
         write_mjcf(folder / "scene_cart.xml", cart_scene_tree(robot, mesh_files, cart))
     urdf_chord_err = max(float(-chord_joint_value(b.theta_max_rad, b.arc_length_m)) for b in robot.bending)
@@ -55,7 +61,13 @@ def write_robot(robot: RobotModel, root: Path, progress: Callable[[str], None], 
     return {"robot": {
         "urdf": f"robot/{name}.urdf", "mjcf": "robot/scene.xml", "mjcf_model": f"robot/{name}.xml",
         "ros2_package": {"path": f"robot/ros2/{ros2['name']}", "urdf": ros2["urdf"], "meshes": ros2["meshes"]},
-        "mjcf_per_segment": "robot/scene_segments.xml", "mjcf_cart": None if cart is None else "robot/scene_cart.xml", "mjcf_per_segment_model": f"robot/{name}_segments.xml",
+        "mjcf_per_segment": "robot/scene_segments.xml", "mjcf_exact": "robot/scene_exact.xml",
+        "mjcf_exact_model": f"robot/{name}_exact.xml",
+        # Each model file's chain, its step and its tip's largest distance from Eq 2 over the joint range.
+        "chains": {f"robot/{name}.urdf": {"chain": "exact", "tip_error_vs_eq2_mm": error_mm["exact"]},
+                   **{f"robot/{stem}.xml": {"chain": f["chain"], "timestep_s": f["timestep_s"],
+                                            "tip_error_vs_eq2_mm": error_mm[f["chain"]]}
+                      for stem, f in facts.items()}}, "mjcf_cart": None if cart is None else "robot/scene_cart.xml", "mjcf_per_segment_model": f"robot/{name}_segments.xml",
         "units": "SI (m, kg, s, rad); actuator control: commanded gauge pressure in Pa (the chamber "
                  "pressure lags it by supply_lag_s)",
         "supply_lag_s": robot.supply_lag_s,
@@ -75,3 +87,14 @@ def write_robot(robot: RobotModel, root: Path, progress: Callable[[str], None], 
         "links": links,
         "soa_actuators": [{"name": s.name, "line": s.line, "rest_length_m": s.rest_length_m} for s in robot.soas],
     }}
+
+
+def chain_errors_mm(robot: RobotModel) -> dict[str, float]:
+    """Largest tip distance (mm) from Eq 2 over the joint range of the tail built from each chain
+    (:func:`bvsr_cad.models.kinematics.chain_tip_error_mm`); the exact chain's MJCF adds its chord
+    polynomial's error (``mjcf_chord_polynomial_max_error_m``)."""
+    lengths_mm = [units.m_to_mm(b.arc_length_m) for b in robot.bending]
+    thickness_mm = units.m_to_mm(robot.joints[0].T_parent_joint[2][3])
+    limits = [b.theta_max_rad for b in robot.bending]
+    return {chain: chain_tip_error_mm(fn, lengths_mm, thickness_mm, limits)
+            for chain, fn in (("reduced", joint_transform_prb), ("exact", joint_transform_chain))}

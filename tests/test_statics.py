@@ -56,3 +56,39 @@ def test_least_norm_in_box_closed_form():
     assert ok and p == pytest.approx([1.25, 0, 1.25, 1.25, 1.25], abs=1e-9)
     _, ok = least_norm_in_box(m, np.array([50.0, 0.0]), -10, 10)
     assert not ok
+
+
+def _central_hessian(st, w, p, tip, h=1e-6):
+    """d(residual)/dw by central differences over every variable at once (the solver's former Hessian)."""
+    n = st.kin.n_joints
+    pert = (np.eye(2 * n) * h).reshape(2 * n, n, 2)
+    lk, fk = p[:, None], tip
+    d = (st.residual(w[:, None] + pert, lk, fk) - st.residual(w[:, None] - pert, lk, fk)) / (2 * h)
+    return np.swapaxes(d.reshape(len(w), 2 * n, 2 * n), -1, -2)
+
+
+def test_structured_hessian_equals_central_differences(bvsr_spec, statics):
+    """The solver's Hessian (actuator blocks per joint, the rod exact, the loads by forward differences)
+    against central differences of the whole residual at bent poses under gravity and a tip force."""
+    p = _workspace_pressures(bvsr_spec, 8, 2)
+    tip = np.array([0.3, -0.2, 0.1])
+    w = statics.forward(p, tip)
+    p_joint = np.repeat(p, bvsr_spec.joints_per_segment, axis=-2)
+    fast = statics._hessian(w, p_joint, tip, statics.load_forces(w, tip))
+    ref = _central_hessian(statics, w, p, tip)
+    scale = np.abs(ref).max()
+    assert np.abs(fast - ref).max() < 1e-6 * scale  # forward differences of the loads: O(h) of a 1e-6 step
+
+
+def test_forward_matches_an_independent_root_finder(bvsr_spec, statics):
+    """The converged poses equal scipy's hybrid root finder on the same residual to 1e-9 rad."""
+    from scipy.optimize import root
+
+    p = _workspace_pressures(bvsr_spec, 6, 3)
+    w = statics.forward(p)
+    n = bvsr_spec.joints
+    for k in range(len(p)):
+        sol = root(lambda x: statics.residual(x.reshape(n, 2), p[k]).ravel(), np.zeros(2 * n), method="hybr",
+                   options={"xtol": 1e-13})
+        assert np.abs(sol.fun).max() < 1e-8  # N mm: equilibrium (hybr may stop at its own xtol floor)
+        assert np.abs(sol.x.reshape(n, 2) - w[k]).max() < 1e-9

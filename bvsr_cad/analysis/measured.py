@@ -19,6 +19,7 @@ from ..assembly.build import Assembly
 from ..parameters.measurements import MeasurementError, data_sha256, load_measurements
 from .calibrate import compare_rows, rms_relative, uncalibrated
 from .predict import Predictor
+from .workspace import Workspace
 
 #: A row "lands" when the calibrated prediction is within this relative error of the reported figure.
 LANDS_WITHIN_REL = 0.30
@@ -50,8 +51,12 @@ class MeasuredComparison:
 
 
 def compare_measurements(asm: Assembly, params_path: str | Path | None,
-                         progress: Callable[[str], None] | None = None) -> MeasuredComparison | None:
-    """The comparison for ``asm``'s spec, or None when the file carries no calibration."""
+                         progress: Callable[[str], None] | None = None,
+                         workspace: Workspace | None = None) -> MeasuredComparison | None:
+    """The comparison for ``asm``'s spec, or None when the file carries no calibration.
+
+    ``workspace``: the build's workspace of ``asm`` (its spec's samples and seed), reused by the rows
+    that predict that very workspace."""
     spec = asm.spec
     cal = spec.calibration
     if not cal.fitted:
@@ -74,6 +79,8 @@ def compare_measurements(asm: Assembly, params_path: str | Path | None,
     except MeasurementError as exc:
         return MeasuredComparison(cal.data_file, f"data file unreadable: {exc}", fitted=fitted)
     pred = Predictor(asm, spec)
+    if workspace is not None:
+        pred.add_workspace(asm, spec, workspace)
     table = compare_rows(pred.with_spec(uncalibrated(spec)), pred, rows,
                          None if progress is None else (lambda m: progress(f"measurements: {m}")))
     return MeasuredComparison(cal.data_file, f"every row of {cal.data_file}, predicted with the tables' values and "

@@ -34,7 +34,7 @@ from ..models.rod import rod_section
 from ..models.statics import MOTION_PHI_RAD, pressure_pattern_kpa, quasi_static_segment
 from ..parameters.measurements import Measurement
 from ..parameters.tables import TailSpec
-from .workspace import run_workspace, tail_statics
+from .workspace import Workspace, run_workspace, tail_statics
 
 GRAVITY_M_S2 = np.array([0.0, -G_M_S2, 0.0])
 PULSE_SECONDS = 0.3
@@ -54,13 +54,37 @@ class Predictor:
     asm: Assembly
     spec: TailSpec
     _other: dict = field(default_factory=dict)  # assemblies of variants (e.g. more segments)
+    #: Motions already solved for this spec: rows that share one (a root torque and force at the same
+    #: pressure and payload, a peak velocity and both exponents at 6 bar, the cart's lift and angle)
+    #: integrate it once.
+    _solved: dict = field(default_factory=dict, repr=False)
+    #: Workspaces already sampled, (assembly, spec, Workspace), shared by every spec of this geometry:
+    #: the build's own workspace is the calibrated prediction of a row with the spec's protocol.
+    _workspaces: list = field(default_factory=list, repr=False)
 
     @classmethod
     def from_spec(cls, spec: TailSpec) -> "Predictor":
         return cls(build_assembly(spec), spec)
 
     def with_spec(self, spec: TailSpec) -> "Predictor":
-        return Predictor(self.asm, spec, self._other)
+        return Predictor(self.asm, spec, self._other, _workspaces=self._workspaces)
+
+    def workspace(self, asm: Assembly, spec: TailSpec) -> Workspace:
+        """:func:`run_workspace` of ``asm`` under ``spec`` with the spec's samples and seed, sampled
+        once per (assembly, spec)."""
+        for known_asm, known_spec, ws in self._workspaces:
+            if known_asm is asm and known_spec == spec:
+                return ws
+        ws = run_workspace(asm, spec.analysis.build_workspace_samples, spec.analysis.seed, spec=spec)
+        self.add_workspace(asm, spec, ws)
+        return ws
+
+    def add_workspace(self, asm: Assembly, spec: TailSpec, ws: Workspace) -> None:
+        """Let the predictions reuse a workspace sampled elsewhere (the build's)."""
+        if ws.samples != spec.analysis.build_workspace_samples or ws.seed != spec.analysis.seed:
+            raise ValueError(f"a workspace of {ws.samples} samples (seed {ws.seed}) is not the spec's "
+                             f"{spec.analysis.build_workspace_samples} (seed {spec.analysis.seed})")
+        self._workspaces.append((asm, spec, ws))
 
     # -- building blocks ---------------------------------------------------
     def joint_model(self, first_joint: int, n_joints: int, payload_g: float = 0.0) -> JointModel:
@@ -86,14 +110,25 @@ class Predictor:
         supply = line_supply(self.asm, 1, places, p0, spec)
         return simulate_joint(model, None, seconds, phi0_rad=phi, supply=supply, stop_angle_deg=stop_angle_deg)
 
+    def _once(self, key: tuple, solve: Callable[[], object]):
+        if key not in self._solved:
+            self._solved[key] = solve()
+        return self._solved[key]
+
     def segment_pulse(self, motion: str, pressure_bar: float) -> Trajectory:
-        model = self.joint_model(1, self.spec.joints_per_segment)
-        return self.pulse(model, motion, pressure_bar, stop_angle_deg=VELOCITY_WINDOW_DEG)
+        def solve() -> Trajectory:
+            model = self.joint_model(1, self.spec.joints_per_segment)
+            return self.pulse(model, motion, pressure_bar, stop_angle_deg=VELOCITY_WINDOW_DEG)
+
+        return self._once(("segment", motion, float(pressure_bar)), solve)
 
     def tail_pulse(self, motion: str, pressure_bar: float, payload_g: float, seconds: float = PULSE_SECONDS
                    ) -> tuple[JointModel, Trajectory]:
-        model = self.joint_model(1, self.spec.joints, payload_g)
-        return model, self.pulse(model, motion, pressure_bar, seconds)
+        def solve() -> tuple[JointModel, Trajectory]:
+            model = self.joint_model(1, self.spec.joints, payload_g)
+            return model, self.pulse(model, motion, pressure_bar, seconds)
+
+        return self._once(("tail", motion, float(pressure_bar), float(payload_g), float(seconds)), solve)
 
     # -- quantities ----------------------------------------------------------
     def segment_max_angle(self, motion: str) -> float:
@@ -140,7 +175,7 @@ class Predictor:
             if key not in self._other:
                 self._other[key] = build_assembly(dataclasses.replace(self.spec, segments=key))
             asm = self._other[key]
-        ws = run_workspace(asm, spec.analysis.build_workspace_samples, spec.analysis.seed, spec=spec)
+        ws = self.workspace(asm, spec)
         st = tail_statics(asm, spec=spec)
         tips = ws.tip_mm
         rest = st.kin.tip_point_mm(st.forward(np.zeros((spec.segments, 5))))
@@ -168,6 +203,9 @@ class Predictor:
         return self.root_wrench(motion, pressure_bar, payload_g)[1]
 
     def cart_motion(self, pressure_bar: float, motion: str):
+        return self._once(("cart", float(pressure_bar), motion), lambda: self._cart_motion(pressure_bar, motion))
+
+    def _cart_motion(self, pressure_bar: float, motion: str):
         cart = self.spec.cart
         model, tr = self.tail_pulse(motion, pressure_bar, 0.0, seconds=0.5)
         body = model.body

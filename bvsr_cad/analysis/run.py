@@ -87,7 +87,7 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
     phis = np.asarray(lims[tip].phi_rad)
     cmap = ClearanceMap(tip + 1, th, ph, bound, phis, np.asarray(lims[tip].theta_max_rad),
                         stack_limit_rad(pt, tip, phis, *stack))
-    measured = compare_measurements(asm, params_path, say)
+    measured = compare_measurements(asm, params_path, say, ws)
     seconds = time.perf_counter() - t0
     say(f"analysis: {seconds:.1f} s")
     return AnalysisResults(ws, quasi, clearance, "poses resampled from the build's workspace samples",

@@ -21,7 +21,8 @@ from .inertia import Inertial, compose, from_solid
 
 def _inertial(asm: Assembly, inst: Instance) -> Inertial:
     part = asm.part_of(inst)
-    return from_solid(part.solid, asm.spec.material(part.material).density_g_cm3, np.asarray(inst.transform))
+    return from_solid(part.solid, asm.spec.material(part.material).density_g_cm3, np.asarray(inst.transform),
+                      asm.solid_properties(inst.part))
 
 
 def _rod_piece(asm: Assembly, z0_mm: float, z1_mm: float) -> Inertial:

@@ -24,6 +24,7 @@ from ..parameters.standard_parts import metric
 from ..parameters.layout import (PanelLayout, half_angle_rad, panel_layout, polar, rod_bore_mm,
                            soa_angles_deg)
 from ..parameters.tables import TailSpec
+from .inertia import SolidProperties
 
 Progress = Callable[[str], None]
 
@@ -69,6 +70,7 @@ class Assembly:
     instances: list[Instance]
     panel_layouts: list[PanelLayout]
     taper_half_angle_deg: float
+    _properties: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def part_of(self, inst: Instance) -> PartDef:
         return self.parts[inst.part]
@@ -89,12 +91,18 @@ class Assembly:
         """The SOAs of joint k in pentagon order (soa_index 1..N_SOA)."""
         return sorted((i for i in self.instances if i.role == "soa" and i.joint == k), key=lambda i: i.soa_index)
 
+    def solid_properties(self, part: str) -> SolidProperties:
+        """The part's volume, centre of mass and inertia (unit density), integrated once per part."""
+        if part not in self._properties:
+            self._properties[part] = SolidProperties.of(self.parts[part].solid)
+        return self._properties[part]
+
     def volume_mm3(self, part: str) -> float:
-        return self.parts[part].solid.volume
+        return self.solid_properties(part).volume_mm3
 
     def mass_g(self, part: str) -> float:
         p = self.parts[part]
-        return units.mass_g(p.solid.volume, self.spec.material(p.material).density_g_cm3)
+        return units.mass_g(self.volume_mm3(part), self.spec.material(p.material).density_g_cm3)
 
 
 def _as_tuple(m: np.ndarray) -> tuple[tuple[float, ...], ...]:

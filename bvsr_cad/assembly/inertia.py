@@ -73,15 +73,33 @@ def shift_inertia(inertia_kg_m2: np.ndarray, mass_kg: float, offset_m: np.ndarra
     return np.asarray(inertia_kg_m2, float) + mass_kg * (np.dot(d, d) * np.eye(3) - np.outer(d, d))
 
 
-def from_solid(solid, density_g_cm3: float, T_frame_part_mm: np.ndarray | None = None) -> Inertial:
+@dataclass(frozen=True)
+class SolidProperties:
+    """A solid's B-rep volume properties at unit density, in its own frame (mm): what
+    :func:`from_solid` reads, computed once per solid by :meth:`Assembly.solid_properties`."""
+
+    volume_mm3: float
+    com_mm: np.ndarray  # (3,)
+    inertia_mm5: np.ndarray  # (3, 3) about the centre of mass, unit density
+
+    @classmethod
+    def of(cls, solid) -> "SolidProperties":
+        return cls(solid.volume, np.array(tuple(solid.center(bd.CenterOf.MASS))),
+                   np.asarray(solid.matrix_of_inertia, float))
+
+
+def from_solid(solid, density_g_cm3: float, T_frame_part_mm: np.ndarray | None = None,
+               props: SolidProperties | None = None) -> Inertial:
     """Exact B-rep mass properties of a build123d solid (mm) at a density, in SI.
 
-    ``T_frame_part_mm`` places the solid's own frame in the target frame (mm).
+    ``T_frame_part_mm`` places the solid's own frame in the target frame (mm); ``props``: the
+    solid's properties when already computed (OCCT integrates the B-rep on every query).
     """
-    vol_mm3 = solid.volume
+    props = props if props is not None else SolidProperties.of(solid)
+    vol_mm3 = props.volume_mm3
     density_g_mm3 = density_g_cm3 / units.MM3_PER_CM3
-    com_mm = np.array(tuple(solid.center(bd.CenterOf.MASS)))
-    I_g_mm2 = np.asarray(solid.matrix_of_inertia, float) * density_g_mm3
+    com_mm = props.com_mm
+    I_g_mm2 = props.inertia_mm5 * density_g_mm3
     own = Inertial.make(units.g_to_kg(vol_mm3 * density_g_mm3), com_mm / units.MM_PER_M,
                         units.g_mm2_to_kg_m2(I_g_mm2))
     if T_frame_part_mm is None:

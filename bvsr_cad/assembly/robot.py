@@ -269,7 +269,7 @@ def robot_model(asm: Assembly, theta_max_rad: list[float]) -> RobotModel:
         name = f"panel{lay.index}"
         part = asm.part_of(asm.panel(lay.index))
         visuals = [Visual(part.name, part.material, panel_mat.density_g_cm3, rgba("panel"), part.solid)]
-        inertials = [from_solid(part.solid, panel_mat.density_g_cm3)]
+        inertials = [from_solid(part.solid, panel_mat.density_g_cm3, props=asm.solid_properties(part.name))]
         rod_piece = _rod_solid(in_panel[lay.index], spec.vertebra.diameter_mm, lay.z0_mm)
         if rod_piece is not None:
             visuals.append(Visual(f"rod_in_{name}", spec.vertebra.material, rod_mat.density_g_cm3, rgba("rod"),
@@ -292,7 +292,8 @@ def robot_model(asm: Assembly, theta_max_rad: list[float]) -> RobotModel:
         for inst in asm.soas_of_joint(k):
             T = T_start_inv @ np.asarray(inst.transform)
             soa_solids.append(asm.part_of(inst).solid.moved(_location(T)))
-            soa_inertials.append(from_solid(asm.part_of(inst).solid, soa_mat.density_g_cm3, T))
+            soa_inertials.append(from_solid(asm.part_of(inst).solid, soa_mat.density_g_cm3, T,
+                                            asm.solid_properties(inst.part)))
         rod_gap = _rod_solid(in_gap[k], spec.vertebra.diameter_mm, z_start_mm)
         parts = list(soa_inertials)
         visuals = [Visual(f"{j}_soas", spec.use.soa, soa_mat.density_g_cm3, rgba("soa"), bd.Compound(soa_solids))]

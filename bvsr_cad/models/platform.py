@@ -83,9 +83,9 @@ def platform_motion(platform: Platform, tail: TailOnPlatform, time_s: np.ndarray
     dt = fine[1] - fine[0]
     alpha, rate = 0.0, 0.0
     out = np.zeros_like(fine)
-    for i, ti in enumerate(fine):
-        beta = float(spline(ti))
-        moment = j_t * float(acc(ti)) - platform.mass_kg * g * platform.com_from_hinge_m * math.cos(alpha) \
+    betas, accs = spline(fine).tolist(), acc(fine).tolist()  # the spline once, not per step
+    for i, (beta, beta_acc) in enumerate(zip(betas, accs)):
+        moment = j_t * beta_acc - platform.mass_kg * g * platform.com_from_hinge_m * math.cos(alpha) \
             + tail.mass_kg * g * tail.com_from_hinge_m * math.cos(beta - alpha)
         a = moment / j_all
         if gravity and alpha <= 0.0 and rate <= 0.0 and a <= 0.0:

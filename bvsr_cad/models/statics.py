@@ -172,10 +172,35 @@ class TailStatics:
         """dV/dw: zero at equilibrium. ``line_kpa`` (..., n_segments, 5) gauge."""
         w = np.asarray(w, float)
         p_joint = np.repeat(np.asarray(line_kpa, float), self.kin.joints_per_segment, axis=-2)
+        return self._actuator_residual(w, p_joint) + self.rod_nmm_per_rad * w - self.load_forces(w, tip_force_n)
+
+    def _actuator_residual(self, w: np.ndarray, p_joint: np.ndarray) -> np.ndarray:
+        """-tau_act (..., n_joints, 2) for per-joint pressures (..., n_joints, 5): joint k's term reads w_k only."""
         dl, jac = self._actuator_terms(w)
-        force = self.act.force_n(p_joint, dl)
-        tau = np.einsum("...si,...s->...i", jac, force)
-        return -tau + self.rod_nmm_per_rad * w - self.load_forces(w, tip_force_n)
+        return -np.einsum("...si,...s->...i", jac, self.act.force_n(p_joint, dl))
+
+    def _hessian(self, w: np.ndarray, p_joint: np.ndarray, tip_force_n: np.ndarray | None, q0: np.ndarray,
+                 h: float = 1e-6) -> np.ndarray:
+        """d(residual)/dw (m, 2n, 2n) at poses ``w`` (m, n, 2) (rows: residual component), by differences
+        that follow the residual's structure: the actuator term of joint k reads w_k only, so its
+        2 x 2 blocks come from perturbing every joint at once along u, then v (central differences,
+        4 evaluations); the rod term is E I / L exactly; the loads (gravity, tip force) couple every
+        joint and take forward differences from ``q0`` = their value at ``w`` (2n evaluations)."""
+        m, n = w.shape[0], self.kin.n_joints
+        dirs = (np.eye(2) * h)[None, :, None, :]  # (1, direction, 1, component)
+        pj = p_joint[:, None]
+        act = (self._actuator_residual(w[:, None] + dirs, pj)
+               - self._actuator_residual(w[:, None] - dirs, pj)) / (2 * h)  # (m, direction, joint, component)
+        hess = np.zeros((m, n, 2, n, 2))
+        for k in range(n):
+            hess[:, k, :, k, :] = np.swapaxes(act[:, :, k, :], -1, -2)
+        hess = hess.reshape((m, 2 * n, 2 * n)) + self.rod_nmm_per_rad * np.eye(2 * n)
+        if self.masses is not None or tip_force_n is not None:
+            pert = (np.eye(2 * n) * h).reshape(2 * n, n, 2)
+            fk = tip_force_n[:, None, :] if tip_force_n is not None and np.ndim(tip_force_n) > 1 else tip_force_n
+            dq = (self.load_forces(w[:, None] + pert, fk) - q0[:, None]).reshape((m, 2 * n, 2 * n)) / h
+            hess = hess - np.swapaxes(dq, -1, -2)
+        return hess
 
     # -- forward map ---------------------------------------------------------
     def forward(self, line_kpa: np.ndarray, tip_force_n: np.ndarray | None = None,
@@ -197,9 +222,7 @@ class TailStatics:
         n = self.kin.n_joints
         w = np.zeros(lead + (n, 2)) if w0 is None else np.array(np.broadcast_to(w0, lead + (n, 2)), float)
         free = np.ones(2 * n, bool) if fixed is None else ~np.repeat(np.asarray(fixed, bool), 2)
-        h = 1e-6
         eye = np.eye(2 * n)
-        pert = (eye * h).reshape(2 * n, n, 2)
         # Newton on the samples still moving only: one sample's slow convergence costs only itself.
         count = int(np.prod(lead, dtype=int))
         flat_w = w.reshape((count, n, 2))
@@ -213,12 +236,10 @@ class TailStatics:
         for _ in range(max_iter):
             wa, pa = flat_w[active], flat_p[active]
             fa = force[active] if per_sample else force
-            r = self.residual(wa, pa, fa).reshape((active.size, 2 * n))
-            lk = pa[:, None, :, :]
-            fk = fa[:, None, :] if per_sample else fa
-            hess = (self.residual(wa[:, None] + pert, lk, fk) - self.residual(wa[:, None] - pert, lk, fk)).reshape(
-                (active.size, 2 * n, 2 * n)) / (2 * h)
-            hess = np.swapaxes(hess, -1, -2)  # rows: residual component, columns: variable
+            pj = np.repeat(pa, self.kin.joints_per_segment, axis=-2)
+            q0 = self.load_forces(wa, fa)
+            r = (self._actuator_residual(wa, pj) + self.rod_nmm_per_rad * wa - q0).reshape((active.size, 2 * n))
+            hess = self._hessian(wa, pj, fa, q0)
             hess = 0.5 * (hess + np.swapaxes(hess, -1, -2))  # a Hessian: symmetric up to rounding
             hess = np.where(free[:, None] & free[None, :], hess, eye)
             r = np.where(free, r, 0.0)

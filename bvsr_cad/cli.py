@@ -171,7 +171,7 @@ def cmd_calibrate(args) -> int:
     out = None
     if args.output:
         out = write_calibrated_params(args.params, args.output, res, args.data, data_sha256(args.data),
-                                      spec.name)
+                                      spec.name, (spec.vertebra.material, spec.vertebra.diameter_mm))
     if args.json:
         print(json.dumps({**res.as_json(), "output": None if out is None else str(out)}))
         return EXIT_OK

@@ -65,7 +65,7 @@ def default_parameters(spec: TailSpec, rows: list[Measurement]) -> list[str]:
     fit = [m.quantity for m in rows if m.role == "fit"]
     names = []
     if any(q in STATIC_QUANTITIES for q in fit):
-        names += ["effective_area_mm2", "rod_flexural_rigidity_n_mm2"]
+        names += ["effective_area_mm2"] + (["rod_flexural_rigidity_n_mm2"] if spec.vertebra.has_rod else [])
     if any(q in DYNAMIC_QUANTITIES for q in fit):
         names.append("ramp_time_s" if spec.pneumatics.model == "ramp" else "valve_sonic_conductance_l_s_bar")
     return names

@@ -50,7 +50,8 @@ def moving_body(asm: Assembly, first_joint: int, n_joints: int) -> RigidBody:
     base_face_mm = first_joint * h_j - gap  # distal face of panel first_joint - 1
     items = [_inertial(asm, asm.panel(k)) for k in range(first_joint, last + 1)]
     items += [_inertial(asm, s) for k in range(first_joint, last + 1) for s in asm.soas_of_joint(k)]
-    items.append(_rod_piece(asm, base_face_mm, last * h_j + spec.joint.panel_thickness_mm))
+    if spec.vertebra.has_rod:
+        items.append(_rod_piece(asm, base_face_mm, last * h_j + spec.joint.panel_thickness_mm))
     body = compose(items)
     inertia = body.inertia
     arc_mm = n_joints * h_j if n_joints > 1 else gap

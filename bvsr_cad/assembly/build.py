@@ -222,7 +222,7 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None) -> Assembly
                                       joint=k, soa_index=i, pressure_line=i))
 
     rods: dict[float, str] = {}
-    for s in range(1, spec.segments + 1):
+    for s in range(1, spec.segments + 1 if spec.vertebra.has_rod else 1):  # "none": sockets, no rod
         z0, z1 = rod_span_mm(spec, s)
         length = round(z1 - z0, 6)
         if length not in rods:

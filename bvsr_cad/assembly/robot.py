@@ -209,7 +209,7 @@ def _rod_pieces(asm: Assembly) -> tuple[dict[int, list[tuple[float, float]]], di
     in_panel: dict[int, list[tuple[float, float]]] = {k: [] for k in range(spec.panels)}
     in_gap: dict[int, list[tuple[float, float]]] = {k: [] for k in range(1, spec.panels)}
     t = spec.joint.panel_thickness_mm
-    for s in range(1, spec.segments + 1):
+    for s in range(1, spec.segments + 1 if spec.vertebra.has_rod else 1):  # "none": no rod
         z0, z1 = rod_span_mm(spec, s)
         for lay in asm.panel_layouts:
             lo, hi = max(z0, lay.z0_mm), min(z1, lay.z0_mm + t)
@@ -255,7 +255,7 @@ def robot_model(asm: Assembly, theta_max_rad: list[float]) -> RobotModel:
     L_mm = spec.joint.gap_mm
     L = units.mm_to_m(L_mm)
     t = units.mm_to_m(t_mm)
-    rod_mat = spec.material(spec.vertebra.material)
+    rod_mat = spec.materials.get(spec.vertebra.material)  # None: no rod (no rod pieces either)
     panel_mat = spec.material(spec.use.panel)
     soa_mat = spec.material(spec.use.soa)
     in_panel, in_gap = _rod_pieces(asm)

@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass
 
 from .. import units
-from ..parameters.tables import TailSpec
+from ..parameters.tables import NO_ROD, TailSpec
 
 
 @dataclass(frozen=True)
@@ -68,12 +68,44 @@ class RodSection:
 
 
 def rod_section(spec: TailSpec) -> RodSection:
-    """The vertebra rod of ``spec`` (its material, diameter, modulus and density)."""
-    key = spec.vertebra.material
-    mat = spec.material(key)
+    """The vertebra rod of ``spec`` (its material, diameter, modulus and density).
+
+    No rod (``vertebra.material = "none"``): a section of zero stiffness and zero mass. A fitted E I
+    (``[calibration.fitted] rod_flexural_rigidity_n_mm2``) belongs to the rod the measured tail had
+    (``calibration.rod_material``, ``rod_diameter_mm``); another rod gets its own table E I times the
+    same ratio fitted / table (:func:`fitted_rigidity_ratio`), so a study over rods keeps the
+    calibration's correction without giving every rod the measured rod's stiffness.
+    """
+    v = spec.vertebra
+    if not v.has_rod:
+        return RodSection(NO_ROD, v.diameter_mm, 0.0, 0.0, None)
+    mat = spec.material(v.material)
+    ratio = fitted_rigidity_ratio(spec)
+    cal = spec.calibration
+    if ratio is None:
+        fitted = None
+    elif (cal.rod_material or v.material, cal.rod_diameter_mm or v.diameter_mm) == (v.material, v.diameter_mm):
+        fitted = float(cal.fitted["rod_flexural_rigidity_n_mm2"])  # the measured rod itself: the value as fitted
+    else:
+        fitted = ratio * mat.youngs_modulus_mpa * math.pi * v.diameter_mm ** 4 / 64.0
+    return RodSection(v.material, v.diameter_mm, mat.youngs_modulus_mpa, mat.density_g_cm3, fitted)
+
+
+def fitted_rigidity_ratio(spec: TailSpec) -> float | None:
+    """The calibration's E I as a fraction of its rod's table E I (None: no fitted E I).
+
+    A file calibrated before the rod was recorded (no ``calibration.rod_material``) is taken to
+    describe its own rod."""
     fitted = spec.calibration.fitted.get("rod_flexural_rigidity_n_mm2")
-    return RodSection(key, spec.vertebra.diameter_mm, mat.youngs_modulus_mpa, mat.density_g_cm3,
-                      None if fitted is None else float(fitted))
+    if fitted is None:
+        return None
+    cal = spec.calibration
+    material = cal.rod_material or spec.vertebra.material
+    if material == NO_ROD:  # a fit of an invertebrate tail has no rod E I to carry over
+        return None
+    diameter_mm = cal.rod_diameter_mm or spec.vertebra.diameter_mm
+    table_n_mm2 = spec.material(material).youngs_modulus_mpa * math.pi * diameter_mm ** 4 / 64.0
+    return float(fitted) / table_n_mm2
 
 
 def joint_rod_stiffness_nmm_per_rad(spec: TailSpec) -> float:

@@ -391,7 +391,7 @@ def quasi_static_segment(seg: TailStatics, motion: str) -> QuasiStatic:
     angle = float(np.degrees(segment_bend_angle_rad(seg.kin, w)))
     n = seg.kin.n_joints
     tip0 = seg.kin.rest_tip_mm()
-    scale = seg.rod_nmm_per_rad
+    scale = seg.rod_nmm_per_rad or 1.0e3  # N mm/rad, the residual's scale only (no rod: any positive value)
 
     def equations(x: np.ndarray) -> np.ndarray:
         wx = x[: 2 * n].reshape(n, 2)
@@ -408,6 +408,21 @@ def quasi_static_segment(seg: TailStatics, motion: str) -> QuasiStatic:
     return QuasiStatic(motion, angle, float(np.linalg.norm(reaction)), tuple(float(v) for v in p_line[0]))
 
 
+def lateral_stiffness_n_per_mm(seg: TailStatics, force_n: float = 0.5) -> float:
+    """Passive lateral stiffness of the tail ``seg`` at its tip, lines open (0 kPa gauge): the paper's
+    Fig. 3(d) test, a sideways force on the distal panel over the tip's displacement.
+
+    A force of +-``force_n`` along X (perpendicular to gravity, which is along -Y) is applied at the tip
+    point and the stiffness is the central difference 2 F / (x(+F) - x(-F)), so the sag under gravity
+    cancels and the figure is the tangent stiffness at the loaded rest pose.
+    """
+    lines = np.zeros((2, seg.kin.n_segments, 5))
+    forces = np.array([[force_n, 0.0, 0.0], [-force_n, 0.0, 0.0]])
+    w = seg.forward(lines, forces)
+    x = seg.kin.tip_point_mm(w)[:, 0]
+    return float(2.0 * force_n / (x[0] - x[1]))
+
+
 __all__ = ["Actuator", "LumpedMasses", "TailStatics", "QuasiStatic", "least_norm_in_box", "pressure_pattern_kpa",
-           "quasi_static_segment", "segment_bend_angle_rad",
+           "quasi_static_segment", "segment_bend_angle_rad", "lateral_stiffness_n_per_mm",
            "uv_from_theta_phi", "MOTION_PHI_RAD", "G_N_PER_KG"]

@@ -20,7 +20,7 @@ import typing
 from pathlib import Path
 from typing import Any
 
-from .tables import _SCHEMA, AUTO, Material, TailSpec
+from .tables import _SCHEMA, AUTO, NO_ROD, Material, TailSpec
 from .twin import RIGID_TWIN_MATERIAL
 
 #: The rigid comparison tail (parts/rigid_tail.py, the fabrication package) is printed in this material.
@@ -181,8 +181,14 @@ def material_problems(spec: TailSpec) -> list[str]:
                        ("vertebra.material", spec.vertebra.material),
                        ("fabrication_package.core_material", spec.fabrication_package.core_material),
                        ("fabrication_package.mold_material", spec.fabrication_package.mold_material)):
+        if key == "vertebra.material" and value == NO_ROD:
+            continue
         if value not in spec.materials:
-            out.append(f"{key} = {value!r}: not a material in [materials]; allowed: {allowed}")
+            extra = f" (or {NO_ROD!r}: no rod)" if key == "vertebra.material" else ""
+            out.append(f"{key} = {value!r}: not a material in [materials]; allowed: {allowed}{extra}")
+    rod = spec.calibration.rod_material
+    if rod and rod not in spec.materials:
+        out.append(f"calibration.rod_material = {rod!r}: not a material in [materials]; allowed: {allowed}")
     if RIGID_TWIN_MATERIAL not in spec.materials:
         out.append(f"materials.{RIGID_TWIN_MATERIAL}: missing; the rigid comparison tail is printed in "
                    f"{RIGID_TWIN_MATERIAL!r} and its mass needs [materials.{RIGID_TWIN_MATERIAL}] (the file names: "

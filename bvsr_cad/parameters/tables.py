@@ -157,11 +157,20 @@ class MaterialUse:
     soa: str
 
 
+#: ``vertebra.material`` of an invertebrate tail: no rod (the paper's "no vertebra" segment). The panels
+#: keep their sockets (sized by ``vertebra.diameter_mm``); the rod, its mass and its stiffness go.
+NO_ROD = "none"
+
+
 @table
 class Vertebra:
     material: str
     diameter_mm: float
     socket: str
+
+    @property
+    def has_rod(self) -> bool:
+        return self.material != NO_ROD
 
 
 @table
@@ -344,6 +353,8 @@ class Calibration:
     rms_rel_holdout: float
     rms_rel_holdout_uncalibrated: float
     fitted: Mapping[str, float]
+    rod_material: str
+    rod_diameter_mm: float
 
 
 @table

@@ -37,6 +37,7 @@ from ..parameters.tables import TailSpec
 from ..colors import rgba
 from ..parts.vertebra import rod
 from .build import Assembly, Instance, rod_span_mm
+from .collision import Collision, panel_collisions
 from .inertia import Inertial, compose, from_solid
 from .pneumatic_lines import line_supply
 
@@ -76,14 +77,6 @@ class Visual:
     density_g_cm3: float
     rgba: tuple[float, float, float, float]
     solid: bd.Shape  # in the link frame, millimetres
-
-
-@dataclass(frozen=True)
-class Collision:
-    kind: str  # cylinder
-    radius_m: float
-    length_m: float
-    T_link_geom: tuple[tuple[float, ...], ...]
 
 
 @dataclass
@@ -259,6 +252,8 @@ def robot_model(asm: Assembly, theta_max_rad: list[float]) -> RobotModel:
     panel_mat = spec.material(spec.use.panel)
     soa_mat = spec.material(spec.use.soa)
     in_panel, in_gap = _rod_pieces(asm)
+    # Every collision shape rides on a panel (assembly/collision): exact at rest whatever the chain.
+    collisions = panel_collisions(asm, in_gap, spec.robot.collision_geometry)
     links: dict[str, Link] = {}
     joints: list[Joint] = []
     sites: list[Site] = []
@@ -275,9 +270,7 @@ def robot_model(asm: Assembly, theta_max_rad: list[float]) -> RobotModel:
             visuals.append(Visual(f"rod_in_{name}", spec.vertebra.material, rod_mat.density_g_cm3, rgba("rod"),
                                   rod_piece))
             inertials.append(from_solid(rod_piece, rod_mat.density_g_cm3))
-        collision = Collision("cylinder", units.mm_to_m(lay.rim_radius_lower_mm), t,
-                              _as_tuple(translation_m(z=t / 2)))
-        links[name] = Link(name, compose(inertials), visuals, [collision])
+        links[name] = Link(name, compose(inertials), visuals, collisions[lay.index])
 
     for k in range(1, spec.panels):
         j = f"j{k}"

@@ -4,12 +4,18 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+import trimesh
+
 from .. import units
 from ..assembly.robot import RobotModel
 from .cad import write_stl
+from .mjcf import collision_mesh_name
 
 #: Fine enough that link inertias from these meshes match the B-rep within 0.1 %.
 MESH_TOLERANCE_MM = 0.01
+#: Collision hulls: coarse (a hull of the tessellation's vertices lies inside the B-rep's by at most this).
+COLLISION_MESH_TOLERANCE_MM = 0.05
 
 
 def write_robot_meshes(robot: RobotModel, mesh_dir: Path) -> dict[str, str]:
@@ -23,7 +29,19 @@ def write_robot_meshes(robot: RobotModel, mesh_dir: Path) -> dict[str, str]:
             name = f"{vis.name}.stl"
             _write_m(vis.solid, mesh_dir / name)
             files[vis.name] = name
+        for col in link.collisions:
+            if col.kind == "mesh":
+                stem = collision_mesh_name(col)
+                _write_hull_m(col.solid, mesh_dir / f"{stem}.stl")
+                files[stem] = f"{stem}.stl"
     return files
+
+
+def _write_hull_m(shape, path: Path) -> None:
+    """The convex hull of a collision piece (robot.collision_geometry = "convex"), in metres."""
+    verts, tris = shape.tessellate(COLLISION_MESH_TOLERANCE_MM, 0.2)
+    points = np.array([(v.X, v.Y, v.Z) for v in verts]) * units.mm_to_m(1.0)
+    trimesh.Trimesh(points, np.asarray(tris), process=False).convex_hull.export(path)
 
 
 def _write_m(shape, path: Path, tolerance_mm: float = MESH_TOLERANCE_MM) -> None:

@@ -15,6 +15,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from ..assembly.robot import RobotModel
+from .mjcf import collision_mesh_name
 from .xml import num as _f
 from .xml import origin_attrs, write_tree
 from .xml import vec as _vec
@@ -46,11 +47,14 @@ def urdf_tree(robot: RobotModel, mesh_files: dict[str, str], mesh_prefix: str = 
             g = ET.SubElement(v, "geometry")
             ET.SubElement(g, "mesh", filename=mesh_prefix + mesh_files[vis.name])
             ET.SubElement(v, "material", name=vis.material)
-        for i, col in enumerate(link.collisions):
-            c = ET.SubElement(el, "collision", name=f"{link.name}_collision{i}")
+        for col in link.collisions:
+            c = ET.SubElement(el, "collision", name=f"{col.name}_collision")
             ET.SubElement(c, "origin", **origin_attrs(col.T_link_geom))
             g = ET.SubElement(c, "geometry")
-            ET.SubElement(g, "cylinder", radius=_f(col.radius_m), length=_f(col.length_m))
+            if col.kind == "mesh":
+                ET.SubElement(g, "mesh", filename=mesh_prefix + mesh_files[collision_mesh_name(col)])
+            else:
+                ET.SubElement(g, "cylinder", radius=_f(col.radius_m), length=_f(col.length_m))
     for j in robot.joints:
         el = ET.SubElement(root, "joint", name=j.name, type=j.type)
         ET.SubElement(el, "origin", **origin_attrs(j.T_parent_joint))

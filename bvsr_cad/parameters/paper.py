@@ -70,3 +70,7 @@ WORKSPACE_HALF_WIDTH_BVSR_L = PaperFigure(300.0, "mm", "tip workspace, BVSR_L", 
 
 def paper_workspace_half_width(segments: int) -> PaperFigure:
     return WORKSPACE_HALF_WIDTH_BVSR_L if segments == 3 else WORKSPACE_HALF_WIDTH_BVSR
+
+# Impact resistance (Sec. IV-D, Fig. 16): a rigid rod struck the tail at four points; an IMU at the tip.
+IMPACT_TIP_ACCELERATION = PaperFigure(200.0, "m/s^2", "tail tip during rod strikes ('approximately 200 m/s²')",
+                                      "Sec. IV-D, Impact Resistance, Fig. 16(c)")

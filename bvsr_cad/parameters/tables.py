@@ -283,6 +283,7 @@ class RobotDescription:
     velocity_margin: float
     pulse_pressure_max_kpa: float
     timestep_s: float
+    collision_geometry: str
 
 
 @table

@@ -100,6 +100,8 @@ def cmd_simulate(args) -> int:
     limits = joint_limits_rad(spec, say)
     if args.platform == "cart":
         return _simulate_cart(args, spec, limits, say)
+    if args.impact:
+        return _simulate_impact(args, spec, limits, say)
     res = simulate(spec, limits, args.pressure_bar, args.payload_g, progress=say, supply=args.supply)
     out = Path(args.output) if args.output else Path("exports") / spec.name / "simulate"
     out.mkdir(parents=True, exist_ok=True)
@@ -128,6 +130,22 @@ def cmd_simulate(args) -> int:
             print(f"{key}: {c['computed']:.3g}  {ref}")
         print(f"segment reached {res.angle_reached_deg:.1f} deg; plot: {png}")
     return EXIT_OK
+
+
+def _simulate_impact(args, spec, limits, say) -> int:
+    from .sim import impact_table, simulate_impact
+
+    rows = impact_table(simulate_impact(spec, limits, progress=say))
+    if args.json:
+        print(json.dumps(rows, indent=2))
+        return 0
+    print(f"{'tail':6} {'ball':22} {'F_root N':>9} {'T_root N m':>10} {'tip acc m/s2':>12} {'paper m/s2':>10} "
+          f"{'pen mm':>7} {'warn':>4} {'v m/s':>6} {'v roll':>6}")
+    for r in rows:
+        print(f"{r['tail']:6} {r['ball']:22} {r['peak_root_force_n']:9.1f} {r['peak_root_torque_nm']:10.2f} "
+              f"{r['peak_tip_acceleration_m_s2']:12.0f} {r['paper_tip_acceleration_m_s2']:10.0f} "
+              f"{r['max_penetration_mm']:7.3f} {r['warnings']:4d} {r['ball_speed_m_s']:6.2f} {r['rolling_speed_m_s']:6.2f}")
+    return 0 if all(r["warnings"] == 0 and r["max_penetration_mm"] <= 1.0 for r in rows) else 1
 
 
 def _simulate_cart(args, spec, limits, say) -> int:
@@ -243,6 +261,31 @@ def cmd_clearance(args) -> int:
     return EXIT_OK if ok else EXIT_FAILED
 
 
+def cmd_sweep(args) -> int:
+    from .parameters.study import load_study
+    from .sweep import run_study
+
+    study = load_study(args.study)
+    say = _progress(args.quiet or args.json)
+    res = run_study(study, args.output, scheduler=args.scheduler, workers=args.workers,
+                    progress=not (args.quiet or args.json), keep_exports=args.keep_exports, say=say)
+    summary = res.as_json()
+    if args.json:
+        print(json.dumps(summary, default=str))
+    else:
+        counts = ", ".join(f"{n} {s}" for s, n in summary["status"].items() if n)
+        print(f"{study.name}: {len(res.rows)} variants ({counts}); {res.reused} from earlier runs, "
+              f"{res.computed} computed on {res.workers} worker(s) in {res.seconds:.0f} s")
+        for r in res.rows:
+            if r["status"] != "ok":
+                print(f"  {r['label']}: {r['status']}: {r.get('reason', '')}")
+        if res.best:
+            print(f"best: {res.best}")
+        for name, path in res.files.items():
+            print(f"{name}: {path}")
+    return EXIT_FAILED if summary["status"]["error"] else EXIT_OK
+
+
 def make_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="bvsr", description="Parametric CAD and fabrication pipeline for the BVSR soft robotic tail.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -277,6 +320,9 @@ def make_parser() -> argparse.ArgumentParser:
         "--platform": {"choices": ("none", "cart"), "default": "none",
                        "help": "cart: the tail on the paper's hinged 700 g cart (robot/scene_cart.xml), extension "
                                "and waggle; the cart's lift and angles beside Eq 20-22 and the paper"},
+        "--impact": {"action": "store_true",
+                     "help": "the paper's disturbance test: a 500 g and a 650 g ball down the 1.35 m, 45 deg ramp "
+                             "into the soft tail and the rigid PLA twin; peak root force and torque, tip acceleration"},
         "--output": {"help": "folder for the plot (default exports/<name>/simulate/)"},
     }
     for flag, options in simulate_args.items():
@@ -294,6 +340,16 @@ def make_parser() -> argparse.ArgumentParser:
     wk.add_argument("--samples", type=_number(1, inclusive=True, kind=int), default=20000)
     wk.add_argument("--seed", type=int, default=1)
     wk.set_defaults(func=cmd_workspace)
+    sw = sub.add_parser("sweep", parents=[common], help="run a design study (grid, random or Optuna) on Dask")
+    sw.add_argument("study", help="study file (TOML; see studies/)")
+    sw.add_argument("-o", "--output", help="study folder (default exports/studies/<study name>/)")
+    sw.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://host:8786); default: a "
+                    "LocalCluster on this machine")
+    sw.add_argument("--workers", type=_number(1, inclusive=True, kind=int),
+                    help="LocalCluster worker processes (default: one per core)")
+    sw.add_argument("--keep-exports", action="store_true",
+                    help="with checks: keep each variant's export in <study folder>/variants/<key>/")
+    sw.set_defaults(func=cmd_sweep)
     cl = sub.add_parser("clearance", parents=[common], help="minimum clearance between solids over the workspace")
     cl.add_argument("params", help="parameter file")
     cl.add_argument("--poses", type=_number(1, inclusive=True, kind=int), default=20000)
@@ -355,11 +411,13 @@ def main(argv: list[str] | None = None) -> int:
     from .parameters.load import ParamError
     from .analysis.calibrate import CalibrationError
     from .parameters.measurements import MeasurementError
+    from .parameters.study import StudyError
+    from .sweep import SweepError
 
     try:
         return args.func(args)
     except (ParamError, MeasurementError, CalibrationError, OutputError, ExportError, SimulationInputError,
-            SlicerMissingError) as exc:
+            SlicerMissingError, StudyError, SweepError) as exc:
         print(f"bvsr: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except GeometryError as exc:

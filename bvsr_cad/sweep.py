@@ -118,6 +118,22 @@ def _plain(v: Any) -> Any:
     return v if isinstance(v, (str, int, float, bool)) or v is None else str(v)
 
 
+def infeasible_reason(variant: Variant) -> str:
+    """Why the variant's parameters describe no buildable tail (the loader's problems), or ""."""
+    from .parameters.load import ParamError, spec_from_dict
+
+    try:
+        spec_from_dict(variant.data, f"variant {variant.label}")
+    except ParamError as exc:
+        return _problems_text(exc.problems)
+    return ""
+
+
+def _problems_text(problems: list[str], first: int = 5) -> str:
+    more = f"; and {len(problems) - first} more" if len(problems) > first else ""
+    return "; ".join(problems[:first]) + more
+
+
 def evaluate(task: dict[str, Any]) -> dict[str, Any]:
     """The Dask task: run one variant in a fresh process, within the study's time limit."""
     import socket
@@ -164,7 +180,7 @@ def _variant_here(task: dict[str, Any]) -> dict[str, Any]:
     try:
         spec = spec_from_dict(task["data"], f"variant {task['label']}")
     except ParamError as exc:
-        return {"status": "infeasible", "reason": "; ".join(exc.problems)}
+        return {"status": "infeasible", "reason": _problems_text(exc.problems)}
     row: dict[str, Any] = {"status": "ok", "reason": ""}
     if task["groups"]:
         row.update(model_metrics(spec, task["groups"], Conditions(**task["conditions"])))
@@ -294,6 +310,10 @@ def run_study(study: Study, out_dir: str | Path | None = None, scheduler: str | 
     say = say or (lambda _m: None)
     t0 = time.perf_counter()
     pl = plan(study)
+    base_problem = infeasible_reason(study.variant({}, "base"))
+    if base_problem:
+        raise StudyError(study.path, [f"base = {str(study.base_path)!r} with [set] is not a buildable tail: "
+                                      f"{base_problem}"])
     out = Path(out_dir) if out_dir is not None else Path("exports") / "studies" / study.name
     out.mkdir(parents=True, exist_ok=True)
     journal = out / JOURNAL
@@ -311,9 +331,19 @@ def run_study(study: Study, out_dir: str | Path | None = None, scheduler: str | 
             variants = study.variants()
             todo = [v for v in variants if v.key not in done]
             reused = len(variants) - len(todo)
-            say(f"{len(variants)} variants, {reused} already in {journal.name}, {len(todo)} to run")
-            new = _run_many(cluster, [payload(study, v, pl, export_root) for v in todo], journal, progress,
-                            study.name)
+            tasks = []
+            for v in todo:  # an impossible tail is found here, at once, without a worker
+                task = payload(study, v, pl, export_root)
+                reason = infeasible_reason(v)
+                if reason:
+                    row = {"key": v.key, "label": v.label, **task["axes"], "status": "infeasible", "reason": reason}
+                    _append(journal, row)
+                    done[v.key] = row
+                else:
+                    tasks.append(task)
+            say(f"{len(variants)} variants: {reused} already in {journal.name}, {len(todo) - len(tasks)} infeasible "
+                f"(recorded with the reason), {len(tasks)} to run")
+            new = _run_many(cluster, tasks, journal, progress, study.name)
             done.update(new)
             rows = [done[v.key] for v in variants]
             best = None
@@ -418,6 +448,17 @@ def _optuna(study: Study, pl: Plan, cluster: _Cluster, journal: Path, done: dict
                     bar.update(1)
                     continue
                 task = payload(study, v, pl, export_root)
+                reason = infeasible_reason(v)
+                if reason:
+                    row = {"key": v.key, "label": v.label, **task["axes"], "status": "infeasible", "reason": reason,
+                           "trial": trial.number}
+                    _append(journal, row)
+                    done[v.key] = rows[v.key] = row
+                    order.append(v.key)
+                    tell(trial, row)
+                    count += 1
+                    bar.update(1)
+                    continue
                 fut = cluster.client.submit(evaluate, task, key=f"bvsr-trial-{trial.number}-{v.key}", pure=False)
                 in_flight[fut] = (trial, v, task)
             if not in_flight:

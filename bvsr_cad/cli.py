@@ -267,8 +267,13 @@ def cmd_sweep(args) -> int:
 
     study = load_study(args.study)
     say = _progress(args.quiet or args.json)
-    res = run_study(study, args.output, scheduler=args.scheduler, workers=args.workers,
-                    progress=not (args.quiet or args.json), keep_exports=args.keep_exports, say=say)
+    try:
+        res = run_study(study, args.output, scheduler=args.scheduler, workers=args.workers,
+                        progress=not args.quiet, keep_exports=args.keep_exports, say=say)
+    except KeyboardInterrupt:
+        print("bvsr: interrupted; the variants that finished are kept in results.jsonl: run the same command "
+              "again to resume", file=sys.stderr)
+        return 130
     summary = res.as_json()
     if args.json:
         print(json.dumps(summary, default=str))

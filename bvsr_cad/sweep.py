@@ -108,7 +108,7 @@ def payload(study: Study, variant: Variant, pl: Plan, export_root: Path | None =
     """Everything a worker needs for one variant (no file of this machine is read there)."""
     data = json.loads(json.dumps(variant.data, default=str))
     data["name"] = f"{study.name}_{variant.key[:8]}"  # its own tail: the base's measurements are not its own
-    return {"key": variant.key, "label": variant.label, "data": data, "groups": list(pl.groups),
+    return {"key": variant.key, "label": variant.label, "study": study.name, "data": data, "groups": list(pl.groups),
             "checks": pl.checks, "conditions": dict(study.conditions), "time_limit_s": study.time_limit_s,
             "axes": {k: _plain(get_path(variant.data, k)) for k in study.axes},
             "export_dir": None if export_root is None else str(export_root / variant.key)}
@@ -144,7 +144,8 @@ def evaluate(task: dict[str, Any]) -> dict[str, Any]:
     package_root = str(Path(__file__).resolve().parents[1])
     env = {**os.environ, PARENT_PID_ENV: str(os.getpid()), "PYTHONPATH": os.pathsep.join(
         [package_root] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])}
-    proc = subprocess.Popen([sys.executable, "-m", "bvsr_cad.sweep", "-"], stdin=subprocess.PIPE,
+    # The study's name on the command line: `ps` shows which study a variant's process belongs to.
+    proc = subprocess.Popen([sys.executable, "-m", "bvsr_cad.sweep", "-", task["study"]], stdin=subprocess.PIPE,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
     try:
         out, err = proc.communicate(json.dumps(task).encode(), timeout=task["time_limit_s"])
@@ -281,7 +282,7 @@ class _Cluster:
             else:
                 n = workers or max(1, (os.cpu_count() or 1))
                 self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                            dashboard_address=None, silence_logs=logging.ERROR)
+                                            dashboard_address=None, silence_logs=logging.CRITICAL)
                 self.client = Client(self.cluster)
         except (OSError, TimeoutError) as exc:
             raise SweepError(f"no Dask scheduler at {scheduler!r}: {exc}") from None
@@ -319,8 +320,10 @@ def run_study(study: Study, out_dir: str | Path | None = None, scheduler: str | 
     journal = out / JOURNAL
     done = read_journal(journal)
     export_root = (out / "variants") if keep_exports else None
-    cluster = _Cluster(scheduler, workers)
+    previous = _terminate_as_interrupt()
+    cluster = None
     try:
+        cluster = _Cluster(scheduler, workers)
         n_workers = cluster.n_workers
         say(f"study {study.name}: {study.kind}, groups {', '.join(pl.groups) or '-'}"
             f"{', export + checks' if pl.checks else ''}; {n_workers} Dask worker(s)"
@@ -348,10 +351,33 @@ def run_study(study: Study, out_dir: str | Path | None = None, scheduler: str | 
             rows = [done[v.key] for v in variants]
             best = None
     finally:
-        cluster.close()
+        if cluster is not None:
+            cluster.close()  # its workers stop, and each variant's process dies with its worker
+        _restore(previous)
     files = write_outputs(study, rows, out)
     return StudyResult(study, out, rows, reused, len(rows) - reused, time.perf_counter() - t0, n_workers, files,
                        best)
+
+
+def _terminate_as_interrupt():
+    """SIGTERM stops a study like Ctrl-C (the cluster is closed on the way out); the old handler."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return None
+
+    def stop(_signum, _frame):
+        raise KeyboardInterrupt
+
+    return signal.signal(signal.SIGTERM, stop)
+
+
+def _restore(previous) -> None:
+    import signal
+
+    if previous is not None:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _bar(total: int, enabled: bool, name: str):
@@ -368,29 +394,39 @@ def _result(fut, task: dict[str, Any]) -> dict[str, Any]:
                 "reason": f"the task failed: {type(exc).__name__}: {exc}"}
 
 
+def _first_done(futures) -> list:
+    """The futures that finished, waiting in short slices so that Ctrl-C and SIGTERM are seen at once
+    (a plain blocking wait holds the main thread inside Dask's event-loop call)."""
+    from distributed import wait
+
+    while True:
+        try:
+            return list(wait(list(futures), timeout=0.5, return_when="FIRST_COMPLETED").done)
+        except TimeoutError:
+            continue
+
+
 def _run_many(cluster: _Cluster, tasks: list[dict[str, Any]], journal: Path, progress: bool, name: str
               ) -> dict[str, dict[str, Any]]:
-    from distributed import as_completed
-
     rows: dict[str, dict[str, Any]] = {}
     if not tasks:
         return rows
     futures = {cluster.client.submit(evaluate, t, key=f"bvsr-variant-{t['key']}", pure=False): t for t in tasks}
     with _bar(len(tasks), progress, name) as bar:
-        for fut in as_completed(futures):
-            task = futures[fut]
-            row = _result(fut, task)
-            rows[task["key"]] = row
-            _append(journal, row)
-            bar.set_postfix_str(f"{task['label'][:40]}: {row['status']}")
-            bar.update(1)
+        while futures:
+            for fut in _first_done(futures):
+                task = futures.pop(fut)
+                row = _result(fut, task)
+                rows[task["key"]] = row
+                _append(journal, row)
+                bar.set_postfix_str(f"{task['label'][:40]}: {row['status']}")
+                bar.update(1)
     return rows
 
 
 def _optuna(study: Study, pl: Plan, cluster: _Cluster, journal: Path, done: dict[str, dict[str, Any]],
             export_root: Path | None, progress: bool, slots: int):
     import optuna
-    from distributed import wait
     from optuna.storages import JournalStorage
     from optuna.storages.journal import JournalFileBackend
     from optuna.trial import TrialState
@@ -398,11 +434,9 @@ def _optuna(study: Study, pl: Plan, cluster: _Cluster, journal: Path, done: dict
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     storage = JournalStorage(JournalFileBackend(str(journal.parent / "optuna.journal")))
 
-    def constraints_of(trial) -> list[float]:
-        return trial.user_attrs.get("constraints", [1.0] * len(study.constraints))
-
-    sampler_kw = {"seed": study.seed, "constraints_func": constraints_of if study.constraints else None}
-    sampler = optuna.samplers.TPESampler(**sampler_kw)
+    # Feasibility reaches the sampler through each trial's set_constraint values.
+    sampler = (optuna.samplers.RandomSampler if study.sampler == "random" else optuna.samplers.TPESampler)(
+        seed=study.seed)
     ost = optuna.create_study(study_name=study.name, storage=storage, sampler=sampler, load_if_exists=True,
                               directions=[o.direction for o in study.objectives])
     for t in ost.get_trials(deepcopy=False, states=(TrialState.RUNNING, TrialState.WAITING)):
@@ -422,7 +456,10 @@ def _optuna(study: Study, pl: Plan, cluster: _Cluster, journal: Path, done: dict
     def tell(trial, row: dict[str, Any]) -> None:
         values = [row.get(o.metric) for o in study.objectives]
         if row["status"] == "ok" and all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
-            trial.set_user_attr("constraints", [c.violation(row.get(c.metric)) for c in study.constraints])
+            violations = [c.violation(row.get(c.metric)) for c in study.constraints]
+            for c, v in zip(study.constraints, violations):
+                trial.set_constraint(c.metric, v)
+            trial.set_user_attr("constraints", violations)
             ost.tell(trial, values)
         else:
             trial.set_user_attr("failure", f"{row['status']}: {row.get('reason', '')}"[:500])
@@ -463,8 +500,7 @@ def _optuna(study: Study, pl: Plan, cluster: _Cluster, journal: Path, done: dict
                 in_flight[fut] = (trial, v, task)
             if not in_flight:
                 continue
-            finished_now = wait(list(in_flight), return_when="FIRST_COMPLETED").done
-            for fut in finished_now:
+            for fut in _first_done(in_flight):
                 trial, v, task = in_flight.pop(fut)
                 row = {**_result(fut, task), "trial": trial.number}
                 _append(journal, row)

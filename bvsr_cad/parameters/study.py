@@ -180,6 +180,7 @@ class Study:
     objectives: tuple[Objective, ...]
     constraints: tuple[Constraint, ...]
     expect: tuple[Expectation, ...] = ()
+    sampler: str = "tpe"
 
     @property
     def axes(self) -> list[str]:
@@ -383,7 +384,7 @@ def load_study(path: str | Path) -> Study:
 
     kind = "grid"
     space: list[Dimension] = []
-    samples, seed, trials = 0, 1, 0
+    samples, seed, trials, sampler = 0, 1, 0, "tpe"
     objectives: list[Objective] = []
     constraints: list[Constraint] = []
     if "random" in raw and "optuna" in raw:
@@ -462,7 +463,8 @@ def load_study(path: str | Path) -> Study:
                  metrics=tuple(metrics), checks=bool(checks), time_limit_s=float(limit), baseline=bool(baseline),
                  conditions=dict(conditions), fixed=dict(fixed), grid={k: list(v) for k, v in grid.items()},
                  listed=tuple(listed), space=tuple(space), samples=samples, seed=seed, trials=trials,
-                 objectives=tuple(objectives), constraints=tuple(constraints), expect=tuple(expect))
+                 objectives=tuple(objectives), constraints=tuple(constraints), expect=tuple(expect),
+                 sampler=sampler)
 
 
 def _absolute_data_file(data: dict[str, Any], base_path: Path) -> None:

@@ -250,9 +250,16 @@ def expectations(study, df) -> list[dict[str, Any]]:
         if not _numeric(sub, e.versus):
             out.append({"expectation": e, "rho": float("nan"), "holds": None, "n": len(sub)})
             continue
-        rho = _spearman(sub[e.versus].astype(float).to_numpy(), sub[e.metric].astype(float).to_numpy())
+        others = [a for a in study.axes if a != e.versus and a in ok.columns] if e.versus in study.axes else []
+        if others:  # a trend along one axis holds at every setting of the others (e.g. per material)
+            rhos = [_spearman(g[e.versus].astype(float).to_numpy(), g[e.metric].astype(float).to_numpy())
+                    for _, g in ok.dropna(subset=[e.metric, e.versus]).groupby(others, dropna=False)]
+            rhos = [r for r in rhos if not math.isnan(r)]
+            rho = min(rhos, key=lambda r: r * e.sign) if rhos else float("nan")
+        else:
+            rho = _spearman(sub[e.versus].astype(float).to_numpy(), sub[e.metric].astype(float).to_numpy())
         holds = None if math.isnan(rho) else bool(rho * e.sign > 0.5)
-        out.append({"expectation": e, "rho": rho, "holds": holds, "n": len(sub)})
+        out.append({"expectation": e, "rho": rho, "holds": holds, "n": len(sub), "per_group": bool(others)})
     return out
 
 
@@ -274,7 +281,8 @@ def _html(study, df, images: list[tuple[str, str]], trends: list[dict[str, Any]]
             e = t["expectation"]
             verdict = {True: "yes", False: "no", None: "not measurable"}[t["holds"]]
             parts.append(f"<tr><td>{esc(e.metric)}</td><td>{'rises' if e.sign > 0 else 'falls'}</td>"
-                         f"<td>{esc(e.versus)}</td><td>{t['rho']:.2f}</td><td>{t['n']}</td>"
+                         f"<td>{esc(e.versus)}</td><td>{t['rho']:.2f}{' (weakest over the other axes)' if t.get('per_group') else ''}"
+                         f"</td><td>{t['n']}</td>"
                          f"<td class='{'' if t['holds'] else 'bad'}'>{verdict}</td><td>{esc(e.source)}</td></tr>")
         parts.append("</table>")
     parts.append("<h2>Results</h2><table><tr>" + "".join(f"<th>{esc(c)}</th>" for c in df.columns

@@ -318,7 +318,9 @@ def run_study(study: Study, out_dir: str | Path | None = None, scheduler: str | 
     out = Path(out_dir) if out_dir is not None else Path("exports") / "studies" / study.name
     out.mkdir(parents=True, exist_ok=True)
     journal = out / JOURNAL
-    done = read_journal(journal)
+    # What a rerun keeps: results and impossible tails. A timeout or an error is tried again (with a
+    # longer time_limit_s, or after a fix), so a rerun finishes what an earlier one could not.
+    done = {k: r for k, r in read_journal(journal).items() if r.get("status") in ("ok", "infeasible")}
     export_root = (out / "variants") if keep_exports else None
     previous = _terminate_as_interrupt()
     cluster = None

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from . import units
-from .assembly.build import build_assembly
+from .assembly.build import Assembly, build_assembly
 from .assembly.robot import robot_model
 from .models.dynamics import VELOCITY_WINDOW_DEG, ramp_pa
 from .models.platform import front_lift_mm
@@ -322,6 +322,7 @@ class ImpactRun:
     root_impulse_n_s: np.ndarray  # the root sensor's force (tared; the mount's on the tail), world frame
     time_s: np.ndarray
     root_force_n: np.ndarray
+    touched: tuple[str, ...] = ()  # the tail's collision geoms the ball touched, sorted
 
 
 #: How long an impact run records after the ball first touches the tail.
@@ -339,9 +340,11 @@ def _running_mean(x: np.ndarray, n: int) -> np.ndarray:
 
 def simulate_impact(spec: TailSpec, theta_max_rad: list[float], balls: tuple[str, ...] = ("size5", "size7"),
                     ramp_length_m: float | None = None, window_s: float = IMPACT_WINDOW_S,
-                    progress: Callable[[str], None] | None = None) -> list[ImpactRun]:
+                    progress: Callable[[str], None] | None = None, asm: Assembly | None = None
+                    ) -> list[ImpactRun]:
     """The paper's disturbance test (Sec. IV-D): each ball rolls down the ramp into the soft tail and
-    into the rigid PLA twin (:mod:`bvsr_cad.exporters.impact_scene`)."""
+    into the rigid PLA twin (:mod:`bvsr_cad.exporters.impact_scene`). ``asm``: ``spec``'s assembly
+    where the caller has built it already."""
     from .assembly.products import build_rigid_twin, rigid_robot_model
     from .exporters.impact_scene import ramp_drop_m, rigid_impact_tree, soft_impact_tree
     from .models.impact import BALLS, RAMP_LENGTH_M, rolling_speed_m_s
@@ -351,7 +354,7 @@ def simulate_impact(spec: TailSpec, theta_max_rad: list[float], balls: tuple[str
     if unknown:
         raise SimulationInputError(f"--ball {unknown[0]}: allowed {', '.join(BALLS)}")
     ramp = RAMP_LENGTH_M if ramp_length_m is None else ramp_length_m
-    asm = build_assembly(spec)
+    asm = asm or build_assembly(spec)
     robot = robot_model(asm, theta_max_rad)
     say("rigid twin")
     twin = rigid_robot_model(asm, build_rigid_twin(asm))
@@ -391,6 +394,7 @@ def _impact_run(path: Path, tail: str, ball: str, window_s: float, v_roll: float
     pen = 0.0
     touch_t = v_touch = None
     tare = None
+    touched: set[str] = set()
     times, forces, torques, accs = [], [], [], []
     limit_s = 5.0
     while d.time < limit_s and (touch_t is None or d.time < touch_t + window_s):
@@ -404,6 +408,7 @@ def _impact_run(path: Path, tail: str, ball: str, window_s: float, v_roll: float
             other = c.geom2 if c.geom1 == ball_geom else c.geom1
             if m.geom_bodyid[other] in tail_bodies:
                 touching = True
+                touched.add(m.geom(other).name)
                 mujoco.mj_contactForce(m, d, i, f6)
                 # Contact frame rows: normal first; the force acts on geom2 along +normal.
                 f_world = c.frame.reshape(3, 3).T @ f6[:3]
@@ -432,7 +437,7 @@ def _impact_run(path: Path, tail: str, ball: str, window_s: float, v_roll: float
 
     return ImpactRun(tail, ball, peak(forces), peak(torques), peak(accs),
                      units.m_to_mm(pen), warnings, v_touch, v_roll, contact_impulse, root_impulse,
-                     np.asarray(times), np.asarray(forces))
+                     np.asarray(times), np.asarray(forces), tuple(sorted(touched)))
 
 
 def impact_table(runs: list[ImpactRun]) -> list[dict]:

@@ -121,7 +121,9 @@ def test_shipped_files_carry_the_calibration_of_the_shipped_data(bvsr_data):
 
 
 def test_shipped_fitted_rigidity_reaches_the_mjcf(bvsr_data, bvsr_spec):
-    """The MJCF's half-angle hinges carry 2 E I / L with the file's fitted E I (hand calculation, SI)."""
+    """Both MJCF chains carry the file's fitted E I (hand calculation, SI): the exact chain's half-angle
+    hinges 2 E I / L each, and the reduced chain's four pivot hinges per joint 2 E I / L each (a pure
+    bend turns both pivots' hinges by theta / 2: their energies add up to (1/2)(E I / L) theta^2)."""
     import mujoco
 
     from bvsr_cad.assembly.build import build_assembly
@@ -133,10 +135,14 @@ def test_shipped_fitted_rigidity_reaches_the_mjcf(bvsr_data, bvsr_spec):
     ei_nmm2 = bvsr_data["calibration"]["fitted"]["rod_flexural_rigidity_n_mm2"]
     ei_l = ei_nmm2 * 1e-6 / (bvsr_data["joint"]["gap_mm"] / 1000.0)  # N mm^2 = 1e-6 N m^2
     robot = robot_model(build_assembly(bvsr_spec), [0.5] * bvsr_spec.joints)
-    tree, _ = mjcf_tree(robot, _mesh_files(robot), False)
-    m = mujoco.MjModel.from_xml_string(_without_meshes(tree.getroot()))
-    assert m.jnt_stiffness[m.joint("j1_theta_a").id] == pytest.approx(2 * ei_l, rel=1e-9)
-    assert m.jnt_stiffness[m.joint(f"j{bvsr_spec.joints}_theta_b").id] == pytest.approx(2 * ei_l, rel=1e-9)
+    n = bvsr_spec.joints
+    hinges = {"exact": ["j1_theta_a", "j1_theta_b", f"j{n}_theta_a", f"j{n}_theta_b"],
+              "reduced": [f"j{k}_{h}" for k in (1, n) for h in ("ax", "ay", "bx", "by")]}
+    for chain, names in hinges.items():
+        tree, _ = mjcf_tree(robot, _mesh_files(robot), False, chain=chain)
+        m = mujoco.MjModel.from_xml_string(_without_meshes(tree.getroot()))
+        for name in names:
+            assert m.jnt_stiffness[m.joint(name).id] == pytest.approx(2 * ei_l, rel=1e-9), (chain, name)
 
 
 def test_inherited_calibration_is_noted_not_compared(bvsr_spec):

@@ -92,7 +92,23 @@ def test_every_robot_check_passes(robot_export):
     names = {r.name for r in results}
     assert {"fk_mujoco_vs_kinematics", "fk_mujoco_reduced_vs_kinematics", "pybullet_masses", "urdf_yourdfpy",
             "mujoco_settled_1s:mjcf", "mujoco_settled_1s:mjcf_exact", "mujoco_no_drift:urdf",
-            "robot_inertia_vs_mesh:panel3", "robot_inertia_vs_mesh:j1_soft(at rest)"} <= names
+            "robot_inertia_vs_mesh:panel3", "robot_inertia_vs_mesh:j1_soft(at rest)",
+            "mujoco_self_contacts_only_neighbours:urdf"} <= names
+
+
+def _candidate_pairs(m) -> set[tuple[str, str]]:
+    """Geom pairs of different bodies that MuJoCo's contype/conaffinity rule lets collide."""
+    return {tuple(sorted((m.geom(i).name, m.geom(j).name))) for i in range(m.ngeom) for j in range(i + 1, m.ngeom)
+            if m.geom_bodyid[i] != m.geom_bodyid[j]
+            and (m.geom_contype[i] & m.geom_conaffinity[j] or m.geom_contype[j] & m.geom_conaffinity[i])}
+
+
+@pytest.mark.parametrize("scene", ["scene.xml", "scene_segments.xml", "scene_exact.xml"])
+def test_scene_contacts_are_the_panels_on_the_floor(robot_export, bvsr_spec, scene):
+    """The contact set MJX compiles: the floor against each panel's cylinder, nothing else (the tail's
+    self-contacts are off; the SOA and rod halves answer only a geom that asks, see test_impact)."""
+    m = mujoco.MjModel.from_xml_path(str(robot_export / "robot" / scene))
+    assert _candidate_pairs(m) == {("floor", f"panel{k}_collision") for k in range(bvsr_spec.panels)}
 
 
 def test_mjcf_rod_springs_add_up_to_ei_over_l(robot_export, bvsr_spec):

@@ -98,10 +98,11 @@ def _mesh_files(robot) -> dict[str, str]:
 
 @pytest.fixture(scope="module")
 def mjcf(robot):
-    """MuJoCo's compiled model of the per-joint MJCF, made in memory."""
+    """MuJoCo's compiled model of the per-joint MJCF with the URDF's exact chain (robot/bvsr_exact.xml),
+    made in memory: the hand calculations below follow its theta_a, chord, theta_b and phi joints."""
     from bvsr_cad.exporters.mjcf import mjcf_tree
 
-    tree, _ = mjcf_tree(robot, _mesh_files(robot), False)
+    tree, _ = mjcf_tree(robot, _mesh_files(robot), False, chain="exact")
     return mujoco.MjModel.from_xml_string(_without_meshes(tree.getroot()))
 
 

@@ -149,10 +149,12 @@ def _equality_residual(m, d) -> float:
     return float(worst)
 
 
-def _step(path: Path, gravity: bool, seconds: float = 1.0):
+def _step(path: Path, gravity: bool, seconds: float = 1.0, self_contacts: bool = True):
     import mujoco
 
     m = mujoco.MjModel.from_xml_path(str(path))
+    if not self_contacts:
+        m.geom_conaffinity[:] = 0  # every geom keeps its contype: the MJCF's rule, the world's geoms excepted
     if not gravity:
         m.opt.gravity[:] = 0.0
     d = mujoco.MjData(m)
@@ -198,7 +200,13 @@ def check_mujoco(exp: Export) -> list[CheckResult]:
             # limits: it is stepped without gravity and must not move at all.
             gravity = key != "urdf"
             try:
-                m, d, warn, eq, at_limit, drift = _step(path, gravity=gravity)
+                if key == "urdf":
+                    out.append(_urdf_self_contacts(path, rel))
+                # MuJoCo's URDF import collides every two links but a parent and its child: the exact chain
+                # puts four links between neighbouring panels, whose SOA and rod halves meet (and overlap by
+                # their tilt) at mid-gap in every pose. The MJCF turns the tail's self-contacts off
+                # (conaffinity 0); the URDF cannot say so to MuJoCo, so it is stepped with the same rule.
+                m, d, warn, eq, at_limit, drift = _step(path, gravity=gravity, self_contacts=key != "urdf")
             except Exception as exc:  # noqa: BLE001 - the compiler's message is the result
                 out.append(CheckResult(f"mujoco_compile:{key}", False, 0, 1, "", rel, str(exc)))
                 continue
@@ -219,6 +227,22 @@ def check_mujoco(exp: Export) -> list[CheckResult]:
                 out.append(CheckResult(f"mujoco_settled_1s:{key}", qvel <= SETTLE_QVEL_RAD_S, qvel, SETTLE_QVEL_RAD_S,
                                        "rad/s or m/s", rel, "largest joint speed 1 s after release under gravity"))
     return out
+
+
+def _urdf_self_contacts(path: Path, rel: str) -> CheckResult:
+    """MuJoCo's import of the URDF at rest: its links touch only where neighbouring panels' halves of a
+    column meet (the contacts :func:`check_mujoco` turns off); any other pair would be shapes that overlap."""
+    import mujoco
+
+    m = mujoco.MjModel.from_xml_path(str(path))
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    bodies = m.geom_bodyid[d.contact.geom[:d.ncon]]
+    pairs = {tuple(sorted(m.body(int(b)).name for b in pair)) for pair in bodies}
+    neighbours = {tuple(sorted((f"panel{k}", f"panel{k + 1}"))) for k in range(m.nbody)}
+    others = sorted(f"{a}-{b}" for a, b in pairs if (a, b) not in neighbours)
+    return CheckResult("mujoco_self_contacts_only_neighbours:urdf", not others, len(others), 0, "link pairs", rel,
+                       ", ".join(others) or f"{len(pairs)} neighbouring panel pairs touch at rest (column halves)")
 
 
 def _import_pybullet():

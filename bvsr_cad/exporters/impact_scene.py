@@ -27,7 +27,7 @@ import numpy as np
 
 from ..assembly.robot import RobotModel
 from ..models.impact import RAMP_ANGLE_DEG, SHELL_INERTIA_RATIO, Ball
-from .mjcf import _dress, collision_geom, mjcf_tree
+from .mjcf import COLUMN_CONTACT_BIT, _dress, collision_geom, mjcf_tree
 from .xml import num as _f
 from .xml import quat_wxyz as _quat
 from .xml import vec as _vec
@@ -72,8 +72,10 @@ def _world(root: ET.Element, ball: Ball, ramp_length_m: float, timestep_s: float
                       stiffness=_f(ball.stiffness_n_per_m), damping=_f(ball.damping_n_s_per_m()))
     i_skin = SHELL_INERTIA_RATIO * m_skin * r * r
     ET.SubElement(skin, "inertial", pos="0 0 0", mass=_f(m_skin), diaginertia=_vec((i_skin,) * 3))
-    # The ball's contacts win over the other geom's (priority): hard, two steps.
+    # The ball's contacts win over the other geom's (priority): hard, two steps. It reaches the SOAs and
+    # the rod between the panels as well as the panels (conaffinity: mjcf.CONTACT_TYPE).
     ET.SubElement(skin, "geom", name="ball", type="sphere", size=_f(r), priority="1", condim="3",
+                  conaffinity=str(1 | COLUMN_CONTACT_BIT),
                   solref=_vec((2.0 * timestep_s, 1.0)), rgba="0.85 0.4 0.1 1", density="0")
     return world
 
@@ -156,7 +158,7 @@ def rigid_impact_tree(robot: RobotModel, rigid, panel_z_m: dict[str, float], bal
     ET.SubElement(root, "option", timestep=_f(timestep_s), integrator="implicitfast")
     default = ET.SubElement(root, "default")
     col = ET.SubElement(default, "default", {"class": "collision"})
-    ET.SubElement(col, "geom", group="3", density="0", rgba="0.9 0.9 0.8 1", contype="1", conaffinity="0")
+    ET.SubElement(col, "geom", group="3", density="0", rgba="0.9 0.9 0.8 1", conaffinity="0")
     ET.SubElement(root, "asset")
     ET.SubElement(root, "worldbody")
     world = _world(root, ball, ramp_length_m, timestep_s)

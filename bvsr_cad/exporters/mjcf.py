@@ -90,6 +90,14 @@ CHAINS = ("reduced", "exact")
 #: Per-segment model: the joints of a segment follow its first joint's (joint suffix, equality tag).
 SEGMENT_COUPLED = {"reduced": (("ax", "ay"), ("x", "y")), "exact": (("theta_a", "phi"), ("theta", "phi"))}
 _AXES = {"x": "1 0 0", "y": "0 1 0"}
+#: Contact bits of the tail's collision shapes (their ``contype``; their ``conaffinity`` is 0, see
+#: :func:`collision_geom`). A geom with MuJoCo's default conaffinity 1 (a floor, a wall, a robot's legs)
+#: meets the panels only: their rims stand out beyond the SOA and rod halves, so a plane reaches a panel
+#: first. A geom that must reach between the panels (the impact scene's ball) adds
+#: :data:`COLUMN_CONTACT_BIT` to its conaffinity. It keeps the default scene's contact set to the seven
+#: panels against the floor (MJX compiles a collision function per candidate pair).
+COLUMN_CONTACT_BIT = 2
+CONTACT_TYPE = {"panel": 1 | COLUMN_CONTACT_BIT, "soa": COLUMN_CONTACT_BIT, "rod": COLUMN_CONTACT_BIT}
 
 
 def chord_polynomial(arc_length_m: float, theta_a_max_rad: float) -> tuple[np.ndarray, float]:
@@ -127,9 +135,8 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
     vis = ET.SubElement(top, "default", {"class": "visual"})
     ET.SubElement(vis, "geom", type="mesh", contype="0", conaffinity="0", group="2", density="0")
     col = ET.SubElement(top, "default", {"class": "collision"})
-    # Self-contacts off (contype 1, conaffinity 0): see collision_geom. Anything with the default
-    # conaffinity 1 (a floor, a ball, a robot's legs) still collides with the tail.
-    ET.SubElement(col, "geom", group="3", density="0", rgba="0.5 0.5 0.5 0.3", contype="1", conaffinity="0")
+    # Self-contacts off (conaffinity 0), each shape's contype from CONTACT_TYPE: see collision_geom.
+    ET.SubElement(col, "geom", group="3", density="0", rgba="0.5 0.5 0.5 0.3", conaffinity="0")
     ET.SubElement(top, "site", size="0.001", rgba="1 0 0 1", group="4")
     asset = ET.SubElement(root, "asset")
     mats = {}
@@ -315,10 +322,12 @@ def collision_geom(body: ET.Element, c: Collision, shift=(0.0, 0.0, 0.0), **attr
     The tail's shapes never collide with one another: those of neighbouring panels meet in every
     pose (the two halves of each SOA and rod column, at mid-gap), and the clearance analysis's joint
     limits keep all others apart; so the tail's contacts are with the world only, which also keeps
-    the scene's contact set (and MJX's compile) small.
+    the scene's contact set (and MJX's compile) small. Which of the world's geoms reach which shapes:
+    :data:`CONTACT_TYPE`.
     """
     T = np.asarray(c.T_link_geom)
-    geom = {"class": "collision", "name": f"{c.name}_collision", "pos": _vec(T[:3, 3] + np.asarray(shift))}
+    geom = {"class": "collision", "name": f"{c.name}_collision", "pos": _vec(T[:3, 3] + np.asarray(shift)),
+            "contype": str(CONTACT_TYPE[c.covers])}
     if c.kind == "mesh":
         geom.update(type="mesh", mesh=collision_mesh_name(c))
     else:

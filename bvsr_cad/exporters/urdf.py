@@ -7,6 +7,12 @@ with multiplier 0: it stays at the rest chord L in tools that enforce mimic
 L - chord(theta) = L theta^2 / 24 + O(theta^4) at most at the joint limit
 (reported in the manifest). Kinematic users who want the exact arc set it
 with :func:`bvsr_cad.assembly.robot.chord_joint_value`.
+
+The collision shapes are for contacts with the world. Neighbouring panels' halves of an SOA or rod
+column meet (and overlap by the column's tilt) at mid-gap in every pose; URDF cannot exclude a pair of
+links, and MuJoCo's import collides every two links but a parent and its child (pybullet and Gazebo
+leave self-collision off unless asked). In MuJoCo use the MJCF, which turns the tail's self-contacts
+off, or set the imported geoms' ``conaffinity`` to 0 as ``bvsr check`` does.
 """
 
 from __future__ import annotations

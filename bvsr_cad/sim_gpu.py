@@ -1,0 +1,284 @@
+"""Batched simulation of an exported MJCF scene under MJX (JAX) and MuJoCo Warp.
+
+Shared by the tests (``tests/test_sim_gpu.py``) and the benchmark (``benchmarks/sim_bench.py``):
+
+- :func:`constraint_buffers`: MuJoCo Warp allocates a fixed number of constraint rows (``njmax``) and
+  contacts (``nconmax``) per world; too few and the solver drops rows and the state goes NaN (the
+  per-segment scene overflowed the default 64). The buffers are sized from CPU MuJoCo probe runs of
+  the same model under held pressures, with a margin.
+- :func:`randomised_fields`: domain randomisation as a learning team needs it: per world, the hinges'
+  spring stiffness (the rod's bending stiffness) and damping scaled, and a tip payload (a point mass
+  at the tip body's centre of mass, so its centre of mass and rotational inertia are unchanged and
+  only ``body_mass`` and the ancestors' ``body_subtreemass`` change).
+- :func:`mjx_batch` / :func:`warp_batch`: the batched model (those fields with one row per world)
+  and data, with a step function; :func:`world_model` is the CPU MuJoCo model of one world, the
+  reference each batch's world is checked against.
+
+MJX, JAX and MuJoCo Warp come with the optional extra ``.[gpu]``; they are imported inside the
+functions that use them, so the base install never needs them.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+GPU_EXTRA = "the optional extra .[gpu] (pip install -e '.[gpu]')"
+
+#: The model fields :func:`randomised_fields` gives one row per world.
+RANDOMISED_FIELDS = ("jnt_stiffness", "dof_damping", "body_mass", "body_subtreemass")
+
+
+def import_mjx():
+    """``(jax, mujoco.mjx)``, or an ImportError naming the extra that installs them."""
+    try:
+        import jax
+        from mujoco import mjx
+    except ImportError as exc:
+        raise ImportError(f"MJX needs {GPU_EXTRA}: {exc}") from exc
+    return jax, mjx
+
+
+def import_warp():
+    """``(warp, mujoco_warp)`` with Warp's per-kernel messages off, or an ImportError naming the extra."""
+    try:
+        import mujoco_warp
+        import warp
+    except ImportError as exc:
+        raise ImportError(f"MuJoCo Warp needs {GPU_EXTRA}: {exc}") from exc
+    warp.config.quiet = True
+    return warp, mujoco_warp
+
+
+def scene_path(export_dir: str | Path) -> Path:
+    """The default MJCF scene of an export (the manifest's ``robot.mjcf``)."""
+    root = Path(export_dir)
+    return root / json.loads((root / "manifest.json").read_text())["robot"]["mjcf"]
+
+
+# --- constraint buffers --------------------------------------------------------------------------
+
+
+def probe_controls(model: mujoco.MjModel) -> list[np.ndarray]:
+    """Held pressure patterns that exercise the scene's constraints: none, every actuator at the top
+    and at the bottom of its range, and each actuator group alone at the top. Actuators are named
+    ``<joint or segment>_<line>``; a group is one line in every joint (the same name after the last
+    underscore), the pattern that bends the tail furthest into its joint limits."""
+    lo, hi = model.actuator_ctrlrange[:, 0], model.actuator_ctrlrange[:, 1]
+    limited = model.actuator_ctrllimited.astype(bool)
+    top = np.where(limited, hi, 0.0)
+    names = [model.actuator(i).name.rsplit("_", 1)[-1] for i in range(model.nu)]
+    groups = sorted(set(names))
+    patterns = [np.zeros(model.nu), top, np.where(limited, lo, 0.0)]
+    patterns += [np.where([n == g for n in names], top, 0.0) for g in groups]
+    return patterns
+
+
+@dataclass(frozen=True)
+class ConstraintBuffers:
+    nefc_seen: int  # the most constraint rows one CPU MuJoCo probe step had
+    ncon_seen: int  # the most contacts
+    njmax: int  # rows allocated per world
+    nconmax: int  # contacts allocated per world
+
+    def line(self) -> str:
+        return (f"njmax {self.njmax} (probe saw nefc <= {self.nefc_seen}), "
+                f"nconmax {self.nconmax} (probe saw ncon <= {self.ncon_seen})")
+
+
+def constraint_buffers(model: mujoco.MjModel, seconds: float = 0.3, margin: float = 2.0,
+                       controls: list[np.ndarray] | None = None) -> ConstraintBuffers:
+    """Per-world buffer sizes for MuJoCo Warp from CPU MuJoCo: ``seconds`` of each held pattern of
+    :func:`probe_controls` from rest, the largest ``nefc`` and ``ncon`` of any step, times ``margin``
+    (at least 16 rows and 8 contacts more than seen: randomised worlds bend further)."""
+    if margin < 1.0:
+        raise ValueError(f"constraint_buffers: margin={margin} must be >= 1 (a multiple of what the probe saw)")
+    data = mujoco.MjData(model)
+    nefc = ncon = 0
+    for ctrl in controls if controls is not None else probe_controls(model):
+        mujoco.mj_resetData(model, data)
+        data.ctrl[:] = ctrl
+        for _ in range(max(1, round(seconds / model.opt.timestep))):
+            mujoco.mj_step(model, data)
+            nefc, ncon = max(nefc, data.nefc), max(ncon, data.ncon)
+    return ConstraintBuffers(nefc, ncon, max(int(np.ceil(nefc * margin)), nefc + 16),
+                             max(int(np.ceil(ncon * margin)), ncon + 8))
+
+
+# --- domain randomisation ------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Randomisation:
+    """Uniform ranges, per world: scale factors on the hinges' stiffness and damping, tip payload (kg)."""
+
+    stiffness_scale: tuple[float, float] = (0.8, 1.2)
+    damping_scale: tuple[float, float] = (0.5, 2.0)
+    payload_kg: tuple[float, float] = (0.0, 0.05)
+    seed: int = 0
+
+    def __post_init__(self):
+        for key in ("stiffness_scale", "damping_scale", "payload_kg"):
+            lo, hi = getattr(self, key)
+            if not 0.0 <= lo <= hi:
+                raise ValueError(f"Randomisation.{key}=({lo}, {hi}): needs 0 <= low <= high")
+
+
+def tip_body(model: mujoco.MjModel) -> int:
+    """The body furthest down the kinematic tree (the last panel of the tail)."""
+    depth = np.zeros(model.nbody, int)
+    for b in range(1, model.nbody):
+        depth[b] = depth[model.body_parentid[b]] + 1
+    return int(np.flatnonzero(depth == depth.max())[-1])
+
+
+def randomised_fields(model: mujoco.MjModel, nworld: int, rand: Randomisation = Randomisation()
+                      ) -> dict[str, np.ndarray]:
+    """The :data:`RANDOMISED_FIELDS`, each with a leading axis of ``nworld`` rows (world 0 included)."""
+    if nworld < 1:
+        raise ValueError(f"randomised_fields: nworld={nworld} must be >= 1")
+    rng = np.random.default_rng(rand.seed)
+    hinge = model.jnt_type == mujoco.mjtJoint.mjJNT_HINGE
+    fields = {name: np.tile(getattr(model, name), (nworld, 1)) for name in RANDOMISED_FIELDS}
+    fields["jnt_stiffness"][:, hinge] *= rng.uniform(*rand.stiffness_scale, (nworld, 1))
+    fields["dof_damping"][:, model.jnt_dofadr[hinge]] *= rng.uniform(*rand.damping_scale, (nworld, 1))
+    payload = rng.uniform(*rand.payload_kg, nworld)
+    body = tip_body(model)
+    fields["body_mass"][:, body] += payload
+    while body > 0:
+        fields["body_subtreemass"][:, body] += payload
+        body = model.body_parentid[body]
+    fields["body_subtreemass"][:, 0] += payload
+    return fields
+
+
+def world_model(model: mujoco.MjModel, fields: dict[str, np.ndarray], world: int) -> mujoco.MjModel:
+    """A CPU MuJoCo copy of ``model`` with world ``world``'s row of each randomised field."""
+    out = copy.deepcopy(model)
+    for name, rows in fields.items():
+        getattr(out, name)[:] = rows[world]
+    return out
+
+
+# --- batches ---------------------------------------------------------------------------------------
+
+
+@dataclass
+class Batch:
+    """A batched model and data, and ``step(n)``: advance every world ``n`` time steps."""
+
+    engine: str
+    nworld: int
+    step: Callable[[int], None]
+    qpos: Callable[[], np.ndarray]  # (nworld, nq) on the host
+    check: Callable[[], list[str]]  # problems (overflow, NaN) so far; empty when none
+
+
+def mjx_batch(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndarray], device=None) -> Batch:
+    """MJX: ``jax.vmap`` of ``mjx.step`` over a model whose randomised fields carry a world axis
+    (MuJoCo Playground's pattern), the data broadcast to every world; ``n`` steps run in one jitted
+    ``fori_loop``. Uses JAX's default device unless ``device`` is given."""
+    jax, mjx = import_mjx()
+    import jax.numpy as jnp
+
+    nworld = len(next(iter(fields.values())))
+    data = mujoco.MjData(model)
+    data.ctrl[:] = ctrl
+    mx = mjx.put_model(model, device=device)
+    axes = jax.tree.map(lambda _: None, mx).tree_replace({name: 0 for name in fields})
+    mx = mx.tree_replace({name: jax.device_put(jnp.asarray(rows), device) for name, rows in fields.items()})
+    dx = jax.tree.map(lambda x: jnp.broadcast_to(x, (nworld, *x.shape)), mjx.put_data(model, data, device=device))
+
+    def one(m, d):  # mjx.step returns some integer fields wider than put_data made them
+        return jax.tree.map(lambda new, old: new.astype(old.dtype), mjx.step(m, d), d)
+
+    batched = jax.vmap(one, in_axes=(axes, 0))
+    run = jax.jit(lambda m, d, n: jax.lax.fori_loop(0, n, lambda _, dd: batched(m, dd), d))
+    state = {"d": dx}
+
+    def step(n: int) -> None:
+        state["d"] = run(mx, state["d"], n)
+        state["d"].qpos.block_until_ready()
+
+    def check() -> list[str]:
+        bad = ~np.isfinite(np.asarray(state["d"].qpos)).all(axis=1)
+        return [f"MJX: {bad.sum()} of {nworld} worlds have a non-finite qpos"] if bad.any() else []
+
+    return Batch("mjx", nworld, step, lambda: np.asarray(state["d"].qpos), check)
+
+
+def warp_batch(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndarray],
+               buffers: ConstraintBuffers, device: str = "cpu", graph: bool | None = None) -> Batch:
+    """MuJoCo Warp: ``put_model`` with ``batch_sizes`` giving the randomised fields one row per world,
+    filled from ``fields``; ``put_data`` with ``nworld`` and the constraint buffers. On a CUDA device
+    one step is captured as a CUDA graph (``graph`` overrides) and replayed."""
+    wp, mjw = import_warp()
+    nworld = len(next(iter(fields.values())))
+    data = mujoco.MjData(model)
+    data.ctrl[:] = ctrl
+    with wp.ScopedDevice(device):
+        mw = mjw.put_model(model, batch_sizes={name: nworld for name in fields})
+        for name, rows in fields.items():
+            getattr(mw, name).assign(rows)
+        dw = mjw.put_data(model, data, nworld=nworld, nconmax=buffers.nconmax, njmax=buffers.njmax)
+        captured = None
+        if graph if graph is not None else wp.get_device(device).is_cuda:
+            mjw.step(mw, dw)  # compile outside the capture
+            with wp.ScopedCapture() as capture:
+                mjw.step(mw, dw)
+            captured = capture.graph
+            mjw.reset_data(mw, dw)
+            dw.ctrl.assign(np.tile(ctrl, (nworld, 1)))
+
+    def step(n: int) -> None:
+        with wp.ScopedDevice(device):
+            for _ in range(n):
+                if captured is None:
+                    mjw.step(mw, dw)
+                else:
+                    wp.capture_launch(captured)
+            wp.synchronize_device(device)
+
+    overflow = mjw.OverflowType
+    buffer_bits = overflow.NEFC | overflow.NJMAX_NNZ | overflow.BROADPHASE | overflow.NARROWPHASE | overflow.CCD
+
+    def check() -> list[str]:
+        problems = []
+        flags = dw.overflow.numpy() & int(buffer_bits)
+        if flags.any():
+            problems.append(f"MuJoCo Warp: {int((flags != 0).sum())} of {nworld} worlds overflowed their buffers "
+                            f"({overflow(int(np.bitwise_or.reduce(flags))).name}; {buffers.line()})")
+        if (dw.nefc.numpy() > buffers.njmax).any():
+            problems.append(f"MuJoCo Warp: nefc {int(dw.nefc.numpy().max())} > njmax {buffers.njmax}")
+        bad = ~np.isfinite(dw.qpos.numpy()).all(axis=1)
+        if bad.any():
+            problems.append(f"MuJoCo Warp: {bad.sum()} of {nworld} worlds have a non-finite qpos")
+        return problems
+
+    return Batch("warp", nworld, step, lambda: dw.qpos.numpy(), check)
+
+
+def cpu_reference(model: mujoco.MjModel, ctrl: np.ndarray, steps: int) -> tuple[np.ndarray, list[str]]:
+    """CPU MuJoCo's ``qpos`` after ``steps`` steps from rest under ``ctrl``, and the warnings it raised."""
+    data = mujoco.MjData(model)
+    data.ctrl[:] = ctrl
+    for _ in range(steps):
+        mujoco.mj_step(model, data)
+    warned = [mujoco.mjtWarning(i).name for i, w in enumerate(data.warning) if w.number]
+    return data.qpos.copy(), warned
+
+
+def world_difference(batch: Batch, model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndarray],
+                     steps: int, world: int = 0) -> float:
+    """The largest ``|qpos|`` difference between ``batch``'s world and CPU MuJoCo stepping that world's
+    model (the batch must have stepped ``steps`` times from rest under ``ctrl``)."""
+    ref, warned = cpu_reference(world_model(model, fields, world), ctrl, steps)
+    if warned:
+        raise RuntimeError(f"CPU MuJoCo warned on world {world}: {warned}")
+    return float(np.abs(batch.qpos()[world] - ref).max())

@@ -48,11 +48,12 @@ def import_mjx():
 def import_warp():
     """``(warp, mujoco_warp)`` with Warp's per-kernel messages off, or an ImportError naming the extra."""
     try:
-        import mujoco_warp
         import warp
+
+        warp.config.quiet = True  # before mujoco_warp's import initialises Warp
+        import mujoco_warp
     except ImportError as exc:
         raise ImportError(f"MuJoCo Warp needs {GPU_EXTRA}: {exc}") from exc
-    warp.config.quiet = True
     return warp, mujoco_warp
 
 

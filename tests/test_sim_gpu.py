@@ -1,0 +1,152 @@
+"""Batched simulation (bvsr_cad/sim_gpu.py): MJX and MuJoCo Warp on their CPU backends step the exported
+scenes, and every randomised world agrees with CPU MuJoCo stepping the same world's model.
+
+The engines come with the optional extra ``.[gpu]``; without it their tests skip and say so. The
+randomisation and the buffer sizing need only MuJoCo and always run."""
+
+from __future__ import annotations
+
+import os
+
+# JAX on a shared CPU: one thread, no accelerator probing (set before anything imports jax).
+os.environ.setdefault("XLA_FLAGS", "--xla_cpu_multi_thread_eigen=false")
+os.environ.setdefault("JAX_PLATFORMS", "cpu")
+
+import mujoco  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from bvsr_cad import sim_gpu  # noqa: E402
+
+SKIP = f"needs {sim_gpu.GPU_EXTRA}"
+
+#: Two hinges with springs, limits and motors: MJX compiles it in seconds, so the batching itself
+#: (per-world fields, vmap, Warp's batched model) is checked without the tail's long compile.
+TWO_LINKS = """<mujoco><option timestep="0.001" integrator="implicitfast"/><worldbody>
+<body name="a"><joint name="h1" axis="0 1 0" stiffness="2" damping="0.01" range="-0.3 0.3"/>
+<geom type="capsule" fromto="0 0 0 0.1 0 0" size="0.01" mass="0.1"/>
+<body name="b" pos="0.1 0 0"><joint name="h2" axis="0 1 0" stiffness="2" damping="0.01" range="-0.3 0.3"/>
+<geom type="capsule" fromto="0 0 0 0.1 0 0" size="0.01" mass="0.1"/></body></body></worldbody>
+<actuator><motor name="a_m1" joint="h1" ctrlrange="-1 1"/><motor name="b_m1" joint="h2" ctrlrange="-1 1"/>
+</actuator></mujoco>"""
+
+
+@pytest.fixture(scope="module")
+def scenes(bvsr_export):
+    robot = sim_gpu.scene_path(bvsr_export).parent
+    return {name: mujoco.MjModel.from_xml_path(str(robot / name)) for name in ("scene.xml", "scene_segments.xml")}
+
+
+@pytest.fixture(scope="module")
+def jax_x64():
+    if not _has("mujoco.mjx"):
+        pytest.skip(SKIP)
+    jax, _ = sim_gpu.import_mjx()
+    jax.config.update("jax_enable_x64", True)  # CPU MuJoCo is double precision: compare like with like
+    return jax
+
+
+def _has(module: str) -> bool:
+    try:
+        __import__(module)
+    except ImportError:
+        return False
+    return True
+
+
+def _needs_warp():
+    if not (_has("warp") and _has("mujoco_warp")):
+        pytest.skip(SKIP)
+
+
+def test_tip_payload_moves_mass_and_subtree_mass_like_mujoco(scenes):
+    model = scenes["scene.xml"]
+    rand = sim_gpu.Randomisation(payload_kg=(0.01, 0.05), seed=3)
+    fields = sim_gpu.randomised_fields(model, 4, rand)
+    tip = sim_gpu.tip_body(model)
+    assert model.body(tip).name == "panel6"
+    payload = fields["body_mass"][:, tip] - model.body_mass[tip]
+    assert (payload >= 0.01).all() and (payload <= 0.05).all() and len(set(payload)) == 4
+    for w in range(4):
+        world = sim_gpu.world_model(model, fields, w)
+        ours = world.body_subtreemass.copy()
+        mujoco.mj_setConst(world, mujoco.MjData(world))  # MuJoCo's own subtree masses from body_mass
+        assert np.allclose(ours, world.body_subtreemass, rtol=1e-12)
+        assert ours[0] == pytest.approx(model.body_subtreemass[0] + payload[w])
+    # The springs of the hinges (the rod) are scaled, the chord slides' are not.
+    hinge = model.jnt_type == mujoco.mjtJoint.mjJNT_HINGE
+    scale = fields["jnt_stiffness"][:, hinge & (model.jnt_stiffness > 0)] / model.jnt_stiffness[hinge & (model.jnt_stiffness > 0)]
+    assert np.allclose(scale, scale[:, :1]) and ((scale >= 0.8) & (scale <= 1.2)).all()
+    assert np.array_equal(fields["jnt_stiffness"][:, ~hinge], np.tile(model.jnt_stiffness[~hinge], (4, 1)))
+
+
+def test_bad_randomisation_names_the_field():
+    with pytest.raises(ValueError, match=r"Randomisation.payload_kg=\(0.1, 0.0\)"):
+        sim_gpu.Randomisation(payload_kg=(0.1, 0.0))
+    with pytest.raises(ValueError, match="margin=0.5"):
+        sim_gpu.constraint_buffers(mujoco.MjModel.from_xml_string(TWO_LINKS), margin=0.5)
+
+
+def test_constraint_buffers_cover_random_held_pressures(scenes):
+    """The probe's buffers hold every constraint row of runs it did not see: random held pressures."""
+    rng = np.random.default_rng(7)
+    for name, model in scenes.items():
+        buffers = sim_gpu.constraint_buffers(model, seconds=0.15)
+        assert buffers.nefc_seen >= model.neq  # the chord couplings are always active
+        lo, hi = model.actuator_ctrlrange.T
+        data = mujoco.MjData(model)
+        for _ in range(3):
+            mujoco.mj_resetData(model, data)
+            data.ctrl[:] = rng.uniform(lo, hi)
+            for _ in range(round(0.15 / model.opt.timestep)):
+                mujoco.mj_step(model, data)
+                assert data.nefc <= buffers.njmax and data.ncon <= buffers.nconmax, (name, buffers.line())
+
+
+def _agrees(batch, model, ctrl, fields, steps, tol):
+    batch.step(steps)
+    assert not batch.check(), batch.check()
+    moved = np.abs(batch.qpos() - model.qpos0).max()
+    worst = max(sim_gpu.world_difference(batch, model, ctrl, fields, steps, w) for w in range(batch.nworld))
+    assert worst < tol < moved / 100, (batch.engine, worst, moved)
+    return worst
+
+
+def test_mjx_batch_of_two_links_matches_cpu_per_world(jax_x64):
+    model = mujoco.MjModel.from_xml_string(TWO_LINKS)
+    fields = sim_gpu.randomised_fields(model, 3)
+    ctrl = np.array([0.3, -0.2])
+    _agrees(sim_gpu.mjx_batch(model, ctrl, fields), model, ctrl, fields, 100, 1e-12)
+
+
+def test_warp_batch_of_two_links_matches_cpu_per_world():
+    _needs_warp()
+    model = mujoco.MjModel.from_xml_string(TWO_LINKS)
+    fields = sim_gpu.randomised_fields(model, 3)
+    ctrl = np.array([0.3, -0.2])
+    buffers = sim_gpu.constraint_buffers(model)
+    _agrees(sim_gpu.warp_batch(model, ctrl, fields, buffers), model, ctrl, fields, 100, 1e-6)
+
+
+@pytest.mark.parametrize("name", ["scene.xml", "scene_segments.xml"])
+def test_warp_steps_the_exported_scene_like_cpu(scenes, name):
+    """Warp's CPU device, float32, three randomised worlds at full pressure on every line: each world
+    within 1e-5 (rad or m) of CPU MuJoCo after 10 ms, with buffers sized from the model (the
+    per-segment scene went NaN in the default 64 rows on a GPU)."""
+    _needs_warp()
+    model = scenes[name]
+    fields = sim_gpu.randomised_fields(model, 3)
+    ctrl = model.actuator_ctrlrange[:, 1].copy()
+    batch = sim_gpu.warp_batch(model, ctrl, fields, sim_gpu.constraint_buffers(model, seconds=0.1))
+    _agrees(batch, model, ctrl, fields, max(5, round(0.01 / model.opt.timestep)), 1e-5)
+
+
+@pytest.mark.skipif(not os.environ.get("BVSR_TEST_MJX"), reason=(
+    "MJX's compile of the exported scene takes over a minute of CPU on two cores (several minutes with "
+    "contacts on a loaded machine): set BVSR_TEST_MJX=1 to run it"))
+def test_mjx_steps_the_exported_scene_like_cpu(scenes, jax_x64):
+    model = scenes["scene.xml"]
+    fields = sim_gpu.randomised_fields(model, 2)
+    ctrl = model.actuator_ctrlrange[:, 1].copy()
+    _agrees(sim_gpu.mjx_batch(model, ctrl, fields), model, ctrl, fields, max(5, round(0.01 / model.opt.timestep)),
+            1e-9)

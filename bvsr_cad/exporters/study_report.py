@@ -176,6 +176,17 @@ def _feasible(study, df):
     return ok
 
 
+def _save(fig, ax, title: str, path: Path) -> str:
+    """Grid, legend and title; the PNG written atomically; its path relative to the report."""
+    ax.grid(True, lw=0.3)
+    ax.legend(fontsize=8)
+    fig.suptitle(title)
+    fig.tight_layout()
+    _atomic(path, lambda p: fig.savefig(p, dpi=90, format="png"))
+    plt.close(fig)
+    return f"plots/{path.name}"
+
+
 def _optuna_plots(study, df, folder: Path) -> list[tuple[str, str]]:
     out = []
     obj = study.objectives[0]
@@ -192,14 +203,8 @@ def _optuna_plots(study, df, folder: Path) -> list[tuple[str, str]]:
     ax.step(d["trial"], best, where="post", color="C1", label="best feasible so far")
     ax.set_xlabel("trial")
     ax.set_ylabel(obj.metric)
-    ax.grid(True, lw=0.3)
-    ax.legend(fontsize=8)
-    fig.suptitle(f"{study.name}: optimisation history ({obj.direction})")
-    fig.tight_layout()
-    path = folder / "optuna_history.png"
-    _atomic(path, lambda p: fig.savefig(p, dpi=90, format="png"))
-    plt.close(fig)
-    out.append(("optimisation history", f"plots/{path.name}"))
+    out.append(("optimisation history", _save(fig, ax, f"{study.name}: optimisation history ({obj.direction})",
+                                               folder / "optuna_history.png")))
     pair = [o.metric for o in study.objectives][:2]
     directions = [o.direction == "maximize" for o in study.objectives][:2]
     if len(pair) < 2:  # one objective: its trade-off against the tail's mass
@@ -219,14 +224,7 @@ def _optuna_plots(study, df, folder: Path) -> list[tuple[str, str]]:
                 ax.plot(base[pair[0]], base[pair[1]], "*", color="k", ms=12, label="base")
         ax.set_xlabel(f"{pair[0]} ({'max' if directions[0] else 'min'})")
         ax.set_ylabel(f"{pair[1]} ({'max' if directions[1] else 'min'})")
-        ax.grid(True, lw=0.3)
-        ax.legend(fontsize=8)
-        fig.suptitle(f"{study.name}: Pareto front")
-        fig.tight_layout()
-        path = folder / "pareto_front.png"
-        _atomic(path, lambda p: fig.savefig(p, dpi=90, format="png"))
-        plt.close(fig)
-        out.append(("Pareto front", f"plots/{path.name}"))
+        out.append(("Pareto front", _save(fig, ax, f"{study.name}: Pareto front", folder / "pareto_front.png")))
     return out
 
 

@@ -26,17 +26,25 @@ from .twin import RIGID_TWIN_MATERIAL
 #: The rigid comparison tail (parts/rigid_tail.py, the fabrication package) is printed in this material.
 
 
-class ParamError(ValueError):
-    """A parameter file that cannot describe a buildable tail."""
+class InputFileError(ValueError):
+    """A user's input file with ``problems``, each naming the key, its value and what is allowed."""
+
+    what = "the file"
 
     def __init__(self, path: str | Path, problems: list[str]):
         self.path = str(path)
         self.problems = list(problems)
         lines = "\n".join(f"  - {p}" for p in self.problems)
-        super().__init__(f"{self.path}: {len(self.problems)} problem(s) in the parameters:\n{lines}")
+        super().__init__(f"{self.path}: {len(self.problems)} problem(s) in {self.what}:\n{lines}")
 
     def __reduce__(self):  # pickles (a second process hands it back to the build)
         return (type(self), (self.path, self.problems))
+
+
+class ParamError(InputFileError):
+    """A parameter file that cannot describe a buildable tail."""
+
+    what = "the parameters"
 
 
 def _allowed(meta: dict[str, Any]) -> str:

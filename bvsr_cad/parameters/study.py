@@ -65,7 +65,7 @@ from typing import Any
 
 import numpy as np
 
-from .load import read_input_text
+from .load import InputFileError, read_input_text
 from .tables import TailSpec
 
 KINDS = ("grid", "random", "optuna")
@@ -74,17 +74,10 @@ TOP_KEYS = {"name", "base", "metrics", "checks", "time_limit_s", "baseline", "co
             "variants", "random", "optuna", "expect"}
 
 
-class StudyError(ValueError):
+class StudyError(InputFileError):
     """A study file that cannot run; ``problems`` name each key, its value and what is allowed."""
 
-    def __init__(self, path: str | Path, problems: list[str]):
-        self.path = str(path)
-        self.problems = list(problems)
-        lines = "\n".join(f"  - {p}" for p in self.problems)
-        super().__init__(f"{self.path}: {len(self.problems)} problem(s) in the study:\n{lines}")
-
-    def __reduce__(self):
-        return (type(self), (self.path, self.problems))
+    what = "the study"
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,7 @@ import trimesh
 
 from .. import units
 from ..colors import rgb, rgba
-from ..assembly.build import Assembly
+from ..assembly.build import Assembly, rod_span_mm
 from ..assembly.fabrication import MadeItem, made_items
 from ..assembly.products import RIGID_MATERIAL, RigidRobot, piece_transform_mm
 from ..parameters.twin import rigid_joining
@@ -55,6 +55,12 @@ def _filled_features(asm: Assembly) -> list[dict[str, Any]]:
             out.append({"name": f"{lay.name}:{c.name}", "kind": c.role, "diameter_mm": c.diameter_mm,
                         "p0_mm": [c.p0[0], c.p0[1], c.p0[2] + lay.z0_mm],
                         "p1_mm": [c.p1[0], c.p1[1], c.p1[2] + lay.z0_mm]})
+    spec = asm.spec
+    if not spec.vertebra.has_rod:  # no vertebra: the twin's solid rod column stands where the BVSR has none
+        for s in range(1, spec.segments + 1):
+            z0, z1 = rod_span_mm(spec, s)
+            out.append({"name": f"rod_column_s{s}", "kind": "rod column (no vertebra)",
+                        "diameter_mm": spec.vertebra.diameter_mm, "p0_mm": [0.0, 0.0, z0], "p1_mm": [0.0, 0.0, z1]})
     return out
 
 

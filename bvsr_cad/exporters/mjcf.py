@@ -11,7 +11,11 @@ rotation is Eq 2's exactly, the end point within 3.5e-4 L theta^4). Each hinge c
 shear the exact chain does not have) are held by the equalities alone, and the SOAs' thrust pushes
 them over: stepped at 2 ms with the links' own inertia that mode grows. A fixed tendon per axis,
 ``jk_shear_x`` = ``jk_ax`` - ``jk_bx`` (zero whenever the equalities hold), damps it with the
-SOAs' own bending damping c N r^2 / 2, so it adds nothing to the constant-curvature motion.
+SOAs' own bending damping c N r^2 / 2 and resists it with what resists it in the real joint, the
+rod's and SOAs' bending as fixed-guided columns (:func:`shear_stiffness_nm_rad`), so it adds nothing
+to the constant-curvature motion and holds with a soft rod or none. The per-segment model's series
+SOA tendons lose the SOAs' resistance to a segment's joints bending unalike: fixed ``spread`` tendons
+put it back (:func:`_segment_spread_tendons`).
 The *exact* chain (``robot/bvsr_exact.xml``) is the URDF's,
 stepped at ``robot.timestep_s``.
 
@@ -85,6 +89,12 @@ PHI_REST_RAD = 1.5707963267948966
 #: of a segment are soft too: it meets the 2 mm at 1 ms (1.5 mm; 3.3 mm at 2 ms).
 REDUCED_CHAIN_TIMESTEP_S = 2e-3
 REDUCED_PER_SEGMENT_TIMESTEP_S = 1e-3
+#: The equalities' impedance (MuJoCo's solimp): its dmax 0.95 -> 0.96, the share of the coupling force
+#: the two-step time constant (the least MuJoCo allows) leaves unregularised. 0.97 moves the 4 ms tip
+#: 5.4 mm off the 0.05 ms one (issue 17's 5 mm; 0.99: 2.8 mm at 2 ms). With the shear and spread tendons
+#: it holds a tail with a soft rod or none (largest residual under gravity, no rod: 10.3 -> 7.1 mrad per
+#: joint, 11.9 -> 5.7 per segment; checks/robot.py's limit is 10).
+EQUALITY_SOLIMP = (0.9, 0.96, 0.001, 0.5, 2.0)
 #: The chains an MJCF file can carry (``chain`` of :func:`mjcf_tree`).
 CHAINS = ("reduced", "exact")
 #: Per-segment model: the joints of a segment follow its first joint's (joint suffix, equality tag).
@@ -246,12 +256,13 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
     eq = ET.SubElement(root, "equality")
     # As stiff as the step allows (MuJoCo needs a time constant of at least two steps).
     solref = _vec((2.0 * timestep_s, 1.0))
+    solimp = _vec(EQUALITY_SOLIMP)
     chord_err = 0.0
     for b in robot.bending:
         if chain == "reduced":
             for axis in "xy":
                 ET.SubElement(eq, "joint", name=f"{b.name}_b{axis}_eq", joint1=f"{b.name}_b{axis}",
-                              joint2=f"{b.name}_a{axis}", polycoef="0 1 0 0 0", solref=solref)
+                              joint2=f"{b.name}_a{axis}", polycoef="0 1 0 0 0", solref=solref, solimp=solimp)
             continue
         phi, tha, chord, thb, phib = b.urdf_joints
         coef, err = chord_polynomial(b.arc_length_m, b.theta_max_rad / 2)
@@ -271,16 +282,20 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
             lead = first[b.segment]
             for kind, tag in zip(*(SEGMENT_COUPLED[chain])):
                 ET.SubElement(eq, "joint", name=f"{b.name}_{tag}_seg", joint1=f"{b.name}_{kind}",
-                              joint2=f"{lead}_{kind}", polycoef="0 1 0 0 0", solref=solref)
+                              joint2=f"{lead}_{kind}", polycoef="0 1 0 0 0", solref=solref, solimp=solimp)
 
     tendon = ET.SubElement(root, "tendon")
     if chain == "reduced":
         shear_damping = _f(_soa_bending_damping(robot))
+        shear_stiffness = _f(shear_stiffness_nm_rad(robot))
         for b in robot.bending:
             for axis in "xy":
-                fixed = ET.SubElement(tendon, "fixed", name=f"{b.name}_shear_{axis}", damping=shear_damping)
+                fixed = ET.SubElement(tendon, "fixed", name=f"{b.name}_shear_{axis}", damping=shear_damping,
+                                      stiffness=shear_stiffness)
                 ET.SubElement(fixed, "joint", joint=f"{b.name}_a{axis}", coef="1")
                 ET.SubElement(fixed, "joint", joint=f"{b.name}_b{axis}", coef="-1")
+        if per_segment:
+            _segment_spread_tendons(tendon, robot)
     actuator = ET.SubElement(root, "actuator")
     ctrl = _vec((act.pressure_min_pa, act.pressure_max_pa))
     groups: dict[str, list] = {}
@@ -339,12 +354,63 @@ def collision_geom(body: ET.Element, c: Collision, shift=(0.0, 0.0, 0.0), **attr
     return ET.SubElement(body, "geom", geom)
 
 
-def _soa_bending_damping(robot: RobotModel) -> float:
-    """c N r^2 / 2 (N m s/rad): a joint's SOA dampers against bending, r the sockets' mean radius."""
+def shear_stiffness_nm_rad(robot: RobotModel) -> float:
+    """Stiffness (N m/rad) on a reduced joint's shear tendon ``a - b`` (s): the real joint's resistance to it.
+
+    In that mode the panel slides sideways by (1 - 2 f) L s / 2 (f = :data:`PRB_PIVOT_FRACTION`) without
+    turning, and every column between the panels (the rod and the N SOAs) bends as a fixed-guided beam of
+    lateral stiffness 12 E I / L^3: energy (1/2) 3 (1 - 2 f)^2 (E I / L) s^2 per column. An SOA's own
+    E I / L is its axial spring n_a spread on a thin wall round its effective area A (a ring of radius
+    sqrt(A / pi): I / A = A / (2 pi)). The two hinges' 2 E I / L already give the rod (1/2) (E I / L) s^2,
+    so the tendon carries the rest. It is zero whenever the equalities hold: it adds nothing to the
+    constant-curvature motion, and it holds the mode where the rod is soft or absent.
+    """
+    law, act = robot.actuation.law, robot.actuation
+    n_soas = sum(1 for s in robot.soas if s.joint == 1)
+    guided = 3.0 * (1.0 - 2.0 * PRB_PIVOT_FRACTION) ** 2
+    soa_ei_over_l = law.stiffness_offset_n_per_m * law.area_m2 / (2.0 * np.pi)
+    return guided * n_soas * soa_ei_over_l + (guided - 1.0) * act.rod_bending_stiffness_nm_rad
+
+
+def _soa_bending(robot: RobotModel, per_soa: float) -> float:
+    """``per_soa`` N r^2 / 2: a joint's N SOAs (each a spring n_a or damper c along it) against bending
+    about either axis, r the sockets' mean radius."""
     pos = {s.name: np.asarray(s.pos_m) for s in robot.sites}
     joint1 = [s for s in robot.soas if s.joint == 1]
     r2 = float(np.mean([np.sum(pos[s.bottom_site][:2] ** 2) for s in joint1]))
-    return robot.actuation.law.damping_n_s_per_m * len(joint1) * r2 / 2
+    return per_soa * len(joint1) * r2 / 2
+
+
+def _soa_bending_damping(robot: RobotModel) -> float:
+    """c N r^2 / 2 (N m s/rad): a joint's SOA dampers against bending."""
+    return _soa_bending(robot, robot.actuation.law.damping_n_s_per_m)
+
+
+def _segment_spread_tendons(tendon: ET.Element, robot: RobotModel) -> None:
+    """What the per-segment model's series tendons lose: the SOAs resisting a segment's joints bending unalike.
+
+    n joints bending theta_i (per axis, theta = a + b) against their own SOAs store (1/2) K sum theta_i^2,
+    K = n_a N r^2 / 2; one series tendon of stiffness n_a / n per line stores (1/2) (K / n) (sum theta_i)^2.
+    The difference, (1/2) K sum (theta_i - mean)^2 = (1/2) (K / n) sum over pairs (theta_i - theta_j)^2,
+    is a fixed tendon per pair of stiffness K / n (and damping c N r^2 / (2 n) likewise). It is zero
+    whenever the segment's equalities hold, so it adds nothing to the coupled motion.
+    """
+    law = robot.actuation.law
+    segments: dict[int, list] = {}
+    for b in robot.bending:
+        segments.setdefault(b.segment, []).append(b.name)
+    for names in segments.values():
+        n = len(names)
+        stiffness = _f(_soa_bending(robot, law.stiffness_offset_n_per_m) / n)
+        damping = _f(_soa_bending(robot, law.damping_n_s_per_m) / n)
+        for i, first in enumerate(names):
+            for second in names[i + 1:]:
+                for axis in "xy":
+                    fixed = ET.SubElement(tendon, "fixed", name=f"{first}_{second}_spread_{axis}",
+                                          stiffness=stiffness, damping=damping)
+                    for name, coef in ((first, "1"), (second, "-1")):
+                        for half in "ab":
+                            ET.SubElement(fixed, "joint", joint=f"{name}_{half}{axis}", coef=coef)
 
 
 def _panel_spans(robot: RobotModel, soas) -> float:

@@ -366,3 +366,27 @@ def test_simulate_cart_command(tmp_path, capsys):
     for r in rows.values():
         assert r["mujoco"] > 0 and r["mujoco"] == pytest.approx(r["eq20_22"], rel=0.25)
     assert Path(out["plot"]).is_file()
+
+
+def test_reduced_couplings_hold_without_a_rod(tmp_path, data):
+    """With no rod (E I = 0) nothing but the equalities held a reduced joint's shear a - b and a segment's
+    joints bending unalike: stepped like `mujoco_couplings_held` they drifted 10.3 mrad per joint and 11.9 per
+    segment (limit 10). The shear tendon's column stiffness, the spread tendons and the equalities' solimp
+    hold them within the limit, and MuJoCo warns of nothing."""
+    from bvsr_cad.checks.robot import EQUALITY_TOLERANCE_REDUCED, _quiet_cwd, _step
+    from bvsr_cad.exporters.mjcf import mjcf_tree, scene_tree, write_mjcf
+    from bvsr_cad.exporters.robot_files import write_robot_meshes
+    from bvsr_cad.parameters.load import spec_from_dict
+
+    data["vertebra"]["material"] = "none"
+    spec = spec_from_dict(data)
+    robot = robot_model(build_assembly(spec), [THETA_MAX] * spec.joints)
+    assert robot.actuation.rod_bending_stiffness_nm_rad == 0.0
+    mesh_files = write_robot_meshes(robot, tmp_path / "meshes")
+    for per_segment in (False, True):
+        stem = f"tail_{per_segment}"
+        write_mjcf(tmp_path / f"{stem}.xml", mjcf_tree(robot, mesh_files, per_segment)[0])
+        write_mjcf(tmp_path / f"scene_{stem}.xml", scene_tree(f"{stem}.xml", stem))
+        with _quiet_cwd(tmp_path):
+            _m, _d, warnings, worst_eq, _at, _drift = _step(tmp_path / f"scene_{stem}.xml", gravity=True)
+        assert warnings == 0 and worst_eq < EQUALITY_TOLERANCE_REDUCED, (per_segment, worst_eq)

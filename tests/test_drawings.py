@@ -126,3 +126,26 @@ def test_same_geometry_gives_the_same_sheet(bvsr_spec):
     first, n = draw_sheet("mold_lid", lid.solid, list(lid.features), views)
     assert draw_sheet("mold_lid", lid.solid, list(lid.features), views) == (first, n)
     assert n == len(lid.features) == 4 + 1 + 4 + 2  # the lid: vents, flange pocket, bolts, pins: one row each
+
+
+def test_the_title_block_is_the_same_bytes_in_a_fresh_process(bvsr_spec):
+    """A build that takes the sheets from the cache never runs build123d's SVG export (which registers
+    SVG as ElementTree's default namespace, process-wide): its stamped title block must not change."""
+    import subprocess
+    import sys
+
+    from bvsr_cad.exporters.drawings import _title_block
+
+    code = ("import sys; from bvsr_cad.exporters.drawings import _title_block as t; "
+            "from bvsr_cad.parameters.load import load_spec\n"
+            "class I: material, process, quantity = 'PA12_MJF', 'MJF', 1\n"
+            "sys.stdout.buffer.write(t('panel0', I, load_spec(sys.argv[1]), 'f' * 64))")
+    params = Path(__file__).resolve().parents[1] / "params" / "bvsr.toml"
+    fresh = subprocess.run([sys.executable, "-c", code, str(params)], capture_output=True, check=True).stdout
+
+    class Item:
+        material, process, quantity = "PA12_MJF", "MJF", 1
+
+    ET.register_namespace("svg", "http://www.w3.org/2000/svg")  # whatever another module registered before
+    assert _title_block("panel0", Item, bvsr_spec, "f" * 64) == fresh
+    assert fresh.startswith(b'<g xmlns="http://www.w3.org/2000/svg" id="title-block"')

@@ -348,6 +348,10 @@ def write_drawing_sheets(asm: Assembly, molds: MoldSet, root: Path) -> None:
 
 
 def _title_block(name: str, item, spec, params_sha256: str) -> bytes:
+    # ElementTree's namespace prefixes are process-wide: build123d's SVG export registers SVG as the
+    # default namespace, and a build that takes the sheets from the cache never runs it. Register it
+    # here too, so the stamped block is the same bytes either way.
+    ET.register_namespace("", SVG_NS)
     w, _ = SHEET_MM
     x0, y0 = w - MARGIN_MM - 178.0, MARGIN_MM
     g = ET.Element(f"{{{SVG_NS}}}g", {"id": "title-block", "font-family": "DejaVu Sans"})

@@ -316,7 +316,10 @@ def run_study(study: Study, out_dir: str | Path | None = None, scheduler: str | 
         raise StudyError(study.path, [f"base = {str(study.base_path)!r} with [set] is not a buildable tail: "
                                       f"{base_problem}"])
     out = Path(out_dir) if out_dir is not None else Path("exports") / "studies" / study.name
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise SweepError(f"cannot use {str(out)!r} as the study folder: {exc}") from None
     journal = out / JOURNAL
     # What a rerun keeps: results and impossible tails. A timeout or an error is tried again (with a
     # longer time_limit_s, or after a fix), so a rerun finishes what an earlier one could not.

@@ -52,6 +52,7 @@ CHECK_METRICS = {
     "checks_failed": "number of failed checks",
     "checks_passed_ok": "every check passed",
     "failed_checks": "names of the failed checks (first 20)",
+    "checks_json": "every check's verdict: a JSON object {check name: passed}",
 }
 STATUSES = ("ok", "infeasible", "timeout", "error")
 JOURNAL = "results.jsonl"
@@ -208,7 +209,9 @@ def _export_and_check(task: dict[str, Any]) -> dict[str, Any]:
     failed = [r.name for r in results if r.passed is False]
     verdicts = [r for r in results if r.passed is not None]
     return {"checks_total": len(verdicts), "checks_failed": len(failed), "checks_passed_ok": not failed,
-            "failed_checks": "; ".join(failed[:20]), "seconds_checks": time.perf_counter() - t}
+            "failed_checks": "; ".join(failed[:20]),
+            "checks_json": json.dumps({r.name: r.passed for r in verdicts}, sort_keys=True),
+            "seconds_checks": time.perf_counter() - t}
 
 
 def _clean_dead_workdirs() -> None:

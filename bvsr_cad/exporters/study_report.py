@@ -21,7 +21,7 @@ import numpy as np
 
 from .plots import plt
 
-SKIP = {"key", "label", "status", "reason", "worker", "trial", "failed_checks"}
+SKIP = {"key", "label", "status", "reason", "worker", "trial", "failed_checks", "checks_json"}
 
 
 def toml_text(data: dict[str, Any]) -> str:
@@ -283,13 +283,11 @@ def _html(study, df, images: list[tuple[str, str]], trends: list[dict[str, Any]]
                          f"</td><td>{t['n']}</td>"
                          f"<td class='{'' if t['holds'] else 'bad'}'>{verdict}</td><td>{esc(e.source)}</td></tr>")
         parts.append("</table>")
-    parts.append("<h2>Results</h2><table><tr>" + "".join(f"<th>{esc(c)}</th>" for c in df.columns
-                                                          if not c.startswith("seconds_")) + "</tr>")
+    shown = [c for c in df.columns if not c.startswith("seconds_") and c != "checks_json"]  # the table has them
+    parts.append("<h2>Results</h2><table><tr>" + "".join(f"<th>{esc(c)}</th>" for c in shown) + "</tr>")
     for _, r in df.iterrows():
         cells = []
-        for c in df.columns:
-            if c.startswith("seconds_"):
-                continue
+        for c in shown:
             v = r[c]
             text = f"{v:.4g}" if isinstance(v, float) and not math.isnan(v) else ("" if v is None or (
                 isinstance(v, float) and math.isnan(v)) else str(v))

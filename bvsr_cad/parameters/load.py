@@ -222,12 +222,15 @@ def load_spec(path: str | Path) -> TailSpec:
             impossible tail.
     """
     path = Path(path)
-    text = read_input_text(path, ParamError)
+    return spec_from_dict(read_toml(path, ParamError), path)
+
+
+def read_toml(path: Path, error: type) -> dict[str, Any]:
+    """A user's TOML file as a mapping; ``error(path, [problem])`` when it is unreadable or not TOML."""
     try:
-        data = tomllib.loads(text)
+        return tomllib.loads(read_input_text(path, error))
     except tomllib.TOMLDecodeError as exc:
-        raise ParamError(path, [f"not valid TOML: {exc}"]) from None
-    return spec_from_dict(data, path)
+        raise error(path, [f"not valid TOML: {exc}"]) from None
 
 
 def params_sha256(path: str | Path) -> str:

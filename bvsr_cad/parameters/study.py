@@ -65,7 +65,7 @@ from typing import Any
 
 import numpy as np
 
-from .load import InputFileError, read_input_text
+from .load import InputFileError, read_toml
 from .tables import TailSpec
 
 KINDS = ("grid", "random", "optuna")
@@ -298,11 +298,7 @@ def load_study(path: str | Path) -> Study:
         StudyError: naming every problem (unknown keys, empty axes, bad ranges, no axes, a bad base file).
     """
     path = Path(path)
-    text = read_input_text(path, StudyError)
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise StudyError(path, [f"not valid TOML: {exc}"]) from None
+    raw = read_toml(path, StudyError)
     problems: list[str] = []
     for k in raw:
         if k not in TOP_KEYS:

@@ -42,9 +42,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from .analysis.metrics import METRICS, Conditions, group_of
 from .parameters.study import Study, StudyError, Variant, get_path
-from .worker import PARENT_PID_ENV
+from .worker import child_env
 
 #: Metrics of the ``checks`` group (a full export and every check of it).
 CHECK_METRICS = {
@@ -111,8 +113,13 @@ def payload(study: Study, variant: Variant, pl: Plan, export_root: Path | None =
     data["name"] = f"{study.name}_{variant.key[:8]}"  # its own tail: the base's measurements are not its own
     return {"key": variant.key, "label": variant.label, "study": study.name, "data": data, "groups": list(pl.groups),
             "checks": pl.checks, "conditions": dict(study.conditions), "time_limit_s": study.time_limit_s,
-            "axes": {k: _plain(get_path(variant.data, k)) for k in study.axes},
+            "axes": {k: _plain(get_path(variant.data, k)) for k in study.axes},  # None: the schema's default
             "export_dir": None if export_root is None else str(export_root / variant.key)}
+
+
+def _row(task: dict[str, Any], status: str, reason: str, **extra: Any) -> dict[str, Any]:
+    """A result row: the variant's key, label and axis values, its status and why."""
+    return {"key": task["key"], "label": task["label"], **task["axes"], "status": status, "reason": reason, **extra}
 
 
 def _plain(v: Any) -> Any:
@@ -140,14 +147,10 @@ def evaluate(task: dict[str, Any]) -> dict[str, Any]:
     import socket
 
     t0 = time.perf_counter()
-    row = {"key": task["key"], "label": task["label"], **task["axes"], "status": "error", "reason": "",
-           "worker": f"{socket.gethostname()}:{os.getpid()}"}
-    package_root = str(Path(__file__).resolve().parents[1])
-    env = {**os.environ, PARENT_PID_ENV: str(os.getpid()), "PYTHONPATH": os.pathsep.join(
-        [package_root] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])}
+    row = _row(task, "error", "", worker=f"{socket.gethostname()}:{os.getpid()}")
     # The study's name on the command line: `ps` shows which study a variant's process belongs to.
     proc = subprocess.Popen([sys.executable, "-m", "bvsr_cad.sweep", "-", task["study"]], stdin=subprocess.PIPE,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=child_env())
     try:
         out, err = proc.communicate(json.dumps(task).encode(), timeout=task["time_limit_s"])
     except subprocess.TimeoutExpired:
@@ -347,7 +350,7 @@ def run_study(study: Study, out_dir: str | Path | None = None, scheduler: str | 
                 task = payload(study, v, pl, export_root)
                 reason = infeasible_reason(v)
                 if reason:
-                    row = {"key": v.key, "label": v.label, **task["axes"], "status": "infeasible", "reason": reason}
+                    row = _row(task, "infeasible", reason)
                     _append(journal, row)
                     done[v.key] = row
                 else:
@@ -398,8 +401,7 @@ def _result(fut, task: dict[str, Any]) -> dict[str, Any]:
     try:
         return fut.result()
     except Exception as exc:  # noqa: BLE001 - a task that failed three times (e.g. killed workers)
-        return {"key": task["key"], "label": task["label"], **task["axes"], "status": "error",
-                "reason": f"the task failed: {type(exc).__name__}: {exc}"}
+        return _row(task, "error", f"the task failed: {type(exc).__name__}: {exc}")
 
 
 def _first_done(futures) -> list:
@@ -447,35 +449,47 @@ def _optuna(study: Study, pl: Plan, cluster: _Cluster, journal: Path, done: dict
         seed=study.seed)
     ost = optuna.create_study(study_name=study.name, storage=storage, sampler=sampler, load_if_exists=True,
                               directions=[o.direction for o in study.objectives])
-    for t in ost.get_trials(deepcopy=False, states=(TrialState.RUNNING, TrialState.WAITING)):
-        if t.state == TrialState.RUNNING:  # left by an interrupted run: asked again below
-            ost.tell(t.number, state=TrialState.FAIL)
+    for t in ost.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):  # left by an interrupted run
+        ost.tell(t.number, state=TrialState.FAIL)
+    # Trials that count towards the study: those whose tail has a row (a trial interrupted before its
+    # row was written does not count, and is asked again).
     finished = [t for t in ost.get_trials(deepcopy=False) if t.state in (TrialState.COMPLETE, TrialState.FAIL)
-                and "variant" in t.user_attrs]
+                and t.user_attrs.get("variant") in done]
     if study.baseline and not ost.get_trials(deepcopy=False):
         base = {d.key: get_path(study.base_data, d.key) for d in study.space}
-        ost.enqueue_trial(base, user_attrs={"baseline": True})
-    rows = {t.user_attrs["variant"]: done[t.user_attrs["variant"]] for t in finished
-            if t.user_attrs["variant"] in done}
-    order = [t.user_attrs["variant"] for t in finished if t.user_attrs["variant"] in done]
-    reused = len(order)
+        ost.enqueue_trial({k: v for k, v in base.items() if v is not None}, user_attrs={"baseline": True})
+    rows = {t.user_attrs["variant"]: done[t.user_attrs["variant"]] for t in finished}
+    reused = len(rows)
     in_flight: dict[Any, tuple[Any, Variant, dict]] = {}
-
-    def tell(trial, row: dict[str, Any]) -> None:
-        values = [row.get(o.metric) for o in study.objectives]
-        if row["status"] == "ok" and all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
-            violations = [c.violation(row.get(c.metric)) for c in study.constraints]
-            for c, v in zip(study.constraints, violations):
-                trial.set_constraint(c.metric, v)
-            trial.set_user_attr("constraints", violations)
-            ost.tell(trial, values)
-        else:
-            trial.set_user_attr("failure", f"{row['status']}: {row.get('reason', '')}"[:500])
-            ost.tell(trial, state=TrialState.FAIL)
 
     with _bar(study.trials, progress, study.name) as bar:
         bar.update(len(finished))
         count = len(finished)
+
+        def finish(trial, v: Variant, row: dict[str, Any], new: bool) -> None:
+            """Record a trial's row (appended to the journal when it is new) and tell Optuna."""
+            nonlocal count, reused
+            row = {**row, "trial": trial.number}
+            if new:
+                _append(journal, row)
+                done[v.key] = rows[v.key] = row
+            else:  # one row per tail: a tail asked again keeps its first trial's row
+                reused += v.key not in rows
+                rows.setdefault(v.key, row)
+            values = [row.get(o.metric) for o in study.objectives]
+            if row["status"] == "ok" and all(isinstance(x, (int, float)) and math.isfinite(x) for x in values):
+                violations = [c.violation(row.get(c.metric)) for c in study.constraints]
+                for c, x in zip(study.constraints, violations):
+                    trial.set_constraint(c.metric, x)  # how the sampler learns feasibility
+                trial.set_user_attr("constraints", violations)
+                ost.tell(trial, values)
+            else:
+                trial.set_user_attr("failure", f"{row['status']}: {row.get('reason', '')}"[:500])
+                ost.tell(trial, state=TrialState.FAIL)
+            count += 1
+            bar.set_postfix_str(f"trial {trial.number}: {row['status']}")
+            bar.update(1)
+
         while count + len(in_flight) < study.trials or in_flight:
             while len(in_flight) < slots and count + len(in_flight) < study.trials:
                 trial = ost.ask()
@@ -484,56 +498,40 @@ def _optuna(study: Study, pl: Plan, cluster: _Cluster, journal: Path, done: dict
                         for d in study.space}
                 v = study.variant(over, "base" if trial.user_attrs.get("baseline") else None)
                 trial.set_user_attr("variant", v.key)
-                if v.key in done:  # the same tail ran before (an earlier trial or run): its row answers
-                    row = {**done[v.key], "trial": trial.number}
-                    tell(trial, row)
-                    rows.setdefault(v.key, row)
-                    order.append(v.key)
-                    count += 1
-                    bar.update(1)
-                    continue
                 task = payload(study, v, pl, export_root)
-                reason = infeasible_reason(v)
-                if reason:
-                    row = {"key": v.key, "label": v.label, **task["axes"], "status": "infeasible", "reason": reason,
-                           "trial": trial.number}
-                    _append(journal, row)
-                    done[v.key] = rows[v.key] = row
-                    order.append(v.key)
-                    tell(trial, row)
-                    count += 1
-                    bar.update(1)
-                    continue
-                fut = cluster.client.submit(evaluate, task, key=f"bvsr-trial-{trial.number}-{v.key}", pure=False)
-                in_flight[fut] = (trial, v, task)
-            if not in_flight:
-                continue
-            for fut in _first_done(in_flight):
+                reason = "" if v.key in done else infeasible_reason(v)
+                if v.key in done:  # the same tail ran before (an earlier trial or run): its row answers
+                    finish(trial, v, done[v.key], new=False)
+                elif reason:
+                    finish(trial, v, _row(task, "infeasible", reason), new=True)
+                else:
+                    fut = cluster.client.submit(evaluate, task, key=f"bvsr-trial-{trial.number}-{v.key}", pure=False)
+                    in_flight[fut] = (trial, v, task)
+            for fut in _first_done(in_flight) if in_flight else ():
                 trial, v, task = in_flight.pop(fut)
-                row = {**_result(fut, task), "trial": trial.number}
-                _append(journal, row)
-                done[v.key] = row
-                rows[v.key] = row
-                order.append(v.key)
-                tell(trial, row)
-                count += 1
-                bar.set_postfix_str(f"trial {trial.number}: {row['status']}")
-                bar.update(1)
-    ordered = [rows[k] for k in dict.fromkeys(order)]
-    best = _best(study, ost)
-    return ordered, reused, best
+                finish(trial, v, _result(fut, task), new=True)
+    return list(rows.values()), reused, _best(study, ost)
 
 
 def _best(study: Study, ost) -> dict[str, Any] | None:
-    """The best feasible trial (one objective) or the Pareto front's trial numbers (several)."""
-    feasible = [t for t in ost.best_trials if all(v <= 0 for v in t.user_attrs.get("constraints", []))]
+    """The best feasible trial (one objective: the best value among completed trials whose every
+    constraint holds) or the feasible Pareto front's trial numbers (several objectives)."""
+    from optuna.trial import TrialState
+
+    feasible = [t for t in ost.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
+                if all(x <= 0 for x in t.user_attrs.get("constraints", []))]
     if not feasible:
         return None
     if len(study.objectives) == 1:
-        t = feasible[0]
+        pick = max if study.objectives[0].direction == "maximize" else min
+        t = pick(feasible, key=lambda tr: tr.values[0])
         return {"trial": t.number, "variant": t.user_attrs["variant"], "params": t.params,
                 "value": t.values[0], "metric": study.objectives[0].metric}
-    return {"pareto_trials": [t.number for t in feasible]}
+    from .exporters.study_report import pareto_mask
+
+    values = np.array([t.values for t in feasible])
+    front = pareto_mask(values, tuple(o.direction == "maximize" for o in study.objectives))
+    return {"pareto_trials": sorted(t.number for t, keep in zip(feasible, front) if keep)}
 
 
 def _main() -> int:

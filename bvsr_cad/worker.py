@@ -82,6 +82,14 @@ def serve(_out: str, fn: Callable[..., Any], *args: Any) -> int:
     return 0
 
 
+def child_env() -> dict[str, str]:
+    """The environment of a child started as ``python -m bvsr_cad...``: it imports the bvsr_cad this
+    process runs, and knows its parent's PID (so that it dies with it: :func:`serve`)."""
+    package_root = str(Path(__file__).resolve().parents[1])
+    return {**os.environ, PARENT_PID_ENV: str(os.getpid()), "PYTHONPATH": os.pathsep.join(
+        [package_root] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])}
+
+
 class SecondProcess:
     def __init__(self, proc: subprocess.Popen):
         self.proc: subprocess.Popen | None = proc
@@ -102,11 +110,8 @@ class SecondProcess:
         (from a reader thread) or, without it, nowhere."""
         if (os.cpu_count() or 1) < 2:
             return None
-        package_root = str(Path(__file__).resolve().parents[1])  # the bvsr_cad this process runs
-        env = {**os.environ, PARENT_PID_ENV: str(os.getpid()), "PYTHONPATH": os.pathsep.join(
-            [package_root] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])}
         try:
-            proc = subprocess.Popen([sys.executable, "-m", module, "-", *args], cwd=cwd, env=env,
+            proc = subprocess.Popen([sys.executable, "-m", module, "-", *args], cwd=cwd, env=child_env(),
                                     stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                                     stderr=subprocess.DEVNULL if progress is None else subprocess.PIPE)
         except OSError:

@@ -108,6 +108,14 @@ def model_metrics(spec: TailSpec, groups: list[str], conditions: Conditions = Co
     out["seconds_assembly"] = time.perf_counter() - t0
     pred = Predictor(asm, spec)
     ws = None
+    posed = []  # the clearance model of the tail, built once for clearance and limits
+
+    def posed_tail_once():
+        from .clearance import posed_tail
+
+        if not posed:
+            posed.append(posed_tail(asm))
+        return posed[0]
     for group in wanted:
         t = time.perf_counter()
         say(f"metrics: {group}")
@@ -119,7 +127,7 @@ def model_metrics(spec: TailSpec, groups: list[str], conditions: Conditions = Co
             seg = tail_statics(asm, spec=spec).first_segment()
             out["lateral_stiffness_n_per_mm"] = lateral_stiffness_n_per_mm(seg)
             for m in MOTIONS:
-                qs = pred._quasi_static(m)
+                qs = pred.quasi_static(m)
                 out[f"blocked_force_{m}_n"] = qs.blocked_force_n
                 out[f"max_angle_{m}_deg"] = qs.max_angle_deg
         elif group == "workspace":
@@ -139,19 +147,18 @@ def model_metrics(spec: TailSpec, groups: list[str], conditions: Conditions = Co
             out["root_peak_force_n"] = force_n
             out["root_torque_per_mass_nm_per_kg"] = torque_nm / units.g_to_kg(out["mass_g"])
         elif group == "clearance":
-            from .clearance import clearance_over, posed_tail
+            from .clearance import clearance_over
 
             rng = np.random.default_rng(spec.analysis.seed)
             idx = rng.integers(0, ws.samples, spec.analysis.build_clearance_poses)
-            res = clearance_over(posed_tail(asm), ws.w[idx])
+            res = clearance_over(posed_tail_once(), ws.w[idx])
             out["min_clearance_mm"] = float(res.min_clearance_mm)
             out["clearance_margin_mm"] = float(res.min_clearance_mm - spec.analysis.min_clearance_mm)
         elif group == "limits":
-            from .clearance import posed_tail
             from .limits import fold_stack, joint_limits
             from .run import BUILD_LIMIT_PHIS, LIMIT_RESOLUTION_RAD, THETA_SEARCH_MAX_RAD
 
-            lims = joint_limits(posed_tail(asm), spec.analysis.min_clearance_mm, BUILD_LIMIT_PHIS,
+            lims = joint_limits(posed_tail_once(), spec.analysis.min_clearance_mm, BUILD_LIMIT_PHIS,
                                 THETA_SEARCH_MAX_RAD, LIMIT_RESOLUTION_RAD, exact=True, stack=fold_stack(spec))
             theta = np.concatenate([lim.theta_max_rad for lim in lims])
             out["joint_limit_min_deg"] = float(np.degrees(theta.min()))

@@ -132,12 +132,12 @@ class Predictor:
 
     # -- quantities ----------------------------------------------------------
     def segment_max_angle(self, motion: str) -> float:
-        return self._quasi_static(motion).max_angle_deg
+        return self.quasi_static(motion).max_angle_deg
 
     def segment_blocked_force(self, motion: str) -> float:
-        return self._quasi_static(motion).blocked_force_n
+        return self.quasi_static(motion).blocked_force_n
 
-    def _quasi_static(self, motion: str):
+    def quasi_static(self, motion: str):
         st = tail_statics(self.asm, spec=self.spec).first_segment()
         return quasi_static_segment(st, motion)
 

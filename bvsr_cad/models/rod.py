@@ -8,6 +8,7 @@ stiffness then reaches all of them by changing one input.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -72,40 +73,30 @@ def rod_section(spec: TailSpec) -> RodSection:
 
     No rod (``vertebra.material = "none"``): a section of zero stiffness and zero mass. A fitted E I
     (``[calibration.fitted] rod_flexural_rigidity_n_mm2``) belongs to the rod the measured tail had
-    (``calibration.rod_material``, ``rod_diameter_mm``); another rod gets its own table E I times the
-    same ratio fitted / table (:func:`fitted_rigidity_ratio`), so a study over rods keeps the
-    calibration's correction without giving every rod the measured rod's stiffness.
+    (``calibration.rod_material``, ``rod_diameter_mm``; a file calibrated before they were recorded
+    describes its own rod). That rod gets the value as fitted; another rod gets its own table E I
+    times the same ratio fitted / table, so a study over rods keeps the calibration's correction
+    without giving every rod the measured rod's stiffness.
     """
     v = spec.vertebra
     if not v.has_rod:
         return RodSection(NO_ROD, v.diameter_mm, 0.0, 0.0, None)
-    mat = spec.material(v.material)
-    ratio = fitted_rigidity_ratio(spec)
-    cal = spec.calibration
-    if ratio is None:
-        fitted = None
-    elif (cal.rod_material or v.material, cal.rod_diameter_mm or v.diameter_mm) == (v.material, v.diameter_mm):
-        fitted = float(cal.fitted["rod_flexural_rigidity_n_mm2"])  # the measured rod itself: the value as fitted
-    else:
-        fitted = ratio * mat.youngs_modulus_mpa * math.pi * v.diameter_mm ** 4 / 64.0
-    return RodSection(v.material, v.diameter_mm, mat.youngs_modulus_mpa, mat.density_g_cm3, fitted)
-
-
-def fitted_rigidity_ratio(spec: TailSpec) -> float | None:
-    """The calibration's E I as a fraction of its rod's table E I (None: no fitted E I).
-
-    A file calibrated before the rod was recorded (no ``calibration.rod_material``) is taken to
-    describe its own rod."""
+    table = _table_section(spec, v.material, v.diameter_mm)
     fitted = spec.calibration.fitted.get("rod_flexural_rigidity_n_mm2")
-    if fitted is None:
-        return None
     cal = spec.calibration
-    material = cal.rod_material or spec.vertebra.material
-    if material == NO_ROD:  # a fit of an invertebrate tail has no rod E I to carry over
-        return None
-    diameter_mm = cal.rod_diameter_mm or spec.vertebra.diameter_mm
-    table_n_mm2 = spec.material(material).youngs_modulus_mpa * math.pi * diameter_mm ** 4 / 64.0
-    return float(fitted) / table_n_mm2
+    measured = (cal.rod_material or v.material, cal.rod_diameter_mm or v.diameter_mm)
+    if fitted is None or measured[0] == NO_ROD:  # a fit of an invertebrate tail has no rod E I to carry over
+        return table
+    if measured == (v.material, v.diameter_mm):
+        return dataclasses.replace(table, fitted_flexural_rigidity_n_mm2=float(fitted))
+    ratio = float(fitted) / _table_section(spec, *measured).flexural_rigidity_n_mm2
+    return dataclasses.replace(table, fitted_flexural_rigidity_n_mm2=ratio * table.flexural_rigidity_n_mm2)
+
+
+def _table_section(spec: TailSpec, material: str, diameter_mm: float) -> RodSection:
+    """A rod of ``material`` and ``diameter_mm`` with the material table's modulus (no calibration)."""
+    mat = spec.material(material)
+    return RodSection(material, diameter_mm, mat.youngs_modulus_mpa, mat.density_g_cm3)
 
 
 def joint_rod_stiffness_nmm_per_rad(spec: TailSpec) -> float:

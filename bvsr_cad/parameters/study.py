@@ -56,7 +56,6 @@ import itertools
 import json
 import math
 import os
-import tomllib
 import typing
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -68,7 +67,6 @@ import numpy as np
 from .load import InputFileError, read_toml
 from .tables import TailSpec
 
-KINDS = ("grid", "random", "optuna")
 DIRECTIONS = ("maximize", "minimize")
 TOP_KEYS = {"name", "base", "metrics", "checks", "time_limit_s", "baseline", "conditions", "set", "grid",
             "variants", "random", "optuna", "expect"}
@@ -97,8 +95,9 @@ class Dimension:
         if self.log:
             return float(math.exp(rng.uniform(math.log(self.low), math.log(self.high))))
         value = float(rng.uniform(self.low, self.high))
-        if self.step:
-            value = self.low + round((value - self.low) / self.step) * self.step
+        if self.step:  # on the grid low + k step, and never above high
+            value = self.low + math.floor((value - self.low) / self.step + 0.5) * self.step
+            value = value - self.step if value > self.high else value
         return value
 
 
@@ -214,9 +213,12 @@ def _short(v: Any) -> str:
     return f"{v:.4g}" if isinstance(v, float) else str(v)
 
 
-def get_path(data: dict[str, Any], key: str) -> Any:
+def get_path(data: dict[str, Any], key: str, default: Any = None) -> Any:
+    """The value at a dotted key, or ``default`` where the file leaves the key to the schema's default."""
     node: Any = data
     for part in key.split("."):
+        if not isinstance(node, dict) or part not in node:
+            return default
         node = node[part]
     return node
 
@@ -256,13 +258,12 @@ def known_keys(data: dict[str, Any]) -> list[str]:
     return sorted(set(keys))
 
 
-def _check_key(key: str, where: str, allowed: list[str], problems: list[str]) -> bool:
+def _check_key(key: str, where: str, allowed: list[str], problems: list[str]) -> None:
     if key in allowed or (key.startswith("materials.") and key.count(".") == 2):
-        return True
+        return
     near = difflib.get_close_matches(key, allowed, n=3)
     hint = f"; did you mean {', '.join(near)}?" if near else "; a key is 'table.key' of the parameter file"
     problems.append(f"{where} {key!r}: not a parameter{hint}")
-    return False
 
 
 def _dimension(key: str, raw: Any, where: str, problems: list[str]) -> Dimension | None:
@@ -313,13 +314,16 @@ def load_study(path: str | Path) -> Study:
         problems.append("base: missing; the parameter file the variants start from (relative to the study)")
     else:
         try:
-            base_data = tomllib.loads(base_path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            problems.append(f"base = {base_raw!r}: file not found ({base_path})")
-        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-            problems.append(f"base = {base_raw!r}: cannot read it: {exc}")
+            base_data = read_toml(base_path, StudyError)
+        except StudyError as exc:
+            problems += [f"base = {base_raw!r} ({base_path}): {p}" for p in exc.problems]
     _absolute_data_file(base_data, base_path)
     allowed = known_keys(base_data) if base_data else []
+
+    def check_key(key: str, where: str) -> None:
+        """An unknown key is a problem (not judged when the base file itself could not be read)."""
+        if allowed:
+            _check_key(key, where, allowed, problems)
 
     metrics = raw.get("metrics", [])
     if not isinstance(metrics, list) or not metrics or not all(isinstance(m, str) for m in metrics):
@@ -351,15 +355,14 @@ def load_study(path: str | Path) -> Study:
         problems.append(f"set = {fixed!r}: a table of 'table.key' = value")
         fixed = {}
     for k in fixed:
-        _check_key(k, "set", allowed, problems) if allowed else None
+        check_key(k, "set")
 
     grid = raw.get("grid", {})
     if not isinstance(grid, dict):
         problems.append(f"grid = {grid!r}: a table of 'table.key' = [values]")
         grid = {}
     for k, values in grid.items():
-        if allowed:
-            _check_key(k, "grid", allowed, problems)
+        check_key(k, "grid")
         if not isinstance(values, list) or not values:
             problems.append(f"grid.{k} = {values!r}: a non-empty list of values")
     listed = raw.get("variants", [])
@@ -368,8 +371,8 @@ def load_study(path: str | Path) -> Study:
         listed = []
     for i, v in enumerate(listed, start=1):
         for k in v:
-            if k != "label" and allowed:
-                _check_key(k, f"variants[{i}]", allowed, problems)
+            if k != "label":
+                check_key(k, f"variants[{i}]")
 
     kind = "grid"
     space: list[Dimension] = []
@@ -405,8 +408,7 @@ def load_study(path: str | Path) -> Study:
             problems.append(f"{section}.space: a non-empty table of 'table.key' = [choices] or {{ low, high }}")
             dims = {}
         for k, v in dims.items():
-            if allowed:
-                _check_key(k, f"{section}.space", allowed, problems)
+            check_key(k, f"{section}.space")
             d = _dimension(k, v, f"{section}.space", problems)
             if d is not None:
                 space.append(d)
@@ -435,7 +437,11 @@ def load_study(path: str | Path) -> Study:
             if sampler not in ("tpe", "random"):
                 problems.append(f"optuna.sampler = {sampler!r}: 'tpe' or 'random'")
     expect: list[Expectation] = []
-    for i, e in enumerate(raw.get("expect", []), start=1):
+    raw_expect = raw.get("expect", [])
+    if not isinstance(raw_expect, list):
+        problems.append(f"expect = {raw_expect!r}: an array of tables ([[expect]])")
+        raw_expect = []
+    for i, e in enumerate(raw_expect, start=1):
         ok = isinstance(e, dict) and "metric" in e and (("rises_with" in e) != ("falls_with" in e)) \
             and set(e) <= {"metric", "rises_with", "falls_with", "source"}
         if not ok:
@@ -465,4 +471,4 @@ def _absolute_data_file(data: dict[str, Any], base_path: Path) -> None:
 
 
 __all__ = ["Study", "StudyError", "Expectation", "Variant", "Dimension", "Objective", "Constraint", "load_study", "set_path",
-           "get_path", "KINDS"]
+           "get_path"]

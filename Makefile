@@ -11,7 +11,7 @@ $(STAMP): pyproject.toml
 	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))' || \
 		{ echo "needs Python 3.11 (found $(PYTHON)); run: make PYTHON=/path/to/python3.11"; exit 2; }
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --quiet -e '.[test,gpu]'
+	$(BIN)/pip install --quiet -e '.[test,gpu,cad]'
 	touch $(STAMP)
 
 exports: $(STAMP)

@@ -198,7 +198,7 @@ class Tail:
             posed: a compound from :meth:`posed`; None for the tail at rest.
 
         Raises:
-            ImportError: CadQuery is not installed (it is optional: ``pip install cadquery==2.8.0``).
+            ImportError: CadQuery is not installed (it is optional: ``pip install -e ".[cad]"``).
 
         Example::
 
@@ -209,8 +209,8 @@ class Tail:
         try:
             import cadquery as cq
         except ImportError as exc:
-            raise ImportError("Tail.cadquery_assembly needs CadQuery 2.8: pip install cadquery==2.8.0 "
-                              "(it brings its own OCP build, which needs vtk 9.6.2)") from exc
+            raise ImportError("Tail.cadquery_assembly needs CadQuery 2.8: pip install -e '.[cad]' "
+                              "(or pip install cadquery==2.8.0 vtk==9.6.2)") from exc
         compound = self.assembly() if posed is None else posed
         assy = cq.Assembly(name=compound.label or self.name)
         for child in compound.children:

@@ -131,7 +131,6 @@ def test_readme_api_example_runs(in_tmp_with_params, capsys):
 
 
 def test_readme_cadquery_example_runs(in_tmp_with_params, capsys):
-    pytest.importorskip("cadquery", reason="CadQuery 2.8 is not installed (pip install cadquery==2.8.0)")
     exec(compile(textwrap.dedent(README_CADQUERY), "README.md", "exec"), {})
     out = capsys.readouterr().out.splitlines()
     assert out == ["['panel0', 'panel1']", "39 panel0"]
@@ -247,7 +246,8 @@ def test_posed_rejects_a_wrong_pose(tail):
 # ---------------------------------------------------------------------------- CadQuery
 
 def test_cadquery_assembly_has_the_same_names_colours_and_places(tail, asm, manifest_volumes):
-    cq = pytest.importorskip("cadquery", reason="CadQuery 2.8 is not installed (pip install cadquery==2.8.0)")
+    import cadquery as cq  # the `test` extra installs it
+
     assy = tail.cadquery_assembly()
     assert isinstance(assy, cq.Assembly) and assy.name == "bvsr"
     assert [c.name for c in assy.children] == [i.name for i in asm.instances]
@@ -266,7 +266,8 @@ def test_cadquery_assembly_has_the_same_names_colours_and_places(tail, asm, mani
 
 
 def test_assembly_step_reimports_in_cadquery(assembly_step, asm, manifest_volumes):
-    cq = pytest.importorskip("cadquery", reason="CadQuery 2.8 is not installed (pip install cadquery==2.8.0)")
+    import cadquery as cq  # the `test` extra installs it
+
     back = cq.Assembly.importStep(str(assembly_step))
     assert [c.name for c in back.children] == [i.name for i in asm.instances]
     total = 0.0

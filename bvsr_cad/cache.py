@@ -17,9 +17,12 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import io
 import json
 import os
+import pickle
 import shutil
+import sys
 import tempfile
 import time
 from collections.abc import Callable
@@ -29,6 +32,8 @@ from typing import Any
 
 DEFAULT_MAX_MB = 2048.0
 _DONE = ".done"
+#: In an entry of :func:`object_stage`: the objects the stage hands on, pickled.
+_OBJECTS = "objects.pkl"
 
 
 def cache_root() -> Path:
@@ -163,4 +168,58 @@ def copy_tree(src: Path, dst: Path, skip: tuple[str, ...] = (_DONE,)) -> None:
             shutil.copy2(p, target)
 
 
-__all__ = ["ArtifactCache", "stage_key", "spec_without", "code_fingerprint", "cache_root", "copy_tree"]
+def _shape(cls: type, wrapped: Any, label: str, rgba: tuple[float, ...] | None) -> Any:
+    shape = cls(wrapped)
+    shape.label = label
+    if rgba is not None:
+        shape.color = sys.modules["build123d"].Color(*rgba)
+    return shape
+
+
+class _Pickler(pickle.Pickler):
+    """Pickles a build123d shape as its B-rep (OCCT's binary format, build123d's own reducer of the
+    wrapped shape: exact geometry and any triangulation), its label and colour; not the boolean
+    history build123d keeps (which OCCT cannot serialise and no stage reads)."""
+
+    def reducer_override(self, obj: Any) -> Any:
+        bd = sys.modules.get("build123d")  # no build123d loaded: no shape to pickle
+        if bd is not None and isinstance(obj, bd.Shape):
+            return _shape, (type(obj), obj.wrapped, obj.label, tuple(obj.color) if obj.color is not None else None)
+        return NotImplemented
+
+
+def _dumps(objects: Any) -> bytes:
+    buf = io.BytesIO()
+    _Pickler(buf, protocol=pickle.HIGHEST_PROTOCOL).dump(objects)
+    return buf.getvalue()
+
+
+def object_stage(cache: ArtifactCache | None, key: str, make: Callable[[Path], Any], dst: Path) -> tuple[Any, bool]:
+    """A stage that writes files and hands objects on to later stages (B-reps, meshes, scenes).
+
+    ``make(folder)`` writes the stage's files into ``folder`` and returns its objects (picklable).
+    From the cache, the entry's files are copied into ``dst`` and its objects unpickled, as ``make``
+    left them; else ``make`` runs (into a new entry when there is a cache). Either way, and without a
+    cache, the objects handed on are the ones read back from their pickle: a B-rep read back from
+    OCCT's binary form is the same geometry, but OCCT's volumes and areas of it can differ from the
+    original's in the last bit, and a build from the cache must equal one without, file for file.
+    Returns (objects, reused).
+    """
+    hit = cache.get(key) if cache is not None else None
+    if hit is not None:
+        copy_tree(hit, dst, skip=(_DONE, _OBJECTS))
+        return pickle.loads((hit / _OBJECTS).read_bytes()), True
+    if cache is None:
+        return pickle.loads(_dumps(make(dst))), False
+    made: list[bytes] = []
+
+    def fill(folder: Path) -> None:
+        made.append(_dumps(make(folder)))
+        (folder / _OBJECTS).write_bytes(made[0])
+
+    copy_tree(cache.put(key, fill), dst, skip=(_DONE, _OBJECTS))
+    return pickle.loads(made[0]), False
+
+
+__all__ = ["ArtifactCache", "stage_key", "spec_without", "code_fingerprint", "cache_root", "copy_tree",
+           "object_stage"]

@@ -18,20 +18,24 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .analysis.poses import viewer_scenes
+import numpy as np
+import trimesh
+
+from .analysis.poses import mold_scene, twin_scene, viewer_scenes
 from .analysis.run import run_analyses
 from .assembly.build import build_assembly
-from .assembly.products import build_mold_set, build_rigid_twin, rigid_robot_model
+from .assembly.inertia import SolidProperties
+from .assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs, rigid_robot_model
 from .assembly.robot import robot_model
-from .cache import ArtifactCache, copy_tree, spec_without, stage_key
+from .cache import ArtifactCache, copy_tree, object_stage, spec_without, stage_key
 from .checks.result import CheckResult
 from .checks.run import run_checks
 from .exporters.analysis_files import write_analyses
 from .exporters.cad import write_assembly_step, write_part_step, write_part_stl
 from .exporters.drawings import stamp_drawings, write_drawing_sheets
 from .exporters.manifest import manifest_dict, write_manifest
-from .exporters.mold_files import write_molds
-from .exporters.fabrication_files import write_fabrication
+from .exporters.mold_files import molds_manifest, write_mold_files
+from .exporters.fabrication_files import write_fabrication, write_rigid_files
 from .exporters.render import render_previews
 from .checks.printability import environment_state
 from .exporters.report import write_report
@@ -39,6 +43,7 @@ from .exporters.reproducible import make_reproducible
 from .exporters.robot_files import write_robot
 from .exporters.viewer import write_viewer
 from .parameters.load import load_spec, params_sha256
+from .sim import WorkspaceProtocolSim
 from .worker import SecondProcess, result_or
 
 Progress = Callable[[str], None]
@@ -154,6 +159,10 @@ ANALYSES_IGNORE = ("robot", "casting", "fabrication_package")
 #: inputs and the molds' (``casting``); the title block (tail name, materials, processes, the params
 #: SHA-256) is stamped at every build, outside the cache.
 DRAWINGS_IGNORE = tuple(k for k in PART_FILES_IGNORE if k != "casting") + ("name",)
+#: The rigid twin's pieces and files are the part files' geometry and the printer volume it is split
+#: for (``fabrication_package``); its pieces are named by joint, not after the tail. (The mold set's
+#: key is its arguments, :func:`bvsr_cad.assembly.products.mold_set_inputs`.)
+TWIN_IGNORE = tuple(k for k in PART_FILES_IGNORE if k != "fabrication_package") + ("name",)
 
 
 @dataclass
@@ -230,7 +239,7 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         if cached_analyses is None:
             # The analyses (workspace, clearance, limits) need only the parameters: a second process
             # runs them from the file while this one builds, exports and fabricates.
-            analyses = SecondProcess.start("bvsr_cad.analysis.run", [str(params.resolve()), params_sha256(params)],
+            analyses = SecondProcess.start("bvsr_cad.pipeline", [str(params.resolve()), params_sha256(params)],
                                            tmp, say)
             if analyses is not None:
                 say("analyses: started in a second process")
@@ -240,7 +249,8 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         t = time.perf_counter()
         files: dict[str, dict[str, str]] = {name: {"step": f"step/{name}.step", "stl": f"stl/{name}.stl"}
                                              for name in asm.parts}
-        part_key = stage_key("part_files", spec=spec_without(spec, *PART_FILES_IGNORE))
+        # A rod material of "none" removes the rod part: the one material fact the part files read.
+        part_key = stage_key("part_files", spec=spec_without(spec, *PART_FILES_IGNORE), rod=spec.vertebra.has_rod)
         part_hit = cache.get(part_key) if cache else None
 
         def write_parts(folder: Path) -> None:
@@ -268,9 +278,17 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         manifest["previews"] = previews
         t = time.perf_counter()
         say("SOA mold set")
-        mold_set = build_mold_set(asm)
-        molds = write_molds(asm, mold_set, tmp, say)
-        log.record("molds", False, time.perf_counter() - t)
+
+        def make_molds(folder: Path) -> tuple:
+            made = build_mold_set(asm)
+            entries = write_mold_files(made, folder, say)
+            # Its viewer scene now: the mold STLs' triangulation is what the scene shows (OCCT keeps the finest).
+            return made, entries, mold_scene(made)
+
+        (mold_set, mold_entries, mold_view), reused = object_stage(
+            cache, stage_key("molds", inputs=mold_set_inputs(spec)), make_molds, tmp)
+        molds = molds_manifest(spec, mold_set, *mold_entries)
+        log.record("molds", reused, time.perf_counter() - t)
         t = time.perf_counter()
         say("drawings (SVG sheets)")
         drawings_key = stage_key("drawings", spec=spec_without(spec, *DRAWINGS_IGNORE))
@@ -284,19 +302,32 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         log.record("drawings", drawings_hit is not None, time.perf_counter() - t)
         t = time.perf_counter()
         say("rigid comparison tail")
-        pieces = build_rigid_twin(asm)
+
+        def make_twin(folder: Path) -> tuple:
+            made = build_rigid_twin(asm)
+            visual = write_rigid_files(made, folder)
+            # Measured on the solids made here: OCCT's integrals of a B-rep read back differ in the last bit.
+            return (made, [(m.vertices.view(np.ndarray), m.faces.view(np.ndarray)) for m in visual],
+                    twin_scene(made), [SolidProperties.of(p.solid) for p in made])
+
+        (pieces, visual, twin_view, twin_props), reused = object_stage(
+            cache, stage_key("rigid_twin", spec=spec_without(spec, *TWIN_IGNORE)), make_twin, tmp)
+        log.record("rigid twin", reused, time.perf_counter() - t)
+        t = time.perf_counter()
         mold_files = {e["name"]: e["files"] for e in molds["molds"]["parts"]}
-        fabrication = write_fabrication(asm, pieces, rigid_robot_model(asm, pieces), mold_set, files, mold_files,
-                                        tmp, say)
+        fabrication = write_fabrication(asm, pieces, rigid_robot_model(asm, pieces, twin_props),
+                                        [trimesh.Trimesh(v, f, process=False) for v, f in visual], mold_set, files,
+                                        mold_files, tmp, say)
         manifest["parts"] += fabrication.pop("rigid_parts")
-        log.record("rigid twin, print jobs, BOM", False, time.perf_counter() - t)
+        log.record("print jobs, BOM", False, time.perf_counter() - t)
         t = time.perf_counter()
         if cached_analyses is not None:
             with (cached_analyses / "analyses.pkl").open("rb") as fh:
                 results = pickle.load(fh)
             log.record("analyses", True, time.perf_counter() - t)
         else:
-            results = result_or(analyses, lambda: run_analyses(asm, say, str(params)), say, "analyses")
+            results = result_or(analyses, lambda: run_analyses(asm, say, str(params), WorkspaceProtocolSim()), say,
+                                "analyses")
             if cache is not None:
                 cache.put(analyses_key, lambda folder: (folder / "analyses.pkl").write_bytes(pickle.dumps(results)))
             # Their own time (in the second process, beside the stages above); the wait was shorter.
@@ -318,7 +349,7 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         log.record("checks", False, time.perf_counter() - t)
         t = time.perf_counter()
         say("interactive 3D view")
-        manifest.update(write_viewer(tmp, viewer_scenes(asm, mold_set, pieces, progress=say)))
+        manifest.update(write_viewer(tmp, viewer_scenes(asm, mold_view, twin_view, progress=say)))
         log.record("interactive 3D view", False, time.perf_counter() - t)
         t = time.perf_counter()
         say("report")
@@ -335,3 +366,20 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return BuildResult(out, results, time.perf_counter() - t0, log.stages)
+
+
+def _analyses_process(params: str, sha256: str):
+    """The analyses' second process (``python -m bvsr_cad.pipeline - PARAMS SHA256``): here, not in the
+    analysis layer, because a measured workspace is predicted in the simulator."""
+    from .analysis.run import from_params
+
+    return from_params(params, sha256, WorkspaceProtocolSim())
+
+
+if __name__ == "__main__":
+    import sys
+
+    from . import pipeline  # the module itself, not __main__: its results must pickle by their real names
+    from .worker import serve
+
+    sys.exit(serve(sys.argv[1], pipeline._analyses_process, *sys.argv[2:]))

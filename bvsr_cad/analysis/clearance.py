@@ -47,6 +47,7 @@ import trimesh
 
 from ..assembly.build import Assembly
 from ..models.kinematics import TailKinematics, joint_transform_uv, theta_phi_from_uv
+from ..parts._kernel import mesh_arrays
 
 Progress = Callable[[str], None]
 #: Longest mesh edge on bending parts, so that deformed triangles follow the arc (chord error < 0.01 mm).
@@ -213,8 +214,7 @@ class PosedTail:
 
 
 def _mesh(solid) -> trimesh.Trimesh:
-    verts, tris = solid.tessellate(0.02, 0.3)
-    return trimesh.Trimesh(np.array([[v.X, v.Y, v.Z] for v in verts]), np.array(tris), process=True)
+    return trimesh.Trimesh(*mesh_arrays(solid, 0.02, 0.3), process=True)
 
 
 def _cut_at_z(m: trimesh.Trimesh, levels: np.ndarray) -> trimesh.Trimesh:

@@ -39,6 +39,7 @@ from ..models.kinematics import TailKinematics
 from ..models.statics import MOTION_PHI_RAD, pressure_pattern_kpa, segment_bend_angle_rad
 from ..parameters.tables import TailSpec
 from ..parts.mold import MoldSet
+from ..parts._kernel import mesh_arrays
 from ..parts.rigid_tail import RigidPiece
 from .clearance import PosedTail, _cut_at_z, _rod_mesh, posed_tail
 from .workspace import tail_statics
@@ -134,9 +135,7 @@ def limit_poses(asm: Assembly, spec: TailSpec | None = None) -> dict[str, TailPo
 
 
 def _mesh(solid: bd.Shape) -> trimesh.Trimesh:
-    verts, tris = solid.tessellate(TOLERANCE_MM, ANGULAR_TOLERANCE_RAD)
-    return trimesh.Trimesh(np.array([(v.X, v.Y, v.Z) for v in verts], float), np.asarray(tris, np.int64),
-                           process=True)
+    return trimesh.Trimesh(*mesh_arrays(solid, TOLERANCE_MM, ANGULAR_TOLERANCE_RAD), process=True)
 
 
 def _sliced(m: trimesh.Trimesh) -> trimesh.Trimesh:
@@ -240,14 +239,16 @@ def twin_scene(pieces: list[RigidPiece]) -> ViewScene:
                      objs)
 
 
-def viewer_scenes(asm: Assembly, mold_set: MoldSet, pieces: list[RigidPiece], spec: TailSpec | None = None,
-                  progress: Progress | None = None) -> list[ViewScene]:
+def viewer_scenes(asm: Assembly, mold_set: MoldSet | ViewScene, pieces: list[RigidPiece] | ViewScene,
+                  spec: TailSpec | None = None, progress: Progress | None = None) -> list[ViewScene]:
     """Every scene of :data:`SCENES`, in that order.
 
     Args:
         asm: the assembled tail.
-        mold_set: its SOA mold set (:func:`bvsr_cad.assembly.products.build_mold_set`).
-        pieces: the rigid twin's pieces (:func:`bvsr_cad.assembly.products.build_rigid_twin`).
+        mold_set: its SOA mold set (:func:`bvsr_cad.assembly.products.build_mold_set`), or its scene
+            already made (:func:`mold_scene`: the build caches it with the mold set's files).
+        pieces: the rigid twin's pieces (:func:`bvsr_cad.assembly.products.build_rigid_twin`), or their
+            scene already made (:func:`twin_scene`).
         spec: the statics' parameters for the poses (default the assembly's).
         progress: called with a short message before each slow step.
     """
@@ -260,5 +261,6 @@ def viewer_scenes(asm: Assembly, mold_set: MoldSet, pieces: list[RigidPiece], sp
     scenes = [rest_scene(asm, meshes)]
     scenes += [posed_scene(asm, meshes, pose, deformer) for pose in poses.values()]
     say("viewer: mold set and rigid twin")
-    scenes += [mold_scene(mold_set), twin_scene(pieces)]
+    scenes += [mold_set if isinstance(mold_set, ViewScene) else mold_scene(mold_set),
+               pieces if isinstance(pieces, ViewScene) else twin_scene(pieces)]
     return scenes

@@ -35,6 +35,7 @@ from scipy.spatial import ConvexHull
 
 from .. import units
 from ..parts._kernel import location
+from ..parts._kernel import mesh_arrays
 from ..parts.vertebra import rod
 from .build import Assembly
 
@@ -83,8 +84,7 @@ class CylinderFit:
 
 def fit_cylinder(piece: bd.Shape, T_axis_mm: np.ndarray) -> CylinderFit:
     """The smallest cylinder about the axis frame ``T_axis_mm`` (its z) holding ``piece`` (mm)."""
-    verts, _ = piece.tessellate(FIT_TOLERANCE_MM, _ANGULAR_TOLERANCE)
-    p = np.array([(v.X, v.Y, v.Z) for v in verts])
+    p, _ = mesh_arrays(piece, FIT_TOLERANCE_MM, _ANGULAR_TOLERANCE)
     T = np.asarray(T_axis_mm, float)
     local = (p - T[:3, 3]) @ T[:3, :3]
     r = float(np.max(np.hypot(local[:, 0], local[:, 1])))

@@ -43,8 +43,8 @@ def made_items(asm: Assembly, pieces: Sequence[RigidPiece] = (), mold_set: MoldS
                               len(asm.instances_of(name)), part.solid.volume, asm.mass_g(name)))
     rigid_density = spec.material(RIGID_MATERIAL).density_g_cm3
     for p in pieces:
-        items.append(MadeItem("rigid tail", p.name, p.name, "rigid_tail", RIGID_MATERIAL, "FDM", 1, p.solid.volume,
-                              units.mass_g(p.solid.volume, rigid_density)))
+        items.append(MadeItem("rigid tail", p.name, p.name, "rigid_tail", RIGID_MATERIAL, "FDM", 1, p.volume_mm3,
+                              units.mass_g(p.volume_mm3, rigid_density)))
     soa_casts = sum(i.quantity for i in items if i.kind == "soa")
     for name, mp in (mold_set.parts.items() if mold_set is not None else ()):
         material = fp.core_material if mp.sacrificial else fp.mold_material

@@ -15,21 +15,27 @@ from dataclasses import dataclass
 import build123d as bd
 import numpy as np
 
+from ..parameters.tables import TailSpec
 from ..parameters.twin import RIGID_TWIN_MATERIAL
 from ..parts._kernel import location
 from ..parts.mold import MoldSet, mold_set
 from ..parts.rigid_tail import RigidPiece, rigid_tail_pieces
 from .build import Assembly
-from .inertia import Inertial, compose, from_solid
+from .inertia import Inertial, SolidProperties, compose, from_solid
 
 #: The rigid twin's material (SPEC section 4: a PLA print), checked at load.
 RIGID_MATERIAL = RIGID_TWIN_MATERIAL
 
 
+def mold_set_inputs(spec: TailSpec) -> tuple:
+    """Everything of the parameters the mold set is made from (:func:`build_mold_set`'s arguments to
+    :func:`bvsr_cad.parts.mold.mold_set`; the build keys the mold set's cache entry by them)."""
+    return spec.soa, spec.joint.base_diameter_mm, spec.casting
+
+
 def build_mold_set(asm: Assembly) -> MoldSet:
     """The casting mold set of the assembly's SOA."""
-    spec = asm.spec
-    return mold_set(spec.soa, spec.joint.base_diameter_mm, spec.casting)
+    return mold_set(*mold_set_inputs(asm.spec))
 
 
 def build_rigid_twin(asm: Assembly) -> list[RigidPiece]:
@@ -56,8 +62,11 @@ class RigidRobot:
     timestep_s: float
 
 
-def rigid_robot_model(asm: Assembly, pieces: list[RigidPiece]) -> RigidRobot:
+def rigid_robot_model(asm: Assembly, pieces: list[RigidPiece], props: list[SolidProperties] | None = None
+                      ) -> RigidRobot:
+    """``props``: the pieces' B-rep properties when already measured (:meth:`SolidProperties.of`)."""
     density = asm.spec.material(RIGID_MATERIAL).density_g_cm3
-    inertial = compose(from_solid(p.solid, density, piece_transform_mm(p)) for p in pieces)
+    props = props if props is not None else [SolidProperties.of(p.solid) for p in pieces]
+    inertial = compose(from_solid(p.solid, density, piece_transform_mm(p), q) for p, q in zip(pieces, props))
     solids = tuple(p.solid.moved(location(piece_transform_mm(p))) for p in pieces)
     return RigidRobot(f"{asm.spec.name}_rigid", RIGID_MATERIAL, inertial, solids, asm.spec.robot.timestep_s)

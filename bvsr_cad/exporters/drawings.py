@@ -241,6 +241,39 @@ def _rect(x0: float, y0: float, x1: float, y1: float) -> list[bd.Edge]:
     return [bd.Edge.make_line(a, b) for a, b in zip(pts, pts[1:])]
 
 
+class _SheetSVG(bd.ExportSVG):
+    """build123d's SVG export with one change: a Bezier arc's poles are read by index. Iterating
+    OCCT's pole array from Python (what build123d 0.12 does) ends in an exception pybind11 translates,
+    about a millisecond per arc and most of a cold build's drawing time; the points, and the sheet's
+    bytes, are the same."""
+
+    def _bspline_segments(self, edge: bd.Edge, reverse: bool) -> list:
+        import svgpathtools as PT
+        from OCP.GeomConvert import GeomConvert_BSplineCurveToBezierCurve
+
+        edge = edge.to_splines()  # from here on build123d's own method, but for the poles
+        adaptor = edge.geom_adaptor()
+        spline = adaptor.Curve().Curve().Copy()
+        u1, u2 = adaptor.FirstParameter(), adaptor.LastParameter()
+        if not edge or edge.location is None:
+            raise ValueError(f"Edge is empty {edge}.")
+        spline.Transform(edge.location.wrapped.Transformation())
+        converter = GeomConvert_BSplineCurveToBezierCurve(spline, u1, u2, bd.Export2D.PARAMETRIC_TOLERANCE)
+        kinds = {2: PT.Line, 3: PT.QuadraticBezier, 4: PT.CubicBezier}
+        result = []
+        for i in range(1, converter.NbArcs() + 1):
+            bezier = converter.Arc(i)
+            p = [self._path_point(bezier.Pole(j)) for j in range(1, bezier.NbPoles() + 1)]
+            if reverse:
+                p.reverse()
+            if len(p) not in kinds:
+                raise ValueError(f"Surprising Bézier of degree {bezier.Degree()}!")
+            result.append(kinds[len(p)](*p))
+        if reverse:
+            result.reverse()
+        return result
+
+
 def draw_sheet(name: str, solid: bd.Solid, features: list[Cyl], views: list[list[str]]) -> tuple[bytes, int]:
     """The sheet without its title block (SVG bytes) and its number of hole-table rows."""
     rows = hole_table(solid, features)
@@ -249,7 +282,7 @@ def draw_sheet(name: str, solid: bd.Solid, features: list[Cyl], views: list[list
     w, h = SHEET_MM
     region = (MARGIN_MM + 8.0, MARGIN_MM + 14.0, TABLE_X_MM - 8.0, h - MARGIN_MM - 12.0)
     scale, offsets = _layout(boxes, views, region, 22.0)
-    svg = bd.ExportSVG(unit=bd.Unit.MM, margin=0.0, fit_to_stroke=False)
+    svg = _SheetSVG(unit=bd.Unit.MM, margin=0.0, fit_to_stroke=False)
     svg.add_layer("frame", line_weight=0.5)
     svg.add_layer("grid", line_weight=0.18)
     svg.add_layer("visible", line_weight=0.35)

@@ -23,6 +23,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import build123d as bd
 import numpy as np
 import trimesh
 
@@ -33,6 +34,7 @@ from ..assembly.fabrication import MadeItem, made_items
 from ..assembly.products import RIGID_MATERIAL, RigidRobot, piece_transform_mm
 from ..parameters.twin import rigid_joining
 from ..parts.mold import MoldSet
+from ..parts._kernel import location, mesh_arrays
 from ..parts.rigid_tail import KEPT_ROLES, RigidPiece
 from .bom import bom_rows, write_bom
 from .cad import write_step, write_stl
@@ -64,19 +66,30 @@ def _filled_features(asm: Assembly) -> list[dict[str, Any]]:
     return out
 
 
-def _rigid_parts(asm: Assembly, pieces: list[RigidPiece], root: Path) -> list[dict[str, Any]]:
+def write_rigid_files(pieces: list[RigidPiece], root: Path) -> list[trimesh.Trimesh]:
+    """Every twin piece's ``step/<piece>.step`` and ``stl/<piece>.stl`` (print frame); returns the twin's
+    visual meshes for its robot description (tail frame, metres), tessellated first (see
+    :func:`_visual_meshes`). What depends on the twin's geometry alone: the build caches it."""
+    visual = _visual_meshes([p.solid.moved(location(piece_transform_mm(p))) for p in pieces])
+    (root / "step").mkdir(parents=True, exist_ok=True)
+    for p in pieces:
+        write_step(p.solid, p.name, rgb("rigid_tail"), root / f"step/{p.name}.step")
+        write_stl(p.solid, root / f"stl/{p.name}.stl")
+    return visual
+
+
+def _rigid_parts(asm: Assembly, pieces: list[RigidPiece]) -> list[dict[str, Any]]:
+    """The twin's entries of the manifest's parts (its files written by :func:`write_rigid_files`)."""
     spec = asm.spec
     mat = spec.material(RIGID_MATERIAL)
     entries = []
     for p in pieces:
         files = {"step": f"step/{p.name}.step", "stl": f"stl/{p.name}.stl"}
-        write_step(p.solid, p.name, rgb("rigid_tail"), root / files["step"])
-        write_stl(p.solid, root / files["stl"])
         transform = piece_transform_mm(p)
         entries.append({
             "name": p.name, "kind": "rigid_tail", "material": RIGID_MATERIAL, "material_name": mat.name,
             "density_g_cm3": mat.density_g_cm3, "process": "FDM", "count": 1,
-            "volume_mm3": p.solid.volume, "mass_g": units.mass_g(p.solid.volume, mat.density_g_cm3),
+            "volume_mm3": p.volume_mm3, "mass_g": units.mass_g(p.volume_mm3, mat.density_g_cm3),
             "instances": [p.name], "files": files,
             # The part frame is the print frame; the instance sits at the piece's bed face in the tail.
             "print_transform": np.eye(4).tolist(), "tail_transform": transform.tolist(),
@@ -88,17 +101,16 @@ def _rigid_parts(asm: Assembly, pieces: list[RigidPiece], root: Path) -> list[di
     return entries
 
 
-def _visual_meshes(rigid: RigidRobot) -> list[trimesh.Trimesh]:
+def _visual_meshes(solids_mm: list[bd.Shape]) -> list[trimesh.Trimesh]:
     """Coarse meshes of the pieces in the tail frame, in metres.
 
     Called before the print STLs are written: OCCT keeps the finest triangulation
     a shape has had, so tessellating afterwards would return the print mesh.
     """
     visual = []
-    for solid in rigid.solids_mm:
-        verts, tris = solid.tessellate(ROBOT_MESH_TOLERANCE_MM, 0.5)
-        v = np.array([(q.X, q.Y, q.Z) for q in verts]) * units.mm_to_m(1.0)
-        visual.append(trimesh.Trimesh(v, np.asarray(tris), process=False))
+    for solid in solids_mm:
+        v, tris = mesh_arrays(solid, ROBOT_MESH_TOLERANCE_MM, 0.5)
+        visual.append(trimesh.Trimesh(v * units.mm_to_m(1.0), tris, process=False))
     return visual
 
 
@@ -224,18 +236,18 @@ def _print_jobs(asm: Assembly, root: Path, items: list[MadeItem], stl_of: dict[s
     return out
 
 
-def write_fabrication(asm: Assembly, pieces: list[RigidPiece], rigid_robot: RigidRobot, mold_set: MoldSet | None,
+def write_fabrication(asm: Assembly, pieces: list[RigidPiece], rigid_robot: RigidRobot,
+                      visual: list[trimesh.Trimesh], mold_set: MoldSet | None,
                       part_files: dict[str, dict[str, str]], mold_files: dict[str, dict[str, str]], root: Path,
                       progress: Callable[[str], None]) -> dict[str, Any]:
-    """Write the rigid tail (built by :mod:`bvsr_cad.assembly.products`), print files and the BOM
-    under ``root``. ``part_files`` and ``mold_files`` name the files the part and mold writers wrote
-    (by part and mold-part name). Returns keys to merge into the manifest (``rigid_parts``: the
-    twin's entries of the manifest's ``parts``)."""
+    """Write the rigid tail's robot description, print files and the BOM under ``root``, beside the
+    twin's pieces (built by :mod:`bvsr_cad.assembly.products`) and their files and ``visual`` meshes
+    (:func:`write_rigid_files`). ``part_files`` and ``mold_files`` name the files the part and mold
+    writers wrote (by part and mold-part name). Returns keys to merge into the manifest
+    (``rigid_parts``: the twin's entries of the manifest's ``parts``)."""
     spec = asm.spec
     fp = spec.fabrication_package
-    progress("rigid comparison tail (PLA pieces)")
-    visual = _visual_meshes(rigid_robot)
-    rigid = _rigid_parts(asm, pieces, root)
+    rigid = _rigid_parts(asm, pieces)
     progress("rigid tail robot description")
     robot_rigid = _rigid_robot(rigid_robot, root, visual)
     progress("print files (STL, 3MF per process and material)")

@@ -23,7 +23,9 @@ import build123d as bd
 import numpy as np
 
 from ..assembly.build import Assembly
+from ..parameters.tables import TailSpec
 from ..parts.mold import MoldPart, MoldSet
+from ..parts._kernel import mesh_arrays
 from ..colors import rgb
 from .cad import write_step, write_stl
 
@@ -32,6 +34,8 @@ from .cad import write_step, write_stl
 MOLD_STL_LINEAR_TOLERANCE_MM = 0.005
 MOLD_STL_ANGULAR_TOLERANCE_RAD = 0.1
 
+CAST_STL = "molds/soa_cast.stl"
+EXPLODED_PNG = "molds/exploded.png"
 #: How far each part moves along its pull direction in the exploded view (mm).
 EXPLODE_MM = {"half_a": 34.0, "half_b": 34.0, "bottom_plate": 30.0, "lid": 30.0}
 
@@ -56,9 +60,9 @@ def _render_exploded(molds: MoldSet, path: Path) -> None:
     pv.OFF_SCREEN = True
 
     def poly(solid: bd.Shape, offset: np.ndarray) -> Any:
-        verts, tris = solid.tessellate(0.05, 0.3)
-        v = np.array([(p.X, p.Y, p.Z) for p in verts]) + offset
-        cells = np.hstack([np.full((len(tris), 1), 3), np.asarray(tris)]).astype(np.int64).ravel()
+        v, tris = mesh_arrays(solid, 0.05, 0.3)
+        v = v + offset
+        cells = np.hstack([np.full((len(tris), 1), 3), tris]).astype(np.int64).ravel()
         return pv.PolyData(v, cells)
 
     plotter = pv.Plotter(off_screen=True, window_size=(1300, 1000))
@@ -93,17 +97,13 @@ def _render_exploded(molds: MoldSet, path: Path) -> None:
     plotter.close()
 
 
-def write_molds(asm: Assembly, molds: MoldSet, root: Path, progress: Callable[[str], None]) -> dict[str, Any]:
-    """Write the mold set (built by :func:`bvsr_cad.assembly.products.build_mold_set`) under ``root/molds``.
-
-    Returns:
-        Keys to merge into the manifest (``{"molds": {...}}``).
-    """
-    spec = asm.spec
+def write_mold_files(molds: MoldSet, root: Path, progress: Callable[[str], None]
+                     ) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """Write the mold set's files under ``root/molds``: what depends on its geometry alone (the build
+    caches it). Returns the manifest entries of its parts and of its channels."""
     out = root / "molds"
     out.mkdir(exist_ok=True)
-    cast_rel = "molds/soa_cast.stl"
-    _stl(molds.cast, root / cast_rel)
+    _stl(molds.cast, root / CAST_STL)
     parts = []
     for name, part in molds.parts.items():
         progress(f"export mold {name} (STL, STEP)")
@@ -130,13 +130,29 @@ def write_molds(asm: Assembly, molds: MoldSet, root: Path, progress: Callable[[s
         channels.append({"name": ch.name, "kind": ch.kind, "diameter_mm": ch.diameter_mm,
                          "opening_mm": list(ch.opening_mm), "volume_mm3": ch.solid.volume, "files": {"stl": rel}})
     progress("mold exploded view")
-    _render_exploded(molds, out / "exploded.png")
+    _render_exploded(molds, root / EXPLODED_PNG)
+    return parts, channels
+
+
+def molds_manifest(spec: TailSpec, molds: MoldSet, parts: list[dict[str, Any]], channels: list[dict[str, Any]]
+                   ) -> dict[str, Any]:
+    """The manifest's ``molds`` section: the files' entries (:func:`write_mold_files`) with the cast's
+    material, which the files do not depend on."""
     material = spec.material(spec.use.soa)
     return {"molds": {
-        "cast_part": cast_rel, "cast_frame": "SOA frame (axis +Z, lower flange face z = 0) scaled by 'scale'",
+        "cast_part": CAST_STL, "cast_frame": "SOA frame (axis +Z, lower flange face z = 0) scaled by 'scale'",
         "scale": molds.scale, "shrinkage_percent": spec.casting.shrinkage_percent,
         "cast_volume_mm3": molds.cast.volume, "soa_volume_mm3": molds.soa_volume_mm3,
         "material": spec.use.soa, "density_g_cm3": material.density_g_cm3,
         "min_print_wall_mm": spec.casting.min_print_wall_mm, "parting_margin_mm": molds.parting_margin_mm,
-        "parts": parts, "channels": channels, "exploded_png": "molds/exploded.png", "info": molds.info,
+        "parts": parts, "channels": channels, "exploded_png": EXPLODED_PNG, "info": molds.info,
     }}
+
+
+def write_molds(asm: Assembly, molds: MoldSet, root: Path, progress: Callable[[str], None]) -> dict[str, Any]:
+    """Write the mold set (built by :func:`bvsr_cad.assembly.products.build_mold_set`) under ``root/molds``.
+
+    Returns:
+        Keys to merge into the manifest (``{"molds": {...}}``).
+    """
+    return molds_manifest(asm.spec, molds, *write_mold_files(molds, root, progress))

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..assembly.build import Assembly
 from ..colors import rgb
+from ..parts._kernel import mesh_arrays
 
 
 def _pyvista():
@@ -28,8 +29,7 @@ def _polydata(pv, vertices: np.ndarray, faces: np.ndarray):
 
 
 def _tessellate(solid, tolerance_mm: float = 0.05):
-    verts, tris = solid.tessellate(tolerance_mm, 0.3)
-    return np.array([(v.X, v.Y, v.Z) for v in verts]), np.array(tris)
+    return mesh_arrays(solid, tolerance_mm, 0.3)
 
 
 def render_previews(asm: Assembly, root: Path) -> dict[str, str]:

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import trimesh
 
 from .. import units
 from ..assembly.robot import RobotModel
+from ..parts._kernel import mesh_arrays
 from .cad import write_stl
 from .mjcf import collision_mesh_name
 
@@ -39,9 +39,8 @@ def write_robot_meshes(robot: RobotModel, mesh_dir: Path) -> dict[str, str]:
 
 def _write_hull_m(shape, path: Path) -> None:
     """The convex hull of a collision piece (robot.collision_geometry = "convex"), in metres."""
-    verts, tris = shape.tessellate(COLLISION_MESH_TOLERANCE_MM, 0.2)
-    points = np.array([(v.X, v.Y, v.Z) for v in verts]) * units.mm_to_m(1.0)
-    trimesh.Trimesh(points, np.asarray(tris), process=False).convex_hull.export(path)
+    points, tris = mesh_arrays(shape, COLLISION_MESH_TOLERANCE_MM, 0.2)
+    trimesh.Trimesh(points * units.mm_to_m(1.0), tris, process=False).convex_hull.export(path)
 
 
 def _write_m(shape, path: Path, tolerance_mm: float = MESH_TOLERANCE_MM) -> None:

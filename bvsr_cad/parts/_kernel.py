@@ -6,6 +6,7 @@ import math
 from collections.abc import Iterable, Sequence
 
 import build123d as bd
+import numpy as np
 
 
 class GeometryError(RuntimeError):
@@ -20,6 +21,35 @@ def location(t) -> bd.Location:
     trsf = gp_Trsf()
     trsf.SetValues(*(float(v) for v in t[0]), *(float(v) for v in t[1]), *(float(v) for v in t[2]))
     return bd.Location(TopLoc_Location(trsf))
+
+
+def mesh_arrays(shape: bd.Shape, tolerance_mm: float, angular_tolerance_rad: float = 0.1
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """``shape.tessellate(...)`` as arrays: vertices (n, 3) float and triangles (m, 3) int64, equal value for
+    value to build123d's (the same triangulation, faces in the same order, a reversed face's triangles
+    flipped), about three times faster (no Vector per vertex, a face at its identity place not moved)."""
+    from OCP.BRep import BRep_Tool
+    from OCP.TopAbs import TopAbs_Orientation
+    from OCP.TopLoc import TopLoc_Location
+
+    shape.mesh(tolerance_mm, angular_tolerance_rad)
+    verts: list[tuple[float, float, float]] = []
+    tris: list[np.ndarray] = []
+    for face in shape.faces():
+        loc = TopLoc_Location()
+        poly = BRep_Tool.Triangulation_s(face.wrapped, loc)
+        node, offset = poly.Node, len(verts)
+        if loc.IsIdentity():
+            verts += [node(i).Coord() for i in range(1, poly.NbNodes() + 1)]
+        else:
+            trsf = loc.Transformation()
+            verts += [node(i).Transformed(trsf).Coord() for i in range(1, poly.NbNodes() + 1)]
+        tri = poly.Triangle
+        t = np.array([tri(i).Get() for i in range(1, poly.NbTriangles() + 1)], np.int64).reshape(-1, 3)
+        t += offset - 1
+        tris.append(t[:, [0, 2, 1]] if face.wrapped.Orientation() == TopAbs_Orientation.TopAbs_REVERSED else t)
+    return (np.array(verts, float).reshape(-1, 3),
+            np.concatenate(tris) if tris else np.zeros((0, 3), np.int64))
 
 
 class PrintPosed:

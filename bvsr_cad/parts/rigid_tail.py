@@ -71,6 +71,7 @@ class RigidPiece:
     solid: bd.Solid  # print frame
     features: tuple[PrintFeature, ...]
     size_mm: tuple[float, float, float]
+    volume_mm3: float  # the solid's, measured once (OCCT integrates the B-rep on every query)
 
 
 def _frustum(lay: PanelLayout) -> bd.Solid:
@@ -176,5 +177,5 @@ def rigid_tail_pieces(spec: TailSpec, layouts: list[PanelLayout],
                 f"printer (fabrication_package.printer_x_mm/printer_y_mm/printer_z_mm = {fp.printer_x_mm:g} x "
                 f"{fp.printer_y_mm:g} x {fp.printer_z_mm:g} mm); one joint per piece is the smallest split that "
                 "prints without support")
-        pieces.append(RigidPiece(name, k, z0, solid, tuple(features), size))
+        pieces.append(RigidPiece(name, k, z0, solid, tuple(features), size, solid.volume))
     return pieces

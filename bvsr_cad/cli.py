@@ -178,6 +178,7 @@ def cmd_calibrate(args) -> int:
     from .exporters.calibration_file import write_calibrated_params
     from .parameters.load import load_spec
     from .parameters.measurements import data_sha256, load_measurements
+    from .sim import protocol_radius_mm
 
     say = _progress(args.quiet or args.json)
     spec = load_spec(args.params)
@@ -185,7 +186,7 @@ def cmd_calibrate(args) -> int:
     names = [n.strip() for n in args.fit.split(",") if n.strip()] if args.fit else None
     say(f"{len(rows)} measurements ({sum(m.role == 'fit' for m in rows)} fit, "
         f"{sum(m.role == 'holdout' for m in rows)} holdout); building the geometry")
-    res = calibrate(spec, rows, names, Predictor.from_spec(spec), progress=say)
+    res = calibrate(spec, rows, names, Predictor.from_spec(spec, protocol_radius_mm), progress=say)
     out = None
     if args.output:
         out = write_calibrated_params(args.params, args.output, res, args.data, data_sha256(args.data),

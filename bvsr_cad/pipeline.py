@@ -43,7 +43,7 @@ from .exporters.reproducible import make_reproducible
 from .exporters.robot_files import write_robot
 from .exporters.viewer import write_viewer
 from .parameters.load import load_spec, params_sha256
-from .sim import WorkspaceProtocolSim
+from .sim import protocol_radius_mm
 from .worker import SecondProcess, result_or
 
 Progress = Callable[[str], None]
@@ -326,7 +326,7 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
                 results = pickle.load(fh)
             log.record("analyses", True, time.perf_counter() - t)
         else:
-            results = result_or(analyses, lambda: run_analyses(asm, say, str(params), WorkspaceProtocolSim()), say,
+            results = result_or(analyses, lambda: run_analyses(asm, say, str(params), protocol_radius_mm), say,
                                 "analyses")
             if cache is not None:
                 cache.put(analyses_key, lambda folder: (folder / "analyses.pkl").write_bytes(pickle.dumps(results)))
@@ -373,7 +373,7 @@ def _analyses_process(params: str, sha256: str):
     analysis layer, because a measured workspace is predicted in the simulator."""
     from .analysis.run import from_params
 
-    return from_params(params, sha256, WorkspaceProtocolSim())
+    return from_params(params, sha256, protocol_radius_mm)
 
 
 if __name__ == "__main__":

@@ -165,16 +165,121 @@ def check_inputs(spec: TailSpec, pressure_bar: float, payload_g: float) -> None:
         raise SimulationInputError(f"--payload-g {payload_g:g}: must be >= 0")
 
 
-def joint_limits_rad(spec: TailSpec, progress: Callable[[str], None] | None = None) -> list[float]:
-    """Collision-free theta_max of every joint (minimum over phi), as the build's limits analysis gives."""
-    from .analysis.clearance import posed_tail
-    from .analysis.limits import fold_stack, joint_limits
+def joint_limits_rad(spec: TailSpec, progress: Callable[[str], None] | None = None,
+                     asm: Assembly | None = None) -> list[float]:
+    """Collision-free theta_max of every joint (minimum over phi), as the build's limits analysis gives
+    (``asm``: the spec's assembly, if already built)."""
+    from .analysis.limits import theta_max_per_joint_rad
 
     say = progress or (lambda _m: None)
     say("joint limits from the clearance analysis")
-    pt = posed_tail(build_assembly(spec))
-    lims = joint_limits(pt, spec.analysis.min_clearance_mm, stack=fold_stack(spec))
-    return [min(j.theta_max_rad) for j in lims]
+    return theta_max_per_joint_rad(asm or build_assembly(spec))
+
+
+@dataclass
+class ProtocolRun:
+    """The workspace protocol of Sec. IV-A-5 run in time on the exported (reduced-chain) MJCF, the tail
+    horizontal: every ``actuation.workspace_cycle_s`` each line draws a new pressure
+    (:func:`bvsr_cad.analysis.workspace.sample_line_pressures_kpa`), reached through the actuators'
+    supply lag. Positions in mm, in the model's world frame."""
+
+    tip_mm: np.ndarray  # (n, 3): the distal panel's origin, every PROTOCOL_SAMPLE_S
+    settled_mm: np.ndarray  # (cycles, 3): the same at the end of each cycle
+    rest_mm: np.ndarray  # (3,): settled under gravity with every line at atmospheric
+    axis: np.ndarray  # the tail's axis at rest (unit, base to tip)
+    warnings: int  # MuJoCo warnings raised during the run
+
+    def lateral_mm(self, points_mm: np.ndarray) -> np.ndarray:
+        """Distance of each point from the rest point across the tail's axis (the radius the paper reads)."""
+        rel = np.asarray(points_mm) - self.rest_mm
+        return np.linalg.norm(rel - np.outer(rel @ self.axis, self.axis), axis=1)
+
+    @property
+    def radius_mm(self) -> float:
+        """The largest lateral excursion over the whole recording (what motion capture sees)."""
+        return float(np.max(self.lateral_mm(self.tip_mm)))
+
+    @property
+    def settled_radius_mm(self) -> float:
+        """The same over the settled ends of the cycles only (close to the quasi-static workspace)."""
+        return float(np.max(self.lateral_mm(self.settled_mm)))
+
+
+#: The paper records the workspace at 100-120 Hz; the path is kept at this interval.
+PROTOCOL_SAMPLE_S = 0.008
+
+
+class _UnwrittenMeshes(dict):
+    """Mesh file names for :func:`mjcf_tree` when no mesh is written (the protocol needs none)."""
+
+    def __missing__(self, key: str) -> str:
+        return f"{key}.stl"
+
+
+def _without_meshes(root: ET.Element) -> None:
+    """Drop mesh assets and mesh geoms (visuals, mass-less: every body's inertia is explicit)."""
+    for parent in root.iter():
+        for child in list(parent):
+            if (child.tag == "mesh" and parent.tag == "asset") or (child.tag == "geom" and (
+                    child.get("mesh") or child.get("class") == "visual")):
+                parent.remove(child)
+
+
+def workspace_protocol(asm: Assembly, spec: TailSpec | None = None, theta_max_rad: list[float] | None = None,
+                       cycles: int | None = None, progress: Callable[[str], None] | None = None) -> ProtocolRun:
+    """The paper's workspace experiment (Sec. IV-A-5) in MuJoCo: ``cycles`` pressure draws (default
+    ``analysis.workspace_protocol_cycles``, seed ``analysis.seed``) held ``actuation.workspace_cycle_s``
+    each, on ``asm``'s exported MJCF with ``spec``'s values (same geometry; it may carry fitted ones).
+
+    ``theta_max_rad``: the joints' limits (default: from the clearance analysis of ``asm``)."""
+    import mujoco
+
+    from .analysis.workspace import sample_line_pressures_kpa
+
+    spec = spec or asm.spec
+    say = progress or (lambda _m: None)
+    if theta_max_rad is None:
+        theta_max_rad = joint_limits_rad(spec, say, asm)
+    posed = dataclasses.replace(asm, spec=spec)
+    posed._properties.update(asm._properties)  # same geometry: its mass properties carry over
+    robot = robot_model(posed, theta_max_rad)
+    tree, _ = mjcf_tree(robot, _UnwrittenMeshes(), per_segment=False)
+    _without_meshes(tree.getroot())
+    m = mujoco.MjModel.from_xml_string(ET.tostring(tree.getroot(), encoding="unicode"))
+    d = mujoco.MjData(m)
+    cycles = int(cycles or spec.analysis.workspace_protocol_cycles)
+    draws_kpa = sample_line_pressures_kpa(spec, cycles, np.random.default_rng(spec.analysis.seed))
+    jps = spec.joints_per_segment
+    actuator = np.array([m.actuator(s.name).id for s in robot.soas])
+    segment = np.array([(s.joint - 1) // jps for s in robot.soas])
+    place = np.array([s.line_index - 1 for s in robot.soas])
+    tip, base = m.body(f"panel{spec.panels - 1}").id, m.body("panel0").id
+    for _ in range(int(round(SETTLE_S / m.opt.timestep))):
+        mujoco.mj_step(m, d)
+    rest = units.m_to_mm(d.xpos[tip].copy())
+    axis = d.xpos[tip] - d.xpos[base]
+    axis = axis / np.linalg.norm(axis)
+    steps = int(round(spec.actuation.workspace_cycle_s / m.opt.timestep))
+    every = max(1, int(round(PROTOCOL_SAMPLE_S / m.opt.timestep)))
+    path, settled = [], []
+    say(f"workspace protocol: {cycles} cycles of {spec.actuation.workspace_cycle_s:g} s in MuJoCo")
+    for c in range(cycles):
+        d.ctrl[actuator] = units.kpa_to_pa(draws_kpa[c, segment, place])
+        for k in range(steps):
+            mujoco.mj_step(m, d)
+            if k % every == every - 1:
+                path.append(d.xpos[tip].copy())
+        settled.append(d.xpos[tip].copy())
+    warnings = int(sum(w.number for w in d.warning))
+    return ProtocolRun(units.m_to_mm(np.array(path)), units.m_to_mm(np.array(settled)), rest, axis, warnings)
+
+
+def protocol_radius_mm(asm: Assembly, spec: TailSpec, theta_max_rad: list[float]) -> float:
+    """:data:`bvsr_cad.analysis.predict.WorkspaceSim`: the radius of :func:`workspace_protocol`'s tip path, mm."""
+    run = workspace_protocol(asm, spec, theta_max_rad)
+    if run.warnings:
+        raise RuntimeError(f"workspace protocol: MuJoCo raised {run.warnings} warnings")
+    return run.radius_mm
 
 
 def segment_extension(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float, supply: str,

@@ -36,7 +36,8 @@ UNITS = {"effective_area_mm2": "mm^2", "rod_flexural_rigidity_n_mm2": "N mm^2", 
          "valve_sonic_conductance_l_s_bar": "dm^3/(s bar)", "ramp_time_s": "s"}
 STATIC_QUANTITIES = ("segment_max_angle", "segment_blocked_force", "tip_workspace_radius")
 DYNAMIC_QUANTITIES = ("segment_peak_velocity", "velocity_pressure_exponent", "time_pressure_exponent",
-                      "root_peak_torque", "root_peak_force", "cart_lift", "cart_peak_angle")
+                      "root_peak_torque", "root_peak_force", "cart_lift", "cart_peak_angle",
+                      "tip_workspace_radius")  # the workspace is recorded in time: both kinds identify it
 
 
 class CalibrationError(ValueError):

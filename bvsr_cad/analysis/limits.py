@@ -188,3 +188,14 @@ def joint_limits(pt: PosedTail, need_mm: float, n_phi: int = 36, theta_hi_rad: f
         out.append(JointLimits(f"j{k + 1}", [float(v) for v in phis], [float(v) for v in th_x],
                                [float(v) for v in th_b], pairs, at, why))
     return out
+
+
+def theta_max_per_joint_rad(asm, progress: Callable[[str], None] | None = None) -> list[float]:
+    """Each joint's collision-free limit of ``asm`` as one number, the minimum over the bending planes:
+    the build's limits analysis (same planes and resolution), which the robot files are built with."""
+    from .clearance import posed_tail
+
+    spec = asm.spec
+    lims = joint_limits(posed_tail(asm, progress), spec.analysis.min_clearance_mm, stack=fold_stack(spec),
+                        progress=progress)
+    return [float(np.min(j.theta_max_rad)) for j in lims]

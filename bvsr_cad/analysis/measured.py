@@ -18,8 +18,7 @@ from pathlib import Path
 from ..assembly.build import Assembly
 from ..parameters.measurements import MeasurementError, data_sha256, load_measurements
 from .calibrate import compare_rows, rms_relative, uncalibrated
-from .predict import Predictor
-from .workspace import Workspace
+from .predict import Predictor, WorkspaceSim
 
 #: A row "lands" when the calibrated prediction is within this relative error of the reported figure.
 LANDS_WITHIN_REL = 0.30
@@ -52,11 +51,13 @@ class MeasuredComparison:
 
 def compare_measurements(asm: Assembly, params_path: str | Path | None,
                          progress: Callable[[str], None] | None = None,
-                         workspace: Workspace | None = None) -> MeasuredComparison | None:
+                         workspace_sim: WorkspaceSim | None = None,
+                         theta_max_rad: list[float] | None = None) -> MeasuredComparison | None:
     """The comparison for ``asm``'s spec, or None when the file carries no calibration.
 
-    ``workspace``: the build's workspace of ``asm`` (its spec's samples and seed), reused by the rows
-    that predict that very workspace."""
+    ``workspace_sim``: what predicts the measured tip workspace (:class:`Predictor`); the pipeline
+    gives :func:`bvsr_cad.sim.protocol_radius_mm`. ``theta_max_rad``: the joints' limits of ``asm``
+    where the build has them."""
     spec = asm.spec
     cal = spec.calibration
     if not cal.fitted:
@@ -78,9 +79,9 @@ def compare_measurements(asm: Assembly, params_path: str | Path | None,
         rows = load_measurements(data)
     except MeasurementError as exc:
         return MeasuredComparison(cal.data_file, f"data file unreadable: {exc}", fitted=fitted)
-    pred = Predictor(asm, spec)
-    if workspace is not None:
-        pred.add_workspace(asm, spec, workspace)
+    pred = Predictor(asm, spec, workspace_sim)
+    if theta_max_rad is not None:
+        pred.known_limits(theta_max_rad)
     table = compare_rows(pred.with_spec(uncalibrated(spec)), pred, rows,
                          None if progress is None else (lambda m: progress(f"measurements: {m}")))
     return MeasuredComparison(cal.data_file, f"every row of {cal.data_file}, predicted with the tables' values and "

@@ -2,7 +2,8 @@
 
 One function per quantity, each from the models' one home: the statics
 (Table III), the Eq 6-12 dynamics with the spec's supply (Eq 13 ramp or the
-ISO 6358 valve), the workspace protocol, the root wrench of the whole tail,
+ISO 6358 valve), the workspace protocol run in time (in MuJoCo, given by
+the caller as ``workspace_sim``), the root wrench of the whole tail,
 and the cart of Eq 20-22. ``spec`` may carry fitted values
 (``[calibration.fitted]``); the geometry comes from an assembly built once.
 
@@ -34,7 +35,8 @@ from ..models.rod import rod_section
 from ..models.statics import MOTION_PHI_RAD, pressure_pattern_kpa, quasi_static_segment
 from ..parameters.measurements import Measurement
 from ..parameters.tables import TailSpec
-from .workspace import Workspace, run_workspace, tail_statics
+from .limits import theta_max_per_joint_rad
+from .workspace import tail_statics
 
 GRAVITY_M_S2 = np.array([0.0, -G_M_S2, 0.0])
 PULSE_SECONDS = 0.3
@@ -47,44 +49,43 @@ def pulse_places(motion: str) -> tuple[int, ...]:
     return tuple(int(i) + 1 for i in np.nonzero(pattern > 0)[0])
 
 
+#: The workspace protocol run in time: (assembly, spec of the same geometry, the joints' limits in rad)
+#: -> the tip's largest lateral excursion from its rest point, mm. It needs the robot model in a
+#: simulator, so the layers that can build one give it (:func:`bvsr_cad.sim.protocol_radius_mm`).
+WorkspaceSim = Callable[[Assembly, TailSpec, list[float]], float]
+
+
+class NeedsSimulator(ValueError):
+    """A quantity asked of a Predictor made without the simulator it needs (a caller's mistake)."""
+
+
 @dataclass
 class Predictor:
-    """Predictions for one tail geometry; ``spec`` (same geometry) may change between calls."""
+    """Predictions for one tail geometry; ``spec`` (same geometry) may change between calls.
+
+    ``workspace_sim`` predicts the measured tip workspace (:data:`WorkspaceSim`); without it that
+    quantity raises :class:`NeedsSimulator`."""
 
     asm: Assembly
     spec: TailSpec
+    workspace_sim: WorkspaceSim | None = None
     _other: dict = field(default_factory=dict)  # assemblies of variants (e.g. more segments)
+    _limits: dict = field(default_factory=dict)  # segments -> the joints' limits (geometry only), rad
     #: Motions already solved for this spec: rows that share one (a root torque and force at the same
     #: pressure and payload, a peak velocity and both exponents at 6 bar, the cart's lift and angle)
     #: integrate it once.
     _solved: dict = field(default_factory=dict, repr=False)
-    #: Workspaces already sampled, (assembly, spec, Workspace), shared by every spec of this geometry:
-    #: the build's own workspace is the calibrated prediction of a row with the spec's protocol.
-    _workspaces: list = field(default_factory=list, repr=False)
 
     @classmethod
-    def from_spec(cls, spec: TailSpec) -> "Predictor":
-        return cls(build_assembly(spec), spec)
+    def from_spec(cls, spec: TailSpec, workspace_sim: WorkspaceSim | None = None) -> "Predictor":
+        return cls(build_assembly(spec), spec, workspace_sim)
 
     def with_spec(self, spec: TailSpec) -> "Predictor":
-        return Predictor(self.asm, spec, self._other, _workspaces=self._workspaces)
+        return Predictor(self.asm, spec, self.workspace_sim, self._other, self._limits)
 
-    def workspace(self, asm: Assembly, spec: TailSpec) -> Workspace:
-        """:func:`run_workspace` of ``asm`` under ``spec`` with the spec's samples and seed, sampled
-        once per (assembly, spec)."""
-        for known_asm, known_spec, ws in self._workspaces:
-            if known_asm is asm and known_spec == spec:
-                return ws
-        ws = run_workspace(asm, spec.analysis.build_workspace_samples, spec.analysis.seed, spec=spec)
-        self.add_workspace(asm, spec, ws)
-        return ws
-
-    def add_workspace(self, asm: Assembly, spec: TailSpec, ws: Workspace) -> None:
-        """Let the predictions reuse a workspace sampled elsewhere (the build's)."""
-        if ws.samples != spec.analysis.build_workspace_samples or ws.seed != spec.analysis.seed:
-            raise ValueError(f"a workspace of {ws.samples} samples (seed {ws.seed}) is not the spec's "
-                             f"{spec.analysis.build_workspace_samples} (seed {spec.analysis.seed})")
-        self._workspaces.append((asm, spec, ws))
+    def known_limits(self, theta_max_rad: list[float]) -> None:
+        """The joints' limits of this geometry where a build has them (saves a clearance analysis)."""
+        self._limits[self.spec.segments] = list(theta_max_rad)
 
     # -- building blocks ---------------------------------------------------
     def joint_model(self, first_joint: int, n_joints: int, payload_g: float = 0.0) -> JointModel:
@@ -163,6 +164,12 @@ class Predictor:
 
     def tip_workspace_radius(self, segments: float, pressurised_max_kpa_abs: float,
                              depressurised_min_kpa_abs: float) -> float:
+        """The paper's workspace experiment (Sec. IV-A-5) run in time: the tail horizontal, a new random
+        pressure per line every ``actuation.workspace_cycle_s``, the tip recorded throughout (its
+        transients included, as motion capture records them); the largest lateral distance from rest."""
+        if self.workspace_sim is None:
+            raise NeedsSimulator("tip_workspace_radius needs the workspace protocol simulated in time: make the "
+                                 "Predictor with workspace_sim=bvsr_cad.sim.protocol_radius_mm")
         spec = dataclasses.replace(
             self.spec, segments=int(segments),
             actuation=dataclasses.replace(self.spec.actuation,
@@ -175,11 +182,10 @@ class Predictor:
             if key not in self._other:
                 self._other[key] = build_assembly(dataclasses.replace(self.spec, segments=key))
             asm = self._other[key]
-        ws = self.workspace(asm, spec)
-        st = tail_statics(asm, spec=spec)
-        tips = ws.tip_mm
-        rest = st.kin.tip_point_mm(st.forward(np.zeros((spec.segments, 5))))
-        return float(np.max(np.hypot(tips[:, 0] - rest[0], tips[:, 1] - rest[1])))
+        if key not in self._limits:
+            self._limits[key] = theta_max_per_joint_rad(asm)
+        return self._once(("workspace", key, float(pressurised_max_kpa_abs), float(depressurised_min_kpa_abs)),
+                          lambda: float(self.workspace_sim(asm, spec, self._limits[key])))
 
     def root_wrench(self, motion: str, pressure_bar: float, payload_g: float) -> tuple[float, float]:
         """(peak force N, peak torque N m) at the root sensor (the root panel's proximal face), tared."""
@@ -229,4 +235,4 @@ class Predictor:
         return float(getattr(self, m.quantity)(**dict(m.conditions)))
 
 
-__all__ = ["Predictor", "pulse_places", "GRAVITY_M_S2"]
+__all__ = ["Predictor", "NeedsSimulator", "WorkspaceSim", "pulse_places", "GRAVITY_M_S2"]

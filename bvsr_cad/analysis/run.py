@@ -20,6 +20,7 @@ import numpy as np
 
 from ..assembly.build import Assembly
 from .measured import MeasuredComparison, compare_measurements
+from .predict import WorkspaceSim
 from .clearance import ClearanceResult, clearance_map, clearance_over, posed_tail
 from .limits import JointLimits, fold_stack, joint_limits, stack_limit_rad
 from .workspace import Workspace, quasi_static_table, run_workspace
@@ -62,9 +63,10 @@ class AnalysisResults:
 
 
 def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
-                 params_path: str | None = None) -> AnalysisResults:
+                 params_path: str | None = None, workspace_sim: WorkspaceSim | None = None) -> AnalysisResults:
     """``params_path``: the parameter file ``asm`` was built from (its calibration's data file is
-    resolved relative to it)."""
+    resolved relative to it); ``workspace_sim``: what predicts a measured tip workspace (see
+    :func:`bvsr_cad.analysis.measured.compare_measurements`)."""
     say = progress or (lambda _m: None)
     spec = asm.spec
     cfg = spec.analysis
@@ -87,16 +89,18 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
     phis = np.asarray(lims[tip].phi_rad)
     cmap = ClearanceMap(tip + 1, th, ph, bound, phis, np.asarray(lims[tip].theta_max_rad),
                         stack_limit_rad(pt, tip, phis, *stack))
-    measured = compare_measurements(asm, params_path, say, ws)
+    measured = compare_measurements(asm, params_path, say, workspace_sim,
+                                    [float(np.min(j.theta_max_rad)) for j in lims])
     seconds = time.perf_counter() - t0
     say(f"analysis: {seconds:.1f} s")
     return AnalysisResults(ws, quasi, clearance, "poses resampled from the build's workspace samples",
                            cfg.min_clearance_mm, lims, stack[0], cmap, measured, seconds)
 
 
-def _from_params(params: str, sha256: str) -> AnalysisResults:
+def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = None) -> AnalysisResults:
     """The second process's work: the analyses of the parameter file the build read (``sha256``),
-    progress on stderr (the parent relays it)."""
+    progress on stderr (the parent relays it). Its entry point is the pipeline's (which gives
+    ``workspace_sim``)."""
     import sys
 
     from ..assembly.build import build_assembly
@@ -108,13 +112,4 @@ def _from_params(params: str, sha256: str) -> AnalysisResults:
     def say(msg: str) -> None:
         print(f"(second process) {msg}", file=sys.stderr, flush=True)
 
-    return run_analyses(build_assembly(load_spec(params)), say, params)
-
-
-if __name__ == "__main__":
-    import sys
-
-    from ..worker import serve
-    from . import run  # the module itself, not __main__: its result classes must pickle by their real name
-
-    sys.exit(serve(sys.argv[1], run._from_params, *sys.argv[2:]))
+    return run_analyses(build_assembly(load_spec(params)), say, params, workspace_sim)

@@ -263,6 +263,7 @@ class Actuation:
     atmospheric_kpa: float
     workspace_pressurised_max_kpa_abs: float
     workspace_depressurised_min_kpa_abs: float
+    workspace_cycle_s: float
 
 
 @table
@@ -273,6 +274,7 @@ class Analysis:
     build_workspace_samples: int
     build_clearance_poses: int
     seed: int
+    workspace_protocol_cycles: int
 
 
 @table

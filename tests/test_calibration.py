@@ -158,3 +158,21 @@ def test_inherited_calibration_is_noted_not_compared(bvsr_spec):
     assert res is not None and not res.rows and "inherited from the bvsr tail" in res.note
     assert res.fitted == dict(bvsr_spec.calibration.fitted)
     assert compare_measurements(SimpleNamespace(spec=uncalibrated(bvsr_spec)), None) is None
+
+
+def test_another_rod_is_noted_not_compared(bvsr_spec):
+    """The data measured the tail with the rod the calibration records; a file with another rod is another
+    tail: a note, no predictions of measurements it was not part of."""
+    from types import SimpleNamespace
+
+    from bvsr_cad.analysis.measured import compare_measurements
+
+    assert (bvsr_spec.calibration.rod_material, bvsr_spec.calibration.rod_diameter_mm) == (
+        bvsr_spec.vertebra.material, bvsr_spec.vertebra.diameter_mm)
+    for vertebra in (dataclasses.replace(bvsr_spec.vertebra, material="PVC"),
+                     dataclasses.replace(bvsr_spec.vertebra, diameter_mm=5.0)):
+        res = compare_measurements(SimpleNamespace(spec=dataclasses.replace(bvsr_spec, vertebra=vertebra)),
+                                   "params/bvsr.toml")
+        assert res is not None and not res.rows and "another tail" in res.note
+        assert f"{vertebra.material} {vertebra.diameter_mm:g} mm" in res.note
+        assert res.fitted == dict(bvsr_spec.calibration.fitted)

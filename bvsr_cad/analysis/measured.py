@@ -66,6 +66,12 @@ def compare_measurements(asm: Assembly, params_path: str | Path | None,
     if cal.measured_tail and cal.measured_tail != spec.name:
         return MeasuredComparison(cal.data_file, f"fitted values inherited from the {cal.measured_tail} tail's "
                                   "calibration; its report compares every row", fitted=fitted)
+    rod = (spec.vertebra.material, float(spec.vertebra.diameter_mm))
+    if cal.rod_material and (cal.rod_material, float(cal.rod_diameter_mm)) != rod:
+        return MeasuredComparison(cal.data_file, f"the data measured a tail with a {cal.rod_material} "
+                                  f"{cal.rod_diameter_mm:g} mm rod and this file's rod is {rod[0]} {rod[1]:g} mm: "
+                                  "another tail, so its rows are not compared (the fitted values carry over, the "
+                                  "rod's E I by the ratio of the tables' values)", fitted=fitted)
     if not cal.data_file or params_path is None:
         return MeasuredComparison(cal.data_file, "the calibration names no data file", fitted=fitted)
     data = (Path(params_path).resolve().parent / cal.data_file)

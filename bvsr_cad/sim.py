@@ -240,9 +240,9 @@ def workspace_protocol(asm: Assembly, spec: TailSpec | None = None, theta_max_ra
     say = progress or (lambda _m: None)
     if theta_max_rad is None:
         theta_max_rad = joint_limits_rad(spec, say, asm)
-    posed = dataclasses.replace(asm, spec=spec)
-    posed._properties.update(asm._properties)  # same geometry: its mass properties carry over
-    robot = robot_model(posed, theta_max_rad)
+    with_values = dataclasses.replace(asm, spec=spec)
+    with_values._properties.update(asm._properties)  # same geometry: its mass properties carry over
+    robot = robot_model(with_values, theta_max_rad)
     tree, _ = mjcf_tree(robot, _UnwrittenMeshes(), per_segment=False)
     _without_meshes(tree.getroot())
     m = mujoco.MjModel.from_xml_string(ET.tostring(tree.getroot(), encoding="unicode"))

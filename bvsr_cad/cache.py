@@ -108,8 +108,10 @@ class ArtifactCache:
             return None
         return entry
 
-    def put(self, key: str, fill: Callable[[Path], None]) -> Path:
-        """Make the entry by ``fill(folder)`` in a temporary folder, then rename it into place."""
+    def put(self, key: str, fill: Callable[[Path], None], evict: bool = True) -> Path:
+        """Make the entry by ``fill(folder)`` in a temporary folder, then rename it into place. Without
+        ``evict`` the cache is not trimmed now (many small entries in a row: the caller calls
+        :meth:`evict` once after them)."""
         entry = self._entry(key)
         entry.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".{key[:12]}.tmp-", dir=entry.parent))
@@ -123,7 +125,8 @@ class ArtifactCache:
         except BaseException:
             shutil.rmtree(tmp, ignore_errors=True)
             raise
-        self.evict()
+        if evict:
+            self.evict()
         return entry
 
     def entries(self) -> list[tuple[float, int, Path]]:
@@ -221,5 +224,24 @@ def object_stage(cache: ArtifactCache | None, key: str, make: Callable[[Path], A
     return pickle.loads(made[0]), False
 
 
-__all__ = ["ArtifactCache", "stage_key", "spec_without", "code_fingerprint", "cache_root", "copy_tree",
+def value_stage(cache: ArtifactCache | None, key: str, compute: Callable[[], Any]) -> tuple[Any, bool]:
+    """A stage that writes no file and hands on a picklable value (check verdicts): from the cache, or
+    ``compute()`` stored in a new entry (left for the caller's :meth:`ArtifactCache.evict`). Returns
+    (value, reused)."""
+    hit = cache.get(key) if cache is not None else None
+    if hit is not None:
+        return pickle.loads((hit / _OBJECTS).read_bytes()), True
+    value = compute()
+    if cache is not None:
+        data = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
+        cache.put(key, lambda folder: (folder / _OBJECTS).write_bytes(data), evict=False)
+        value = pickle.loads(data)  # as a build from the cache hands it on
+    return value, False
+
+
+def file_sha256(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+__all__ = ["ArtifactCache", "value_stage", "file_sha256", "stage_key", "spec_without", "code_fingerprint", "cache_root", "copy_tree",
            "object_stage"]

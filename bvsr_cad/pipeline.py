@@ -47,6 +47,8 @@ from .sim import protocol_radius_mm
 from .worker import SecondProcess, result_or
 
 Progress = Callable[[str], None]
+#: In the geometry analyses' cache entry: :class:`bvsr_cad.analysis.run.GeometryAnalyses`, pickled.
+GEOMETRY_FILE = "geometry.pkl"
 
 
 class OutputError(ValueError):
@@ -155,6 +157,10 @@ PART_FILES_IGNORE = ("materials", "use", "vertebra.material", "actuation", "anal
 #: package (of which only the tube lengths, for the supply model); the name decides whether the
 #: calibration's measurements are this tail's.
 ANALYSES_IGNORE = ("robot", "casting", "fabrication_package")
+#: The geometry analyses (joint limits, the tip's clearance map: :func:`bvsr_cad.analysis.run.geometry_analyses`)
+#: read the tail's solids and placements (the part files' inputs, not the tail's name), the SOAs' fold stack
+#: (``soa``, in them) and the required clearance (``analysis.min_clearance_mm``, in the key beside them).
+ANALYSIS_GEOMETRY_IGNORE = PART_FILES_IGNORE + ("name",)
 #: The drawings' views and hole tables are the panels' and the mold set's geometry: the part files'
 #: inputs and the molds' (``casting``); the title block (tail name, materials, processes, the params
 #: SHA-256) is stamped at every build, outside the cache.
@@ -236,11 +242,19 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
                                  tubes=(spec.fabrication_package.tube_lead_mm,
                                         spec.fabrication_package.tube_bend_allowance))
         cached_analyses = cache.get(analyses_key) if cache else None
+        geometry_key = stage_key("analysis_geometry", spec=spec_without(spec, *ANALYSIS_GEOMETRY_IGNORE),
+                                 rod=spec.vertebra.has_rod, min_clearance_mm=spec.analysis.min_clearance_mm)
+        geometry_hit = cache.get(geometry_key) if cache and cached_analyses is None else None
+        geometry = None
+        if geometry_hit is not None:
+            t = time.perf_counter()
+            geometry = pickle.loads((geometry_hit / GEOMETRY_FILE).read_bytes())
+            log.record("analysis geometry (joint limits, clearance map)", True, time.perf_counter() - t)
         if cached_analyses is None:
             # The analyses (workspace, clearance, limits) need only the parameters: a second process
             # runs them from the file while this one builds, exports and fabricates.
-            analyses = SecondProcess.start("bvsr_cad.pipeline", [str(params.resolve()), params_sha256(params)],
-                                           tmp, say)
+            analyses = SecondProcess.start("bvsr_cad.pipeline", [str(params.resolve()), params_sha256(params), str(
+                geometry_hit / GEOMETRY_FILE) if geometry_hit is not None else ""], tmp, say)
             if analyses is not None:
                 say("analyses: started in a second process")
         t = time.perf_counter()
@@ -317,7 +331,7 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         mold_files = {e["name"]: e["files"] for e in molds["molds"]["parts"]}
         fabrication = write_fabrication(asm, pieces, rigid_robot_model(asm, pieces, twin_props),
                                         [trimesh.Trimesh(v, f, process=False) for v, f in visual], mold_set, files,
-                                        mold_files, tmp, say)
+                                        mold_files, tmp, say, cache)
         manifest["parts"] += fabrication.pop("rigid_parts")
         log.record("print jobs, BOM", False, time.perf_counter() - t)
         t = time.perf_counter()
@@ -326,8 +340,13 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
                 results = pickle.load(fh)
             log.record("analyses", True, time.perf_counter() - t)
         else:
-            results = result_or(analyses, lambda: run_analyses(asm, say, str(params), protocol_radius_mm), say,
-                                "analyses")
+            results = result_or(analyses, lambda: run_analyses(asm, say, str(params), protocol_radius_mm, geometry),
+                                say, "analyses")
+            if geometry is None:
+                log.record("analysis geometry (joint limits, clearance map)", False, results.geometry_seconds)
+                if cache is not None:
+                    cache.put(geometry_key, lambda folder: (folder / GEOMETRY_FILE).write_bytes(
+                        pickle.dumps(results.geometry)))
             if cache is not None:
                 cache.put(analyses_key, lambda folder: (folder / "analyses.pkl").write_bytes(pickle.dumps(results)))
             # Their own time (in the second process, beside the stages above); the wait was shorter.
@@ -344,7 +363,7 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         log.record("analysis files and robot descriptions", False, time.perf_counter() - t)
         t = time.perf_counter()
         say("checks")
-        results = run_checks(tmp, say)
+        results = run_checks(tmp, say, cache=cache)
         manifest["checks"] = [r.to_json() for r in results]
         log.record("checks", False, time.perf_counter() - t)
         t = time.perf_counter()
@@ -353,7 +372,7 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         log.record("interactive 3D view", False, time.perf_counter() - t)
         t = time.perf_counter()
         say("report")
-        manifest.update(write_report(tmp, manifest))
+        manifest.update(write_report(tmp, manifest, cache))
         log.record("report", False, time.perf_counter() - t)
         manifest["volatile"] = _volatile(t0, log)
         write_manifest(tmp, manifest)
@@ -368,12 +387,17 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
     return BuildResult(out, results, time.perf_counter() - t0, log.stages)
 
 
-def _analyses_process(params: str, sha256: str):
-    """The analyses' second process (``python -m bvsr_cad.pipeline - PARAMS SHA256``): here, not in the
-    analysis layer, because a measured workspace is predicted in the simulator."""
+def _analyses_process(params: str, sha256: str, geometry: str = ""):
+    """The analyses' second process (``python -m bvsr_cad.pipeline - PARAMS SHA256 [GEOMETRY]``): here, not
+    in the analysis layer, because a measured workspace is predicted in the simulator. ``GEOMETRY``: the
+    cached geometry analyses' pickle (computed here when it is gone)."""
     from .analysis.run import from_params
 
-    return from_params(params, sha256, protocol_radius_mm)
+    try:
+        given = pickle.loads(Path(geometry).read_bytes()) if geometry else None
+    except OSError:  # evicted since the build looked: computed here
+        given = None
+    return from_params(params, sha256, protocol_radius_mm, given)
 
 
 if __name__ == "__main__":

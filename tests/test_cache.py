@@ -82,6 +82,38 @@ def test_keys_follow_exactly_the_declared_inputs(bvsr_spec):
     assert key("part_files", renamed, PART_FILES_IGNORE) != base
     assert key("analyses", pvc, ANALYSES_IGNORE) != key("analyses", bvsr_spec, ANALYSES_IGNORE)
     assert key("analyses", renamed, ANALYSES_IGNORE) != key("analyses", bvsr_spec, ANALYSES_IGNORE)
+    # The geometry analyses (joint limits, clearance map): the solids, not the material or the name.
+    from bvsr_cad.pipeline import ANALYSIS_GEOMETRY_IGNORE as GEO
+
+    assert key("analysis_geometry", pvc, GEO) == key("analysis_geometry", bvsr_spec, GEO)
+    assert key("analysis_geometry", renamed, GEO) == key("analysis_geometry", bvsr_spec, GEO)
+    assert key("analysis_geometry", thin, GEO) != key("analysis_geometry", bvsr_spec, GEO)
+
+
+def test_check_verdicts_follow_the_bytes_of_the_files_they_read(tmp_path):
+    """A group's verdicts are reused while its files' bytes and manifest values are unchanged (a file
+    rewritten with the same bytes too), and computed again when either changes."""
+    from bvsr_cad.checks.export import Export
+    from bvsr_cad.checks.memo import CheckMemo
+    from bvsr_cad.checks.result import CheckResult
+
+    (tmp_path / "manifest.json").write_text(json.dumps({"name": "t", "parts": [], "mass_g": {}}))
+    (tmp_path / "a.stl").write_bytes(b"solid a")
+    cache = ArtifactCache(tmp_path / "c")
+    runs = []
+
+    def verdicts(value):
+        memo = CheckMemo(Export.open(tmp_path), cache)
+        return memo("g", (["a.stl"], {"limit": value}),
+                    lambda: runs.append(1) or [CheckResult("c", True, (1, 2), value, "mm", "a.stl")])
+
+    first = verdicts(1.0)
+    (tmp_path / "a.stl").write_bytes(b"solid a")  # rewritten, same bytes
+    assert verdicts(1.0) == first and len(runs) == 1
+    verdicts(2.0)
+    (tmp_path / "a.stl").write_bytes(b"solid b")
+    verdicts(2.0)
+    assert len(runs) == 3
 
 
 def _files(root: Path) -> dict[str, bytes]:

@@ -228,7 +228,7 @@ def test_printability_runs_here_when_the_second_process_fails(bvsr_export, monke
     if (os.cpu_count() or 1) < 2:
         pytest.skip("one core: the printability checks never leave the process")
     monkeypatch.setattr(worker.sys, "executable", shutil.which("false") or "/bin/false")  # exits, no results
-    monkeypatch.setattr(run, "check_printability", lambda exp, sliced_now=(): ["ran here"])
+    monkeypatch.setattr(run, "check_printability", lambda exp, sliced_now=(), memo=None: ["ran here"])
     said: list[str] = []
     group = run._Printability(Export.open(bvsr_export), (), said.append, parallel=True)
     assert group.proc is not None

@@ -21,7 +21,7 @@ import numpy as np
 from ..assembly.build import Assembly
 from .measured import MeasuredComparison, compare_measurements
 from .predict import WorkspaceSim
-from .clearance import ClearanceResult, clearance_map, clearance_over, posed_tail
+from .clearance import ClearanceResult, PosedTail, clearance_map, clearance_over, posed_tail
 from .limits import JointLimits, fold_stack, joint_limits, stack_limit_rad
 from .workspace import Workspace, quasi_static_table, run_workspace
 
@@ -45,6 +45,19 @@ class ClearanceMap:
 
 
 @dataclass(frozen=True)
+class GeometryAnalyses:
+    """The analyses that read the tail's geometry alone (its solids and placements, the SOAs' fold
+    stack, the required clearance), not its materials, actuation or fitted values: the exact joint
+    limits and the tip joint's clearance map. The build caches them on their own, so an edit of a
+    material reuses them."""
+
+    limits: list[JointLimits]
+    fold_stack_lambda: float
+    clearance_map: ClearanceMap
+    seconds: float  # what computing them took (reused: when they were computed)
+
+
+@dataclass(frozen=True)
 class AnalysisResults:
     workspace: Workspace
     quasi_static: list[dict]
@@ -56,17 +69,42 @@ class AnalysisResults:
     clearance_map: ClearanceMap
     measured: MeasuredComparison | None
     seconds: float
+    geometry_seconds: float = 0.0  # of seconds: the geometry analyses (0 when they were given)
+
+    @property
+    def geometry(self) -> GeometryAnalyses:
+        return GeometryAnalyses(self.limits, self.fold_stack_lambda, self.clearance_map, self.geometry_seconds)
 
     def theta_max_per_joint(self) -> list[float]:
         """Each joint's limit as one number: the minimum of theta_max over the bending planes."""
         return [float(np.min(lim.theta_max_rad)) for lim in self.limits]
 
 
+def geometry_analyses(asm: Assembly, pt: PosedTail, progress: Callable[[str], None] | None = None
+                      ) -> GeometryAnalyses:
+    """The exact joint limits and the tip joint's clearance map of ``asm`` (posed as ``pt``)."""
+    say = progress or (lambda _m: None)
+    t0 = time.perf_counter()
+    spec = asm.spec
+    say("analysis: joint limits")
+    stack = fold_stack(spec)
+    lims = joint_limits(pt, spec.analysis.min_clearance_mm, BUILD_LIMIT_PHIS, THETA_SEARCH_MAX_RAD,
+                        LIMIT_RESOLUTION_RAD, exact=True, stack=stack, progress=say)
+    tip = spec.joints - 1
+    th, ph, bound = clearance_map(pt, tip, THETA_SEARCH_MAX_RAD)
+    phis = np.asarray(lims[tip].phi_rad)
+    cmap = ClearanceMap(tip + 1, th, ph, bound, phis, np.asarray(lims[tip].theta_max_rad),
+                        stack_limit_rad(pt, tip, phis, *stack))
+    return GeometryAnalyses(lims, stack[0], cmap, time.perf_counter() - t0)
+
+
 def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
-                 params_path: str | None = None, workspace_sim: WorkspaceSim | None = None) -> AnalysisResults:
+                 params_path: str | None = None, workspace_sim: WorkspaceSim | None = None,
+                 geometry: GeometryAnalyses | None = None) -> AnalysisResults:
     """``params_path``: the parameter file ``asm`` was built from (its calibration's data file is
     resolved relative to it); ``workspace_sim``: what predicts a measured tip workspace (see
-    :func:`bvsr_cad.analysis.measured.compare_measurements`)."""
+    :func:`bvsr_cad.analysis.measured.compare_measurements`); ``geometry``: :func:`geometry_analyses`
+    of this geometry when the caller has them (from the build's cache), else they are computed."""
     say = progress or (lambda _m: None)
     spec = asm.spec
     cfg = spec.analysis
@@ -79,28 +117,21 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
     rng = np.random.default_rng(cfg.seed)
     idx = rng.integers(0, ws.samples, cfg.build_clearance_poses)
     clearance = clearance_over(pt, ws.w[idx])
-    say("analysis: joint limits")
-    stack = fold_stack(spec)
-    lims = joint_limits(pt, cfg.min_clearance_mm, BUILD_LIMIT_PHIS, THETA_SEARCH_MAX_RAD, LIMIT_RESOLUTION_RAD,
-                        exact=True, stack=stack,
-                        progress=say)
-    tip = spec.joints - 1
-    th, ph, bound = clearance_map(pt, tip, THETA_SEARCH_MAX_RAD)
-    phis = np.asarray(lims[tip].phi_rad)
-    cmap = ClearanceMap(tip + 1, th, ph, bound, phis, np.asarray(lims[tip].theta_max_rad),
-                        stack_limit_rad(pt, tip, phis, *stack))
+    geo = geometry if geometry is not None else geometry_analyses(asm, pt, say)
     measured = compare_measurements(asm, params_path, say, workspace_sim,
-                                    [float(np.min(j.theta_max_rad)) for j in lims])
+                                    [float(np.min(j.theta_max_rad)) for j in geo.limits])
     seconds = time.perf_counter() - t0
     say(f"analysis: {seconds:.1f} s")
     return AnalysisResults(ws, quasi, clearance, "poses resampled from the build's workspace samples",
-                           cfg.min_clearance_mm, lims, stack[0], cmap, measured, seconds)
+                           cfg.min_clearance_mm, geo.limits, geo.fold_stack_lambda, geo.clearance_map, measured,
+                           seconds, 0.0 if geometry is not None else geo.seconds)
 
 
-def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = None) -> AnalysisResults:
+def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = None,
+                geometry: GeometryAnalyses | None = None) -> AnalysisResults:
     """The second process's work: the analyses of the parameter file the build read (``sha256``),
     progress on stderr (the parent relays it). Its entry point is the pipeline's (which gives
-    ``workspace_sim``)."""
+    ``workspace_sim`` and, from its cache, ``geometry``)."""
     import sys
 
     from ..assembly.build import build_assembly
@@ -112,4 +143,4 @@ def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = N
     def say(msg: str) -> None:
         print(f"(second process) {msg}", file=sys.stderr, flush=True)
 
-    return run_analyses(build_assembly(load_spec(params)), say, params, workspace_sim)
+    return run_analyses(build_assembly(load_spec(params)), say, params, workspace_sim, geometry)

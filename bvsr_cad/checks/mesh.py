@@ -11,6 +11,11 @@ VOLUME_TOLERANCE = 0.002  # 0.2 % of the B-rep volume
 FLAT_NORMAL_DOT = 0.9999
 
 
+def part_mesh_reads(part: dict) -> tuple[list[str], dict]:
+    """What :func:`check_part_mesh` reads: the part's STL, its name and its B-rep volume."""
+    return [part["files"]["stl"]], {"name": part["name"], "stl": part["files"]["stl"], "volume_mm3": part["volume_mm3"]}
+
+
 def check_part_mesh(exp: Export, part: dict) -> list[CheckResult]:
     name, rel = part["name"], part["files"]["stl"]
     mesh = exp.mesh(rel)

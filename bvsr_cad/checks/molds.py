@@ -441,6 +441,16 @@ def mold_meshes(exp: Export) -> tuple[trimesh.Trimesh, list[MoldMesh], list[tupl
     return exp.mesh(molds["cast_part"]), parts, channels
 
 
+def molds_reads(exp: Export) -> tuple[list[str], Any]:
+    """What :func:`check_molds` reads: the manifest's ``molds`` section and the meshes it names."""
+    molds = exp.manifest.get("molds") or {}
+    files = [molds["cast_part"]] if molds else []
+    for p in molds.get("parts", []):
+        files += [p["files"]["assembled_stl"], p["files"]["stl"]]
+    files += [c["files"]["stl"] for c in molds.get("channels", [])]
+    return files, molds
+
+
 def check_molds(exp: Export) -> list[CheckResult]:
     """Every mold check on an export (none when the export has no mold set)."""
     molds: dict[str, Any] | None = exp.manifest.get("molds")

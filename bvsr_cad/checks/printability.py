@@ -52,6 +52,7 @@ from scipy.sparse.csgraph import connected_components
 from shapely.geometry import MultiPoint
 
 from .export import Export
+from .memo import CheckMemo
 from .queries import contains
 from .result import CheckResult
 
@@ -568,6 +569,22 @@ def _inside_any(meshes: list[trimesh.Trimesh], points: np.ndarray, skip: np.ndar
 OUTER_PROBE_MM = 1e-3
 
 
+def envelope_reads(exp: Export) -> tuple[list[str], Any]:
+    """What :func:`check_envelope` reads: the twin's pieces and the BVSR's instances (STLs, transforms,
+    features) and the manifest's ``rigid_tail`` tolerance and filled features."""
+    rt = exp.manifest.get("rigid_tail") or {}
+    parts = {p["name"]: p for p in exp.parts}
+    pieces = [p for p in exp.parts if p["kind"] == "rigid_tail"]
+    instances = exp.manifest["assembly"]["instances"] if rt else []
+    used = sorted({i["part"] for i in instances})
+    files = [p["files"]["stl"] for p in pieces] + [parts[n]["files"]["stl"] for n in used]
+    return files, {"rigid_tail": [rt.get("envelope_tolerance_mm"), rt.get("filled_features")],
+                   "pieces": [[p["files"]["stl"], p["print_transform"], p["tail_transform"],
+                               p["info"]["print_features"]] for p in pieces],
+                   "parts": [[n, parts[n]["files"]["stl"], parts[n]["print_transform"]] for n in used],
+                   "instances": [[i["part"], i["transform"]] for i in instances]}
+
+
 def check_envelope(exp: Export, samples: int = 6000, seed: int = 1) -> list[CheckResult]:
     """The rigid twin's outer surface against the BVSR at rest (both ways). The twin is its pieces,
     assembled: a point is inside it when it is inside a piece, and its outer surface is the pieces'
@@ -637,65 +654,81 @@ def check_rigid_robot(exp: Export) -> list[CheckResult]:
     return out
 
 
-def check_printability(exp: Export, sliced_now: Collection[str] = ()) -> list[CheckResult]:
+def print_item_reads(job: dict[str, Any], it: dict[str, Any], fab: dict[str, Any]) -> tuple[list[str], Any]:
+    """What :func:`check_print_item` reads: the item's STL, its name and kind, the job's process and
+    build volume, the manifest's ``fabrication`` limits."""
+    return [it["stl"]], {"job": [job["name"], job["process"], job["build_volume_mm"]],
+                         "item": [it["part"], it["kind"], it["stl"]], "fabrication": fab}
+
+
+def check_print_item(exp: Export, job: dict[str, Any], it: dict[str, Any], fab: dict[str, Any]) -> list[CheckResult]:
+    """The printability checks of one STL of a print job."""
+    out: list[CheckResult] = []
+    fdm = job["process"] == "FDM"
+    rel, name = it["stl"], f"{job['name']}/{it['part']}"
+    mesh = exp.mesh(rel)
+    lo, hi = mesh.bounds
+    size = hi - lo
+    out.append(CheckResult(f"print_fits_volume:{name}", _fits(size, job["build_volume_mm"]),
+                           [round(float(v), 2) for v in size], job["build_volume_mm"], "mm", rel))
+    zmin = float(lo[2])
+    down = (mesh.face_normals[:, 2] < -0.9999) & (np.abs(mesh.triangles[:, :, 2] - zmin).max(axis=1) < 1e-6)
+    base = float(mesh.area_faces[down].sum())
+    out.append(CheckResult(f"print_flat_base:{name}", abs(zmin) < BED_Z_TOL_MM and base >= MIN_BASE_AREA_MM2,
+                           base, MIN_BASE_AREA_MM2, "mm2", rel, f"lowest z {zmin:.6f} mm"))
+    regions = overhang_regions(mesh, fab["max_overhang_deg"])
+    down_area = float(mesh.area_faces[mesh.face_normals[:, 2] < 0].sum())
+    over = sum(r["area_mm2"] for r in regions)
+    support = [r for r in regions if r["width_mm"] > fab["max_bridge_mm"]]
+    frac = over / down_area if down_area > 0 else 0.0
+    text = (f"{100 * frac:.2f} % of the downward area is steeper than {fab['max_overhang_deg']:g} deg from "
+            f"vertical in {len(regions)} regions; {len(regions) - len(support)} no wider than "
+            f"{fab['max_bridge_mm']:g} mm (bridges, short ledges)")
+    if support:
+        text += "; needs support at " + "; ".join(
+            f"{r['centre_mm']} ({r['area_mm2']:.1f} mm2, {r['width_mm']:.1f} mm wide)" for r in support[:5])
+    elif regions:
+        r = max(regions, key=lambda r: r["width_mm"])
+        text += f"; widest {r['width_mm']:.2f} mm at {r['centre_mm']}"
+    if not fdm:
+        text = "powder bed (MJF): no support needed; " + text
+    out.append(CheckResult(f"print_overhang:{name}", (len(support) == 0) if fdm else None,
+                           sum(r["area_mm2"] for r in support), 0.0, "mm2 needing support", rel, text))
+    wall, at = min_wall_mm(mesh)
+    plate, at_plate = min_wall_mm(mesh, horizontal=True)
+    wall_min = fab["fdm_min_wall_mm"] if fdm else fab["mjf_min_wall_mm"]
+    plate_min = fab["fdm_min_plate_mm"] if fdm else fab["mjf_min_wall_mm"]
+    if it["kind"] in ("mold", "mold_core"):
+        wall_min = plate_min = fab["mold_min_wall_mm"]
+    note = "" if fdm else f"; limit {fab.get('mjf_min_wall_note', '')}"
+    out.append(CheckResult(f"print_min_wall:{name}", wall >= wall_min, wall, wall_min, "mm", rel,
+                           f"thinnest wall (faces within 45 deg of vertical) at {at}, rays inwards to a "
+                           f"parallel face{note}"))
+    out.append(CheckResult(f"print_min_plate:{name}", plate >= plate_min, plate, plate_min, "mm", rel,
+                           f"thinnest plate (faces within 45 deg of horizontal) at {at_plate}{note}"))
+    hole, where = min_hole_mm(mesh)
+    hole_min = fab["fdm_min_hole_mm"] if fdm else fab["mjf_min_hole_mm"]
+    ok = hole >= HOLE_POLYGON_FACTOR * hole_min
+    out.append(CheckResult(f"print_min_hole:{name}", ok, hole if np.isfinite(hole) else None, hole_min,
+                           "mm", rel, f"smallest enclosed void (4 A / P) at {where}" if where else
+                           "no enclosed void in any section"))
+    return out
+
+
+def check_printability(exp: Export, sliced_now: Collection[str] = (), memo: CheckMemo | None = None
+                       ) -> list[CheckResult]:
     """Every printability check on every STL the manifest's ``print_jobs`` names (slicing results from
-    the cache: see :func:`check_slicing`)."""
+    the cache: see :func:`check_slicing`). ``memo``: verdicts of unchanged inputs from the artifact cache."""
     jobs = exp.manifest.get("print_jobs")
     if not jobs:
         return []
+    memo = memo or CheckMemo(exp)
     fab = exp.manifest["fabrication"]
     out: list[CheckResult] = []
     for job in jobs:
-        fdm = job["process"] == "FDM"
         for it in job["items"]:
-            rel, name = it["stl"], f"{job['name']}/{it['part']}"
-            mesh = exp.mesh(rel)
-            lo, hi = mesh.bounds
-            size = hi - lo
-            out.append(CheckResult(f"print_fits_volume:{name}", _fits(size, job["build_volume_mm"]),
-                                   [round(float(v), 2) for v in size], job["build_volume_mm"], "mm", rel))
-            zmin = float(lo[2])
-            down = (mesh.face_normals[:, 2] < -0.9999) & (np.abs(mesh.triangles[:, :, 2] - zmin).max(axis=1) < 1e-6)
-            base = float(mesh.area_faces[down].sum())
-            out.append(CheckResult(f"print_flat_base:{name}", abs(zmin) < BED_Z_TOL_MM and base >= MIN_BASE_AREA_MM2,
-                                   base, MIN_BASE_AREA_MM2, "mm2", rel, f"lowest z {zmin:.6f} mm"))
-            regions = overhang_regions(mesh, fab["max_overhang_deg"])
-            down_area = float(mesh.area_faces[mesh.face_normals[:, 2] < 0].sum())
-            over = sum(r["area_mm2"] for r in regions)
-            support = [r for r in regions if r["width_mm"] > fab["max_bridge_mm"]]
-            frac = over / down_area if down_area > 0 else 0.0
-            text = (f"{100 * frac:.2f} % of the downward area is steeper than {fab['max_overhang_deg']:g} deg from "
-                    f"vertical in {len(regions)} regions; {len(regions) - len(support)} no wider than "
-                    f"{fab['max_bridge_mm']:g} mm (bridges, short ledges)")
-            if support:
-                text += "; needs support at " + "; ".join(
-                    f"{r['centre_mm']} ({r['area_mm2']:.1f} mm2, {r['width_mm']:.1f} mm wide)" for r in support[:5])
-            elif regions:
-                r = max(regions, key=lambda r: r["width_mm"])
-                text += f"; widest {r['width_mm']:.2f} mm at {r['centre_mm']}"
-            if not fdm:
-                text = "powder bed (MJF): no support needed; " + text
-            out.append(CheckResult(f"print_overhang:{name}", (len(support) == 0) if fdm else None,
-                                   sum(r["area_mm2"] for r in support), 0.0, "mm2 needing support", rel, text))
-            wall, at = min_wall_mm(mesh)
-            plate, at_plate = min_wall_mm(mesh, horizontal=True)
-            wall_min = fab["fdm_min_wall_mm"] if fdm else fab["mjf_min_wall_mm"]
-            plate_min = fab["fdm_min_plate_mm"] if fdm else fab["mjf_min_wall_mm"]
-            if it["kind"] in ("mold", "mold_core"):
-                wall_min = plate_min = fab["mold_min_wall_mm"]
-            note = "" if fdm else f"; limit {fab.get('mjf_min_wall_note', '')}"
-            out.append(CheckResult(f"print_min_wall:{name}", wall >= wall_min, wall, wall_min, "mm", rel,
-                                   f"thinnest wall (faces within 45 deg of vertical) at {at}, rays inwards to a "
-                                   f"parallel face{note}"))
-            out.append(CheckResult(f"print_min_plate:{name}", plate >= plate_min, plate, plate_min, "mm", rel,
-                                   f"thinnest plate (faces within 45 deg of horizontal) at {at_plate}{note}"))
-            hole, where = min_hole_mm(mesh)
-            hole_min = fab["fdm_min_hole_mm"] if fdm else fab["mjf_min_hole_mm"]
-            ok = hole >= HOLE_POLYGON_FACTOR * hole_min
-            out.append(CheckResult(f"print_min_hole:{name}", ok, hole if np.isfinite(hole) else None, hole_min,
-                                   "mm", rel, f"smallest enclosed void (4 A / P) at {where}" if where else
-                                   "no enclosed void in any section"))
+            out += memo("print_item", print_item_reads(job, it, fab), lambda: check_print_item(exp, job, it, fab))
     out += check_slicing(exp, sliced_now=sliced_now)
-    out += check_envelope(exp)
+    out += memo("envelope", envelope_reads(exp), lambda: check_envelope(exp))
     out += check_rigid_robot(exp)
     return out

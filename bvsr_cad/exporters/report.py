@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 import trimesh
 
+from ..cache import ArtifactCache, file_sha256, object_stage, stage_key
 from ..colors import rgb
 from ..parameters import paper
 
@@ -100,9 +101,16 @@ def _poly(pv, mesh: trimesh.Trimesh):
     return pv.PolyData(np.asarray(mesh.vertices, float), cells)
 
 
-def _render_parts(root: Path, items: list[tuple[str, str, str]], out: Path) -> dict[str, str]:
-    """One small picture per STL (print orientation, the bed drawn as a grid); returns name -> path."""
+#: Where the report's pictures go, in the export.
+PART_PICTURES = "report/parts"
+RIGID_PICTURE = "report/rigid_tail.png"
+
+
+def _render_parts(root: Path, items: list[tuple[str, str, str]], dst: Path) -> dict[str, str]:
+    """One small picture per STL of ``root`` (print orientation, the bed drawn as a grid), written
+    under ``dst`` (the export, or a cache entry); returns name -> path in the export."""
     pv = _pyvista()
+    out = dst / PART_PICTURES
     out.mkdir(parents=True, exist_ok=True)
     pics: dict[str, str] = {}
     plotter = pv.Plotter(off_screen=True, window_size=(360, 300))
@@ -119,18 +127,21 @@ def _render_parts(root: Path, items: list[tuple[str, str, str]], out: Path) -> d
         plotter.reset_camera()
         plotter.add_text(f"{name}  {hi[0] - lo[0]:.0f} x {hi[1] - lo[1]:.0f} x {hi[2] - lo[2]:.0f} mm",
                          font_size=8)
-        path = out / f"{name}.png"
-        plotter.screenshot(str(path))
-        pics[name] = str(path.relative_to(root))
+        plotter.screenshot(str(out / f"{name}.png"))
+        pics[name] = f"{PART_PICTURES}/{name}.png"
     plotter.close()
     return pics
 
 
-def _render_rigid(root: Path, manifest: dict[str, Any], path: Path) -> str:
-    """The rigid twin assembled beside an exploded stack of its pieces."""
+def _rigid_pieces(manifest: dict[str, Any]) -> list[dict[str, Any]]:
+    return [p for p in manifest["parts"] if p["kind"] == "rigid_tail"]
+
+
+def _render_rigid(root: Path, manifest: dict[str, Any], dst: Path) -> str:
+    """The rigid twin assembled beside an exploded stack of its pieces (written under ``dst``)."""
     pv = _pyvista()
     plotter = pv.Plotter(off_screen=True, window_size=(1200, 560), shape=(1, 2))
-    pieces = [p for p in manifest["parts"] if p["kind"] == "rigid_tail"]
+    pieces = _rigid_pieces(manifest)
     for col, gap in ((0, 0.0), (1, 18.0)):
         plotter.subplot(0, col)
         for i, p in enumerate(pieces):
@@ -144,9 +155,10 @@ def _render_rigid(root: Path, manifest: dict[str, Any], path: Path) -> str:
         plotter.reset_camera()
         plotter.add_text("rigid PLA twin, assembled" if col == 0 else "pieces as printed, exploded along the tail",
                          font_size=10)
-    plotter.screenshot(str(path))
+    (dst / RIGID_PICTURE).parent.mkdir(parents=True, exist_ok=True)
+    plotter.screenshot(str(dst / RIGID_PICTURE))
     plotter.close()
-    return str(path.relative_to(root))
+    return RIGID_PICTURE
 
 
 def _pngs(section: Any) -> list[str]:
@@ -345,22 +357,28 @@ def drawings_section(manifest: dict[str, Any]) -> str:
             f"<th>sha256</th></tr>{rows}</table>")
 
 
-def write_report(root: Path, manifest: dict[str, Any]) -> dict[str, Any]:
-    """Write ``report.html`` and its pictures (``report/``) under ``root``; returns the manifest's ``report``."""
-    out = root / "report"
-    out.mkdir(exist_ok=True)
+def write_report(root: Path, manifest: dict[str, Any], cache: ArtifactCache | None = None) -> dict[str, Any]:
+    """Write ``report.html`` and its pictures (``report/``) under ``root``; returns the manifest's ``report``.
+
+    With ``cache`` the pictures are cached stages keyed by what they draw: the STLs' bytes, the names
+    and kinds (the parts sheet), the pieces' placements (the twin)."""
+    (root / "report").mkdir(exist_ok=True)
     problems: list[str] = []
     items = [(it["part"], it["stl"], it["kind"]) for job in manifest.get("print_jobs", []) for it in job["items"]]
     items += [(p["name"], p["files"]["stl"], p["kind"]) for p in manifest["parts"]
               if p["process"] not in ("MJF", "FDM")]
+    sha = (lambda rel: file_sha256(root / rel)) if cache is not None else (lambda rel: "")
     try:
-        part_pics = _render_parts(root, items, out / "parts")
+        part_pics, _ = object_stage(cache, stage_key("report_part_pictures", items=[(*i, sha(i[1])) for i in items]),
+                                    lambda dst: _render_parts(root, items, dst), root)
     except Exception as exc:  # a missing GL library must not lose the export; the report says what failed
         part_pics, problems = {}, problems + [f"part renders failed: {exc}"]
     rigid_pic = None
     if manifest.get("rigid_tail"):
+        pieces = [(p["files"]["stl"], sha(p["files"]["stl"]), p["tail_transform"]) for p in _rigid_pieces(manifest)]
         try:
-            rigid_pic = _render_rigid(root, manifest, out / "rigid_tail.png")
+            rigid_pic, _ = object_stage(cache, stage_key("report_rigid_picture", pieces=pieces),
+                                        lambda dst: _render_rigid(root, manifest, dst), root)
         except Exception as exc:
             problems.append(f"rigid tail render failed: {exc}")
 

@@ -10,7 +10,7 @@ the code path; their rates say nothing about a GPU. MJX and Warp come with the e
 (MJX on an NVIDIA GPU also needs ``jax[cuda12]``).
 
     python benchmarks/sim_bench.py EXPORT_DIR [--scene robot/scene.xml] [--steps 100]
-    python benchmarks/sim_bench.py /tmp/x --cpu-batches 1,4 --no-mjx     # skip MJX's long CPU compile
+    python benchmarks/sim_bench.py /tmp/x --cpu-batches 1,4 --no-mjx     # skip MJX's CPU compile (25-40 s a batch)
 """
 
 from __future__ import annotations
@@ -83,7 +83,7 @@ def main(argv=None) -> int:
     ap.add_argument("--cpu-seconds", type=float, default=3.0)
     ap.add_argument("--pressure-fraction", type=float, default=0.6, help="held pressure, fraction of the range's top")
     ap.add_argument("--cpu-batches", default="1,4", help="batch sizes on the CPU backends when there is no GPU")
-    ap.add_argument("--no-mjx", action="store_true", help="skip MJX (its CPU compile of the tail takes minutes)")
+    ap.add_argument("--no-mjx", action="store_true", help="skip MJX (its CPU compile of the tail takes 25-40 s per batch size)")
     args = ap.parse_args(argv)
 
     path = args.export / args.scene if args.scene else sim_gpu.scene_path(args.export)

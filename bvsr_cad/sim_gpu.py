@@ -5,7 +5,8 @@ Shared by the tests (``tests/test_sim_gpu.py``) and the benchmark (``benchmarks/
 - :func:`constraint_buffers`: MuJoCo Warp allocates a fixed number of constraint rows (``njmax``) and
   contacts (``nconmax``) per world; too few and the solver drops rows and the state goes NaN (the
   per-segment scene overflowed the default 64). The buffers are sized from CPU MuJoCo probe runs of
-  the same model under held pressures, with a margin.
+  the same model under held pressures, with a margin, plus a row for every limit (which held pressures
+  do not reach).
 - :func:`randomised_fields`: domain randomisation as a learning team needs it: per world, the hinges'
   spring stiffness (the rod's bending stiffness) and damping scaled, and a tip payload (a point mass
   at the tip body's centre of mass, so its centre of mass and rotational inertia are unchanged and
@@ -43,6 +44,29 @@ def import_mjx():
     except ImportError as exc:
         raise ImportError(f"MJX needs {GPU_EXTRA}: {exc}") from exc
     return jax, mjx
+
+
+#: XLA options for compiling MJX's step on JAX's CPU backend (DebugOptions fields, passed per function
+#: through ``jax.jit(compiler_options=...)``, so nothing else in the process changes). XLA:CPU's loop
+#: fusion copies the step's long chains of dependent arithmetic (the tail is 14 bodies and 24 hinges
+#: deep) into every consumer, so its kernels nest thousands of calls deep: on the default scene (a shared
+#: 2-core machine, JAX 0.10.2, MJX 3.17) ``compile()`` of one step took 64 s of CPU at float32 (over 7 min
+#: at float64) and the first step then ran for minutes. Without fusion (each operation its own kernel)
+#: one step compiles in 29-33 s of CPU and runs in milliseconds; with XLA's backend optimisation level 0
+#: and LLVM's expensive passes off as well, 23 s (float32). :func:`mjx_batch` (two worlds, float64,
+#: compile and the first 25 steps): 40-50 s of CPU without fusion, 35-38 s with all three, whose steps
+#: then run 2.4 times slower, which matters little: MJX on a CPU is for trying and testing (CPU MuJoCo
+#: steps this scene 50-100 times faster per world). A GPU's fusion is what makes it fast: these are
+#: for CPU devices only (:func:`compiler_options`).
+CPU_COMPILER_OPTIONS = {"xla_disable_hlo_passes": "fusion", "xla_backend_optimization_level": 0,
+                        "xla_llvm_disable_expensive_passes": True}
+
+
+def compiler_options(device=None) -> dict:
+    """The XLA options :func:`mjx_batch` compiles with on ``device`` (JAX's default device when None)."""
+    jax, _ = import_mjx()
+    platform = (device if device is not None else jax.devices()[0]).platform
+    return dict(CPU_COMPILER_OPTIONS) if platform == "cpu" else {}
 
 
 def import_warp():
@@ -87,9 +111,10 @@ class ConstraintBuffers:
     ncon_seen: int  # the most contacts
     njmax: int  # rows allocated per world
     nconmax: int  # contacts allocated per world
+    limit_rows: int = 0  # of njmax, reserved for the joint and tendon limits (one row each at most)
 
     def line(self) -> str:
-        return (f"njmax {self.njmax} (probe saw nefc <= {self.nefc_seen}), "
+        return (f"njmax {self.njmax} (probe saw nefc <= {self.nefc_seen}; {self.limit_rows} reserved for limits), "
                 f"nconmax {self.nconmax} (probe saw ncon <= {self.ncon_seen})")
 
 
@@ -97,7 +122,10 @@ def constraint_buffers(model: mujoco.MjModel, seconds: float = 0.3, margin: floa
                        controls: list[np.ndarray] | None = None) -> ConstraintBuffers:
     """Per-world buffer sizes for MuJoCo Warp from CPU MuJoCo: ``seconds`` of each held pattern of
     :func:`probe_controls` from rest, the largest ``nefc`` and ``ncon`` of any step, times ``margin``
-    (at least 16 rows and 8 contacts more than seen: randomised worlds bend further)."""
+    (at least 16 rows and 8 contacts more than seen: randomised worlds bend further), and one row more
+    per limited joint and tendon: MuJoCo makes at most one row per limit, and held pressures bend the
+    default tail to at most 38 % of its joint limits, so the probe never sees them, but a load (a
+    contact, an impact) does: the reduced chain's bend limits are 8 fixed tendons per joint."""
     if margin < 1.0:
         raise ValueError(f"constraint_buffers: margin={margin} must be >= 1 (a multiple of what the probe saw)")
     data = mujoco.MjData(model)
@@ -108,8 +136,9 @@ def constraint_buffers(model: mujoco.MjModel, seconds: float = 0.3, margin: floa
         for _ in range(max(1, round(seconds / model.opt.timestep))):
             mujoco.mj_step(model, data)
             nefc, ncon = max(nefc, data.nefc), max(ncon, data.ncon)
-    return ConstraintBuffers(nefc, ncon, max(int(np.ceil(nefc * margin)), nefc + 16),
-                             max(int(np.ceil(ncon * margin)), ncon + 8))
+    limits = int(model.jnt_limited.sum() + model.tendon_limited.sum())
+    return ConstraintBuffers(nefc, ncon, max(int(np.ceil(nefc * margin)), nefc + 16) + limits,
+                             max(int(np.ceil(ncon * margin)), ncon + 8), limits)
 
 
 # --- domain randomisation ------------------------------------------------------------------------
@@ -184,7 +213,8 @@ class Batch:
 def mjx_batch(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndarray], device=None) -> Batch:
     """MJX: ``jax.vmap`` of ``mjx.step`` over a model whose randomised fields carry a world axis
     (MuJoCo Playground's pattern), the data broadcast to every world; ``n`` steps run in one jitted
-    ``fori_loop``. Uses JAX's default device unless ``device`` is given."""
+    ``fori_loop``, compiled with :func:`compiler_options`. Uses JAX's default device unless ``device``
+    is given."""
     jax, mjx = import_mjx()
     import jax.numpy as jnp
 
@@ -200,7 +230,8 @@ def mjx_batch(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndar
         return jax.tree.map(lambda new, old: new.astype(old.dtype), mjx.step(m, d), d)
 
     batched = jax.vmap(one, in_axes=(axes, 0))
-    run = jax.jit(lambda m, d, n: jax.lax.fori_loop(0, n, lambda _, dd: batched(m, dd), d))
+    run = jax.jit(lambda m, d, n: jax.lax.fori_loop(0, n, lambda _, dd: batched(m, dd), d),
+                  compiler_options=compiler_options(device))
     state = {"d": dx}
 
     def step(n: int) -> None:

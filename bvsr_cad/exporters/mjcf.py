@@ -59,7 +59,7 @@ from scipy.spatial.transform import Rotation
 
 from ..assembly.collision import Collision
 from ..assembly.robot import RobotModel, chord_joint_value, rest_pair
-from ..models.kinematics import PRB_PIVOT_FRACTION
+from ..models.kinematics import PRB_PIVOT_FRACTION, PrbLimitPolygon
 from .xml import num as _f
 from .xml import quat_wxyz as _quat
 from .xml import vec as _vec
@@ -95,6 +95,19 @@ REDUCED_PER_SEGMENT_TIMESTEP_S = 1e-3
 #: it holds a tail with a soft rod or none (largest residual under gravity, no rod: 10.3 -> 7.1 mrad per
 #: joint, 11.9 -> 5.7 per segment; checks/robot.py's limit is 10).
 EQUALITY_SOLIMP = (0.9, 0.96, 0.001, 0.5, 2.0)
+#: The reduced chain's bend limit: fixed tendons along this many directions per joint (twice as many
+#: faces), a polygon circumscribing the exact limit theta <= theta_max (:func:`_bend_limit_tendons`).
+#: 8 (16 faces): a bend reaches at most 2.1 % past theta_max between faces (4 directions: 8.1 %,
+#: 6: 3.6 %, the hinges' own limits before: 39 %).
+BEND_LIMIT_DIRECTIONS = 8
+#: The bend limits' impedance (solimplimit; their solreflimit is the equalities', two steps). With MuJoCo's
+#: defaults (0.9, 0.95, 0.001, 0.5, 2; 0.02 s) a tip moment 1.5 times the rod's own at theta_max (the SOAs'
+#: stiffness off) pushed the default tail's joints 38-49 % past their limits (the exact chain's: 32-47 %);
+#: with these, 1.1-3.2 % at the exported 2 ms (3.8-9.2 % at 4 ms). With the SOAs, a tip moment 1.2 times
+#: the one that bends the tail to its limits (5.4 Nm) stops every joint 2.6-6.9 % past theta_max in any
+#: direction, where the hinges' limits folded the tail (123 % past) or went unstable. (0.99, 0.999) is no
+#: tighter under larger moments (14 %) and rattles (joint speeds of 1-6 rad/s against the limit).
+LIMIT_SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)
 #: The chains an MJCF file can carry (``chain`` of :func:`mjcf_tree`).
 CHAINS = ("reduced", "exact")
 #: Per-segment model: the joints of a segment follow its first joint's (joint suffix, equality tag).
@@ -227,21 +240,20 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
     def add_reduced(parent_el, k: int):
         """Joint k's middle link (the whole deformable body) and panel k on it, then the rest."""
         b = robot.bending[k - 1]
-        lim = _vec((-b.theta_max_rad / 2, b.theta_max_rad / 2))
         d = PRB_PIVOT_FRACTION * b.arc_length_m
         t_m = np.asarray(next(j for j in robot.joints if j.child == f"{b.name}_after_phi").T_parent_joint)[2, 3]
         half_a, half_b = robot.links[f"{b.name}_after_theta_a"], robot.links[f"{b.name}_after_chord"]
         soft = dataclasses.replace(half_a, name=f"{b.name}_soft",
                                    inertial=rest_pair(half_a.inertial, half_b.inertial, b.arc_length_m))
         body = ET.SubElement(parent_el, "body", name=soft.name, pos=_vec((0, 0, t_m)))
-        for axis in "xy":
+        for axis in "xy":  # no range: the joint's bend limit is the fixed tendons of _bend_limit_tendons
             ET.SubElement(body, "joint", name=f"{b.name}_a{axis}", type="hinge", axis=_AXES[axis],
-                          pos=_vec((0, 0, d)), range=lim, stiffness=_f(stiff_half))
+                          pos=_vec((0, 0, d)), stiffness=_f(stiff_half))
         contents(body, soft)
         panel = ET.SubElement(body, "body", name=b.tip_link, pos=_vec((0, 0, b.arc_length_m)))
         for axis in "yx":
             ET.SubElement(panel, "joint", name=f"{b.name}_b{axis}", type="hinge", axis=_AXES[axis],
-                          pos=_vec((0, 0, -d)), range=lim, stiffness=_f(stiff_half))
+                          pos=_vec((0, 0, -d)), stiffness=_f(stiff_half))
         contents(panel, robot.links[b.tip_link])
         if k < len(robot.bending):
             add_reduced(panel, k + 1)
@@ -258,6 +270,7 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
     solref = _vec((2.0 * timestep_s, 1.0))
     solimp = _vec(EQUALITY_SOLIMP)
     chord_err = 0.0
+    bend_overshoot = None
     for b in robot.bending:
         if chain == "reduced":
             for axis in "xy":
@@ -296,6 +309,7 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
                 ET.SubElement(fixed, "joint", joint=f"{b.name}_b{axis}", coef="-1")
         if per_segment:
             _segment_spread_tendons(tendon, robot)
+        bend_overshoot = _bend_limit_tendons(tendon, robot, solref)
     actuator = ET.SubElement(root, "actuator")
     ctrl = _vec((act.pressure_min_pa, act.pressure_max_pa))
     groups: dict[str, list] = {}
@@ -325,7 +339,10 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
              "actuator_control": "commanded (supply) gauge pressure, Pa; the chamber pressure is the "
                                  "actuator's activation, a first-order lag of it" if lags else "gauge pressure, Pa",
              "supply_lag_s": [lags[0], lags[-1]] if lags else None, "per_segment": per_segment,
-             "chain": chain, "timestep_s": timestep_s}
+             "chain": chain, "timestep_s": timestep_s, "bend_limit": None if bend_overshoot is None else {
+                 "faces": 2 * BEND_LIMIT_DIRECTIONS, "max_overshoot": bend_overshoot,
+                 "tendons": "jk_bend_limit_<i>: cos(phi_i) (jk_ax + jk_bx) + sin(phi_i) (jk_ay + jk_by), "
+                            f"phi_i = 180 i / {BEND_LIMIT_DIRECTIONS} deg"}}
     return ET.ElementTree(root), facts
 
 
@@ -370,6 +387,29 @@ def shear_stiffness_nm_rad(robot: RobotModel) -> float:
     guided = 3.0 * (1.0 - 2.0 * PRB_PIVOT_FRACTION) ** 2
     soa_ei_over_l = law.stiffness_offset_n_per_m * law.area_m2 / (2.0 * np.pi)
     return guided * n_soas * soa_ei_over_l + (guided - 1.0) * act.rod_bending_stiffness_nm_rad
+
+
+def _bend_limit_tendons(tendon: ET.Element, robot: RobotModel, solref: str) -> float:
+    """Each reduced joint's bend limit theta <= theta_max, for every bending direction: fixed tendons
+    ``jk_bend_limit_i`` = cos(phi_i) (``jk_ax`` + ``jk_bx``) + sin(phi_i) (``jk_ay`` + ``jk_by``) (twice a
+    pivot's angle along phi_i while the equalities hold) limited to twice the faces of
+    :class:`~bvsr_cad.models.kinematics.PrbLimitPolygon`: a polygon of 2 :data:`BEND_LIMIT_DIRECTIONS`
+    faces circumscribing the exact limit. Limits on the pivots' hinges instead (a square) let a diagonal
+    bend reach 1.39 theta_max, and they act on one pivot, whose light shear mode lets it through. Returns
+    the largest overshoot over the joints (theta / theta_max - 1 at a vertex)."""
+    solimp = _vec(LIMIT_SOLIMP)
+    worst = 0.0
+    for b in robot.bending:
+        poly = PrbLimitPolygon.make(b.theta_max_rad, BEND_LIMIT_DIRECTIONS)
+        worst = max(worst, poly.overshoot)
+        for i, (phi, half) in enumerate(zip(poly.direction_rad, poly.half_width_rad)):
+            fixed = ET.SubElement(tendon, "fixed", name=f"{b.name}_bend_limit_{i}", range=_vec((-2 * half, 2 * half)),
+                                  solreflimit=solref, solimplimit=solimp)
+            for axis, coef in (("x", np.cos(phi)), ("y", np.sin(phi))):
+                if abs(coef) > 1e-12:
+                    for pivot in "ab":
+                        ET.SubElement(fixed, "joint", joint=f"{b.name}_{pivot}{axis}", coef=_f(coef))
+    return worst
 
 
 def _soa_bending(robot: RobotModel, per_soa: float) -> float:

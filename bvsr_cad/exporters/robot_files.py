@@ -63,10 +63,12 @@ def write_robot(robot: RobotModel, root: Path, progress: Callable[[str], None], 
         "ros2_package": {"path": f"robot/ros2/{ros2['name']}", "urdf": ros2["urdf"], "meshes": ros2["meshes"]},
         "mjcf_per_segment": "robot/scene_segments.xml", "mjcf_exact": "robot/scene_exact.xml",
         "mjcf_exact_model": f"robot/{name}_exact.xml",
-        # Each model file's chain, its step and its tip's largest distance from Eq 2 over the joint range.
+        # Each model file's chain, its step and its tip's largest distance from Eq 2 over the joint range;
+        # a reduced chain's bend limit (a polygon of fixed tendons, its largest overshoot past theta_max).
         "chains": {f"robot/{name}.urdf": {"chain": "exact", "tip_error_vs_eq2_mm": error_mm["exact"]},
                    **{f"robot/{stem}.xml": {"chain": f["chain"], "timestep_s": f["timestep_s"],
-                                            "tip_error_vs_eq2_mm": error_mm[f["chain"]]}
+                                            "tip_error_vs_eq2_mm": error_mm[f["chain"]],
+                                            **({"bend_limit": f["bend_limit"]} if f["bend_limit"] else {})}
                       for stem, f in facts.items()}}, "mjcf_cart": None if cart is None else "robot/scene_cart.xml", "mjcf_per_segment_model": f"robot/{name}_segments.xml",
         "units": "SI (m, kg, s, rad); actuator control: commanded gauge pressure in Pa (the chamber "
                  "pressure lags it by supply_lag_s)",

@@ -293,6 +293,55 @@ def prb_angles(theta_rad: np.ndarray, phi_rad: np.ndarray) -> tuple[np.ndarray, 
             np.arcsin(np.sin(half) * np.cos(phi_rad)))
 
 
+def prb_bend_angle(a_rad: np.ndarray, b_rad: np.ndarray) -> np.ndarray:
+    """The reduced joint's bend theta from a pivot's hinge angles (the inverse of :func:`prb_angles`):
+    cos(theta/2) = cos a cos b (from sin b = sin(theta/2) cos phi, tan a = -tan(theta/2) sin phi)."""
+    return 2.0 * np.arccos(np.clip(np.cos(a_rad) * np.cos(b_rad), -1.0, 1.0))
+
+
+@dataclass(frozen=True)
+class PrbLimitPolygon:
+    """The reduced joint's bend limit theta <= theta_max as faces in a pivot's hinge angles (a, b).
+
+    The exact limit, cos a cos b >= cos(theta_max / 2) (:func:`prb_bend_angle`), is a convex region
+    (log cos a + log cos b is concave), nearly the disc of radius theta_max / 2. Face i bounds
+    cos(phi_i) a + sin(phi_i) b <= half_width_rad[i] on both sides, phi_i = 180 i / n deg for the n
+    directions (2 n faces), and touches the region at ``touch_ab[i]`` (the support function, in closed
+    form), so the polygon circumscribes it. Along a face theta is largest at its ends (-log(cos a cos b)
+    is convex), so the largest bend the polygon allows is at a vertex (``vertex_ab``, between faces i
+    and i + 1 of the 2 n): ``overshoot`` = theta / theta_max - 1 there; the smallest is theta_max, where
+    a face touches."""
+
+    theta_max_rad: float
+    direction_rad: np.ndarray  # (n,)
+    half_width_rad: np.ndarray  # (n,)
+    touch_ab: np.ndarray  # (n, 2)
+    vertex_ab: np.ndarray  # (2 n, 2)
+    overshoot: float
+
+    @classmethod
+    def make(cls, theta_max_rad: float, directions: int) -> PrbLimitPolygon:
+        if directions < 2:
+            raise ValueError(f"PrbLimitPolygon: directions={directions} must be >= 2 (4 faces)")
+        phi = np.arange(directions) * np.pi / directions
+        # Support of {cos a cos b >= C}: the Lagrange condition tan b / tan a = tan phi with
+        # (1 + tan^2 a)(1 + tan^2 b) = 1 / C^2 = 1 + T gives tan^2 a = 2 cos^2 phi T / w,
+        # tan^2 b = 2 sin^2 phi T / w, w = 1 + sqrt(1 + 4 sin^2 phi cos^2 phi T).
+        big_t = np.tan(theta_max_rad / 2) ** 2
+        c2, s2 = np.cos(phi) ** 2, np.sin(phi) ** 2
+        w = 1.0 + np.sqrt(1.0 + 4.0 * s2 * c2 * big_t)
+        touch = np.stack([np.sign(np.cos(phi).round(15)) * np.arctan(np.sqrt(2 * c2 * big_t / w)),
+                          np.arctan(np.sqrt(2 * s2 * big_t / w))], axis=1)
+        half = np.cos(phi) * touch[:, 0] + np.sin(phi) * touch[:, 1]
+        normal = np.concatenate([phi, phi + np.pi])  # faces phi and phi + pi (i.e. -half along phi)
+        width = np.concatenate([half, half])
+        n1 = np.stack([np.cos(normal), np.sin(normal)], axis=1)
+        vertex = np.array([np.linalg.solve(np.stack([n1[k], n1[(k + 1) % len(normal)]]),
+                                           [width[k], width[(k + 1) % len(normal)]]) for k in range(len(normal))])
+        worst = float(prb_bend_angle(vertex[:, 0], vertex[:, 1]).max())
+        return cls(theta_max_rad, phi, half, touch, vertex, worst / theta_max_rad - 1.0)
+
+
 def joint_transform_prb(theta_rad: np.ndarray, phi_rad: np.ndarray, length_mm: float) -> np.ndarray:
     """Tz(d) Rx(a) Ry(b) Tz(L - 2d) Ry(b) Rx(a) Tz(d), d = L/6: the reduced joint's end frame."""
     a, b = prb_angles(theta_rad, phi_rad)

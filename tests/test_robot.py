@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import shutil
 from pathlib import Path
 
@@ -94,6 +95,25 @@ def test_every_robot_check_passes(robot_export):
             "mujoco_settled_1s:mjcf", "mujoco_settled_1s:mjcf_exact", "mujoco_no_drift:urdf",
             "robot_inertia_vs_mesh:panel3", "robot_inertia_vs_mesh:j1_soft(at rest)",
             "mujoco_self_contacts_only_neighbours:urdf"} <= names
+
+
+def test_at_limit_check_sees_the_bend_limit_tendons(robot_export, tmp_path):
+    """The reduced chain bounds a bend by limited fixed tendons, not joint ranges: a tail whose sag under
+    gravity rests on one of them (its range narrowed to +-1 mrad here) fails the check, by name."""
+    from bvsr_cad.checks.robot import _step
+
+    src = (robot_export / "robot" / "bvsr.xml").read_text()
+    narrowed = re.sub(r'(<fixed name="j1_bend_limit_\d+") range="[^"]*"', r'\1 range="-0.001 0.001"', src)
+    assert narrowed != src
+    (tmp_path / "meshes").symlink_to(robot_export / "robot" / "meshes")
+    for text, on_limit in ((src, False), (narrowed, True)):
+        path = tmp_path / "bvsr.xml"
+        path.write_text(text)
+        *_, at_limit, _ = _step(path, gravity=True)
+        if on_limit:
+            assert any(n.startswith("j1_bend_limit_") for n in at_limit), at_limit
+        else:
+            assert at_limit == []
 
 
 def _candidate_pairs(m) -> set[tuple[str, str]]:

@@ -172,6 +172,12 @@ def _step(path: Path, gravity: bool, seconds: float = 1.0, self_contacts: bool =
             lo, hi = m.jnt_range[j]
             if q <= lo + 1e-9 or q >= hi - 1e-9:
                 at_limit.append(mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j))
+    # The reduced chains bound each joint's bend by limited fixed tendons (the hinges have no range).
+    for t in range(m.ntendon):
+        if m.tendon_limited[t]:
+            lo, hi = m.tendon_range[t]
+            if d.ten_length[t] <= lo + 1e-9 or d.ten_length[t] >= hi - 1e-9:
+                at_limit.append(mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_TENDON, t))
     drift = float(np.max(np.abs(d.qpos - m.qpos0))) if m.nq else 0.0
     return m, d, warnings, worst_eq, at_limit, drift
 
@@ -217,8 +223,8 @@ def check_mujoco(exp: Export) -> list[CheckResult]:
             tol = EQUALITY_TOLERANCE if key in ("urdf", "mjcf_exact") else EQUALITY_TOLERANCE_REDUCED
             out.append(CheckResult(f"mujoco_couplings_held:{key}", eq <= tol, eq, tol,
                                    "rad or m", rel, "largest mimic/chord equality residual while stepping"))
-            out.append(CheckResult(f"mujoco_no_joint_at_limit:{key}", not at_limit, len(at_limit), 0, "joints", rel,
-                                   ", ".join(at_limit)))
+            out.append(CheckResult(f"mujoco_no_joint_at_limit:{key}", not at_limit, len(at_limit), 0,
+                                   "joints or bend-limit tendons", rel, ", ".join(at_limit)))
             if not gravity:
                 out.append(CheckResult(f"mujoco_no_drift:{key}", drift <= 1e-9, drift, 1e-9, "rad or m", rel,
                                        "largest joint displacement after 1 s at rest without gravity"))

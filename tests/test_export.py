@@ -163,7 +163,7 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
     from bvsr_cad.parameters.load import ParamError
 
     changed = write_toml(tmp_path / "edited.toml", {"name": "edited"})
-    proc = worker.SecondProcess.start("bvsr_cad.analysis.run", [str(changed), "sha256 of what the build read"],
+    proc = worker.SecondProcess.start("bvsr_cad.pipeline", [str(changed), "sha256 of what the build read"],
                                       tmp_path)
     if proc is None:
         pytest.skip("one core: the analyses never leave the process")
@@ -173,7 +173,7 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
     assert not proc.running
     # A process that dies without a result: the work runs here instead.
     monkeypatch.setattr(worker.sys, "executable", shutil.which("false") or "/bin/false")
-    lost = worker.SecondProcess.start("bvsr_cad.analysis.run", [], tmp_path)
+    lost = worker.SecondProcess.start("bvsr_cad.pipeline", [], tmp_path)
     said: list[str] = []
     assert worker.result_or(lost, lambda: {"analysis": "computed here"}, said.append, "analyses") == {
         "analysis": "computed here"}

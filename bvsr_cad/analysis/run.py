@@ -5,9 +5,9 @@ certified clearance, the exact joint limits and the tip joint's clearance map;
 :mod:`bvsr_cad.exporters.analysis_files` serialises the result and the robot
 model takes its joint limits from it (nothing reads a file the build wrote).
 
-Run as ``python -m bvsr_cad.analysis.run OUT PARAMS SHA256`` it is the build's
-second process (:mod:`bvsr_cad.worker`): the same analyses from the parameter
-file, the result pickled back to the build.
+:func:`from_params` is the build's second process (:mod:`bvsr_cad.worker`,
+started as ``python -m bvsr_cad.pipeline``, which gives it the simulator): the
+same analyses from the parameter file, the result pickled back to the build.
 """
 
 from __future__ import annotations

@@ -190,12 +190,23 @@ def joint_limits(pt: PosedTail, need_mm: float, n_phi: int = 36, theta_hi_rad: f
     return out
 
 
+#: Limits in the build: 36 bending planes, 1 mrad steps, searched up to 1 rad.
+BUILD_LIMIT_PHIS = 36
+THETA_SEARCH_MAX_RAD = 1.0
+LIMIT_RESOLUTION_RAD = 1e-3
+
+
+def build_joint_limits(pt: PosedTail, spec: TailSpec, progress: Callable[[str], None] | None = None
+                       ) -> list[JointLimits]:
+    """The build's exact joint limits of a posed tail: :func:`joint_limits` with the build's planes,
+    search range and resolution, the spec's required clearance and fold stack."""
+    return joint_limits(pt, spec.analysis.min_clearance_mm, BUILD_LIMIT_PHIS, THETA_SEARCH_MAX_RAD,
+                        LIMIT_RESOLUTION_RAD, exact=True, stack=fold_stack(spec), progress=progress)
+
+
 def theta_max_per_joint_rad(asm, progress: Callable[[str], None] | None = None) -> list[float]:
-    """Each joint's collision-free limit of ``asm`` as one number, the minimum over the bending planes:
-    the build's limits analysis (same planes and resolution), which the robot files are built with."""
+    """Each joint's collision-free limit of ``asm`` as one number, the minimum over the bending planes of
+    :func:`build_joint_limits`: what the robot files are built with."""
     from .clearance import posed_tail
 
-    spec = asm.spec
-    lims = joint_limits(posed_tail(asm, progress), spec.analysis.min_clearance_mm, stack=fold_stack(spec),
-                        progress=progress)
-    return [float(np.min(j.theta_max_rad)) for j in lims]
+    return [float(np.min(j.theta_max_rad)) for j in build_joint_limits(posed_tail(asm, progress), asm.spec, progress)]

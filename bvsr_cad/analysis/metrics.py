@@ -155,11 +155,9 @@ def model_metrics(spec: TailSpec, groups: list[str], conditions: Conditions = Co
             out["min_clearance_mm"] = float(res.min_clearance_mm)
             out["clearance_margin_mm"] = float(res.min_clearance_mm - spec.analysis.min_clearance_mm)
         elif group == "limits":
-            from .limits import fold_stack, joint_limits
-            from .run import BUILD_LIMIT_PHIS, LIMIT_RESOLUTION_RAD, THETA_SEARCH_MAX_RAD
+            from .limits import build_joint_limits
 
-            lims = joint_limits(posed_tail_once(), spec.analysis.min_clearance_mm, BUILD_LIMIT_PHIS,
-                                THETA_SEARCH_MAX_RAD, LIMIT_RESOLUTION_RAD, exact=True, stack=fold_stack(spec))
+            lims = build_joint_limits(posed_tail_once(), spec)
             theta = np.concatenate([lim.theta_max_rad for lim in lims])
             out["joint_limit_min_deg"] = float(np.degrees(theta.min()))
             out["joint_limit_max_deg"] = float(np.degrees(theta.max()))

@@ -22,13 +22,8 @@ from ..assembly.build import Assembly
 from .measured import MeasuredComparison, compare_measurements
 from .predict import WorkspaceSim
 from .clearance import ClearanceResult, PosedTail, clearance_map, clearance_over, posed_tail
-from .limits import JointLimits, fold_stack, joint_limits, stack_limit_rad
+from .limits import THETA_SEARCH_MAX_RAD, JointLimits, build_joint_limits, fold_stack, stack_limit_rad
 from .workspace import Workspace, quasi_static_table, run_workspace
-
-#: Limits in the build: 36 bending planes, 1 mrad steps, searched up to 1 rad.
-BUILD_LIMIT_PHIS = 36
-THETA_SEARCH_MAX_RAD = 1.0
-LIMIT_RESOLUTION_RAD = 1e-3
 
 
 @dataclass(frozen=True)
@@ -88,8 +83,7 @@ def geometry_analyses(asm: Assembly, pt: PosedTail, progress: Callable[[str], No
     spec = asm.spec
     say("analysis: joint limits")
     stack = fold_stack(spec)
-    lims = joint_limits(pt, spec.analysis.min_clearance_mm, BUILD_LIMIT_PHIS, THETA_SEARCH_MAX_RAD,
-                        LIMIT_RESOLUTION_RAD, exact=True, stack=stack, progress=say)
+    lims = build_joint_limits(pt, spec, say)
     tip = spec.joints - 1
     th, ph, bound = clearance_map(pt, tip, THETA_SEARCH_MAX_RAD)
     phis = np.asarray(lims[tip].phi_rad)

@@ -6,7 +6,8 @@ import json
 from pathlib import Path
 from typing import Any
 
-from ..analysis.run import LIMIT_RESOLUTION_RAD, THETA_SEARCH_MAX_RAD, AnalysisResults
+from ..analysis.limits import LIMIT_RESOLUTION_RAD, THETA_SEARCH_MAX_RAD
+from ..analysis.run import AnalysisResults
 from ..analysis.measured import LANDS_WITHIN_REL
 from .plots import plot_clearance_map, plot_measurements, plot_workspace
 

@@ -225,6 +225,56 @@ def _without_meshes(root: ET.Element) -> None:
                 parent.remove(child)
 
 
+def _without_geoms(root: ET.Element) -> None:
+    """Drop every geom (for a scene where none can touch another: see :func:`protocol_model`)."""
+    for parent in root.iter():
+        for child in list(parent):
+            if child.tag == "geom":
+                parent.remove(child)
+
+
+def protocol_model(asm: Assembly, spec: TailSpec, theta_max_rad: list[float], tip_body: str):
+    """(MjModel, robot model) of the workspace protocol: ``asm``'s exported reduced-chain MJCF with
+    ``spec``'s values, a ``framepos`` sensor on ``tip_body`` (sensors do not act on the dynamics).
+
+    Its geoms are mass-less (every body's inertia is explicit) and, in this scene of the tail alone,
+    collide with nothing (no geom has a non-zero ``conaffinity``, the scene declares no contact pair):
+    they are dropped, so each step skips their kinematics and the collision pass. The run is the
+    same either way (``tests/test_workspace_protocol.py`` compares the two)."""
+    import mujoco
+
+    with_values = dataclasses.replace(asm, spec=spec)
+    with_values._properties.update(asm._properties)  # same geometry: its mass properties carry over
+    robot = robot_model(with_values, theta_max_rad)
+    tree, _ = mjcf_tree(robot, _UnwrittenMeshes(), per_segment=False)
+    root = tree.getroot()
+    _without_meshes(root)
+    sensor = root.find("sensor")
+    if sensor is None:
+        sensor = ET.SubElement(root, "sensor")
+    ET.SubElement(sensor, "framepos", name="protocol_tip", objtype="xbody", objname=tip_body)
+    m = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
+    if not m.geom_conaffinity.any() and m.npair == 0 and m.nexclude == 0:
+        _without_geoms(root)
+        m = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
+    return m, robot
+
+
+def _hold(m, d, ctrl: np.ndarray, steps: int) -> np.ndarray:
+    """``steps`` steps of ``d`` with ``ctrl`` held, in MuJoCo's rollout (C, without Python's lock:
+    protocols run side by side in threads); ``d`` is left at the last step. The sensor data of each step."""
+    import mujoco
+    from mujoco import rollout
+
+    spec_full = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.empty(mujoco.mj_stateSize(m, spec_full))
+    mujoco.mj_getState(m, d, state, spec_full)
+    d.ctrl[:] = ctrl
+    _, sensordata = rollout.rollout(m, d, state[None], d.ctrl[None, None].copy(), nstep=steps,
+                                    initial_warmstart=d.qacc_warmstart[None].copy())
+    return sensordata[0]
+
+
 def workspace_protocol(asm: Assembly, spec: TailSpec | None = None, theta_max_rad: list[float] | None = None,
                        cycles: int | None = None, progress: Callable[[str], None] | None = None) -> ProtocolRun:
     """The paper's workspace experiment (Sec. IV-A-5) in MuJoCo: ``cycles`` pressure draws (default
@@ -240,12 +290,7 @@ def workspace_protocol(asm: Assembly, spec: TailSpec | None = None, theta_max_ra
     say = progress or (lambda _m: None)
     if theta_max_rad is None:
         theta_max_rad = joint_limits_rad(spec, say, asm)
-    with_values = dataclasses.replace(asm, spec=spec)
-    with_values._properties.update(asm._properties)  # same geometry: its mass properties carry over
-    robot = robot_model(with_values, theta_max_rad)
-    tree, _ = mjcf_tree(robot, _UnwrittenMeshes(), per_segment=False)
-    _without_meshes(tree.getroot())
-    m = mujoco.MjModel.from_xml_string(ET.tostring(tree.getroot(), encoding="unicode"))
+    m, robot = protocol_model(asm, spec, theta_max_rad, f"panel{spec.panels - 1}")
     d = mujoco.MjData(m)
     cycles = int(cycles or spec.analysis.workspace_protocol_cycles)
     draws_kpa = sample_line_pressures_kpa(spec, cycles, np.random.default_rng(spec.analysis.seed))
@@ -254,8 +299,8 @@ def workspace_protocol(asm: Assembly, spec: TailSpec | None = None, theta_max_ra
     segment = np.array([(s.joint - 1) // jps for s in robot.soas])
     place = np.array([s.line_index - 1 for s in robot.soas])
     tip, base = m.body(f"panel{spec.panels - 1}").id, m.body("panel0").id
-    for _ in range(int(round(SETTLE_S / m.opt.timestep))):
-        mujoco.mj_step(m, d)
+    sensor = m.sensor("protocol_tip").adr[0]
+    _hold(m, d, d.ctrl.copy(), int(round(SETTLE_S / m.opt.timestep)))
     rest = units.m_to_mm(d.xpos[tip].copy())
     axis = d.xpos[tip] - d.xpos[base]
     axis = axis / np.linalg.norm(axis)
@@ -263,15 +308,14 @@ def workspace_protocol(asm: Assembly, spec: TailSpec | None = None, theta_max_ra
     every = max(1, int(round(PROTOCOL_SAMPLE_S / m.opt.timestep)))
     path, settled = [], []
     say(f"workspace protocol: {cycles} cycles of {spec.actuation.workspace_cycle_s:g} s in MuJoCo")
+    ctrl = d.ctrl.copy()
     for c in range(cycles):
-        d.ctrl[actuator] = units.kpa_to_pa(draws_kpa[c, segment, place])
-        for k in range(steps):
-            mujoco.mj_step(m, d)
-            if k % every == every - 1:
-                path.append(d.xpos[tip].copy())
-        settled.append(d.xpos[tip].copy())
+        ctrl[actuator] = units.kpa_to_pa(draws_kpa[c, segment, place])
+        tips = _hold(m, d, ctrl, steps)[:, sensor:sensor + 3]
+        path.append(tips[every - 1::every])
+        settled.append(tips[-1])
     warnings = int(sum(w.number for w in d.warning))
-    return ProtocolRun(units.m_to_mm(np.array(path)), units.m_to_mm(np.array(settled)), rest, axis, warnings)
+    return ProtocolRun(units.m_to_mm(np.concatenate(path)), units.m_to_mm(np.array(settled)), rest, axis, warnings)
 
 
 def protocol_radius_mm(asm: Assembly, spec: TailSpec, theta_max_rad: list[float]) -> float:

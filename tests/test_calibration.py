@@ -176,3 +176,29 @@ def test_another_rod_is_noted_not_compared(bvsr_spec):
         assert res is not None and not res.rows and "another tail" in res.note
         assert f"{vertebra.material} {vertebra.diameter_mm:g} mm" in res.note
         assert res.fitted == dict(bvsr_spec.calibration.fitted)
+
+
+def test_rows_predicted_in_threads_equal_rows_predicted_one_by_one(bvsr_spec):
+    """compare_rows predicts in threads (the workspace protocol steps beside the other rows): the table
+    is the same, value for value, with one thread. Rows that share a memoised motion (a root torque and
+    force, a peak velocity and the exponents) are asked from several threads at once."""
+    from bvsr_cad.analysis.calibrate import compare_rows, uncalibrated
+    from bvsr_cad.analysis.predict import Predictor
+    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.parameters.measurements import load_measurements
+
+    from .conftest import ROOT
+
+    rows = [m for m in load_measurements(ROOT / "data" / "paper_bvsr.csv")
+            if m.quantity in ("segment_max_angle", "segment_peak_velocity", "velocity_pressure_exponent",
+                              "root_peak_torque", "root_peak_force", "soa_stiffness")]
+    assert len(rows) >= 8
+    asm = build_assembly(bvsr_spec)
+
+    def table(threads: int) -> list[dict]:
+        pred = Predictor(asm, bvsr_spec)
+        return compare_rows(pred.with_spec(uncalibrated(bvsr_spec)), pred, rows, threads=threads)
+
+    one, many = table(1), table(6)
+    assert [r["row"] for r in many] == [m.row for m in rows]
+    assert json.dumps(many, sort_keys=True) == json.dumps(one, sort_keys=True)

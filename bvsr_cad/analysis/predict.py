@@ -17,6 +17,7 @@ the others open; the quasi-static figures are at the lines' pressure limits
 from __future__ import annotations
 
 import dataclasses
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -59,6 +60,23 @@ class NeedsSimulator(ValueError):
     """A quantity asked of a Predictor made without the simulator it needs (a caller's mistake)."""
 
 
+class _Locks:
+    """One lock per memo entry, so that threads asking for the same entry make it once."""
+
+    def __init__(self) -> None:
+        self._guard = threading.Lock()
+        self._locks: dict[tuple[int, object], threading.Lock] = {}
+
+    def once(self, store: dict, key: object, make: Callable[[], object]):
+        """``store[key]``, made by ``make()`` if absent (by one thread; the others wait for it)."""
+        with self._guard:
+            lock = self._locks.setdefault((id(store), key), threading.Lock())
+        with lock:
+            if key not in store:
+                store[key] = make()
+            return store[key]
+
+
 @dataclass
 class Predictor:
     """Predictions for one tail geometry; ``spec`` (same geometry) may change between calls.
@@ -75,13 +93,16 @@ class Predictor:
     #: pressure and payload, a peak velocity and both exponents at 6 bar, the cart's lift and angle)
     #: integrate it once.
     _solved: dict = field(default_factory=dict, repr=False)
+    #: Predictions may run in threads (:func:`bvsr_cad.analysis.calibrate.compare_rows`): each memo entry
+    #: is made once, under its own lock; shared with the Predictors of other specs (``with_spec``).
+    _locks: "_Locks" = field(default_factory=lambda: _Locks(), repr=False)
 
     @classmethod
     def from_spec(cls, spec: TailSpec, workspace_sim: WorkspaceSim | None = None) -> "Predictor":
         return cls(build_assembly(spec), spec, workspace_sim)
 
     def with_spec(self, spec: TailSpec) -> "Predictor":
-        return Predictor(self.asm, spec, self.workspace_sim, self._other, self._limits)
+        return Predictor(self.asm, spec, self.workspace_sim, self._other, self._limits, _locks=self._locks)
 
     def known_limits(self, theta_max_rad: list[float]) -> None:
         """The joints' limits of this geometry where a build has them (saves a clearance analysis)."""
@@ -112,9 +133,7 @@ class Predictor:
         return simulate_joint(model, None, seconds, phi0_rad=phi, supply=supply, stop_angle_deg=stop_angle_deg)
 
     def _once(self, key: tuple, solve: Callable[[], object]):
-        if key not in self._solved:
-            self._solved[key] = solve()
-        return self._solved[key]
+        return self._locks.once(self._solved, key, solve)
 
     def segment_pulse(self, motion: str, pressure_bar: float) -> Trajectory:
         def solve() -> Trajectory:
@@ -176,16 +195,12 @@ class Predictor:
                                           workspace_pressurised_max_kpa_abs=pressurised_max_kpa_abs,
                                           workspace_depressurised_min_kpa_abs=depressurised_min_kpa_abs))
         key = int(segments)
-        if key == self.spec.segments:
-            asm = self.asm
-        else:
-            if key not in self._other:
-                self._other[key] = build_assembly(dataclasses.replace(self.spec, segments=key))
-            asm = self._other[key]
-        if key not in self._limits:
-            self._limits[key] = theta_max_per_joint_rad(asm)
+        once = self._locks.once
+        asm = self.asm if key == self.spec.segments else once(
+            self._other, key, lambda: build_assembly(dataclasses.replace(self.spec, segments=key)))
+        limits = once(self._limits, key, lambda: theta_max_per_joint_rad(asm))
         return self._once(("workspace", key, float(pressurised_max_kpa_abs), float(depressurised_min_kpa_abs)),
-                          lambda: float(self.workspace_sim(asm, spec, self._limits[key])))
+                          lambda: float(self.workspace_sim(asm, spec, limits)))
 
     def root_wrench(self, motion: str, pressure_bar: float, payload_g: float) -> tuple[float, float]:
         """(peak force N, peak torque N m) at the root sensor (the root panel's proximal face), tared."""

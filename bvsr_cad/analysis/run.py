@@ -13,6 +13,7 @@ same analyses from the parameter file, the result pickled back to the build.
 from __future__ import annotations
 
 import time
+from concurrent.futures import ThreadPoolExecutor
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -103,17 +104,21 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
     spec = asm.spec
     cfg = spec.analysis
     t0 = time.perf_counter()
-    say("analysis: workspace")
-    ws = run_workspace(asm, cfg.build_workspace_samples, cfg.seed, say)
-    quasi = quasi_static_table(asm, (1.0, 2.0))
     say("analysis: clearance")
     pt = posed_tail(asm, say)
-    rng = np.random.default_rng(cfg.seed)
-    idx = rng.integers(0, ws.samples, cfg.build_clearance_poses)
-    clearance = clearance_over(pt, ws.w[idx])
     geo = geometry if geometry is not None else geometry_analyses(asm, pt, say)
-    measured = compare_measurements(asm, params_path, say, workspace_sim,
-                                    [float(np.min(j.theta_max_rad)) for j in geo.limits])
+    # The measurements need only the joints' limits: their simulations (the workspace protocol steps in
+    # MuJoCo without Python's lock) go on beside the workspace and clearance analyses.
+    with ThreadPoolExecutor(1) as pool:
+        measuring = pool.submit(compare_measurements, asm, params_path, say, workspace_sim,
+                                [float(np.min(j.theta_max_rad)) for j in geo.limits])
+        say("analysis: workspace")
+        ws = run_workspace(asm, cfg.build_workspace_samples, cfg.seed, say)
+        quasi = quasi_static_table(asm, (1.0, 2.0))
+        rng = np.random.default_rng(cfg.seed)
+        idx = rng.integers(0, ws.samples, cfg.build_clearance_poses)
+        clearance = clearance_over(pt, ws.w[idx])
+        measured = measuring.result()
     seconds = time.perf_counter() - t0
     say(f"analysis: {seconds:.1f} s")
     return AnalysisResults(ws, quasi, clearance, "poses resampled from the build's workspace samples",

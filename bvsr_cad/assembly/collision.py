@@ -27,6 +27,8 @@ mesh (the exporters write its convex hull) instead of its cylinder.
 
 from __future__ import annotations
 
+import weakref
+
 from dataclasses import dataclass
 
 import build123d as bd
@@ -82,10 +84,23 @@ class CylinderFit:
         return float(np.pi * self.radius_mm ** 2 * self.length_mm)
 
 
+#: piece -> {T_axis_mm bytes: its fit}: a robot model per spec of one geometry (the calibration's
+#: predictions, the workspace protocol) fits each part once.
+_FITS: "weakref.WeakKeyDictionary[bd.Shape, dict[bytes, CylinderFit]]" = weakref.WeakKeyDictionary()
+
+
 def fit_cylinder(piece: bd.Shape, T_axis_mm: np.ndarray) -> CylinderFit:
     """The smallest cylinder about the axis frame ``T_axis_mm`` (its z) holding ``piece`` (mm)."""
-    p, _ = mesh_arrays(piece, FIT_TOLERANCE_MM, _ANGULAR_TOLERANCE)
     T = np.asarray(T_axis_mm, float)
+    fits = _FITS.setdefault(piece, {})
+    key = T.tobytes()
+    if key not in fits:
+        fits[key] = _fit_cylinder(piece, T)
+    return fits[key]
+
+
+def _fit_cylinder(piece: bd.Shape, T: np.ndarray) -> CylinderFit:
+    p, _ = mesh_arrays(piece, FIT_TOLERANCE_MM, _ANGULAR_TOLERANCE)
     local = (p - T[:3, 3]) @ T[:3, :3]
     r = float(np.max(np.hypot(local[:, 0], local[:, 1])))
     return CylinderFit(r + FIT_TOLERANCE_MM, float(local[:, 2].min()) - FIT_TOLERANCE_MM,

@@ -47,7 +47,7 @@ def test_checks_never_build_geometry():
 
 
 #: Calls that write a file (or a picture) to disk.
-WRITERS = ("write_text", "write_bytes", "savefig", "screenshot", "export_stl", "export_step", "mkdir", "copyfile",
+WRITERS = ("write_text", "write_bytes", "savefig", "screenshot", "export_stl", "export_step", "Write", "mkdir", "copyfile",
            "rename", "unlink", "rmtree", "mkstemp", "mkdtemp")
 
 

@@ -191,7 +191,7 @@ def calibrate(spec: TailSpec, rows: list[Measurement], parameters: list[str] | N
 
 #: Threads predicting a table's rows: the workspace protocol's rows step in MuJoCo without Python's
 #: lock, so they go on beside the others (their Python parts take turns).
-COMPARE_THREADS = 4
+COMPARE_THREADS = 8
 
 
 def compare_rows(before: Predictor, after: Predictor, rows: list[Measurement],

@@ -52,12 +52,13 @@ class MeasuredComparison:
 def compare_measurements(asm: Assembly, params_path: str | Path | None,
                          progress: Callable[[str], None] | None = None,
                          workspace_sim: WorkspaceSim | None = None,
-                         theta_max_rad: list[float] | None = None) -> MeasuredComparison | None:
+                         theta_max_rad: list[float] | Callable[[], list[float]] | None = None
+                         ) -> MeasuredComparison | None:
     """The comparison for ``asm``'s spec, or None when the file carries no calibration.
 
     ``workspace_sim``: what predicts the measured tip workspace (:class:`Predictor`); the pipeline
     gives :func:`bvsr_cad.sim.protocol_radius_mm`. ``theta_max_rad``: the joints' limits of ``asm``
-    where the build has them."""
+    where the build has them, or what gives them when first needed (they may still be computing)."""
     spec = asm.spec
     cal = spec.calibration
     if not cal.fitted:

@@ -104,9 +104,10 @@ class Predictor:
     def with_spec(self, spec: TailSpec) -> "Predictor":
         return Predictor(self.asm, spec, self.workspace_sim, self._other, self._limits, _locks=self._locks)
 
-    def known_limits(self, theta_max_rad: list[float]) -> None:
-        """The joints' limits of this geometry where a build has them (saves a clearance analysis)."""
-        self._limits[self.spec.segments] = list(theta_max_rad)
+    def known_limits(self, theta_max_rad: list[float] | Callable[[], list[float]]) -> None:
+        """The joints' limits of this geometry where a build has them (saves a clearance analysis), or
+        what gives them when a prediction first needs them (a build computing them beside)."""
+        self._limits[self.spec.segments] = theta_max_rad if callable(theta_max_rad) else list(theta_max_rad)
 
     # -- building blocks ---------------------------------------------------
     def joint_model(self, first_joint: int, n_joints: int, payload_g: float = 0.0) -> JointModel:
@@ -199,6 +200,8 @@ class Predictor:
         asm = self.asm if key == self.spec.segments else once(
             self._other, key, lambda: build_assembly(dataclasses.replace(self.spec, segments=key)))
         limits = once(self._limits, key, lambda: theta_max_per_joint_rad(asm))
+        if callable(limits):  # given by known_limits, still to come
+            limits = list(limits())
         return self._once(("workspace", key, float(pressurised_max_kpa_abs), float(depressurised_min_kpa_abs)),
                           lambda: float(self.workspace_sim(asm, spec, limits)))
 

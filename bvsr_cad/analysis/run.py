@@ -13,7 +13,7 @@ same analyses from the parameter file, the result pickled back to the build.
 from __future__ import annotations
 
 import time
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -104,14 +104,19 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
     spec = asm.spec
     cfg = spec.analysis
     t0 = time.perf_counter()
-    say("analysis: clearance")
-    pt = posed_tail(asm, say)
-    geo = geometry if geometry is not None else geometry_analyses(asm, pt, say)
-    # The measurements need only the joints' limits: their simulations (the workspace protocol steps in
-    # MuJoCo without Python's lock) go on beside the workspace and clearance analyses.
+    # The measurements go on in a thread beside the other analyses (the workspace protocol steps in
+    # MuJoCo without Python's lock); only a workspace row of this geometry waits for its joints' limits.
+    limits: Future = Future()
     with ThreadPoolExecutor(1) as pool:
-        measuring = pool.submit(compare_measurements, asm, params_path, say, workspace_sim,
-                                [float(np.min(j.theta_max_rad)) for j in geo.limits])
+        measuring = pool.submit(compare_measurements, asm, params_path, say, workspace_sim, limits.result)
+        try:
+            say("analysis: clearance")
+            pt = posed_tail(asm, say)
+            geo = geometry if geometry is not None else geometry_analyses(asm, pt, say)
+            limits.set_result([float(np.min(j.theta_max_rad)) for j in geo.limits])
+        except BaseException as exc:
+            limits.set_exception(exc)
+            raise
         say("analysis: workspace")
         ws = run_workspace(asm, cfg.build_workspace_samples, cfg.seed, say)
         quasi = quasi_static_table(asm, (1.0, 2.0))

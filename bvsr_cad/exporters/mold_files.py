@@ -29,7 +29,7 @@ from ..parts._kernel import mesh_arrays
 from ..colors import rgb
 from .cad import write_step, write_stl
 
-#: Mold meshes: fine enough that the cavity (closed mold minus channels) and
+#: Mold meshes (relative to each edge's size): fine enough that the cavity (closed mold minus channels) and
 #: the cast agree far inside the 0.5 % the cavity check allows.
 MOLD_STL_LINEAR_TOLERANCE_MM = 0.005
 MOLD_STL_ANGULAR_TOLERANCE_RAD = 0.1
@@ -41,7 +41,7 @@ EXPLODE_MM = {"half_a": 34.0, "half_b": 34.0, "bottom_plate": 30.0, "lid": 30.0}
 
 
 def _stl(shape: bd.Shape, path: Path) -> None:
-    write_stl(shape, path, MOLD_STL_LINEAR_TOLERANCE_MM, MOLD_STL_ANGULAR_TOLERANCE_RAD)
+    write_stl(shape, path, MOLD_STL_LINEAR_TOLERANCE_MM, MOLD_STL_ANGULAR_TOLERANCE_RAD, relative=True)
 
 
 def _step(part: MoldPart, path: Path) -> None:

@@ -45,4 +45,4 @@ def _write_hull_m(shape, path: Path) -> None:
 
 def _write_m(shape, path: Path, tolerance_mm: float = MESH_TOLERANCE_MM) -> None:
     """Tessellate in millimetres with OCCT (fast), then scale the mesh to metres."""
-    write_stl(shape, path, tolerance_mm, 0.1, scale=units.mm_to_m(1.0))
+    write_stl(shape, path, tolerance_mm, 0.1, scale=units.mm_to_m(1.0), relative=True)

@@ -216,31 +216,29 @@ class _UnwrittenMeshes(dict):
         return f"{key}.stl"
 
 
+def _drop(root: ET.Element, unwanted: Callable[[ET.Element, ET.Element], bool]) -> None:
+    """Remove every element for which ``unwanted(parent, child)`` holds."""
+    for parent in root.iter():
+        for child in list(parent):
+            if unwanted(parent, child):
+                parent.remove(child)
+
+
 def _without_meshes(root: ET.Element) -> None:
     """Drop mesh assets and mesh geoms (visuals, mass-less: every body's inertia is explicit)."""
-    for parent in root.iter():
-        for child in list(parent):
-            if (child.tag == "mesh" and parent.tag == "asset") or (child.tag == "geom" and (
-                    child.get("mesh") or child.get("class") == "visual")):
-                parent.remove(child)
+    _drop(root, lambda parent, child: (child.tag == "mesh" and parent.tag == "asset") or (
+        child.tag == "geom" and bool(child.get("mesh") or child.get("class") == "visual")))
 
 
-def _without_geoms(root: ET.Element) -> None:
-    """Drop every geom (for a scene where none can touch another: see :func:`protocol_model`)."""
-    for parent in root.iter():
-        for child in list(parent):
-            if child.tag == "geom":
-                parent.remove(child)
-
-
-def protocol_model(asm: Assembly, spec: TailSpec, theta_max_rad: list[float], tip_body: str):
+def protocol_model(asm: Assembly, spec: TailSpec, theta_max_rad: list[float], tip_body: str,
+                   keep_geoms: bool = False):
     """(MjModel, robot model) of the workspace protocol: ``asm``'s exported reduced-chain MJCF with
     ``spec``'s values, a ``framepos`` sensor on ``tip_body`` (sensors do not act on the dynamics).
 
     Its geoms are mass-less (every body's inertia is explicit) and, in this scene of the tail alone,
     collide with nothing (no geom has a non-zero ``conaffinity``, the scene declares no contact pair):
-    they are dropped, so each step skips their kinematics and the collision pass. The run is the
-    same either way (``tests/test_workspace_protocol.py`` compares the two)."""
+    they are dropped (unless ``keep_geoms``), so each step skips their kinematics and the collision
+    pass. The run is the same either way (``tests/test_workspace_protocol.py`` compares the two)."""
     import mujoco
 
     with_values = dataclasses.replace(asm, spec=spec)
@@ -254,8 +252,8 @@ def protocol_model(asm: Assembly, spec: TailSpec, theta_max_rad: list[float], ti
         sensor = ET.SubElement(root, "sensor")
     ET.SubElement(sensor, "framepos", name="protocol_tip", objtype="xbody", objname=tip_body)
     m = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
-    if not m.geom_conaffinity.any() and m.npair == 0 and m.nexclude == 0:
-        _without_geoms(root)
+    if not keep_geoms and not m.geom_conaffinity.any() and m.npair == 0 and m.nexclude == 0:
+        _drop(root, lambda _parent, child: child.tag == "geom")
         m = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
     return m, robot
 
@@ -276,12 +274,14 @@ def _hold(m, d, ctrl: np.ndarray, steps: int) -> np.ndarray:
 
 
 def workspace_protocol(asm: Assembly, spec: TailSpec | None = None, theta_max_rad: list[float] | None = None,
-                       cycles: int | None = None, progress: Callable[[str], None] | None = None) -> ProtocolRun:
+                       cycles: int | None = None, progress: Callable[[str], None] | None = None,
+                       keep_geoms: bool = False) -> ProtocolRun:
     """The paper's workspace experiment (Sec. IV-A-5) in MuJoCo: ``cycles`` pressure draws (default
     ``analysis.workspace_protocol_cycles``, seed ``analysis.seed``) held ``actuation.workspace_cycle_s``
     each, on ``asm``'s exported MJCF with ``spec``'s values (same geometry; it may carry fitted ones).
 
-    ``theta_max_rad``: the joints' limits (default: from the clearance analysis of ``asm``)."""
+    ``theta_max_rad``: the joints' limits (default: from the clearance analysis of ``asm``);
+    ``keep_geoms``: see :func:`protocol_model`."""
     import mujoco
 
     from .analysis.workspace import sample_line_pressures_kpa
@@ -290,7 +290,7 @@ def workspace_protocol(asm: Assembly, spec: TailSpec | None = None, theta_max_ra
     say = progress or (lambda _m: None)
     if theta_max_rad is None:
         theta_max_rad = joint_limits_rad(spec, say, asm)
-    m, robot = protocol_model(asm, spec, theta_max_rad, f"panel{spec.panels - 1}")
+    m, robot = protocol_model(asm, spec, theta_max_rad, f"panel{spec.panels - 1}", keep_geoms)
     d = mujoco.MjData(m)
     cycles = int(cycles or spec.analysis.workspace_protocol_cycles)
     draws_kpa = sample_line_pressures_kpa(spec, cycles, np.random.default_rng(spec.analysis.seed))

@@ -59,15 +59,13 @@ def test_workspace_row_needs_the_simulator(asm, bvsr_spec):
         Predictor(asm, bvsr_spec).tip_workspace_radius(2, 150.0, 50.0)
 
 
-def test_dropping_the_geoms_changes_nothing(asm, bvsr_spec, monkeypatch):
+def test_dropping_the_geoms_changes_nothing(asm, bvsr_spec):
     """The protocol's model drops its geoms (none can touch another in this scene): the same run as
     with them, to the last bit."""
-    lean = sim.workspace_protocol(asm, bvsr_spec, [FREE_LIMITS_RAD] * bvsr_spec.joints, cycles=4)
-    m, _ = sim.protocol_model(asm, bvsr_spec, [FREE_LIMITS_RAD] * bvsr_spec.joints, "panel0")
-    assert m.ngeom == 0
-    monkeypatch.setattr(sim, "_without_geoms", lambda root: None)
-    m, _ = sim.protocol_model(asm, bvsr_spec, [FREE_LIMITS_RAD] * bvsr_spec.joints, "panel0")
-    assert m.ngeom > 0
-    full = sim.workspace_protocol(asm, bvsr_spec, [FREE_LIMITS_RAD] * bvsr_spec.joints, cycles=4)
+    limits = [FREE_LIMITS_RAD] * bvsr_spec.joints
+    assert sim.protocol_model(asm, bvsr_spec, limits, "panel0")[0].ngeom == 0
+    assert sim.protocol_model(asm, bvsr_spec, limits, "panel0", keep_geoms=True)[0].ngeom > 0
+    lean = sim.workspace_protocol(asm, bvsr_spec, limits, cycles=4)
+    full = sim.workspace_protocol(asm, bvsr_spec, limits, cycles=4, keep_geoms=True)
     np.testing.assert_array_equal(full.tip_mm, lean.tip_mm)
     np.testing.assert_array_equal(full.rest_mm, lean.rest_mm)

@@ -204,9 +204,14 @@ def build_joint_limits(pt: PosedTail, spec: TailSpec, progress: Callable[[str], 
                         LIMIT_RESOLUTION_RAD, exact=True, stack=fold_stack(spec), progress=progress)
 
 
+def per_joint_rad(limits: list[JointLimits]) -> list[float]:
+    """Each joint's limit as one number: the minimum of theta_max over its bending planes (what the
+    robot files are built with)."""
+    return [float(np.min(j.theta_max_rad)) for j in limits]
+
+
 def theta_max_per_joint_rad(asm, progress: Callable[[str], None] | None = None) -> list[float]:
-    """Each joint's collision-free limit of ``asm`` as one number, the minimum over the bending planes of
-    :func:`build_joint_limits`: what the robot files are built with."""
+    """:func:`per_joint_rad` of :func:`build_joint_limits` of ``asm``."""
     from .clearance import posed_tail
 
-    return [float(np.min(j.theta_max_rad)) for j in build_joint_limits(posed_tail(asm, progress), asm.spec, progress)]
+    return per_joint_rad(build_joint_limits(posed_tail(asm, progress), asm.spec, progress))

@@ -13,8 +13,8 @@ same analyses from the parameter file, the result pickled back to the build.
 from __future__ import annotations
 
 import time
-from concurrent.futures import Future, ThreadPoolExecutor
 from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,7 +23,8 @@ from ..assembly.build import Assembly
 from .measured import MeasuredComparison, compare_measurements
 from .predict import WorkspaceSim
 from .clearance import ClearanceResult, PosedTail, clearance_map, clearance_over, posed_tail
-from .limits import THETA_SEARCH_MAX_RAD, JointLimits, build_joint_limits, fold_stack, stack_limit_rad
+from .limits import (THETA_SEARCH_MAX_RAD, JointLimits, build_joint_limits, fold_stack, per_joint_rad,
+                     stack_limit_rad)
 from .workspace import Workspace, quasi_static_table, run_workspace
 
 
@@ -72,8 +73,8 @@ class AnalysisResults:
         return GeometryAnalyses(self.limits, self.fold_stack_lambda, self.clearance_map, self.geometry_seconds)
 
     def theta_max_per_joint(self) -> list[float]:
-        """Each joint's limit as one number: the minimum of theta_max over the bending planes."""
-        return [float(np.min(lim.theta_max_rad)) for lim in self.limits]
+        """Each joint's limit as one number (:func:`~bvsr_cad.analysis.limits.per_joint_rad`)."""
+        return per_joint_rad(self.limits)
 
 
 def geometry_analyses(asm: Assembly, pt: PosedTail, progress: Callable[[str], None] | None = None
@@ -113,7 +114,7 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
             say("analysis: clearance")
             pt = posed_tail(asm, say)
             geo = geometry if geometry is not None else geometry_analyses(asm, pt, say)
-            limits.set_result([float(np.min(j.theta_max_rad)) for j in geo.limits])
+            limits.set_result(per_joint_rad(geo.limits))
         except BaseException as exc:
             limits.set_exception(exc)
             raise

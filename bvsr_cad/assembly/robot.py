@@ -229,7 +229,7 @@ def robot_model(asm: Assembly, theta_max_rad: list[float]) -> RobotModel:
     Args:
         asm: the assembly (mm).
         theta_max_rad: collision-free bending limit of each joint (the minimum over phi), e.g.
-            :meth:`bvsr_cad.analysis.limits.LimitsResult.theta_max_per_joint`.
+            :func:`bvsr_cad.analysis.limits.per_joint_rad`.
 
     The velocity limit of a joint is the segment's peak rate shared by its joints
     times a margin (``[robot]``); the effort limits are what all N_SOA SOAs can

@@ -94,3 +94,22 @@ def test_clearance_over_is_certified_and_limits_are_conservative(asm):
 def test_cli_bad_input_exit_2(capsys):
     assert main(["clearance", str(PARAMS / "bvsr.toml"), "--poses", "0"]) == 2
     assert main(["workspace", str(PARAMS / "nope.toml")]) == 2
+
+
+def test_the_limit_searchs_shortcuts_give_the_same_numbers(asm):
+    """The one-joint screen is PosedTail.stretch to the last bit, and the lowest limit per joint found with
+    planes skipped is the minimum of the full search's."""
+    from bvsr_cad.analysis.clearance import posed_tail
+    from bvsr_cad.analysis.limits import _pose, _Tester, fold_stack, joint_limits, lowest_limits_rad, per_joint_rad
+
+    pt = posed_tail(asm)
+    need = asm.spec.analysis.min_clearance_mm
+    rng = np.random.default_rng(11)
+    for k in range(pt.kin.n_joints):
+        test = _Tester(pt, k, need)
+        for theta, phi in [(0.0, 0.0), (1.0, np.pi), *zip(rng.uniform(0, 1.2, 20), rng.uniform(-np.pi, np.pi, 20))]:
+            w = _pose(pt, k, float(theta), float(phi))
+            np.testing.assert_array_equal(test._stretch(w), pt.stretch(w[None])[0, test.ids])
+    stack = fold_stack(asm.spec)
+    full = joint_limits(pt, need, n_phi=12, stack=stack)
+    assert lowest_limits_rad(pt, need, n_phi=12, stack=stack) == per_joint_rad(full)

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..parameters.tables import TailSpec
-from .clearance import PosedTail
+from .clearance import SUPPORT_BINS, PosedTail
 
 
 def fold_stack(spec: TailSpec) -> tuple[float, float]:
@@ -69,13 +69,27 @@ class _Tester:
     def __init__(self, pt: PosedTail, joint: int, need_mm: float):
         self.pt, self.k, self.need = pt, joint, need_mm
         self.ids = np.flatnonzero(pt.span[:, joint])
+        self._support = pt.support_mm[self.ids]
         self.exact_calls = 0
         self._exact: dict[tuple[float, float], tuple[bool, int, float]] = {}  # the search asks twice at its end
+
+    def _stretch(self, w: np.ndarray) -> np.ndarray:
+        """:meth:`PosedTail.stretch` of the pairs that feel joint k, at a pose bending joint k alone: in
+        every other joint theta = 0 leaves lambda at 1, so the one term left is computed, with the same
+        operations on the same values (the same numbers to the last bit: ``tests/test_limits.py``)."""
+        pt, k = self.pt, self.k
+        theta = np.hypot(w[None, :, 0], w[None, :, 1])
+        kappa = theta / pt.kin.length_mm
+        bins = (np.floor((np.arctan2(w[None, :, 1], w[None, :, 0]) + np.pi) / (2 * np.pi) * SUPPORT_BINS)
+                .astype(int) % SUPPORT_BINS)
+        bulge = pt.kin.length_mm * theta[0, k] / 8.0
+        lam = np.minimum(1.0, 1.0 - kappa[0, k] * (self._support[:, bins[0, k]] + bulge))
+        return np.clip(lam, 0.0, 1.0)
 
     def _screen(self, theta: float, phi: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The pose, and the pairs whose stage-1a bound is below the need with their stage-1b bounds."""
         w = _pose(self.pt, self.k, theta, phi)
-        lam = self.pt.stretch(w[None])[0, self.ids]
+        lam = self._stretch(w)
         low = lam * self.pt.rest_mm[self.ids] < self.need
         return w, self.ids[low], self.pt.refine(lam[low], self.ids[low])
 
@@ -127,6 +141,48 @@ def stack_limit_rad(pt: PosedTail, joint: int, phis: np.ndarray, lambda_solid: f
         return np.where(reach > 0, (1.0 - lambda_solid) * pt.kin.length_mm / reach, np.inf)
 
 
+@dataclass(frozen=True)
+class _Plane:
+    """One bending plane's search: the exact and the bounds' limit, the pair beyond it and why it stops."""
+
+    theta_max_rad: float
+    theta_bound_rad: float
+    pair: int  # -1: none
+    clearance_mm: float | None
+    limited_by: str
+
+
+def _plane(test: _Tester, phi: float, t_stack: float, theta_hi_rad: float, tol_rad: float, exact: bool) -> _Plane:
+    """theta_max of one bending plane (see :func:`joint_limits`)."""
+    top = float(min(theta_hi_rad, t_stack))
+    reached = "fold stack" if t_stack <= theta_hi_rad else "search range"
+    if test.bound_ok(top, phi)[0]:
+        return _Plane(top, top, -1, None, reached)
+    lo, hi = _bisect(lambda t: test.bound_ok(t, phi)[0], 0.0, top, tol_rad)
+    th_b = lo
+    if exact:
+        # Free up to the bound's limit for certain; above it, exact distances at EXACT_SAMPLES
+        # evenly spaced bends up to the top, and bisection below the first that fails.
+        for t in np.linspace(lo, top, EXACT_SAMPLES + 1)[1:]:
+            if not test.exact_ok(float(t), phi)[0]:
+                hi = float(t)
+                break
+            lo = float(t)
+        else:
+            hi = lo
+        if hi > lo:
+            lo, hi = _bisect(lambda t: test.exact_ok(t, phi)[0], lo, hi, tol_rad)
+    if hi <= lo:
+        return _Plane(lo, th_b, -1, None, reached)
+    d, p = None, -1
+    if exact:
+        _ok, p, dist = test.exact_ok(hi, phi)
+        d = dist if np.isfinite(dist) else None
+    if p < 0:
+        p = test.bound_ok(hi, phi)[1]
+    return _Plane(lo, th_b, p, d, "clearance")
+
+
 def joint_limits(pt: PosedTail, need_mm: float, n_phi: int = 36, theta_hi_rad: float = 1.0,
                  tol_rad: float = 1e-3, exact: bool = True, stack: tuple[float, float] | None = None,
                  progress: Callable[[str], None] | None = None) -> list[JointLimits]:
@@ -143,50 +199,52 @@ def joint_limits(pt: PosedTail, need_mm: float, n_phi: int = 36, theta_hi_rad: f
         t0 = time.perf_counter()
         test = _Tester(pt, k, need_mm)
         th_stack = stack_limit_rad(pt, k, phis, *stack) if stack else np.full(n_phi, np.inf)
-        th_b, th_x, pairs, at, why = [], [], [], [], []
-        for phi, t_stack in zip(phis, th_stack):
-            top = float(min(theta_hi_rad, t_stack))
-            if test.bound_ok(top, phi)[0]:
-                th_b.append(top)
-                th_x.append(top)
-                pairs.append([])
-                at.append(None)
-                why.append("fold stack" if t_stack <= theta_hi_rad else "search range")
-                continue
-            theta_hi = top
-            lo, hi = _bisect(lambda t: test.bound_ok(t, phi)[0], 0.0, theta_hi, tol_rad)
-            th_b.append(lo)
-            if exact:
-                # Free up to the bound's limit for certain; above it, exact distances at EXACT_SAMPLES
-                # evenly spaced bends up to the top, and bisection below the first that fails.
-                for t in np.linspace(lo, theta_hi, EXACT_SAMPLES + 1)[1:]:
-                    if not test.exact_ok(float(t), phi)[0]:
-                        hi = float(t)
-                        break
-                    lo = float(t)
-                else:
-                    hi = lo
-                if hi > lo:
-                    lo, hi = _bisect(lambda t: test.exact_ok(t, phi)[0], lo, hi, tol_rad)
-            th_x.append(lo)
-            d, p = None, -1
-            if hi > lo:
-                if exact:
-                    _ok, p, dist = test.exact_ok(hi, phi)
-                    d = dist if np.isfinite(dist) else None
-                if p < 0:
-                    p = test.bound_ok(hi, phi)[1]
-                why.append("clearance")
-            else:
-                why.append("fold stack" if t_stack <= theta_hi_rad else "search range")
-            pairs.append([pt.names[pt.pairs[p][0]], pt.names[pt.pairs[p][1]]] if p >= 0 else [])
-            at.append(d)
+        planes = [_plane(test, phi, t_stack, theta_hi_rad, tol_rad, exact) for phi, t_stack in zip(phis, th_stack)]
+        th_x = [pl.theta_max_rad for pl in planes]
+        why = [pl.limited_by for pl in planes]
         say(f"limits j{k + 1}: theta_max {min(th_x):.3f}..{max(th_x):.3f} rad "
             f"({'exact' if exact else 'bounds'}; {why.count('clearance')} of {n_phi} planes limited by clearance, "
             f"{why.count('fold stack')} by the fold stack), {test.exact_calls} exact distances, "
             f"{time.perf_counter() - t0:.1f} s")
         out.append(JointLimits(f"j{k + 1}", [float(v) for v in phis], [float(v) for v in th_x],
-                               [float(v) for v in th_b], pairs, at, why))
+                               [float(pl.theta_bound_rad) for pl in planes],
+                               [[pt.names[pt.pairs[pl.pair][0]], pt.names[pt.pairs[pl.pair][1]]] if pl.pair >= 0
+                                else [] for pl in planes], [pl.clearance_mm for pl in planes], why))
+    return out
+
+
+def lowest_limits_rad(pt: PosedTail, need_mm: float, n_phi: int = 36, theta_hi_rad: float = 1.0,
+                      tol_rad: float = 1e-3, stack: tuple[float, float] | None = None,
+                      progress: Callable[[str], None] | None = None) -> list[float]:
+    """Each joint's lowest theta_max over the planes: ``per_joint_rad(joint_limits(...))`` (exact), with
+    the planes that cannot lower it skipped.
+
+    A plane's search ends within ``tol_rad`` below the top T of its free interval [0, T] (the assumption
+    every sampled limit makes). Once a plane gave ``best``, a plane free at ``best + 2 tol_rad`` has
+    T >= best + 2 tol_rad, so its search would end above ``best``: one exact test instead of its
+    search. The planes are searched tightest first (their stage-1a bound at half the search range), so
+    ``best`` is low early. The planes searched are searched as :func:`joint_limits` searches them: the
+    result is the same number to the last bit (``tests/test_limits.py``)."""
+    say = progress or (lambda _m: None)
+    phis = np.linspace(-np.pi, np.pi, n_phi, endpoint=False)
+    out = []
+    for k in range(pt.kin.n_joints):
+        t0 = time.perf_counter()
+        test = _Tester(pt, k, need_mm)
+        th_stack = stack_limit_rad(pt, k, phis, *stack) if stack else np.full(n_phi, np.inf)
+        rest = pt.rest_mm[test.ids]
+        tight = [float(np.min(test._stretch(_pose(pt, k, 0.5 * theta_hi_rad, phi)) * rest, initial=np.inf))
+                 for phi in phis]
+        best, searched = np.inf, 0
+        for i in sorted(range(n_phi), key=lambda i: (min(theta_hi_rad, th_stack[i]), tight[i], i)):
+            probe = best + 2.0 * tol_rad
+            if probe < min(theta_hi_rad, th_stack[i]) and test.exact_ok(probe, float(phis[i]))[0]:
+                continue
+            best = min(best, _plane(test, float(phis[i]), th_stack[i], theta_hi_rad, tol_rad, True).theta_max_rad)
+            searched += 1
+        say(f"limits j{k + 1}: lowest theta_max {best:.3f} rad ({searched} of {n_phi} planes searched, "
+            f"{time.perf_counter() - t0:.1f} s)")
+        out.append(float(best))
     return out
 
 
@@ -211,7 +269,10 @@ def per_joint_rad(limits: list[JointLimits]) -> list[float]:
 
 
 def theta_max_per_joint_rad(asm, progress: Callable[[str], None] | None = None) -> list[float]:
-    """:func:`per_joint_rad` of :func:`build_joint_limits` of ``asm``."""
+    """:func:`per_joint_rad` of :func:`build_joint_limits` of ``asm``, found by :func:`lowest_limits_rad`
+    (the same numbers, a fraction of the search)."""
     from .clearance import posed_tail
 
-    return per_joint_rad(build_joint_limits(posed_tail(asm, progress), asm.spec, progress))
+    spec = asm.spec
+    return lowest_limits_rad(posed_tail(asm, progress), spec.analysis.min_clearance_mm, BUILD_LIMIT_PHIS,
+                             THETA_SEARCH_MAX_RAD, LIMIT_RESOLUTION_RAD, fold_stack(spec), progress)

@@ -14,7 +14,6 @@ Layout (paths relative to the export root, as SPEC section 7 names them):
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -28,6 +27,7 @@ from ..parts.mold import MoldPart, MoldSet
 from ..parts._kernel import mesh_arrays
 from ..colors import rgb
 from .cad import write_step, write_stl
+from .render import offscreen_pyvista
 
 #: Mold meshes (relative to each edge's size): fine enough that the cavity (closed mold minus channels) and
 #: the cast agree far inside the 0.5 % the cavity check allows.
@@ -52,12 +52,7 @@ def _step(part: MoldPart, path: Path) -> None:
 def _render_exploded(molds: MoldSet, path: Path) -> None:
     """Exploded view: every rigid part moved out along its pull direction,
     the core in place with the cast (translucent) around it."""
-    os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
-    import pyvista as pv
-    import vtk
-
-    vtk.vtkLogger.SetStderrVerbosity(vtk.vtkLogger.VERBOSITY_OFF)
-    pv.OFF_SCREEN = True
+    pv = offscreen_pyvista()
 
     def poly(solid: bd.Shape, offset: np.ndarray) -> Any:
         v, tris = mesh_arrays(solid, 0.05, 0.3)

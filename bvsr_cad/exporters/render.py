@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +15,8 @@ from ..colors import rgb
 from ..parts._kernel import mesh_arrays
 
 
-def _pyvista():
+def offscreen_pyvista():
+    """pyvista, set to draw off-screen (no display needed)."""
     os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
     import pyvista as pv
     import vtk
@@ -21,6 +24,21 @@ def _pyvista():
     vtk.vtkLogger.SetStderrVerbosity(vtk.vtkLogger.VERBOSITY_OFF)  # no "bad X server" noise without a display
     pv.OFF_SCREEN = True
     return pv
+
+
+
+@contextmanager
+def composing(plotter) -> Iterator[None]:
+    """Set up a scene without drawing it: once a plotter has drawn a frame, pyvista draws another at every
+    actor added and every camera move (five frames per picture of the report's parts, 36 ms each in
+    software OpenGL), and its screenshot reads the last frame drawn. The block ends with the one frame
+    the picture needs (before a plotter's first frame pyvista draws nothing, and its screenshot draws)."""
+    plotter.suppress_rendering = True
+    try:
+        yield
+    finally:
+        plotter.suppress_rendering = False
+    plotter.render()
 
 
 def _polydata(pv, vertices: np.ndarray, faces: np.ndarray):
@@ -34,7 +52,7 @@ def _tessellate(solid, tolerance_mm: float = 0.05):
 
 def render_previews(asm: Assembly, root: Path) -> dict[str, str]:
     """Write ``previews/assembly.png`` and ``previews/parts.png``; returns their paths."""
-    pv = _pyvista()
+    pv = offscreen_pyvista()
     out = root / "previews"
     out.mkdir(exist_ok=True)
     meshes = {name: _tessellate(p.solid) for name, p in asm.parts.items()}

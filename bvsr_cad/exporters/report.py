@@ -20,7 +20,6 @@ from __future__ import annotations
 import html
 import json
 import math
-import os
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +29,7 @@ import trimesh
 from ..cache import ArtifactCache, file_sha256, object_stage, stage_key
 from ..colors import rgb
 from ..parameters import paper
+from .render import composing, offscreen_pyvista
 
 
 _MODEL = "the Eq 6-12 model predicts it: see Model against measurements (and `bvsr simulate` in MuJoCo)"
@@ -86,16 +86,6 @@ def _num(v: Any, digits: int = 4) -> str:
     return _e(v)
 
 
-def _pyvista():
-    os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
-    import pyvista as pv
-    import vtk
-
-    vtk.vtkLogger.SetStderrVerbosity(vtk.vtkLogger.VERBOSITY_OFF)
-    pv.OFF_SCREEN = True
-    return pv
-
-
 def _poly(pv, mesh: trimesh.Trimesh):
     cells = np.hstack([np.full((len(mesh.faces), 1), 3), mesh.faces]).astype(np.int64).ravel()
     return pv.PolyData(np.asarray(mesh.vertices, float), cells)
@@ -109,24 +99,25 @@ RIGID_PICTURE = "report/rigid_tail.png"
 def _render_parts(root: Path, items: list[tuple[str, str, str]], dst: Path) -> dict[str, str]:
     """One small picture per STL of ``root`` (print orientation, the bed drawn as a grid), written
     under ``dst`` (the export, or a cache entry); returns name -> path in the export."""
-    pv = _pyvista()
+    pv = offscreen_pyvista()
     out = dst / PART_PICTURES
     out.mkdir(parents=True, exist_ok=True)
     pics: dict[str, str] = {}
     plotter = pv.Plotter(off_screen=True, window_size=(360, 300))
     for name, rel, kind in items:
         mesh = trimesh.load(root / rel, file_type="stl", force="mesh")
-        plotter.clear()
-        plotter.add_mesh(_poly(pv, mesh), color=rgb(kind), smooth_shading=False)
-        lo, hi = mesh.bounds
-        size = float(max(hi[0] - lo[0], hi[1] - lo[1])) * 1.3
-        bed = pv.Plane(center=((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, 0.0), direction=(0, 0, 1),
-                       i_size=size, j_size=size, i_resolution=8, j_resolution=8)
-        plotter.add_mesh(bed, color=(0.85, 0.85, 0.85), style="wireframe", line_width=1)
-        plotter.view_isometric()
-        plotter.reset_camera()
-        plotter.add_text(f"{name}  {hi[0] - lo[0]:.0f} x {hi[1] - lo[1]:.0f} x {hi[2] - lo[2]:.0f} mm",
-                         font_size=8)
+        with composing(plotter):
+            plotter.clear()
+            plotter.add_mesh(_poly(pv, mesh), color=rgb(kind), smooth_shading=False)
+            lo, hi = mesh.bounds
+            size = float(max(hi[0] - lo[0], hi[1] - lo[1])) * 1.3
+            bed = pv.Plane(center=((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, 0.0), direction=(0, 0, 1),
+                           i_size=size, j_size=size, i_resolution=8, j_resolution=8)
+            plotter.add_mesh(bed, color=(0.85, 0.85, 0.85), style="wireframe", line_width=1)
+            plotter.view_isometric()
+            plotter.reset_camera()
+            plotter.add_text(f"{name}  {hi[0] - lo[0]:.0f} x {hi[1] - lo[1]:.0f} x {hi[2] - lo[2]:.0f} mm",
+                             font_size=8)
         plotter.screenshot(str(out / f"{name}.png"))
         pics[name] = f"{PART_PICTURES}/{name}.png"
     plotter.close()
@@ -139,7 +130,7 @@ def _rigid_pieces(manifest: dict[str, Any]) -> list[dict[str, Any]]:
 
 def _render_rigid(root: Path, manifest: dict[str, Any], dst: Path) -> str:
     """The rigid twin assembled beside an exploded stack of its pieces (written under ``dst``)."""
-    pv = _pyvista()
+    pv = offscreen_pyvista()
     plotter = pv.Plotter(off_screen=True, window_size=(1200, 560), shape=(1, 2))
     pieces = _rigid_pieces(manifest)
     for col, gap in ((0, 0.0), (1, 18.0)):

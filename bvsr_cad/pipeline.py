@@ -29,7 +29,7 @@ from .assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs
 from .assembly.robot import robot_model
 from .cache import ArtifactCache, copy_tree, object_stage, spec_without, stage_key
 from .checks.result import CheckResult
-from .checks.run import run_checks
+from .checks.run import Checks
 from .exporters.analysis_files import write_analyses
 from .exporters.cad import write_assembly_step, write_part_step, write_part_stl
 from .exporters.drawings import stamp_drawings, write_drawing_sheets
@@ -38,7 +38,7 @@ from .exporters.mold_files import molds_manifest, write_mold_files
 from .exporters.fabrication_files import write_fabrication, write_rigid_files
 from .exporters.render import render_previews
 from .checks.printability import environment_state
-from .exporters.report import write_report
+from .exporters.report import report_pictures, write_report
 from .exporters.reproducible import make_reproducible
 from .exporters.robot_files import write_robot
 from .exporters.viewer import write_viewer
@@ -225,6 +225,7 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
     _claim(tmp)
     analyses = None
+    checks: Checks | None = None
     try:
         hit = cache.get(export_key) if cache else None
         if hit is not None:
@@ -333,7 +334,25 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
                                         [trimesh.Trimesh(v, f, process=False) for v, f in visual], mold_set, files,
                                         mold_files, tmp, say, cache)
         manifest["parts"] += fabrication.pop("rigid_parts")
+        manifest.update(molds)
+        manifest.update(fabrication)
         log.record("print jobs, BOM", False, time.perf_counter() - t)
+        # What reads only the CAD files goes on while the analyses finish: the checks of the meshes, the
+        # molds and the print files (on the manifest so far), the 3D view and the report's pictures.
+        t = time.perf_counter()
+        write_manifest(tmp, manifest)
+        make_reproducible(tmp)  # the files the early checks hash are the published ones
+        say("checks of the CAD files")
+        checks = Checks.start(tmp, say, cache=cache)
+        checks_s = time.perf_counter() - t
+        t = time.perf_counter()
+        say("interactive 3D view")
+        manifest.update(write_viewer(tmp, viewer_scenes(asm, mold_view, twin_view, progress=say)))
+        log.record("interactive 3D view", False, time.perf_counter() - t)
+        t = time.perf_counter()
+        say("report pictures")
+        pictures = report_pictures(tmp, manifest, cache)
+        pictures_s = time.perf_counter() - t
         t = time.perf_counter()
         if cached_analyses is not None:
             with (cached_analyses / "analyses.pkl").open("rb") as fh:
@@ -356,24 +375,18 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         say("robot model (B-rep inertials)")
         robot = robot_model(asm, results.theta_max_per_joint())
         manifest.update(write_robot(robot, tmp, say, spec.cart))
-        manifest.update(molds)
-        manifest.update(fabrication)
         write_manifest(tmp, manifest)
         make_reproducible(tmp)  # STEP and 3MF time stamps: the build time is in the manifest's volatile section
         log.record("analysis files and robot descriptions", False, time.perf_counter() - t)
         t = time.perf_counter()
         say("checks")
-        results = run_checks(tmp, say, cache=cache)
+        results = checks.finish()
         manifest["checks"] = [r.to_json() for r in results]
-        log.record("checks", False, time.perf_counter() - t)
-        t = time.perf_counter()
-        say("interactive 3D view")
-        manifest.update(write_viewer(tmp, viewer_scenes(asm, mold_view, twin_view, progress=say)))
-        log.record("interactive 3D view", False, time.perf_counter() - t)
+        log.record("checks", False, checks_s + time.perf_counter() - t)
         t = time.perf_counter()
         say("report")
-        manifest.update(write_report(tmp, manifest, cache))
-        log.record("report", False, time.perf_counter() - t)
+        manifest.update(write_report(tmp, manifest, cache, pictures))
+        log.record("report", False, pictures_s + time.perf_counter() - t)
         manifest["volatile"] = _volatile(t0, log)
         write_manifest(tmp, manifest)
         if cache is not None:
@@ -382,6 +395,8 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
     except BaseException:
         if analyses is not None:
             analyses.close()
+        if checks is not None:
+            checks.close()
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return BuildResult(out, results, time.perf_counter() - t0, log.stages)

@@ -226,3 +226,19 @@ def test_the_page_draws_the_scene_in_headless_chromium(export, scene, tmp_path):
     title = next(s["title"] for s in export["manifest"]["viewer"]["scenes"] if s["name"] == scene)
     assert info and title in info.group(1) and "triangles" in info.group(1), dom.stdout[-2000:]
     assert re.search(rf'class="active" data-scene="{scene}"|data-scene="{scene}" class="active"', dom.stdout)
+
+
+def test_tail_scene_meshes_do_not_depend_on_earlier_tessellations(built):
+    """OCCT keeps the finest triangulation a solid was given; the tail's scene meshes a copy, so a build
+    that took the part files from its cache (no 0.01 mm STL meshing) shows the same scene as a cold one."""
+    from bvsr_cad.analysis.poses import _tail_meshes
+    from bvsr_cad.parts._kernel import mesh_arrays
+
+    asm = built["asm"]
+    before = _tail_meshes(asm)
+    for part in asm.parts.values():
+        mesh_arrays(part.solid, 0.005, 0.05)
+    after = _tail_meshes(asm)
+    for name, m in before.items():
+        np.testing.assert_array_equal(m.vertices, after[name].vertices)
+        np.testing.assert_array_equal(m.faces, after[name].faces)

@@ -138,6 +138,14 @@ def _mesh(solid: bd.Shape) -> trimesh.Trimesh:
     return trimesh.Trimesh(*mesh_arrays(solid, TOLERANCE_MM, ANGULAR_TOLERANCE_RAD), process=True)
 
 
+def _fresh_mesh(solid: bd.Shape) -> trimesh.Trimesh:
+    """:func:`_mesh` of a copy without the triangulation earlier stages left on ``solid`` (OCCT keeps a
+    finer one): the scene is the same whichever stages a build took from its cache."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
+
+    return _mesh(type(solid)(BRepBuilderAPI_Copy(solid.wrapped, True, False).Shape()))
+
+
 def _sliced(m: trimesh.Trimesh) -> trimesh.Trimesh:
     """``m`` with every triangle split at planes z = const every BENDING_SLICE_MM or less (part frame)."""
     lo, hi = m.bounds[:, 2]
@@ -162,9 +170,9 @@ def _tail_meshes(asm: Assembly) -> dict[str, trimesh.Trimesh]:
         if part.kind == "rod":  # rings along the axis, as the clearance analysis meshes it
             out[name] = _rod_mesh(part.info["diameter_mm"], part.info["cut_length_mm"], ROD_SECTIONS)
         elif part.kind == "soa":
-            out[name] = _sliced(_mesh(part.solid))
+            out[name] = _sliced(_fresh_mesh(part.solid))
         else:
-            out[name] = _mesh(part.solid)
+            out[name] = _fresh_mesh(part.solid)
     return out
 
 

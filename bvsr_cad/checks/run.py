@@ -57,6 +57,103 @@ class _Printability:
             self.proc.close()
 
 
+#: The manifest sections the printability checks read (besides the files they name).
+PRINTABILITY_READS = ("parts", "print_jobs", "fabrication", "assembly", "rigid_tail")
+
+
+def _printability_reads(exp: Export) -> str:
+    return json.dumps({k: exp.manifest.get(k) for k in PRINTABILITY_READS}, sort_keys=True)
+
+
+class Checks:
+    """Every check on an export, in two steps: :meth:`start` runs the groups that read only the CAD
+    files (the part meshes, the molds, and the printability checks in a second process), so that a build
+    can run them before its analyses are in; :meth:`finish` runs the rest on the export as it is then
+    and returns every result in one order. A group started early whose reads (files, manifest values)
+    changed since is run again: the results are what one run on the final export gives."""
+
+    def __init__(self, root: str | Path, progress: Callable[[str], None] | None = None, *,
+                 run_slicer: bool = False, parallel: bool = True, cache: ArtifactCache | None = None):
+        self.root, self.say, self.cache = root, progress or (lambda _m: None), cache
+        self.parallel = parallel
+        self.sliced_now: dict = {}
+        self._mesh: dict[str, tuple[tuple, list[CheckResult]]] = {}
+        self._molds: tuple[tuple, list[CheckResult]] | None = None
+        self._printability: _Printability | None = None
+        self._printability_reads = ""
+        exp = Export.open(root)
+        if run_slicer:
+            self.sliced_now = slice_stls(exp, progress=self.say)
+        self._exp = exp
+
+    @classmethod
+    def start(cls, root: str | Path, progress: Callable[[str], None] | None = None, **kw) -> "Checks":
+        """Open the export, start the printability checks and run the part meshes' and the molds'."""
+        run = cls(root, progress, **kw)
+        exp, say = run._exp, run.say
+        memo = CheckMemo(exp, run.cache)
+        run._printability = _Printability(exp, run.sliced_now, say, run.parallel, memo)
+        run._printability_reads = _printability_reads(exp)
+        try:
+            for part in exp.parts:
+                say(f"mesh {part['name']}")
+                reads = part_mesh_reads(part)
+                run._mesh[part["name"]] = (reads, memo("part_mesh", reads, lambda: check_part_mesh(exp, part)))
+            say("molds")
+            reads = molds_reads(exp)
+            run._molds = (reads, memo("molds", reads, lambda: check_molds(exp)))
+        except BaseException:
+            run.close()
+            raise
+        return run
+
+    def finish(self) -> list[CheckResult]:
+        """Every result, in the order of :func:`run_checks`."""
+        say = self.say
+        exp = Export.open(self.root)  # the export as it is now (the manifest may have grown)
+        memo = CheckMemo(exp, self.cache)
+        try:
+            results: list[CheckResult] = []
+            for part in exp.parts:
+                reads = part_mesh_reads(part)
+                early = self._mesh.get(part["name"])
+                if early is None or early[0] != reads:
+                    say(f"mesh {part['name']}")
+                    early = (reads, memo("part_mesh", reads, lambda: check_part_mesh(exp, part)))
+                results.extend(early[1])
+            say("masses")
+            results.extend(check_masses(exp))
+            say("pentagon layout")
+            results.extend(check_layout(exp))
+            results.extend(check_paper(exp))
+            say("analyses")
+            results.extend(check_analyses(exp))
+            say("robot descriptions (URDF, MJCF, MuJoCo, PyBullet)")
+            results.extend(check_robot(exp))
+            printability = self._printability
+            if printability is None or self._printability_reads != _printability_reads(exp):
+                if printability is not None:
+                    printability.close()
+                printability = self._printability = _Printability(exp, self.sliced_now, say, False, memo)
+            results.extend(printability.results())
+            reads = molds_reads(exp)
+            if self._molds is None or self._molds[0] != reads:
+                say("molds")
+                self._molds = (reads, memo("molds", reads, lambda: check_molds(exp)))
+            results.extend(self._molds[1])
+        finally:
+            self.close()
+        if self.cache is not None:
+            self.cache.evict()  # once, after the groups' small entries
+        return results
+
+    def close(self) -> None:
+        """Stop the printability process if it still runs (a failed build) and drop the loaded meshes."""
+        if self._printability is not None:
+            self._printability.close()
+        clear_cache()
+
+
 def run_checks(root: str | Path, progress: Callable[[str], None] | None = None, *,
                run_slicer: bool = False, parallel: bool = True, cache: ArtifactCache | None = None
                ) -> list[CheckResult]:
@@ -73,42 +170,7 @@ def run_checks(root: str | Path, progress: Callable[[str], None] | None = None, 
         ExportError: the folder is not a readable export.
         SlicerMissingError: ``run_slicer`` and PrusaSlicer is not installed.
     """
-    say = progress or (lambda _m: None)
-    exp = Export.open(root)
-    sliced_now: dict = {}
-    if run_slicer:
-        sliced_now = slice_stls(exp, progress=say)
-    memo = CheckMemo(exp, cache)
-    printability = _Printability(exp, sliced_now, say, parallel, memo)
-    try:
-        results: list[CheckResult] = []
-        for part in exp.parts:
-            say(f"mesh {part['name']}")
-            results.extend(memo("part_mesh", part_mesh_reads(part), lambda: check_part_mesh(exp, part)))
-        say("masses")
-        results.extend(check_masses(exp))
-        say("pentagon layout")
-        results.extend(check_layout(exp))
-        results.extend(check_paper(exp))
-        say("analyses")
-        results.extend(check_analyses(exp))
-        say("robot descriptions (URDF, MJCF, MuJoCo, PyBullet)")
-        results.extend(check_robot(exp))
-        if printability.proc is None:  # in-process: in its usual place, before the molds
-            results.extend(printability.results())
-            say("molds")
-            results.extend(memo("molds", molds_reads(exp), lambda: check_molds(exp)))
-        else:
-            say("molds")
-            molds = memo("molds", molds_reads(exp), lambda: check_molds(exp))
-            results.extend(printability.results())
-            results.extend(molds)
-    finally:
-        printability.close()
-        clear_cache()
-    if cache is not None:
-        cache.evict()  # once, after the groups' small entries
-    return results
+    return Checks.start(root, progress, run_slicer=run_slicer, parallel=parallel, cache=cache).finish()
 
 
 if __name__ == "__main__":

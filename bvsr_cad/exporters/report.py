@@ -20,6 +20,7 @@ from __future__ import annotations
 import html
 import json
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -348,8 +349,18 @@ def drawings_section(manifest: dict[str, Any]) -> str:
             f"<th>sha256</th></tr>{rows}</table>")
 
 
-def write_report(root: Path, manifest: dict[str, Any], cache: ArtifactCache | None = None) -> dict[str, Any]:
-    """Write ``report.html`` and its pictures (``report/``) under ``root``; returns the manifest's ``report``.
+@dataclass(frozen=True)
+class ReportPictures:
+    """The report's pictures, written under ``report/`` (:func:`report_pictures`)."""
+
+    parts: dict[str, str]  # part name -> picture
+    rigid: str | None
+    problems: list[str]  # what failed to render
+
+
+def report_pictures(root: Path, manifest: dict[str, Any], cache: ArtifactCache | None = None) -> ReportPictures:
+    """Draw the report's pictures of the print files and the rigid twin under ``root``: they read the
+    manifest's parts, print jobs and twin and the STLs, so a build draws them before its analyses are in.
 
     With ``cache`` the pictures are cached stages keyed by what they draw: the STLs' bytes, the names
     and kinds (the parts sheet), the pieces' placements (the twin)."""
@@ -372,7 +383,16 @@ def write_report(root: Path, manifest: dict[str, Any], cache: ArtifactCache | No
                                         lambda dst: _render_rigid(root, manifest, dst), root)
         except Exception as exc:
             problems.append(f"rigid tail render failed: {exc}")
+    return ReportPictures(part_pics, rigid_pic, problems)
 
+
+def write_report(root: Path, manifest: dict[str, Any], cache: ArtifactCache | None = None,
+                 pictures: ReportPictures | None = None) -> dict[str, Any]:
+    """Write ``report.html`` and its pictures (``report/``; ``pictures``: drawn already by
+    :func:`report_pictures`) under ``root``; returns the manifest's ``report``."""
+    if pictures is None:
+        pictures = report_pictures(root, manifest, cache)
+    part_pics, rigid_pic, problems = pictures.parts, pictures.rigid, list(pictures.problems)
     checks = manifest.get("checks", [])
     n_fail = sum(1 for c in checks if c["passed"] is False)
     n_pass = sum(1 for c in checks if c["passed"] is True)

@@ -39,6 +39,7 @@ from ..parts._kernel import location, mesh_arrays
 from ..parts.rigid_tail import KEPT_ROLES, RigidPiece
 from .bom import bom_rows, write_bom
 from .cad import write_step, write_stl
+from .reproducible import write_reproducible_3mf
 from .xml import num as _f
 from .xml import vec as _vec
 
@@ -194,7 +195,7 @@ def _layout_3mf(items: list[tuple[str, Path]], path: Path) -> None:
         scene.add_geometry(mesh, node_name=name, geom_name=name, transform=t)
         x += w + PLATE_GAP_MM
         row_depth = max(row_depth, d)
-    path.write_bytes(scene.export(file_type="3mf"))
+    write_reproducible_3mf(scene, path)
 
 
 def _print_jobs(asm: Assembly, root: Path, items: list[MadeItem], stl_of: dict[str, str],

@@ -57,24 +57,45 @@ def _fixed_uuids(name: str, data: bytes) -> bytes:
                      .encode() + m.group(2), data)
 
 
-def fix_zip(path: Path) -> bool:
-    with zipfile.ZipFile(path) as zin:
-        entries = [(info, zin.read(info.filename)) for info in zin.infolist()]
-    entries = [(info, _fixed_uuids(f"{path.name}/{info.filename}", data) if info.filename.endswith(".model")
-                else data) for info, data in entries]
-    with zipfile.ZipFile(path) as zin:
-        same = all(info.date_time == FIXED_ZIP_TIME and data == zin.read(info.filename) for info, data in entries)
-    if same:
-        return False
+def _fixed_entries(name: str, zin: zipfile.ZipFile) -> tuple[list[tuple[zipfile.ZipInfo, bytes]], bool]:
+    """The zip's entries with fixed UUIDs, and whether they and the dates were fixed already."""
+    entries, same = [], True
+    for info in zin.infolist():
+        data = zin.read(info.filename)
+        fixed = _fixed_uuids(f"{name}/{info.filename}", data) if info.filename.endswith(".model") else data
+        same = same and info.date_time == FIXED_ZIP_TIME and fixed == data
+        entries.append((info, fixed))
+    return entries, same
+
+
+def _write_zip(path: Path, entries: list[tuple[zipfile.ZipInfo, bytes]], compress_type: int | None = None) -> None:
     tmp = path.with_name(path.name + ".tmp")
     with zipfile.ZipFile(tmp, "w") as zout:
         for info, data in entries:
             fixed = zipfile.ZipInfo(info.filename, date_time=FIXED_ZIP_TIME)
-            fixed.compress_type = info.compress_type
+            fixed.compress_type = info.compress_type if compress_type is None else compress_type
             fixed.external_attr = info.external_attr
             zout.writestr(fixed, data)
     tmp.replace(path)
+
+
+def fix_zip(path: Path) -> bool:
+    with zipfile.ZipFile(path) as zin:
+        entries, same = _fixed_entries(path.name, zin)
+    if same:
+        return False
+    _write_zip(path, entries)
     return True
+
+
+def write_reproducible_3mf(scene, path: Path) -> None:
+    """A trimesh scene as a 3MF file as :func:`fix_zip` leaves it (fixed dates and UUIDs, deflated),
+    compressed once: trimesh writes it stored, not deflated, and only the fixed entries are compressed."""
+    import io
+
+    with zipfile.ZipFile(io.BytesIO(scene.export(file_type="3mf", compression=zipfile.ZIP_STORED))) as zin:
+        entries, _same = _fixed_entries(path.name, zin)
+    _write_zip(path, entries, zipfile.ZIP_DEFLATED)
 
 
 def make_reproducible(root: Path) -> dict[str, int]:
@@ -84,4 +105,4 @@ def make_reproducible(root: Path) -> dict[str, int]:
     return {"step": steps, "3mf": zips}
 
 
-__all__ = ["make_reproducible", "fix_step", "fix_zip", "FIXED_STEP_TIME"]
+__all__ = ["make_reproducible", "fix_step", "fix_zip", "write_reproducible_3mf", "FIXED_STEP_TIME"]

@@ -30,6 +30,7 @@ exported model keeps working in plain MuJoCo.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -152,6 +153,7 @@ def fill_curve(supply: LineSupply, seconds: float, samples: int = 2000) -> tuple
     return sol.t, sol.y[0] - supply.atmospheric_pa
 
 
+@functools.lru_cache(maxsize=256)  # a robot model asks per line; the lines of a segment often match
 def first_order_time_constant_s(supply: LineSupply) -> float:
     """The lag tau of p' = (P0 - p) / tau fitted to the supply filling its SOAs at rest: least squares
     of P0 (1 - exp(-t / tau)) against the fill curve up to 95 % of P0 (the MJCF actuators' ``dynprm``)."""

@@ -55,9 +55,18 @@ def _print_results(results, as_json: bool, extra: dict | None = None) -> int:
 
 
 def cmd_build(args) -> int:
-    from .pipeline import build_export
+    say = _progress(args.quiet or args.json)
+    from .worker import SecondProcess
 
-    res = build_export(args.params, args.output, _progress(args.quiet or args.json), use_cache=not args.no_cache)
+    # The analyses' second process imports its modules beside this process's imports of the pipeline.
+    standby = SecondProcess.standby("bvsr_cad.pipeline", say)
+    try:
+        from .pipeline import build_export
+    except BaseException:
+        if standby is not None:
+            standby.close()
+        raise
+    res = build_export(args.params, args.output, say, use_cache=not args.no_cache, standby=standby)
     failed = [r for r in res.results if r.passed is False]
     summary = {"out": str(res.out_dir), "seconds": round(res.seconds, 2),
                "passed": not failed, "failed_checks": [r.name for r in failed], "stages": res.stages}

@@ -198,17 +198,30 @@ def _data_bytes(spec, params: Path) -> bytes:
 
 
 def build_export(params: str | Path, out_dir: str | Path | None = None,
-                 progress: Progress | None = None, use_cache: bool = True) -> BuildResult:
+                 progress: Progress | None = None, use_cache: bool = True,
+                 standby: SecondProcess | None = None) -> BuildResult:
     """Build every part of the tail described by ``params`` into ``out_dir``.
 
     With ``use_cache`` the stages whose inputs are unchanged are taken from the artifact cache
     (:mod:`bvsr_cad.cache`): the whole export, the analyses, the parts' files and previews.
+    ``standby``: the analyses' second process started ahead (``SecondProcess.standby("bvsr_cad.pipeline")``,
+    as the command line does before it imports this module, so that the two import side by side), given
+    its work here if the analyses are to be run, else stopped.
 
     Raises:
         ParamError: the parameter file is unreadable or describes an impossible tail.
         OutputError: ``out_dir`` cannot be replaced.
         GeometryError: the CAD kernel failed.
     """
+    try:
+        return _build_export(params, out_dir, progress, use_cache, standby)
+    finally:
+        if standby is not None:
+            standby.close()  # a no-op once it gave its result; stops one given no work
+
+
+def _build_export(params: str | Path, out_dir: str | Path | None, progress: Progress | None, use_cache: bool,
+                  standby: SecondProcess | None) -> BuildResult:
     say = progress or (lambda _m: None)
     t0 = time.perf_counter()
     params = Path(params)
@@ -254,8 +267,10 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         if cached_analyses is None:
             # The analyses (workspace, clearance, limits) need only the parameters: a second process
             # runs them from the file while this one builds, exports and fabricates.
-            analyses = SecondProcess.start("bvsr_cad.pipeline", [str(params.resolve()), params_sha256(params), str(
-                geometry_hit / GEOMETRY_FILE) if geometry_hit is not None else ""], tmp, say)
+            work = [str(params.resolve()), params_sha256(params),
+                    str(geometry_hit / GEOMETRY_FILE) if geometry_hit is not None else ""]
+            analyses = (standby if standby is not None and standby.begin(work, tmp)
+                        else SecondProcess.start("bvsr_cad.pipeline", work, tmp, say))
             if analyses is not None:
                 say("analyses: started in a second process")
         t = time.perf_counter()
@@ -341,7 +356,8 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         # molds and the print files (on the manifest so far), the 3D view and the report's pictures.
         t = time.perf_counter()
         write_manifest(tmp, manifest)
-        make_reproducible(tmp)  # the files the early checks hash are the published ones
+        fixed: set[Path] = set()
+        make_reproducible(tmp, fixed)  # the files the early checks hash are the published ones
         say("checks of the CAD files")
         checks = Checks.start(tmp, say, cache=cache)
         checks_s = time.perf_counter() - t
@@ -376,7 +392,9 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         robot = robot_model(asm, results.theta_max_per_joint())
         manifest.update(write_robot(robot, tmp, say, spec.cart))
         write_manifest(tmp, manifest)
-        make_reproducible(tmp)  # STEP and 3MF time stamps: the build time is in the manifest's volatile section
+        # STEP and 3MF time stamps (the build time is in the manifest's volatile section), of the files
+        # written since the first go.
+        make_reproducible(tmp, fixed)
         log.record("analysis files and robot descriptions", False, time.perf_counter() - t)
         t = time.perf_counter()
         say("checks")

@@ -237,13 +237,14 @@ def protocol_model(asm: Assembly, spec: TailSpec, theta_max_rad: list[float], ti
 
     Its geoms are mass-less (every body's inertia is explicit) and, in this scene of the tail alone,
     collide with nothing (no geom has a non-zero ``conaffinity``, the scene declares no contact pair):
-    they are dropped (unless ``keep_geoms``), so each step skips their kinematics and the collision
+    unless ``keep_geoms``, the robot model is made without its collision shapes (their fits are most
+    of its making) and any geom left is dropped, so each step skips their kinematics and the collision
     pass. The run is the same either way (``tests/test_workspace_protocol.py`` compares the two)."""
     import mujoco
 
     with_values = dataclasses.replace(asm, spec=spec)
     with_values._properties.update(asm._properties)  # same geometry: its mass properties carry over
-    robot = robot_model(with_values, theta_max_rad)
+    robot = robot_model(with_values, theta_max_rad, collisions=keep_geoms)
     tree, _ = mjcf_tree(robot, _UnwrittenMeshes(), per_segment=False)
     root = tree.getroot()
     _without_meshes(root)
@@ -252,7 +253,7 @@ def protocol_model(asm: Assembly, spec: TailSpec, theta_max_rad: list[float], ti
         sensor = ET.SubElement(root, "sensor")
     ET.SubElement(sensor, "framepos", name="protocol_tip", objtype="xbody", objname=tip_body)
     m = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
-    if not keep_geoms and not m.geom_conaffinity.any() and m.npair == 0 and m.nexclude == 0:
+    if not keep_geoms and m.ngeom and not m.geom_conaffinity.any() and m.npair == 0 and m.nexclude == 0:
         _drop(root, lambda _parent, child: child.tag == "geom")
         m = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
     return m, robot

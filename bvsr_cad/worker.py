@@ -16,6 +16,7 @@ with :meth:`SecondProcess.result` and always :meth:`SecondProcess.close`\\ s it
 
 from __future__ import annotations
 
+import json
 import os
 import pickle
 import subprocess
@@ -60,11 +61,24 @@ def _die_with_parent() -> None:
         os._exit(1)
 
 
+#: The first argument of a child started by :meth:`SecondProcess.standby`: its work comes on stdin.
+STANDBY = "--standby"
+
+
 def serve(_out: str, fn: Callable[..., Any], *args: Any) -> int:
     """Run ``fn(*args)`` and pickle its result, or its exception, onto stdout (the child's side).
 
-    ``_out`` is the placeholder argument the parent passes (``-``)."""
+    ``_out`` is the placeholder argument the parent passes (``-``), or :data:`STANDBY`: then the child,
+    its modules imported, waits for one JSON line on stdin, ``{"args": [...], "cwd": ...}``, and exits
+    quietly at end of input (the parent did not need it)."""
     _die_with_parent()
+    if _out == STANDBY:
+        line = sys.stdin.readline()
+        if not line.strip():
+            return 0
+        work = json.loads(line)
+        os.chdir(work["cwd"])
+        args = tuple(work["args"])
     result_fd = os.dup(1)
     os.dup2(2, 1)  # stray prints (a library's banner) must not corrupt the pickle
     sys.stdout = sys.stderr
@@ -105,14 +119,15 @@ class SecondProcess:
 
     @classmethod
     def start(cls, module: str, args: list[str], cwd: Path,
-              progress: Callable[[str], None] | None = None) -> "SecondProcess | None":
+              progress: Callable[[str], None] | None = None, standby: bool = False) -> "SecondProcess | None":
         """``python -m module - *args`` in ``cwd``; each line of its stderr goes to ``progress``
-        (from a reader thread) or, without it, nowhere."""
+        (from a reader thread) or, without it, nowhere. ``standby``: see :meth:`standby`."""
         if (os.cpu_count() or 1) < 2:
             return None
         try:
-            proc = subprocess.Popen([sys.executable, "-m", module, "-", *args], cwd=cwd, env=child_env(),
-                                    stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+            proc = subprocess.Popen([sys.executable, "-m", module, STANDBY if standby else "-", *args], cwd=cwd,
+                                    env=child_env(), stdin=subprocess.PIPE if standby else subprocess.DEVNULL,
+                                    stdout=subprocess.PIPE,
                                     stderr=subprocess.DEVNULL if progress is None else subprocess.PIPE)
         except OSError:
             return None
@@ -125,6 +140,26 @@ class SecondProcess:
 
             threading.Thread(target=relay, daemon=True).start()
         return cls(proc)
+
+    @classmethod
+    def standby(cls, module: str, progress: Callable[[str], None] | None = None) -> "SecondProcess | None":
+        """``python -m module --standby``: a child that imports its modules now, while this process
+        imports its own, and waits for its work (:meth:`begin`); ``None`` where :meth:`start` would
+        give none. A child never given work exits when it is :meth:`close`\\ d."""
+        proc = cls.start(module, [], Path.cwd(), progress, standby=True)
+        return proc
+
+    def begin(self, args: list[str], cwd: Path) -> bool:
+        """Hand a standby child its arguments and working folder; False if it is gone (then start another)."""
+        if not self.running or self.proc is None or self.proc.stdin is None:
+            return False
+        try:
+            self.proc.stdin.write((json.dumps({"args": list(args), "cwd": str(cwd)}) + "\n").encode())
+            self.proc.stdin.close()
+        except OSError:
+            return False
+        self.t0 = time.perf_counter()
+        return True
 
     @property
     def running(self) -> bool:
@@ -158,6 +193,8 @@ class SecondProcess:
             if self.proc.poll() is None:
                 self.proc.terminate()
                 self.proc.wait()
+            if self.proc.stdin is not None and not self.proc.stdin.closed:
+                self.proc.stdin.close()
             self.proc = None
 
 

@@ -178,3 +178,24 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
     assert worker.result_or(lost, lambda: {"analysis": "computed here"}, said.append, "analyses") == {
         "analysis": "computed here"}
     assert any("without a result; running them here" in m for m in said), said
+
+
+def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path):
+    """`bvsr build` starts the analyses' process before it imports the pipeline: given its work it
+    answers as a process started with it; closed without work it exits; once gone it takes none."""
+    from bvsr_cad import worker
+    from bvsr_cad.parameters.load import ParamError
+
+    changed = write_toml(tmp_path / "edited.toml", {"name": "edited"})
+    standby = worker.SecondProcess.standby("bvsr_cad.pipeline")
+    if standby is None:
+        pytest.skip("one core: the analyses never leave the process")
+    assert standby.begin([str(changed), "sha256 of what the build read"], tmp_path)
+    with pytest.raises(ParamError, match=r"edited.toml(.|\n)*changed while the build was running"):
+        standby.result()
+    idle = worker.SecondProcess.standby("bvsr_cad.pipeline")
+    idle.proc.stdin.close()  # no work: it imports, reads the end of its input and exits quietly
+    assert idle.proc.wait(timeout=300) == 0
+    assert not idle.begin([str(changed), "x"], tmp_path)  # gone: the build starts another
+    idle.close()
+    assert idle.proc is None

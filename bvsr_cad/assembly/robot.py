@@ -223,13 +223,15 @@ def _rod_solid(ranges: list[tuple[float, float]], diameter_mm: float, z_frame_mm
     return pieces[0] if len(pieces) == 1 else bd.Compound(pieces)
 
 
-def robot_model(asm: Assembly, theta_max_rad: list[float]) -> RobotModel:
+def robot_model(asm: Assembly, theta_max_rad: list[float], collisions: bool = True) -> RobotModel:
     """The robot model of the tail at rest, in SI.
 
     Args:
         asm: the assembly (mm).
         theta_max_rad: collision-free bending limit of each joint (the minimum over phi), e.g.
             :func:`bvsr_cad.analysis.limits.per_joint_rad`.
+        collisions: False leaves the links without collision shapes (a simulation of the tail alone,
+            which nothing can touch: the shapes' fits are most of the model's making).
 
     The velocity limit of a joint is the segment's peak rate shared by its joints
     times a margin (``[robot]``); the effort limits are what all N_SOA SOAs can
@@ -253,7 +255,8 @@ def robot_model(asm: Assembly, theta_max_rad: list[float]) -> RobotModel:
     soa_mat = spec.material(spec.use.soa)
     in_panel, in_gap = _rod_pieces(asm)
     # Every collision shape rides on a panel (assembly/collision): exact at rest whatever the chain.
-    collisions = panel_collisions(asm, in_gap, spec.robot.collision_geometry)
+    shapes = (panel_collisions(asm, in_gap, spec.robot.collision_geometry) if collisions
+              else {lay.index: [] for lay in asm.panel_layouts})
     links: dict[str, Link] = {}
     joints: list[Joint] = []
     sites: list[Site] = []
@@ -270,7 +273,7 @@ def robot_model(asm: Assembly, theta_max_rad: list[float]) -> RobotModel:
             visuals.append(Visual(f"rod_in_{name}", spec.vertebra.material, rod_mat.density_g_cm3, rgba("rod"),
                                   rod_piece))
             inertials.append(from_solid(rod_piece, rod_mat.density_g_cm3))
-        links[name] = Link(name, compose(inertials), visuals, collisions[lay.index])
+        links[name] = Link(name, compose(inertials), visuals, shapes[lay.index])
 
     for k in range(1, spec.panels):
         j = f"j{k}"

@@ -98,11 +98,17 @@ def write_reproducible_3mf(scene, path: Path) -> None:
     _write_zip(path, entries, zipfile.ZIP_DEFLATED)
 
 
-def make_reproducible(root: Path) -> dict[str, int]:
-    """Fix the time stamps of every STEP and 3MF file under ``root``; returns how many of each changed."""
-    steps = sum(fix_step(p) for p in sorted(root.rglob("*")) if p.suffix.lower() in (".step", ".stp"))
-    zips = sum(fix_zip(p) for p in sorted(root.rglob("*.3mf")))
-    return {"step": steps, "3mf": zips}
+def make_reproducible(root: Path, done: set[Path] | None = None) -> dict[str, int]:
+    """Fix the time stamps of every STEP and 3MF file under ``root``; returns how many of each changed.
+
+    ``done``: the files fixed by an earlier call (skipped; the files fixed now are added), for a build
+    that fixes its files in two goes."""
+    done = set() if done is None else done
+    steps = [p for p in sorted(root.rglob("*")) if p.suffix.lower() in (".step", ".stp") and p not in done]
+    zips = [p for p in sorted(root.rglob("*.3mf")) if p not in done]
+    out = {"step": sum(fix_step(p) for p in steps), "3mf": sum(fix_zip(p) for p in zips)}
+    done.update(steps + zips)
+    return out
 
 
 __all__ = ["make_reproducible", "fix_step", "fix_zip", "write_reproducible_3mf", "FIXED_STEP_TIME"]

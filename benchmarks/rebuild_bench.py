@@ -5,14 +5,16 @@
 Runs in a private cache (a temporary ``BVSR_CACHE``) and a temporary output
 folder: first a cold build (empty cache), then the same file again (no-op),
 then each one-parameter edit of the base file, each from the cache the cold
-build filled. Prints one row per build: seconds, ratio to cold, and which
-stages were reused.
+build filled. Prints one row per build: seconds, ratio to cold, the CPU seconds
+of the build's processes (this one and its second processes: on two cores a build
+is CPU-bound when they are near twice its seconds), and which stages were reused.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import resource
 import re
 import shutil
 import tempfile
@@ -63,13 +65,17 @@ def main() -> None:
     text = base.read_text()
     rows = []
 
+    def cpu_s() -> float:
+        return sum(u.ru_utime + u.ru_stime for u in (resource.getrusage(resource.RUSAGE_SELF),
+                                                     resource.getrusage(resource.RUSAGE_CHILDREN)))
+
     def run(label: str, path: Path) -> float:
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), cpu_s()
         res = build_export(path, work / "out")
-        seconds = time.perf_counter() - t0
+        seconds, cpu = time.perf_counter() - t0, cpu_s() - c0
         reused = [s["stage"] for s in res.stages if s["status"] == "reused"]
-        rows.append((label, seconds, reused))
-        print(f"{label:18} {seconds:7.1f} s  reused: {', '.join(reused) or '-'}", flush=True)
+        rows.append((label, seconds, cpu))
+        print(f"{label:18} {seconds:7.1f} s  {cpu:6.1f} CPU s  reused: {', '.join(reused) or '-'}", flush=True)
         print("    " + "; ".join(f"{s['stage']} {s['status']} {s['seconds']:.1f} s" for s in res.stages), flush=True)
         return seconds
 
@@ -87,9 +93,9 @@ def main() -> None:
             finally:
                 path.unlink()
         print()
-        print(f"{'build':18} {'seconds':>8} {'/ cold':>7}")
-        for label, seconds, _ in rows:
-            print(f"{label:18} {seconds:8.1f} {seconds / cold:7.2f}")
+        print(f"{'build':18} {'seconds':>8} {'/ cold':>7} {'CPU s':>7}")
+        for label, seconds, cpu in rows:
+            print(f"{label:18} {seconds:8.1f} {seconds / cold:7.2f} {cpu:7.1f}")
     finally:
         shutil.rmtree(work, ignore_errors=True)
 

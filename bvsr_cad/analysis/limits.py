@@ -76,7 +76,7 @@ class _Tester:
     def _stretch(self, w: np.ndarray) -> np.ndarray:
         """:meth:`PosedTail.stretch` of the pairs that feel joint k, at a pose bending joint k alone: in
         every other joint theta = 0 leaves lambda at 1, so the one term left is computed, with the same
-        operations on the same values (the same numbers to the last bit: ``tests/test_limits.py``)."""
+        operations on the same values (the same numbers to the last bit: ``tests/test_workspace_clearance.py``)."""
         pt, k = self.pt, self.k
         theta = np.hypot(w[None, :, 0], w[None, :, 1])
         kappa = theta / pt.kin.length_mm
@@ -183,6 +183,14 @@ def _plane(test: _Tester, phi: float, t_stack: float, theta_hi_rad: float, tol_r
     return _Plane(lo, th_b, p, d, "clearance")
 
 
+def _joints(pt: PosedTail, need_mm: float, phis: np.ndarray, stack: tuple[float, float] | None):
+    """Per joint of a search: (its 0-based index, its tester, the fold stack's limit per plane, start time)."""
+    for k in range(pt.kin.n_joints):
+        t0 = time.perf_counter()
+        yield (k, _Tester(pt, k, need_mm),
+               stack_limit_rad(pt, k, phis, *stack) if stack else np.full(len(phis), np.inf), t0)
+
+
 def joint_limits(pt: PosedTail, need_mm: float, n_phi: int = 36, theta_hi_rad: float = 1.0,
                  tol_rad: float = 1e-3, exact: bool = True, stack: tuple[float, float] | None = None,
                  progress: Callable[[str], None] | None = None) -> list[JointLimits]:
@@ -195,10 +203,7 @@ def joint_limits(pt: PosedTail, need_mm: float, n_phi: int = 36, theta_hi_rad: f
     say = progress or (lambda _m: None)
     phis = np.linspace(-np.pi, np.pi, n_phi, endpoint=False)
     out = []
-    for k in range(pt.kin.n_joints):
-        t0 = time.perf_counter()
-        test = _Tester(pt, k, need_mm)
-        th_stack = stack_limit_rad(pt, k, phis, *stack) if stack else np.full(n_phi, np.inf)
+    for k, test, th_stack, t0 in _joints(pt, need_mm, phis, stack):
         planes = [_plane(test, phi, t_stack, theta_hi_rad, tol_rad, exact) for phi, t_stack in zip(phis, th_stack)]
         th_x = [pl.theta_max_rad for pl in planes]
         why = [pl.limited_by for pl in planes]
@@ -224,14 +229,11 @@ def lowest_limits_rad(pt: PosedTail, need_mm: float, n_phi: int = 36, theta_hi_r
     T >= best + 2 tol_rad, so its search would end above ``best``: one exact test instead of its
     search. The planes are searched tightest first (their stage-1a bound at half the search range), so
     ``best`` is low early. The planes searched are searched as :func:`joint_limits` searches them: the
-    result is the same number to the last bit (``tests/test_limits.py``)."""
+    result is the same number to the last bit (``tests/test_workspace_clearance.py``)."""
     say = progress or (lambda _m: None)
     phis = np.linspace(-np.pi, np.pi, n_phi, endpoint=False)
     out = []
-    for k in range(pt.kin.n_joints):
-        t0 = time.perf_counter()
-        test = _Tester(pt, k, need_mm)
-        th_stack = stack_limit_rad(pt, k, phis, *stack) if stack else np.full(n_phi, np.inf)
+    for k, test, th_stack, t0 in _joints(pt, need_mm, phis, stack):
         rest = pt.rest_mm[test.ids]
         tight = [float(np.min(test._stretch(_pose(pt, k, 0.5 * theta_hi_rad, phi)) * rest, initial=np.inf))
                  for phi in phis]

@@ -104,6 +104,23 @@ def test_check_fails_on_a_broken_stl(bvsr_export, tmp_path, capsys):
     assert "stl_watertight:soa" in failed and "stl_volume:soa" in failed
 
 
+def test_checks_started_early_see_a_file_changed_before_they_finish(bvsr_export, tmp_path):
+    """A build runs the CAD files' checks before its analyses are in (Checks.start) and the rest after
+    (Checks.finish): a file changed in between is checked again, so the verdicts are those of the
+    final export, the same as one run of every check."""
+    from bvsr_cad.checks.run import Checks, run_checks
+
+    copy = tmp_path / "copy"
+    shutil.copytree(bvsr_export, copy)
+    checks = Checks.start(copy, parallel=False)
+    mesh = trimesh.load(copy / "stl" / "soa.stl")
+    mesh.update_faces(np.arange(len(mesh.faces)) % 50 != 0)  # punch holes after the start
+    mesh.export(copy / "stl" / "soa.stl")
+    late = checks.finish()
+    assert {"stl_watertight:soa", "stl_volume:soa"} <= {r.name for r in late if r.passed is False}
+    assert [r.to_json() for r in late] == [r.to_json() for r in run_checks(copy, parallel=False)]
+
+
 def test_check_moved_pocket_fails_the_pentagon(bvsr_export, tmp_path, capsys):
     moved = tmp_path / "moved"
     shutil.copytree(bvsr_export, moved)

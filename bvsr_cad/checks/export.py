@@ -52,16 +52,19 @@ class Export:
         return mesh
 
 
-_CACHE: dict[str, trimesh.Trimesh] = {}
+#: Meshes read, by path and the file's size and modification time (a file rewritten is read again).
+_CACHE: dict[tuple[str, int, int], trimesh.Trimesh] = {}
 
 
 def _load(path: str) -> trimesh.Trimesh:
-    if path not in _CACHE:
+    st = Path(path).stat()
+    key = (path, st.st_size, st.st_mtime_ns)
+    if key not in _CACHE:
         # process=False keeps the file's own vertices: a check must see what a slicer sees.
         mesh = trimesh.load(path, file_type="stl", force="mesh", process=False)
         mesh.merge_vertices()
-        _CACHE[path] = mesh
-    return _CACHE[path]
+        _CACHE[key] = mesh
+    return _CACHE[key]
 
 
 def clear_cache() -> None:

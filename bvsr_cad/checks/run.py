@@ -6,6 +6,7 @@ import json
 import sys
 from collections.abc import Callable, Collection
 from pathlib import Path
+from typing import Any
 
 from ..cache import ArtifactCache
 from ..worker import SecondProcess, result_or, serve
@@ -62,15 +63,45 @@ PRINTABILITY_READS = ("parts", "print_jobs", "fabrication", "assembly", "rigid_t
 
 
 def _printability_reads(exp: Export) -> str:
-    return json.dumps({k: exp.manifest.get(k) for k in PRINTABILITY_READS}, sort_keys=True)
+    """The manifest sections the printability checks read, and the size and modification time of every
+    file those sections name."""
+    sections = {k: exp.manifest.get(k) for k in PRINTABILITY_READS}
+    names: set[str] = set()
+
+    def walk(v: Any) -> None:
+        if isinstance(v, dict):
+            for x in v.values():
+                walk(x)
+        elif isinstance(v, list):
+            for x in v:
+                walk(x)
+        elif isinstance(v, str) and v.lower().endswith((".stl", ".3mf", ".step", ".gcode")):
+            names.add(v)
+
+    walk(sections)
+    return json.dumps([sections, _state(exp, (sorted(names), None))[1]], sort_keys=True)
+
+
+def _state(exp: Export, reads: tuple) -> tuple:
+    """A group's reads (file names, manifest values) with each file's size and modification time: an
+    early verdict stands only while all of them are unchanged."""
+    stats = []
+    for rel in reads[0]:
+        try:
+            st = (exp.root / rel).stat()
+            stats.append((st.st_size, st.st_mtime_ns))
+        except OSError:
+            stats.append(None)
+    return reads, stats
 
 
 class Checks:
     """Every check on an export, in two steps: :meth:`start` runs the groups that read only the CAD
     files (the part meshes, the molds, and the printability checks in a second process), so that a build
     can run them before its analyses are in; :meth:`finish` runs the rest on the export as it is then
-    and returns every result in one order. A group started early whose reads (files, manifest values)
-    changed since is run again: the results are what one run on the final export gives."""
+    and returns every result in one order. A group started early whose reads changed since (its manifest
+    values, its files' names, sizes or modification times; for the printability checks, the manifest
+    sections they read) is run again: the results are what one run on the final export gives."""
 
     def __init__(self, root: str | Path, progress: Callable[[str], None] | None = None, *,
                  run_slicer: bool = False, parallel: bool = True, cache: ArtifactCache | None = None):
@@ -98,10 +129,11 @@ class Checks:
             for part in exp.parts:
                 say(f"mesh {part['name']}")
                 reads = part_mesh_reads(part)
-                run._mesh[part["name"]] = (reads, memo("part_mesh", reads, lambda: check_part_mesh(exp, part)))
+                run._mesh[part["name"]] = (_state(exp, reads),
+                                           memo("part_mesh", reads, lambda: check_part_mesh(exp, part)))
             say("molds")
             reads = molds_reads(exp)
-            run._molds = (reads, memo("molds", reads, lambda: check_molds(exp)))
+            run._molds = (_state(exp, reads), memo("molds", reads, lambda: check_molds(exp)))
         except BaseException:
             run.close()
             raise
@@ -117,9 +149,9 @@ class Checks:
             for part in exp.parts:
                 reads = part_mesh_reads(part)
                 early = self._mesh.get(part["name"])
-                if early is None or early[0] != reads:
+                if early is None or early[0] != _state(exp, reads):
                     say(f"mesh {part['name']}")
-                    early = (reads, memo("part_mesh", reads, lambda: check_part_mesh(exp, part)))
+                    early = (None, memo("part_mesh", reads, lambda: check_part_mesh(exp, part)))
                 results.extend(early[1])
             say("masses")
             results.extend(check_masses(exp))
@@ -137,9 +169,9 @@ class Checks:
                 printability = self._printability = _Printability(exp, self.sliced_now, say, False, memo)
             results.extend(printability.results())
             reads = molds_reads(exp)
-            if self._molds is None or self._molds[0] != reads:
+            if self._molds is None or self._molds[0] != _state(exp, reads):
                 say("molds")
-                self._molds = (reads, memo("molds", reads, lambda: check_molds(exp)))
+                self._molds = (None, memo("molds", reads, lambda: check_molds(exp)))
             results.extend(self._molds[1])
         finally:
             self.close()

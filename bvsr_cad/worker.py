@@ -21,6 +21,7 @@ import os
 import pickle
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Callable
@@ -146,8 +147,9 @@ class SecondProcess:
         """``python -m module --standby``: a child that imports its modules now, while this process
         imports its own, and waits for its work (:meth:`begin`); ``None`` where :meth:`start` would
         give none. A child never given work exits when it is :meth:`close`\\ d."""
-        proc = cls.start(module, [], Path.cwd(), progress, standby=True)
-        return proc
+        # It starts in the temporary folder (the caller's working folder may be gone) and moves into
+        # the one :meth:`begin` names.
+        return cls.start(module, [], Path(tempfile.gettempdir()), progress, standby=True)
 
     def begin(self, args: list[str], cwd: Path) -> bool:
         """Hand a standby child its arguments and working folder; False if it is gone (then start another)."""

@@ -197,13 +197,18 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
     assert any("without a result; running them here" in m for m in said), said
 
 
-def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path):
+def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path, monkeypatch):
     """`bvsr build` starts the analyses' process before it imports the pipeline: given its work it
-    answers as a process started with it; closed without work it exits; once gone it takes none."""
+    answers as a process started with it (even from a working folder that is gone); closed without
+    work it exits; once gone it takes none."""
     from bvsr_cad import worker
     from bvsr_cad.parameters.load import ParamError
 
     changed = write_toml(tmp_path / "edited.toml", {"name": "edited"})
+    gone = tmp_path / "gone"
+    gone.mkdir()
+    monkeypatch.chdir(gone)
+    gone.rmdir()
     standby = worker.SecondProcess.standby("bvsr_cad.pipeline")
     if standby is None:
         pytest.skip("one core: the analyses never leave the process")

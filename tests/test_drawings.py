@@ -149,3 +149,19 @@ def test_the_title_block_is_the_same_bytes_in_a_fresh_process(bvsr_spec):
     ET.register_namespace("svg", "http://www.w3.org/2000/svg")  # whatever another module registered before
     assert _title_block("panel0", Item, bvsr_spec, "f" * 64) == fresh
     assert fresh.startswith(b'<g xmlns="http://www.w3.org/2000/svg" id="title-block"')
+
+
+def test_dimensions_are_the_parts_extents_along_each_views_axes(bvsr_export, sheets):
+    """Each view's overall dimensions (its width, and a side view's height) read the part's B-rep extent
+    along the view's horizontal and vertical axes, found here from the STEP file's bounding box."""
+    axes = {"top": ("X", None), "front": ("X", "Z"), "right": ("Y", "Z")}
+    for item, s in sheets["by_item"].items():
+        folder, name = ("molds/step", item.removeprefix("mold_")) if item.startswith("mold_") else ("step", item)
+        size = bd.import_step(bvsr_export / folder / f"{name}.step").solids()[0].bounding_box(optimal=True).size
+        root = ET.parse(bvsr_export / s["svg"]).getroot()
+        read = [float(t.text) for t in root.findall(".//s:g[@id='dimensions']/s:g[@class='dim']/s:text", NS)]
+        views = [t.text.split(" ")[0] for t in root.findall(".//s:g[@id='views']/s:text", NS)
+                 if " (looking along " in (t.text or "")]
+        expected = [getattr(size, a) for v in views for a in axes[v] if a is not None]
+        assert views[0] == "top" and len(read) == len(expected) == (3 if item.startswith("panel") else 5), item
+        assert read == pytest.approx(expected, abs=0.006), item

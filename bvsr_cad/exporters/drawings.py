@@ -1,8 +1,8 @@
 """Drawings: one SVG sheet (A3 landscape, mm) per panel and per mold part (``drawings/<item>.svg``).
 
 A sheet holds the part's outline views (build123d's hidden-line projection,
-``project_to_viewport``, visible and hidden edges), overall dimensions (build123d's
-``drafting.ExtensionLine``, measured on the projected geometry), the hole table and
+``project_to_viewport``, visible and hidden edges), overall dimensions (measured on the
+projected geometry, drawn as plain SVG lines, arrowheads and text), the hole table and
 the title block. The hole table's rows are the part's declared round features
 (:class:`bvsr_cad.parameters.layout.Cyl`: the panel layout's cuts and passages, the
 mold set's bolts, pins, sockets, gate, vents and flange pockets), the same objects the
@@ -44,6 +44,14 @@ TITLE_H_MM = 46.0  # title block height, bottom right
 ROW_MM = 3.6
 FONT_MM = 2.2
 SCALES = (5.0, 4.0, 2.5, 2.0, 1.5, 1.0, 0.5, 0.25)
+#: Dimensions (sheet mm): the line's distance from the outline, arrowheads, text height and its lift off the line.
+DIM_GAP_MM = 8.0
+DIM_ARROW_MM = 2.5
+DIM_ARROW_WIDTH_MM = 0.9
+DIM_FONT_MM = 3.0
+DIM_TEXT_LIFT_MM = 0.8
+DIM_LINE_MM = 0.18
+DIM_DECIMALS = 2
 #: What each declared role is, in a workshop's words.
 ROLE_TEXT = {
     "pocket": "SOA flange pocket (bonded)", "channel": "air channel", "port": "push-in fitting port",
@@ -223,8 +231,63 @@ def _layout(boxes: dict[str, tuple[float, float, float, float]], views: list[lis
     return scale, offsets
 
 
-def _place(shape: bd.Shape, scale: float, offset: tuple[float, float]) -> bd.Shape:
-    return bd.Pos(offset[0], offset[1]) * shape.scale(scale)
+def _placed(edges: list[bd.Edge], scale: float, offset: tuple[float, float]) -> list[bd.Edge]:
+    """View edges (model mm) on the sheet: scaled about the view's origin, then moved by ``offset``; one
+    OCCT transform per edge (build123d's ``scale`` and ``Pos *`` each deep-copy the edge in Python first)."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.gp import gp_Pnt, gp_Trsf, gp_Vec
+
+    grow, move = gp_Trsf(), gp_Trsf()
+    grow.SetScale(gp_Pnt(0.0, 0.0, 0.0), scale)
+    move.SetTranslation(gp_Vec(offset[0], offset[1], 0.0))
+    trsf = move.Multiplied(grow)
+    return [bd.Edge(BRepBuilderAPI_Transform(e.wrapped, trsf, True).Shape()) for e in edges]
+
+
+def _sheet(p: tuple[float, float], scale: float, offset: tuple[float, float]) -> tuple[float, float]:
+    """A view point (model mm) on the sheet (mm, y up)."""
+    return offset[0] + scale * p[0], offset[1] + scale * p[1]
+
+
+@dataclass(frozen=True)
+class Dimension:
+    """A linear dimension on the sheet: its line from ``a`` to ``b`` (sheet mm, y up), arrows at both ends
+    pointing out to the extension lines, and the measured model length written above the line."""
+
+    a: tuple[float, float]
+    b: tuple[float, float]
+    length_mm: float
+
+    def text(self) -> str:
+        return f"{self.length_mm:.{DIM_DECIMALS}f}"
+
+
+def _dimensions(parent: ET.Element, dims: list[Dimension]) -> None:
+    """Each dimension as plain SVG (a line, two filled arrowheads, a text): a reader can pick the value
+    out of the ``dim`` group's text, and nothing is a glyph outline."""
+    g = ET.SubElement(parent, f"{{{SVG_NS}}}g", {"id": "dimensions", "font-family": "DejaVu Sans",
+                                                 "stroke": "black", "stroke-width": f"{DIM_LINE_MM:g}"})
+    for d in dims:
+        a, b = np.array(d.a), np.array(d.b)
+        u = (b - a) / max(float(np.linalg.norm(b - a)), 1e-12)
+        n = np.array([-u[1], u[0]])
+        el = ET.SubElement(g, f"{{{SVG_NS}}}g", {"class": "dim"})
+        ET.SubElement(el, f"{{{SVG_NS}}}line", {"x1": f"{a[0]:.3f}", "y1": f"{-a[1]:.3f}",
+                                                "x2": f"{b[0]:.3f}", "y2": f"{-b[1]:.3f}"})
+        for tip, inward in ((a, u), (b, -u)):
+            base = tip + DIM_ARROW_MM * inward
+            pts = [tip, base + 0.5 * DIM_ARROW_WIDTH_MM * n, base - 0.5 * DIM_ARROW_WIDTH_MM * n]
+            ET.SubElement(el, f"{{{SVG_NS}}}polygon", {"points": " ".join(f"{x:.3f},{-y:.3f}" for x, y in pts),
+                                                       "fill": "black", "stroke": "none"})
+        # Read from below or from the right (ISO 129): left to right, or bottom to top; the text stands on
+        # the line's side its letters point to.
+        read = u if u[0] > 1e-9 or (abs(u[0]) <= 1e-9 and u[1] > 0) else -u
+        up = np.array([-read[1], read[0]])
+        mid = (a + b) / 2 + DIM_TEXT_LIFT_MM * up
+        angle = -math.degrees(math.atan2(read[1], read[0])) + 0.0  # SVG turns clockwise (its y runs down)
+        t = _text(el, float(mid[0]), float(mid[1]), d.text(), DIM_FONT_MM, "middle", stroke="none")
+        if abs(angle) > 1e-9:
+            t.set("transform", f"rotate({angle:.3f} {mid[0]:.3f} {-mid[1]:.3f})")
 
 
 def _text(parent: ET.Element, x: float, y: float, text: str, size: float = FONT_MM, anchor: str = "start",
@@ -280,36 +343,35 @@ def draw_sheet(name: str, solid: bd.Solid, features: list[Cyl], views: list[list
     projected = {v: _project(solid, v) for row in views for v in row}
     boxes = {v: _view_box(vis + hid) for v, (vis, hid) in projected.items()}
     w, h = SHEET_MM
-    region = (MARGIN_MM + 8.0, MARGIN_MM + 14.0, TABLE_X_MM - 8.0, h - MARGIN_MM - 12.0)
+    # Room left of the views for a side view's height dimension and its text (it stood on the frame once).
+    region = (MARGIN_MM + DIM_GAP_MM + DIM_FONT_MM + 2.0 * DIM_TEXT_LIFT_MM + 1.0, MARGIN_MM + 14.0,
+              TABLE_X_MM - 8.0, h - MARGIN_MM - 12.0)
     scale, offsets = _layout(boxes, views, region, 22.0)
     svg = _SheetSVG(unit=bd.Unit.MM, margin=0.0, fit_to_stroke=False)
     svg.add_layer("frame", line_weight=0.5)
     svg.add_layer("grid", line_weight=0.18)
     svg.add_layer("visible", line_weight=0.35)
     svg.add_layer("hidden", line_color=(0.43, 0.43, 0.43), line_weight=0.18, line_type=bd.LineType.ISO_DASH)
-    svg.add_layer("dimensions", fill_color=(0.0, 0.0, 0.0), line_weight=0.0)
     svg.add_shape(_rect(0.0, 0.0, w, h), "grid")
     svg.add_shape(_rect(MARGIN_MM, MARGIN_MM, w - MARGIN_MM, h - MARGIN_MM), "frame")
-    draft = bd.Draft(font_size=3.0 / scale, font="DejaVu Sans", arrow_length=2.5 / scale, line_width=0.18 / scale,
-                     pad_around_text=1.0 / scale, extension_gap=1.0 / scale, decimal_precision=2,
-                     display_units=False)
+    dims: list[Dimension] = []
     for view, (vis, hid) in projected.items():
         off = offsets[view]
-        svg.add_shape([_place(e, scale, off) for e in vis], "visible")
+        svg.add_shape(_placed(vis, scale, off), "visible")
         if hid:
-            svg.add_shape([_place(e, scale, off) for e in hid], "hidden")
+            svg.add_shape(_placed(hid, scale, off), "hidden")
         bx0, by0, bx1, by1 = boxes[view]
-        # Overall width below the view, and height left of the side views: build123d's dimension lines
-        # measure the projected outline (their own extension lines are ten times slower to build).
-        gap = 8.0 / scale
+        # Overall width below the view, and height left of the side views, measured on the projected outline;
+        # their extension lines from the outline's corners to just past the dimension line.
+        gap = DIM_GAP_MM / scale
         spans = [((bx0, by0), (bx1, by0), (0.0, -gap))]
         if view != "top":
             spans.append(((bx0, by1), (bx0, by0), (-gap, 0.0)))
         for a, b, (dx, dy) in spans:
             a2, b2 = (a[0] + dx, a[1] + dy), (b[0] + dx, b[1] + dy)
-            svg.add_shape(_place(bd.DimensionLine([a2, b2], draft=draft), scale, off), "dimensions")
+            dims.append(Dimension(_sheet(a2, scale, off), _sheet(b2, scale, off), math.dist(a, b)))
             ext = [bd.Edge.make_line(p, (p[0] + 1.15 * dx, p[1] + 1.15 * dy)) for p in (a, b)]
-            svg.add_shape([_place(e, scale, off) for e in ext], "grid")
+            svg.add_shape(_placed(ext, scale, off), "grid")
     # Hole table grid.
     top = h - MARGIN_MM - 10.0
     x_cols = np.cumsum([TABLE_X_MM, *COLUMNS_MM])
@@ -334,6 +396,7 @@ def draw_sheet(name: str, solid: bd.Solid, features: list[Cyl], views: list[list
             for row in rows:
                 u, v = _uv(view, np.array(row.start_mm))
                 _text(labels, off[0] + scale * u + 0.8, off[1] + scale * v + 0.8, row.label, 1.8, fill="#0645ad")
+    _dimensions(root, dims)
     table = ET.SubElement(root, f"{{{SVG_NS}}}g", {"id": "hole-table", "font-family": "DejaVu Sans"})
     _text(table, TABLE_X_MM, top + 3.0, f"Hole table: {len(rows)} features, mm, part frame "
           "(positions where each bore begins; B-rep lengths)", 2.5)

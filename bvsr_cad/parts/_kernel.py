@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import functools
 import math
-from collections.abc import Iterable, Sequence
+import threading
+from collections.abc import Callable, Iterable, Sequence
 
 import build123d as bd
 import numpy as np
@@ -84,6 +86,32 @@ def single_solid(shape: bd.Shape, what: str) -> bd.Solid:
     if not solid.is_valid:
         raise GeometryError(f"{what}: the kernel produced an invalid solid")
     return solid
+
+
+def fresh_copy(shape: bd.Shape) -> bd.Shape:
+    """A copy of ``shape`` with its own geometry and no triangulation (``BRepBuilderAPI_Copy``): whatever a
+    caller does to it (mesh it, label it) leaves the original as it was."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
+
+    return type(shape)(BRepBuilderAPI_Copy(shape.wrapped, True, False).Shape())
+
+
+def remembered(make: Callable[..., bd.Shape]) -> Callable[..., bd.Shape]:
+    """``make`` (a pure function of hashable arguments returning a solid) made once per arguments in a
+    process; each call gets a :func:`fresh_copy`, so no caller sees another's triangulation or label.
+    The SOA's solids are asked for by the assembly, the mold set and the rigid twin alike."""
+    made: dict[tuple, bd.Shape] = {}
+    lock = threading.Lock()
+
+    @functools.wraps(make)
+    def remember(*args, **kwargs):
+        key = (args, tuple(sorted(kwargs.items())))
+        with lock:
+            if key not in made:
+                made[key] = make(*args, **kwargs)
+            return fresh_copy(made[key])
+
+    return remember
 
 
 def cut_all(base: bd.Shape, tools: Iterable[bd.Shape]) -> bd.Shape:

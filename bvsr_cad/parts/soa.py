@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import build123d as bd
 
 from ..parameters.tables import SoaTable
-from ._kernel import single_solid
+from ._kernel import remembered, single_solid
 
 
 @dataclass(frozen=True)
@@ -54,6 +54,7 @@ def rounded_square(side_mm: float, radius_mm: float, z_mm: float) -> bd.Face:
     return plane * sk.face()
 
 
+@remembered
 def soa_envelope(soa: SoaTable, flange_diameter_mm: float) -> bd.Solid:
     """The SOA's outer surface, filled: both flange discs and the bellows' outer ruled loft.
 
@@ -68,6 +69,7 @@ def soa_envelope(soa: SoaTable, flange_diameter_mm: float) -> bd.Solid:
     return single_solid(lower.fuse(outer, upper), "SOA envelope")
 
 
+@remembered
 def soa_interior(soa: SoaTable, flange_diameter_mm: float, beyond_ends_mm: float = 0.01) -> bd.Solid:
     """The SOA's air space: the inner ruled loft, prolonged at the end size through both
     flanges and ``beyond_ends_mm`` past them (the mold core's prints use the same sections)."""
@@ -78,6 +80,7 @@ def soa_interior(soa: SoaTable, flange_diameter_mm: float, beyond_ends_mm: float
                         "SOA interior")
 
 
+@remembered
 def soa_body(soa: SoaTable, flange_diameter_mm: float) -> bd.Solid:
     """The cast SOA as one solid (mm).
 

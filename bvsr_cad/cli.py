@@ -58,8 +58,9 @@ def cmd_build(args) -> int:
     say = _progress(args.quiet or args.json)
     from .worker import SecondProcess
 
-    # The analyses' second process imports its modules beside this process's imports of the pipeline.
-    standby = SecondProcess.standby("bvsr_cad.pipeline", say)
+    # The analyses' second process imports its modules beside this process's imports of the pipeline, and
+    # builds the tail's assembly from the file while this process decides what the cache holds.
+    standby = SecondProcess.standby("bvsr_cad.pipeline", say, [str(Path(args.params).resolve())])
     try:
         from .pipeline import build_export
     except BaseException:
@@ -418,34 +419,39 @@ def main(argv: list[str] | None = None) -> int:
         args = make_parser().parse_args(argv)
     except SystemExit as exc:  # --help (0) or a bad argument (2): return it like every other outcome
         return int(exc.code or 0)
-    from .checks.export import ExportError
-    from .checks.printability import SlicerMissingError
-    from .parts._kernel import GeometryError
-    from .pipeline import OutputError
-    from .sim import SimulationInputError
-    from .parameters.load import ParamError
-    from .analysis.calibrate import CalibrationError
-    from .parameters.measurements import MeasurementError
-    from .parameters.study import StudyError
-    from .sweep import SweepError
-
     try:
         return args.func(args)
-    except (ParamError, MeasurementError, CalibrationError, OutputError, ExportError, SimulationInputError,
-            SlicerMissingError, StudyError, SweepError) as exc:
-        print(f"bvsr: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except GeometryError as exc:
-        print(_generator_failure(args, exc), file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except ValueError as exc:
-        if _raised_in_parts(exc) is None:
-            raise  # a bug, not a parameter: keep its traceback
-        print(_generator_failure(args, exc), file=sys.stderr)
-        return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("bvsr: interrupted; nothing was published", file=sys.stderr)
         return 130
+    except Exception as exc:
+        # The error classes are imported here, not before the command runs: `bvsr build` starts its
+        # analyses' process before it imports the pipeline (seconds of imports), and these would import it.
+        bad_input, geometry_error = _error_classes()
+        if isinstance(exc, bad_input):
+            print(f"bvsr: error: {exc}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        if isinstance(exc, geometry_error) or (isinstance(exc, ValueError) and _raised_in_parts(exc) is not None):
+            print(_generator_failure(args, exc), file=sys.stderr)
+            return EXIT_BAD_INPUT
+        raise  # a bug, not a parameter: keep its traceback
+
+
+def _error_classes() -> tuple[tuple[type[Exception], ...], type[Exception]]:
+    """(the errors that are bad input, exit code 2; the CAD kernel's failure on valid-looking input)."""
+    from .analysis.calibrate import CalibrationError
+    from .checks.export import ExportError
+    from .checks.printability import SlicerMissingError
+    from .parameters.load import ParamError
+    from .parameters.measurements import MeasurementError
+    from .parameters.study import StudyError
+    from .parts._kernel import GeometryError
+    from .pipeline import OutputError
+    from .sim import SimulationInputError
+    from .sweep import SweepError
+
+    return ((ParamError, MeasurementError, CalibrationError, OutputError, ExportError, SimulationInputError,
+             SlicerMissingError, StudyError, SweepError), GeometryError)
 
 
 if __name__ == "__main__":

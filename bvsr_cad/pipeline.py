@@ -420,6 +420,22 @@ def _build_export(params: str | Path, out_dir: str | Path | None, progress: Prog
     return BuildResult(out, results, time.perf_counter() - t0, log.stages)
 
 
+#: The standby analyses process's head start (:func:`_prepare_analyses`): (params path, SHA-256) -> assembly.
+_PREPARED: dict[tuple[str, str], object] = {}
+
+
+def _prepare_analyses(params: str) -> None:
+    """A standby analyses process's head start (``python -m bvsr_cad.pipeline --standby PARAMS``): the
+    tail's assembly, built from the file while the build imports and reads its cache; used only if the
+    work that comes names the same file with the same SHA-256 (the bytes the assembly was built from)."""
+    from .assembly.build import build_assembly
+
+    before = params_sha256(params)
+    asm = build_assembly(load_spec(params))
+    if params_sha256(params) == before:
+        _PREPARED[str(Path(params).resolve()), before] = asm
+
+
 def _analyses_process(params: str, sha256: str, geometry: str = ""):
     """The analyses' second process (``python -m bvsr_cad.pipeline - PARAMS SHA256 [GEOMETRY]``): here, not
     in the analysis layer, because a measured workspace is predicted in the simulator. ``GEOMETRY``: the
@@ -430,7 +446,8 @@ def _analyses_process(params: str, sha256: str, geometry: str = ""):
         given = pickle.loads(Path(geometry).read_bytes()) if geometry else None
     except OSError:  # evicted since the build looked: computed here
         given = None
-    return from_params(params, sha256, protocol_radius_mm, given)
+    return from_params(params, sha256, protocol_radius_mm, given, _PREPARED.pop((str(Path(params).resolve()), sha256),
+                                                                                None))
 
 
 if __name__ == "__main__":
@@ -439,4 +456,4 @@ if __name__ == "__main__":
     from . import pipeline  # the module itself, not __main__: its results must pickle by their real names
     from .worker import serve
 
-    sys.exit(serve(sys.argv[1], pipeline._analyses_process, *sys.argv[2:]))
+    sys.exit(serve(sys.argv[1], pipeline._analyses_process, *sys.argv[2:], prepare=pipeline._prepare_analyses))

@@ -66,14 +66,21 @@ def _die_with_parent() -> None:
 STANDBY = "--standby"
 
 
-def serve(_out: str, fn: Callable[..., Any], *args: Any) -> int:
+def serve(_out: str, fn: Callable[..., Any], *args: Any, prepare: Callable[..., None] | None = None) -> int:
     """Run ``fn(*args)`` and pickle its result, or its exception, onto stdout (the child's side).
 
     ``_out`` is the placeholder argument the parent passes (``-``), or :data:`STANDBY`: then the child,
     its modules imported, waits for one JSON line on stdin, ``{"args": [...], "cwd": ...}``, and exits
-    quietly at end of input (the parent did not need it)."""
+    quietly at end of input (the parent did not need it). A standby child's own ``args`` are its hint
+    (what the parent expects to ask of it): ``prepare(*args)`` runs first, while the parent is still
+    deciding (a head start it may waste: the parent stops a child it gives no work)."""
     _die_with_parent()
     if _out == STANDBY:
+        if prepare is not None and args:
+            try:
+                prepare(*args)
+            except Exception:  # noqa: BLE001 - only a head start: the work itself meets any problem again
+                pass
         line = sys.stdin.readline()
         if not line.strip():
             return 0
@@ -143,13 +150,15 @@ class SecondProcess:
         return cls(proc)
 
     @classmethod
-    def standby(cls, module: str, progress: Callable[[str], None] | None = None) -> "SecondProcess | None":
-        """``python -m module --standby``: a child that imports its modules now, while this process
-        imports its own, and waits for its work (:meth:`begin`); ``None`` where :meth:`start` would
-        give none. A child never given work exits when it is :meth:`close`\\ d."""
+    def standby(cls, module: str, progress: Callable[[str], None] | None = None,
+                hint: list[str] | None = None) -> "SecondProcess | None":
+        """``python -m module --standby [HINT...]``: a child that imports its modules now, while this
+        process imports its own, prepares what ``hint`` lets it (see :func:`serve`) and waits for its work
+        (:meth:`begin`); ``None`` where :meth:`start` would give none. A child never given work exits when
+        it is :meth:`close`\\ d."""
         # It starts in the temporary folder (the caller's working folder may be gone) and moves into
         # the one :meth:`begin` names.
-        return cls.start(module, [], Path(tempfile.gettempdir()), progress, standby=True)
+        return cls.start(module, list(hint or []), Path(tempfile.gettempdir()), progress, standby=True)
 
     def begin(self, args: list[str], cwd: Path) -> bool:
         """Hand a standby child its arguments and working folder; False if it is gone (then start another)."""

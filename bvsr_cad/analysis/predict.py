@@ -195,15 +195,27 @@ class Predictor:
             actuation=dataclasses.replace(self.spec.actuation,
                                           workspace_pressurised_max_kpa_abs=pressurised_max_kpa_abs,
                                           workspace_depressurised_min_kpa_abs=depressurised_min_kpa_abs))
-        key = int(segments)
+        asm, limits = self.workspace_geometry(int(segments))
+        return self._once(("workspace", int(segments), float(pressurised_max_kpa_abs),
+                           float(depressurised_min_kpa_abs)), lambda: float(self.workspace_sim(asm, spec, limits)))
+
+    def workspace_geometry(self, segments: int) -> tuple[Assembly, list[float]]:
+        """(the assembly, its joints' limits) of this tail with ``segments`` segments: what the workspace
+        protocol is simulated on (made once, by the first thread that asks; limits given by
+        :meth:`known_limits` may still be computing elsewhere, and are waited for)."""
         once = self._locks.once
-        asm = self.asm if key == self.spec.segments else once(
-            self._other, key, lambda: build_assembly(dataclasses.replace(self.spec, segments=key)))
-        limits = once(self._limits, key, lambda: theta_max_per_joint_rad(asm))
+        asm = self.asm if segments == self.spec.segments else once(
+            self._other, segments, lambda: build_assembly(dataclasses.replace(self.spec, segments=segments)))
+        limits = once(self._limits, segments, lambda: theta_max_per_joint_rad(asm))
         if callable(limits):  # given by known_limits, still to come
             limits = list(limits())
-        return self._once(("workspace", key, float(pressurised_max_kpa_abs), float(depressurised_min_kpa_abs)),
-                          lambda: float(self.workspace_sim(asm, spec, limits)))
+        return asm, limits
+
+    def prepare(self, m: Measurement) -> None:
+        """What :meth:`predict` of ``m`` computes in Python before it simulates in C (the workspace
+        protocol's geometry and joint limits), so that a caller can let the rest wait for it."""
+        if m.quantity == "tip_workspace_radius":
+            self.workspace_geometry(int(dict(m.conditions)["segments"]))
 
     def root_wrench(self, motion: str, pressure_bar: float, payload_g: float) -> tuple[float, float]:
         """(peak force N, peak torque N m) at the root sensor (the root panel's proximal face), tared."""

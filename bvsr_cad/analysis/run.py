@@ -133,10 +133,11 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
 
 
 def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = None,
-                geometry: GeometryAnalyses | None = None) -> AnalysisResults:
+                geometry: GeometryAnalyses | None = None, asm: Assembly | None = None) -> AnalysisResults:
     """The second process's work: the analyses of the parameter file the build read (``sha256``),
     progress on stderr (the parent relays it). Its entry point is the pipeline's (which gives
-    ``workspace_sim`` and, from its cache, ``geometry``)."""
+    ``workspace_sim``, from its cache ``geometry``, and ``asm`` when it built the assembly of this very
+    file ahead)."""
     import sys
 
     from ..assembly.build import build_assembly
@@ -148,4 +149,6 @@ def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = N
     def say(msg: str) -> None:
         print(f"(second process) {msg}", file=sys.stderr, flush=True)
 
-    return run_analyses(build_assembly(load_spec(params)), say, params, workspace_sim, geometry)
+    if asm is None:
+        asm = build_assembly(load_spec(params))
+    return run_analyses(asm, say, params, workspace_sim, geometry)

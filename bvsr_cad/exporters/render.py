@@ -12,7 +12,7 @@ import numpy as np
 
 from ..assembly.build import Assembly
 from ..colors import rgb
-from ..parts._kernel import mesh_arrays
+from ..parts._kernel import fresh_copy, mesh_arrays
 
 
 def offscreen_pyvista():
@@ -47,7 +47,9 @@ def _polydata(pv, vertices: np.ndarray, faces: np.ndarray):
 
 
 def _tessellate(solid, tolerance_mm: float = 0.05):
-    return mesh_arrays(solid, tolerance_mm, 0.3)
+    """A picture's mesh, from a copy: the part files' writer meshed ``solid`` for print first (0.01 mm), and
+    OCCT would hand that mesh back, several times the triangles a picture shows."""
+    return mesh_arrays(fresh_copy(solid), tolerance_mm, 0.3)
 
 
 def render_previews(asm: Assembly, root: Path) -> dict[str, str]:

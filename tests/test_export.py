@@ -221,3 +221,26 @@ def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path, monkeypatch
     assert not idle.begin([str(changed), "x"], tmp_path)  # gone: the build starts another
     idle.close()
     assert idle.proc is None
+
+
+def test_the_standby_head_start_is_used_only_for_the_bytes_it_was_built_from(tmp_path, monkeypatch):
+    """`bvsr build` names the file to its standby analyses' process, which builds the assembly while the
+    build reads its cache; the work that comes uses it only if it names the same file with the same
+    SHA-256, else it builds the file as it is now."""
+    from bvsr_cad import pipeline
+    from bvsr_cad.analysis import run
+    from bvsr_cad.parameters.load import params_sha256
+
+    params = tmp_path / "tail.toml"
+    shutil.copyfile(PARAMS / "bvsr.toml", params)
+    monkeypatch.setattr(run, "run_analyses", lambda asm, *_a, **_k: asm)  # the analyses' input, handed back
+    monkeypatch.setattr(pipeline, "_PREPARED", {})
+    pipeline._prepare_analyses(str(params))
+    first = params_sha256(params)
+    prepared = pipeline._PREPARED[str(params.resolve()), first]
+    assert pipeline._analyses_process(str(params), first) is prepared  # used, and taken (used once)
+    assert pipeline._PREPARED == {}
+    pipeline._prepare_analyses(str(params))
+    params.write_text(params.read_text().replace('name = "bvsr"', 'name = "edited"', 1))
+    built = pipeline._analyses_process(str(params), params_sha256(params))
+    assert built.spec.name == "edited" and built is not pipeline._PREPARED[str(params.resolve()), first]

@@ -126,3 +126,40 @@ def test_rod_material_changes_mass_not_geometry(bvsr_spec):
     a = layout.panel_layout(bvsr_spec, 1)
     b = layout.panel_layout(pvc, 1)
     assert a == b
+
+
+def test_remembered_solids_are_made_once_copied_per_call_and_bounded():
+    """parts._kernel.remembered: a repeated call does not make the solid again and gets its own copy (a
+    triangulation or label on one leaves the others as they were); past REMEMBERED_MAX arguments the
+    least recently used is made again, the others are not."""
+    import build123d as bd
+
+    from bvsr_cad.parts import _kernel
+
+    made: list[float] = []
+
+    @_kernel.remembered
+    def box(size_mm: float) -> bd.Solid:
+        made.append(size_mm)
+        return bd.Solid.make_box(size_mm, 1.0, 1.0)
+
+    first = box(1.0)
+    again = box(1.0)
+    assert made == [1.0]
+    assert first.wrapped is not again.wrapped and not first.wrapped.IsSame(again.wrapped)
+    first.label = "mine"
+    first.mesh(0.1)
+    assert box(1.0).label != "mine"
+    assert math.isclose(again.volume, 1.0, rel_tol=1e-12)
+    sizes = [1.0 + k for k in range(1, _kernel.REMEMBERED_MAX)]  # REMEMBERED_MAX arguments in all
+    for s in sizes:
+        box(s)
+    box(1.0)  # used last: kept, and 2.0 is now the least recently used
+    assert made == [1.0, *sizes]
+    box(100.0)  # one more than the bound: 2.0 goes
+    box(1.0)
+    box(3.0)
+    assert made == [1.0, *sizes, 100.0]
+    box(2.0)
+    assert made == [1.0, *sizes, 100.0, 2.0]
+    assert math.isclose(box(2.0).volume, 2.0, rel_tol=1e-12)

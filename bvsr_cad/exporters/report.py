@@ -134,10 +134,11 @@ def _render_rigid(root: Path, manifest: dict[str, Any], dst: Path) -> str:
     pv = offscreen_pyvista()
     plotter = pv.Plotter(off_screen=True, window_size=(1200, 560), shape=(1, 2))
     pieces = _rigid_pieces(manifest)
+    meshes = [trimesh.load(root / p["files"]["stl"], file_type="stl", force="mesh") for p in pieces]  # read once
     for col, gap in ((0, 0.0), (1, 18.0)):
         plotter.subplot(0, col)
-        for i, p in enumerate(pieces):
-            mesh = trimesh.load(root / p["files"]["stl"], file_type="stl", force="mesh")
+        for i, (p, piece) in enumerate(zip(pieces, meshes)):
+            mesh = piece.copy()
             t = np.asarray(p["tail_transform"], float).copy()
             t[2, 3] += gap * i
             mesh.apply_transform(t)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import functools
 import math
 import threading
+from collections import OrderedDict
 from collections.abc import Callable, Iterable, Sequence
 
 import build123d as bd
@@ -96,19 +97,29 @@ def fresh_copy(shape: bd.Shape) -> bd.Shape:
     return type(shape)(BRepBuilderAPI_Copy(shape.wrapped, True, False).Shape())
 
 
+#: Solids :func:`remembered` keeps per function: a `bvsr watch` session that tries many SOA tables keeps
+#: the most recently used ones, not every one it saw.
+REMEMBERED_MAX = 8
+
+
 def remembered(make: Callable[..., bd.Shape]) -> Callable[..., bd.Shape]:
     """``make`` (a pure function of hashable arguments returning a solid) made once per arguments in a
-    process; each call gets a :func:`fresh_copy`, so no caller sees another's triangulation or label.
-    The SOA's solids are asked for by the assembly, the mold set and the rigid twin alike."""
-    made: dict[tuple, bd.Shape] = {}
+    process (the :data:`REMEMBERED_MAX` most recently used are kept); each call gets a :func:`fresh_copy`,
+    so no caller sees another's triangulation or label. The SOA's solids are asked for by the assembly,
+    the mold set and the rigid twin alike."""
+    made: OrderedDict[tuple, bd.Shape] = OrderedDict()
     lock = threading.Lock()
 
     @functools.wraps(make)
     def remember(*args, **kwargs):
         key = (args, tuple(sorted(kwargs.items())))
         with lock:
-            if key not in made:
+            if key in made:
+                made.move_to_end(key)
+            else:
                 made[key] = make(*args, **kwargs)
+                while len(made) > REMEMBERED_MAX:
+                    made.popitem(last=False)
             return fresh_copy(made[key])
 
     return remember

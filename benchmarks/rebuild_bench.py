@@ -61,11 +61,15 @@ def main() -> None:
     args = ap.parse_args()
     work = Path(tempfile.mkdtemp(prefix="bvsr-rebuild-bench-"))
     os.environ["BVSR_CACHE"] = str(work / "cache")
-    from bvsr_cad.pipeline import build_export
+    from bvsr_cad.pipeline import _process_start, build_export
     from bvsr_cad.worker import SecondProcess
 
     base = Path(args.params).resolve()
     text = base.read_text()
+    for stale in base.parent.glob(".bench-*.toml"):  # left by a benchmark that was killed
+        pid = stale.name.split("-")[1]
+        if pid.isdigit() and _process_start(int(pid)) is None:
+            stale.unlink(missing_ok=True)
     rows = []
 
     def cpu_s() -> float:
@@ -88,7 +92,9 @@ def main() -> None:
         run("no-op", base)
         for name in (n.strip() for n in args.edits.split(",") if n.strip()):
             table, key, value = EDITS[name]
-            path = base.parent / f".bench-{name.replace(' ', '_')}.toml"  # beside the base: data_file resolves
+            # Beside the base, so its data_file resolves as the base's does; named by this process, so
+            # the next run removes it if this one is killed before its `finally`.
+            path = base.parent / f".bench-{os.getpid()}-{name.replace(' ', '_')}.toml"
             path.write_text(edited(text, table, key, value))
             try:
                 run(name, path)

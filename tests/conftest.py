@@ -16,9 +16,14 @@ def pytest_configure(config):
     import os
     import tempfile
 
-    if "BVSR_TEST_KEEP_CACHE" not in os.environ:
-        config._bvsr_test_cache = tempfile.mkdtemp(prefix="bvsr-test-cache-")
-        os.environ["BVSR_CACHE"] = config._bvsr_test_cache
+    if "BVSR_TEST_KEEP_CACHE" in os.environ:
+        return
+    if hasattr(config, "workerinput"):
+        # A pytest-xdist worker: it was started with the cache its controller made (the environment is
+        # inherited), which the workers share as two concurrent builds share one; the controller removes it.
+        return
+    config._bvsr_test_cache = tempfile.mkdtemp(prefix="bvsr-test-cache-")
+    os.environ["BVSR_CACHE"] = config._bvsr_test_cache
 
 
 def pytest_unconfigure(config):
@@ -57,12 +62,27 @@ def bvsr_spec():
 
 
 @pytest.fixture(scope="session")
-def bvsr_export(tmp_path_factory) -> Path:
-    """One full default build shared by the export tests."""
+def bvsr_export(tmp_path_factory, request) -> Path:
+    """One full default build shared by the export tests (read-only to them).
+
+    Under pytest-xdist (``make test`` runs ``-n auto``) the workers share it too: the first to need it builds
+    it under a lock in the session's common temporary folder, the others wait for that build and read it."""
+    import fcntl
+
     from bvsr_cad.pipeline import build_export
 
-    out = tmp_path_factory.mktemp("exp") / "bvsr"
-    build_export(PARAMS / "bvsr.toml", out)
+    if not hasattr(request.config, "workerinput"):  # no pytest-xdist workers
+        out = tmp_path_factory.mktemp("exp") / "bvsr"
+        build_export(PARAMS / "bvsr.toml", out)
+        return out
+    shared = tmp_path_factory.getbasetemp().parent / "shared-exp"
+    shared.mkdir(exist_ok=True)
+    out = shared / "bvsr"
+    with open(shared / ".lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes, even if the build fails
+        if not (shared / ".built").exists():  # a worker's failed build leaves no mark: the next one tries again
+            build_export(PARAMS / "bvsr.toml", out)
+            (shared / ".built").touch()
     return out
 
 

@@ -23,7 +23,7 @@ check-l: $(STAMP)
 	$(BIN)/bvsr check exports/bvsr_l -q
 
 test: $(STAMP)
-	$(BIN)/python -m pytest -q -n auto
+	$(BIN)/python -m pytest -q -n auto --maxprocesses 4
 
 clean:
 	rm -rf $(VENV) exports

@@ -35,6 +35,7 @@ from .analysis.clearance import PosedTail, posed_tail
 from .assembly.build import Assembly, build_assembly
 from .assembly.placed import PlacedShape, labelled_compound, placed_instances
 from .exporters.cad import write_labelled_step
+from .exporters.reproducible import fix_step
 from .models.kinematics import uv_from_theta_phi
 from .parameters.load import ParamError, load_spec
 from .parameters.tables import TailSpec
@@ -223,7 +224,9 @@ class Tail:
         """Write the tail (at rest, or a compound from :meth:`posed`) as a STEP assembly in mm.
 
         Every instance is its own named, coloured product at its place: FreeCAD,
-        CadQuery and other OCCT-based readers show the instance names.
+        CadQuery and other OCCT-based readers show the instance names. The file is
+        reproducible: the same tail gives the same bytes (a fixed time stamp, the
+        colour entities in an order that follows the content).
 
         Example::
 
@@ -232,6 +235,7 @@ class Tail:
         """
         path = Path(path)
         write_labelled_step(self.assembly() if posed is None else posed, path)
+        fix_step(path)
         return path
 
     # -- posing -----------------------------------------------------------------------------

@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import shutil
 import subprocess
 import textwrap
@@ -24,6 +25,7 @@ from bvsr_cad.assembly.build import build_assembly
 from bvsr_cad.colors import rgb
 from bvsr_cad.exporters.cad import write_assembly_step
 from bvsr_cad.exporters.manifest import manifest_dict
+from bvsr_cad.exporters.reproducible import fix_step
 from bvsr_cad.parameters.load import ParamError, load_spec
 
 from .conftest import PARAMS
@@ -97,8 +99,11 @@ def manifest_volumes(asm) -> dict[str, float]:
 
 @pytest.fixture(scope="module")
 def assembly_step(asm, tmp_path_factory):
+    """The tail's STEP as the export writes it: OCCT's file made reproducible (the reimport tests read
+    the colours of its canonically ordered presentation section)."""
     path = tmp_path_factory.mktemp("step") / "assembly.step"
     write_assembly_step(asm, path)
+    fix_step(path)
     return path
 
 
@@ -263,6 +268,47 @@ def test_cadquery_assembly_has_the_same_names_colours_and_places(tail, asm, mani
     assert [c.name for c in posed.children] == [c.label for c in bent.children]
     tip = posed.children[asm.spec.joints]
     np.testing.assert_allclose(_matrix(tip.loc), _matrix(bent.children[asm.spec.joints].location), atol=1e-12)
+
+
+def _reordered_presentation(data: bytes) -> bytes:
+    """The STEP file with its colour blocks (one per MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION)
+    written in the reverse order and renumbered, each shared colour defined in the first block that now
+    uses it: what OCCT writes when its in-memory map comes out in another order."""
+    start = data.rfind(b"\n", 0, data.index(b"MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION")) + 1
+    end = data.index(b"\nENDSEC;", start) + 1
+    bodies = {int(m.group(1)): m.group(2) for m in
+              re.finditer(rb"^#(\d+) = (.*?;)\s*$(?=\n#|\Z)", data[start:end], re.M | re.S)}
+    inner = {n: [int(r) for r in re.findall(rb"#(\d+)", b) if int(r) in bodies] for n, b in bodies.items()}
+    roots = [n for n in sorted(bodies) if not any(n in refs for refs in inner.values())]
+    assert len(roots) == 39  # one block per coloured instance
+    first, new = min(bodies), {}
+
+    def walk(n: int) -> None:
+        if n not in new:
+            new[n] = first + len(new)
+            for r in inner[n]:
+                walk(r)
+
+    for root in reversed(roots):
+        walk(root)
+    assert len(new) == len(bodies)
+    text = {new[n]: re.sub(rb"#(\d+)", lambda m: b"#%d" % new.get(int(m.group(1)), int(m.group(1))), b)
+            for n, b in bodies.items()}
+    return data[:start] + b"".join(b"#%d = %s\n" % (n, text[n]) for n in sorted(text)) + data[end:]
+
+
+def test_assembly_step_colours_are_in_one_order(assembly_step, tmp_path):
+    """OCCT writes the colour blocks in the order of an in-memory map, which changes from run to run;
+    the published file puts them in one order that follows the content: the blocks in another order
+    give the same bytes."""
+    data = assembly_step.read_bytes()
+    other = _reordered_presentation(data)
+    assert other != data
+    path = tmp_path / "other.step"
+    path.write_bytes(other)
+    assert fix_step(path)
+    assert path.read_bytes() == data
+    assert not fix_step(path)  # a fixed file stays as it is
 
 
 def test_assembly_step_reimports_in_cadquery(assembly_step, asm, manifest_volumes):

@@ -5,12 +5,10 @@ from __future__ import annotations
 
 import json
 import os
-import re
 import subprocess
 import sys
 import threading
 import time
-from collections import Counter
 from pathlib import Path
 
 import pytest
@@ -129,24 +127,9 @@ def _files(root: Path) -> dict[str, bytes]:
     return out
 
 
-def _step_entities(data: bytes) -> Counter:
-    """A STEP file's entities with every #reference blanked: equal for two files that differ only in
-    the numbering and order of their entities."""
-    text = data.decode("latin-1")
-    body = text[text.index("DATA;"):]
-    return Counter(re.sub(r"#\d+", "#", re.sub(r"\s+", "", e.split("=", 1)[-1]))
-                   for e in body.split(";\n") if e.strip())
-
-
-#: OCCT writes the assembly's colour entities in its in-memory order, which changes from run to run:
-#: the same entities, numbered and ordered differently (compared by their entities, not their bytes).
-ENTITY_ORDER_VARIES = {"step/assembly.step"}
-
-
 def _differences(a: Path, b: Path) -> list[str]:
     fa, fb = _files(a), _files(b)
-    differ = [k for k in set(fa) & set(fb) if fa[k] != fb[k]
-              and not (k in ENTITY_ORDER_VARIES and _step_entities(fa[k]) == _step_entities(fb[k]))]
+    differ = [k for k in set(fa) & set(fb) if fa[k] != fb[k]]
     return sorted(set(fa) ^ set(fb)) + sorted(differ)
 
 

@@ -1,9 +1,10 @@
 """Byte-reproducible files: the same parameter file gives the same bytes in every build.
 
 Two writers stamp the time or chance into their files: OCCT's STEP writer
-(the header's ``FILE_NAME`` time stamp, and assembly usage ids counted across the
-process's writes) and the 3MF writer (each zip entry's
-date, and a random ``p:UUID`` per object and build item).
+(the header's ``FILE_NAME`` time stamp, assembly usage ids counted across the
+process's writes, and the colour entities written in the order of an in-memory map)
+and the 3MF writer (each zip entry's date, and a random ``p:UUID`` per object and
+build item).
 :func:`make_reproducible` rewrites both, over a whole export folder, to a
 fixed time and to UUIDs derived from the file's name and the item's place
 (still unique within the file); the real build time lives in the manifest's ``volatile``
@@ -15,6 +16,7 @@ from __future__ import annotations
 import re
 import uuid
 import zipfile
+from collections.abc import Callable
 from pathlib import Path
 
 #: The time stamp every STEP header carries (ISO 8601, as OCCT writes it).
@@ -38,10 +40,109 @@ def _fixed_nauo_ids(data: bytes) -> bytes:
                      data)
 
 
+#: The first entity of the presentation section OCCT writes after the geometry: one per coloured shape.
+_PRESENTATION = b"MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION"
+_ENTITY_START = re.compile(rb"^#(\d+)\s*=\s*", re.M)
+_REF = re.compile(rb"#(\d+)")
+_LINE_BREAK = re.compile(rb"\s*\n\s*")
+
+
+def _outside_strings(body: bytes, change: Callable[[bytes], bytes]) -> bytes:
+    """``body`` with ``change`` applied to the text outside its quoted strings (a quote inside a
+    string is doubled, which splits it into two strings with nothing between: the same result)."""
+    parts = body.split(b"'")
+    return b"'".join(change(p) if i % 2 == 0 else p for i, p in enumerate(parts))
+
+
+def _canonical_presentation(data: bytes) -> bytes:
+    """The STEP file with its presentation section (the colours: from the first
+    ``MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION`` to the end of the data) in one order
+    that follows the file's content, not the writer's memory.
+
+    OCCT writes one presentation block per coloured shape, in the order of a map keyed by memory
+    addresses, and defines each colour in the first block that uses it. Here every entity of the
+    section is named by a digest of its text, with its references into the section replaced by their
+    digests (references to the geometry before it kept as numbers, which are reproducible); the
+    blocks are then written in the order of their digests, each entity numbered, from the section's
+    first number on, where a depth-first walk first reaches it, and on one line. The entities, their
+    references and what they mean are unchanged. A file without such a section, or one whose section
+    is not a tree of references into itself (never seen), is returned as it is."""
+    import hashlib
+
+    start = data.find(_PRESENTATION)
+    if start < 0:
+        return data
+    start = data.rfind(b"\n", 0, start) + 1
+    end = data.find(b"\nENDSEC;", start)
+    if end < 0:
+        return data
+    section = data[start:end + 1]
+    heads = list(_ENTITY_START.finditer(section))
+    if not heads or heads[0].start() != 0:
+        return data
+    bodies: dict[int, bytes] = {}
+    for head, nxt in zip(heads, heads[1:] + [None]):
+        body = section[head.end():nxt.start() if nxt else len(section)].rstrip()
+        if not body.endswith(b";"):
+            return data
+        bodies[int(head.group(1))] = _outside_strings(
+            body, lambda text: _LINE_BREAK.sub(lambda m: b" " if m.start() and text[m.start() - 1:m.start()].isalnum()
+                                               and m.end() < len(text) and text[m.end():m.end() + 1].isalnum()
+                                               else b"", text))
+    first = min(bodies)
+    if first != int(heads[0].group(1)) or len(bodies) != len(heads):
+        return data
+
+    def refs(number: int) -> list[int]:
+        out: list[int] = []
+        _outside_strings(bodies[number], lambda text: out.extend(int(r) for r in _REF.findall(text)) or text)
+        return [r for r in out if r in bodies]
+
+    digests: dict[int, bytes] = {}
+    walking: set[int] = set()
+
+    def digest(number: int) -> bytes:
+        if number not in digests:
+            if number in walking:
+                raise ValueError("a cycle of references")
+            walking.add(number)
+            text = _outside_strings(bodies[number], lambda t: _REF.sub(
+                lambda m: b"@" + digest(int(m.group(1))) if int(m.group(1)) in bodies else m.group(0), t))
+            walking.discard(number)
+            digests[number] = hashlib.sha256(text).hexdigest().encode()
+        return digests[number]
+
+    try:
+        referenced = {r for n in bodies for r in refs(n)}
+        roots = sorted((n for n in bodies if n not in referenced), key=digest)
+    except (ValueError, RecursionError):
+        return data
+    new: dict[int, int] = {}
+
+    def walk(number: int) -> None:
+        stack = [number]
+        while stack:
+            n = stack.pop()
+            if n in new:
+                continue
+            new[n] = first + len(new)
+            stack.extend(reversed(refs(n)))
+
+    for root in roots:
+        walk(root)
+    if len(new) != len(bodies):
+        return data
+    renumbered = {new[n]: _outside_strings(body, lambda t: _REF.sub(
+        lambda m: b"#%d" % new.get(int(m.group(1)), int(m.group(1))), t)) for n, body in bodies.items()}
+    out = b"".join(b"#%d = %s\n" % (n, renumbered[n]) for n in sorted(renumbered))
+    return data[:start] + out + data[end + 1:]
+
+
 def fix_step(path: Path) -> bool:
     data = path.read_bytes()
     fixed = _STEP_STAMP.sub(rb"\g<1>" + FIXED_STEP_TIME.encode() + rb"\g<2>", data, count=1)
     fixed = _fixed_nauo_ids(fixed)
+    fixed = _canonical_presentation(fixed)
     if fixed != data:
         path.write_bytes(fixed)
         return True

@@ -180,14 +180,17 @@ def _rigid_robot(rigid: RigidRobot, root: Path, visual: list[trimesh.Trimesh]) -
                     "weigh the print and scale)"}
 
 
-def _layout_3mf(items: list[tuple[str, Path]], path: Path) -> None:
-    """Each STL once as a named object, side by side in a row of rows (mm)."""
+def _layout_3mf(items: list[tuple[str, Path]], path: Path) -> list[list[float]]:
+    """Each STL once as a named object, side by side in a row of rows (mm); returns each item's size
+    (x, y, z) in mm, as its STL is oriented."""
     scene = trimesh.Scene()
     x = y = row_depth = 0.0
     row_limit = 400.0
+    sizes = []
     for name, stl in items:
         mesh = trimesh.load(stl, file_type="stl", force="mesh")
         lo, hi = mesh.bounds
+        sizes.append((hi - lo).tolist())
         w, d = hi[0] - lo[0], hi[1] - lo[1]
         if x > 0 and x + w > row_limit:
             x, y, row_depth = 0.0, y + row_depth + PLATE_GAP_MM, 0.0
@@ -196,6 +199,7 @@ def _layout_3mf(items: list[tuple[str, Path]], path: Path) -> None:
         x += w + PLATE_GAP_MM
         row_depth = max(row_depth, d)
     write_reproducible_3mf(scene, path)
+    return sizes
 
 
 def _print_jobs(asm: Assembly, root: Path, items: list[MadeItem], stl_of: dict[str, str],
@@ -226,9 +230,7 @@ def _print_jobs(asm: Assembly, root: Path, items: list[MadeItem], stl_of: dict[s
 
         def layout(dst: Path, items: list[dict[str, Any]] = items, three_mf: str = three_mf) -> list[list[float]]:
             (dst / three_mf).parent.mkdir(parents=True, exist_ok=True)
-            _layout_3mf([(it["part"], root / it["stl"]) for it in items], dst / three_mf)
-            return [(hi - lo).tolist() for lo, hi in
-                    (trimesh.load(root / it["stl"], file_type="stl", force="mesh").bounds for it in items)]
+            return _layout_3mf([(it["part"], root / it["stl"]) for it in items], dst / three_mf)
 
         sha = (lambda rel: file_sha256(root / rel)) if cache is not None else (lambda rel: "")
         sizes, _ = object_stage(cache, stage_key("print_job_layout", job=job,

@@ -26,24 +26,7 @@ FIXED_ZIP_TIME = (1980, 1, 1, 0, 0, 0)
 _STEP_STAMP = re.compile(rb"(FILE_NAME\('(?:[^']|'')*',\s*')[^']*(')")
 
 
-_NAUO = re.compile(rb"(NEXT_ASSEMBLY_USAGE_OCCURRENCE\(')([^']*)(',')((?:[^']|'')*)(')")
-
-
-def _fixed_nauo_ids(data: bytes) -> bytes:
-    """OCCT numbers assembly usages with a counter that runs on across a process's STEP writes; number
-    them by their instance names' order instead (unique names: 1..n), so the id follows the file."""
-    names = [m.group(4) for m in _NAUO.finditer(data)]
-    if len(set(names)) != len(names):
-        return data
-    order = {name: i + 1 for i, name in enumerate(sorted(names))}
-    return _NAUO.sub(lambda m: m.group(1) + str(order[m.group(4)]).encode() + m.group(3) + m.group(4) + m.group(5),
-                     data)
-
-
-#: The first entity of the presentation section OCCT writes after the geometry: one per coloured shape.
-_PRESENTATION = b"MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION"
-_ENTITY_START = re.compile(rb"^#(\d+)\s*=\s*", re.M)
-_REF = re.compile(rb"#(\d+)")
+_NAUO = re.compile(rb"(NEXT_ASSEMBLY_USAGE_OCCURRENCE\(')([^']*)(',')((?:[^']|'')*)(')((?:'(?:[^']|'')*'|[^';])*;)")
 _LINE_BREAK = re.compile(rb"\s*\n\s*")
 
 
@@ -52,6 +35,34 @@ def _outside_strings(body: bytes, change: Callable[[bytes], bytes]) -> bytes:
     string is doubled, which splits it into two strings with nothing between: the same result)."""
     parts = body.split(b"'")
     return b"'".join(change(p) if i % 2 == 0 else p for i, p in enumerate(parts))
+
+
+def _unwrapped(text: bytes) -> bytes:
+    """``text`` (outside strings) without OCCT's line breaks: removed, or one space between two words."""
+    def join(m: re.Match) -> bytes:
+        a, b = text[m.start() - 1:m.start()], text[m.end():m.end() + 1]
+        return b" " if a.isalnum() and b.isalnum() else b""
+
+    return _LINE_BREAK.sub(join, text)
+
+
+def _fixed_nauo_ids(data: bytes) -> bytes:
+    """OCCT numbers assembly usages with a counter that runs on across a process's STEP writes; number
+    them by their instance names' order instead (unique names: 1..n), so the id follows the file. Each
+    usage is written on one line: OCCT breaks the line where the counter's digits pushed it past its
+    width, which would otherwise depend on how many files the process wrote before."""
+    names = [m.group(4) for m in _NAUO.finditer(data)]
+    if len(set(names)) != len(names):
+        return data
+    order = {name: i + 1 for i, name in enumerate(sorted(names))}
+    return _NAUO.sub(lambda m: m.group(1) + str(order[m.group(4)]).encode() + m.group(3) + m.group(4) + m.group(5)
+                     + _outside_strings(m.group(6), _unwrapped), data)
+
+
+#: The first entity of the presentation section OCCT writes after the geometry: one per coloured shape.
+_PRESENTATION = b"MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION"
+_ENTITY_START = re.compile(rb"^#(\d+)\s*=\s*", re.M)
+_REF = re.compile(rb"#(\d+)")
 
 
 def _canonical_presentation(data: bytes) -> bytes:
@@ -85,10 +96,7 @@ def _canonical_presentation(data: bytes) -> bytes:
         body = section[head.end():nxt.start() if nxt else len(section)].rstrip()
         if not body.endswith(b";"):
             return data
-        bodies[int(head.group(1))] = _outside_strings(
-            body, lambda text: _LINE_BREAK.sub(lambda m: b" " if m.start() and text[m.start() - 1:m.start()].isalnum()
-                                               and m.end() < len(text) and text[m.end():m.end() + 1].isalnum()
-                                               else b"", text))
+        bodies[int(head.group(1))] = _outside_strings(body, _unwrapped)
     first = min(bodies)
     if first != int(heads[0].group(1)) or len(bodies) != len(heads):
         return data

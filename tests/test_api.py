@@ -311,6 +311,27 @@ def test_assembly_step_colours_are_in_one_order(assembly_step, tmp_path):
     assert not fix_step(path)  # a fixed file stays as it is
 
 
+def test_presentation_sections_that_cannot_be_renumbered_are_left_as_they_are():
+    """Renumbering the colour section is safe only when nothing before it refers into it and its
+    references form no cycle; otherwise the file keeps OCCT's order. A well-formed one is reordered."""
+    from bvsr_cad.exporters.reproducible import _canonical_presentation
+
+    head = b"ISO-10303-21;\nHEADER;\nENDSEC;\nDATA;\n#1 = CARTESIAN_POINT('',(0.,0.,0.));\n"
+    blocks = (b"#2 = MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION('',(#4),#1);\n"
+              b"#3 = MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION('',(#5),#1);\n"
+              b"#4 = STYLED_ITEM('color',(),#1);\n#5 = STYLED_ITEM('colour',(),#1);\n")
+    tail = b"ENDSEC;\nEND-ISO-10303-21;\n"
+    good = head + blocks + tail
+    fixed = _canonical_presentation(good)
+    assert sorted(fixed.splitlines()) != sorted(good.splitlines())  # the walk numbers each block's item next to it
+    assert _canonical_presentation(fixed) == fixed
+    assert sorted(re.sub(rb"#\d+", b"#", fixed).splitlines()) == sorted(re.sub(rb"#\d+", b"#", good).splitlines())
+    into = good.replace(b"#1 = CARTESIAN_POINT('',(0.,0.,0.));", b"#1 = CARTESIAN_POINT('',(0.,0.,0.),#4);")
+    assert _canonical_presentation(into) == into
+    cycle = good.replace(b"STYLED_ITEM('color',(),#1)", b"STYLED_ITEM('color',(#2),#1)")
+    assert _canonical_presentation(cycle) == cycle
+
+
 def test_assembly_step_is_the_same_after_other_writes(assembly_step, asm, tmp_path):
     """OCCT numbers assembly usages with a counter that runs on across a process's writes (three writes
     of the 39 usages take it past 100, and OCCT then wraps those lines elsewhere): each later write of

@@ -70,14 +70,15 @@ def _canonical_presentation(data: bytes) -> bytes:
     ``MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION`` to the end of the data) in one order
     that follows the file's content, not the writer's memory.
 
-    OCCT writes one presentation block per coloured shape, in the order of a map keyed by memory
-    addresses, and defines each colour in the first block that uses it. Here every entity of the
+    OCCT writes one presentation block per coloured shape in the order of an in-memory map, which
+    changed from run to run (measured), and defines each colour in the first block that uses it. Here every entity of the
     section is named by a digest of its text, with its references into the section replaced by their
     digests (references to the geometry before it kept as numbers, which are reproducible); the
     blocks are then written in the order of their digests, each entity numbered, from the section's
     first number on, where a depth-first walk first reaches it, and on one line. The entities, their
-    references and what they mean are unchanged. A file without such a section, or one whose section
-    is not a tree of references into itself (never seen), is returned as it is."""
+    references and what they mean are unchanged. A file without such a section, one whose section has
+    a cycle of references, or one whose entities before it refer into it (never seen: renumbering
+    would break them), is returned as it is."""
     import hashlib
 
     start = data.find(_PRESENTATION)
@@ -99,6 +100,9 @@ def _canonical_presentation(data: bytes) -> bytes:
         bodies[int(head.group(1))] = _outside_strings(body, _unwrapped)
     first = min(bodies)
     if first != int(heads[0].group(1)) or len(bodies) != len(heads):
+        return data
+    digits = len(str(first))
+    if any(int(r) >= first for r in re.findall(rb"#(\d{%d,})" % digits, data[:start])):
         return data
 
     def refs(number: int) -> list[int]:

@@ -28,6 +28,7 @@ _STEP_STAMP = re.compile(rb"(FILE_NAME\('(?:[^']|'')*',\s*')[^']*(')")
 
 _NAUO = re.compile(rb"(NEXT_ASSEMBLY_USAGE_OCCURRENCE\(')([^']*)(',')((?:[^']|'')*)(')((?:'(?:[^']|'')*'|[^';])*;)")
 _LINE_BREAK = re.compile(rb"\s*\n\s*")
+_REF = re.compile(rb"#(\d+)")
 
 
 def _outside_strings(body: bytes, change: Callable[[bytes], bytes]) -> bytes:
@@ -35,6 +36,11 @@ def _outside_strings(body: bytes, change: Callable[[bytes], bytes]) -> bytes:
     string is doubled, which splits it into two strings with nothing between: the same result)."""
     parts = body.split(b"'")
     return b"'".join(change(p) if i % 2 == 0 else p for i, p in enumerate(parts))
+
+
+def _references(body: bytes) -> list[int]:
+    """The entity numbers ``body`` refers to (``#n`` outside its strings), in order."""
+    return [int(r) for i, part in enumerate(body.split(b"'")) if i % 2 == 0 for r in _REF.findall(part)]
 
 
 def _unwrapped(text: bytes) -> bytes:
@@ -62,7 +68,6 @@ def _fixed_nauo_ids(data: bytes) -> bytes:
 #: The first entity of the presentation section OCCT writes after the geometry: one per coloured shape.
 _PRESENTATION = b"MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION"
 _ENTITY_START = re.compile(rb"^#(\d+)\s*=\s*", re.M)
-_REF = re.compile(rb"#(\d+)")
 
 
 def _canonical_presentation(data: bytes) -> bytes:
@@ -105,11 +110,7 @@ def _canonical_presentation(data: bytes) -> bytes:
     if any(int(r) >= first for r in re.findall(rb"#(\d{%d,})" % digits, data[:start])):
         return data
 
-    def refs(number: int) -> list[int]:
-        out: list[int] = []
-        _outside_strings(bodies[number], lambda text: out.extend(int(r) for r in _REF.findall(text)) or text)
-        return [r for r in out if r in bodies]
-
+    inner = {n: [r for r in _references(body) if r in bodies] for n, body in bodies.items()}
     digests: dict[int, bytes] = {}
     walking: set[int] = set()
 
@@ -125,7 +126,7 @@ def _canonical_presentation(data: bytes) -> bytes:
         return digests[number]
 
     try:
-        referenced = {r for n in bodies for r in refs(n)}
+        referenced = {r for refs in inner.values() for r in refs}
         roots = sorted((n for n in bodies if n not in referenced), key=digest)
     except (ValueError, RecursionError):
         return data
@@ -138,7 +139,7 @@ def _canonical_presentation(data: bytes) -> bytes:
             if n in new:
                 continue
             new[n] = first + len(new)
-            stack.extend(reversed(refs(n)))
+            stack.extend(reversed(inner[n]))
 
     for root in roots:
         walk(root)

@@ -179,9 +179,8 @@ def test_another_rod_is_noted_not_compared(bvsr_spec):
 
 
 def test_rows_predicted_in_threads_equal_rows_predicted_one_by_one(bvsr_spec):
-    """compare_rows predicts in threads (the workspace protocol steps beside the other rows): the table
-    is the same, value for value, with one thread. Rows that share a memoised motion (a root torque and
-    force, a peak velocity and the exponents) are asked from several threads at once."""
+    """compare_rows predicts in threads (the workspace protocol steps beside the other rows, which take
+    one thread of their own): the table is the same, value for value, with one thread."""
     from bvsr_cad.analysis.calibrate import compare_rows, uncalibrated
     from bvsr_cad.analysis.predict import Predictor
     from bvsr_cad.assembly.build import build_assembly
@@ -202,3 +201,34 @@ def test_rows_predicted_in_threads_equal_rows_predicted_one_by_one(bvsr_spec):
     one, many = table(1), table(6)
     assert [r["row"] for r in many] == [m.row for m in rows]
     assert json.dumps(many, sort_keys=True) == json.dumps(one, sort_keys=True)
+
+
+def test_a_memo_entry_asked_from_many_threads_is_made_once():
+    """The Predictor's memo (shared by the protocol rows' threads and the thread preparing their
+    geometry): threads asking for one entry at once wait for the first, which makes it once."""
+    import threading
+    import time
+
+    from bvsr_cad.analysis.predict import _Locks
+
+    locks, store, made, start = _Locks(), {}, [], threading.Barrier(9)
+
+    def make(key: str) -> str:
+        made.append(key)
+        time.sleep(0.05)  # long enough for every other thread to arrive
+        return key.upper()
+
+    got = []
+
+    def ask(key: str) -> None:
+        start.wait()
+        got.append(locks.once(store, key, lambda: make(key)))
+
+    threads = [threading.Thread(target=ask, args=(k,)) for k in ["a"] * 8 + ["b"]]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert sorted(made) == ["a", "b"]
+    assert sorted(got) == ["A"] * 8 + ["B"]
+    assert store == {"a": "A", "b": "B"}

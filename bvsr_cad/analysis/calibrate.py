@@ -198,9 +198,9 @@ def compare_rows(before: Predictor, after: Predictor, rows: list[Measurement],
                  progress: Callable[[str], None] | None = None, threads: int = COMPARE_THREADS) -> list[dict]:
     """Every row predicted by ``before`` (uncalibrated) and ``after`` (calibrated), with relative errors.
 
-    The predictions run in ``threads`` threads, the slowest quantity (the workspace protocol) first, the
-    others once its geometry and joint limits are made; each is deterministic, so the table is the same
-    for any number of threads."""
+    The predictions run in up to ``threads`` threads, the slowest quantity (the workspace protocol)
+    first, the others once its geometry and joint limits are made; each is deterministic, so the table
+    is the same for any number of threads."""
     say = progress or (lambda _m: None)
 
     def predict(pred: Predictor, m: Measurement) -> float:
@@ -212,8 +212,9 @@ def compare_rows(before: Predictor, after: Predictor, rows: list[Measurement],
     protocol = [i for i, (_pred, m) in enumerate(jobs) if m.quantity == "tip_workspace_radius"]
     # The protocol rows each in a thread of their own (their simulation runs in C, without the
     # interpreter's lock); every other row in one more thread, one after another: their Python takes
-    # turns on the lock anyway, and more threads taking turns add only switching and rows solved twice
-    # at once (eight threads for all rows used about 9 s more CPU of about 130 for the same table).
+    # turns on the lock anyway, and more threads taking turns add only switching (and the taper's
+    # unlocked memo filled twice at once: six layouts solved for three). Eight threads for all rows
+    # used about 9 s more CPU, of about 130, for the same table.
     sims = ThreadPoolExecutor(max(1, min(len(protocol), threads - 1)))
     rest = ThreadPoolExecutor(1) if threads > 1 else sims
     try:

@@ -31,16 +31,22 @@ _LINE_BREAK = re.compile(rb"\s*\n\s*")
 _REF = re.compile(rb"#(\d+)")
 
 
-def _outside_strings(body: bytes, change: Callable[[bytes], bytes]) -> bytes:
-    """``body`` with ``change`` applied to the text outside its quoted strings (a quote inside a
+def _quote_split(body: bytes) -> list[bytes]:
+    """``body`` split at its quotes: the even parts lie outside its quoted strings (a quote inside a
     string is doubled, which splits it into two strings with nothing between: the same result)."""
-    parts = body.split(b"'")
-    return b"'".join(change(p) if i % 2 == 0 else p for i, p in enumerate(parts))
+    return body.split(b"'")
+
+
+def _outside_strings(body: bytes, change: Callable[[bytes], bytes]) -> bytes:
+    """``body`` with ``change`` applied to the text outside its quoted strings."""
+    parts = _quote_split(body)
+    parts[::2] = [change(p) for p in parts[::2]]
+    return b"'".join(parts)
 
 
 def _references(body: bytes) -> list[int]:
     """The entity numbers ``body`` refers to (``#n`` outside its strings), in order."""
-    return [int(r) for i, part in enumerate(body.split(b"'")) if i % 2 == 0 for r in _REF.findall(part)]
+    return [int(r) for part in _quote_split(body)[::2] for r in _REF.findall(part)]
 
 
 def _unwrapped(text: bytes) -> bytes:

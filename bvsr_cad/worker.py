@@ -161,11 +161,12 @@ class SecondProcess:
         return cls.start(module, list(hint or []), Path(tempfile.gettempdir()), progress, standby=True)
 
     def begin(self, args: list[str], cwd: Path) -> bool:
-        """Hand a standby child its arguments and working folder; False if it is gone (then start another)."""
+        """Hand a standby child its arguments and working folder; False if it is gone (then start another).
+        A relative ``cwd`` is this process's (the child started elsewhere: :meth:`standby`)."""
         if not self.running or self.proc is None or self.proc.stdin is None:
             return False
         try:
-            self.proc.stdin.write((json.dumps({"args": list(args), "cwd": str(cwd)}) + "\n").encode())
+            self.proc.stdin.write((json.dumps({"args": list(args), "cwd": str(Path(cwd).resolve())}) + "\n").encode())
             self.proc.stdin.close()
         except OSError:
             return False

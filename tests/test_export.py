@@ -215,6 +215,15 @@ def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path, monkeypatch
     assert standby.begin([str(changed), "sha256 of what the build read"], tmp_path)
     with pytest.raises(ParamError, match=r"edited.toml(.|\n)*changed while the build was running"):
         standby.result()
+    # A relative working folder is this process's, not the child's (`bvsr build -o exports/x` names the
+    # build's temporary folder relative to where the user stands; the child started in /tmp).
+    here = tmp_path / "here"
+    (here / "exports").mkdir(parents=True)
+    monkeypatch.chdir(here)
+    relative = worker.SecondProcess.standby("bvsr_cad.pipeline")
+    assert relative.begin([str(changed), "sha256 of what the build read"], Path("exports"))
+    with pytest.raises(ParamError, match=r"edited.toml(.|\n)*changed while the build was running"):
+        relative.result()
     idle = worker.SecondProcess.standby("bvsr_cad.pipeline")
     idle.proc.stdin.close()  # no work: it imports, reads the end of its input and exits quietly
     assert idle.proc.wait(timeout=300) == 0

@@ -37,7 +37,9 @@ _OBJECTS = "objects.pkl"
 
 
 def cache_root() -> Path:
-    return Path(os.environ.get("BVSR_CACHE", Path.home() / ".cache" / "bvsr_cad")) / "artifacts"
+    """``$BVSR_CACHE/artifacts`` (default ``~/.cache/bvsr_cad/artifacts``), made absolute: a relative
+    ``BVSR_CACHE`` is where the user stands, not the folder a second process works in."""
+    return (Path(os.environ.get("BVSR_CACHE", Path.home() / ".cache" / "bvsr_cad")) / "artifacts").absolute()
 
 
 @lru_cache(maxsize=1)
@@ -89,7 +91,7 @@ class ArtifactCache:
     """Entries are folders ``<root>/<key[:2]>/<key>/`` with a ``.done`` marker written last."""
 
     def __init__(self, root: Path | None = None, max_bytes: float | None = None):
-        self.root = Path(root) if root is not None else cache_root()
+        self.root = Path(root).absolute() if root is not None else cache_root()
         mb = float(os.environ.get("BVSR_CACHE_MAX_MB", DEFAULT_MAX_MB))
         self.max_bytes = max_bytes if max_bytes is not None else mb * 1e6
 

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from bvsr_cad.cache import ArtifactCache
 from bvsr_cad.checks import printability
 from bvsr_cad.checks.export import Export
 from bvsr_cad.checks.printability import (
@@ -222,13 +223,12 @@ def test_printability_in_a_second_process_gives_the_same_results(bvsr_export):
 
 
 def test_a_relative_cache_is_where_the_user_stands_not_in_the_export(bvsr_export, monkeypatch, tmp_path):
-    """`BVSR_CACHE=cache bvsr build ...`: the printability process works in the export's folder, and was
-    handed the cache's path as written; it filed its entries in a `cache/` inside the export."""
+    """`BVSR_CACHE=cache bvsr build ...`: the cache is `cache/` where the command runs, for the printability
+    process too, which works in the export's folder (handed the path as written, it once filed its
+    entries in a `cache/` inside the export)."""
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("BVSR_CACHE", "relative_cache")
     before = sorted(p.relative_to(bvsr_export) for p in bvsr_export.rglob("*"))
-    from bvsr_cad.cache import ArtifactCache
-
     run_checks(bvsr_export, cache=ArtifactCache())
     assert sorted(p.relative_to(bvsr_export) for p in bvsr_export.rglob("*")) == before
     assert any((tmp_path / "relative_cache" / "artifacts").rglob(".done"))

@@ -1,9 +1,12 @@
 """`bvsr watch`: rebuild an export each time its parameter file (or calibration data) is saved.
 
-It watches the file's folder with watchfiles (editors save by writing a new
-file and renaming it over the old one), waits until the saves settle
-(debounce), prints which keys changed, rebuilds through the cache (so only
+It watches the folders of the parameter file and of the calibration data file
+it names (``calibration.data_file``, read by the build's measurement
+comparison) with watchfiles (editors save by writing a new file and renaming
+it over the old one), waits until the saves settle (debounce), prints which
+keys changed (or that the data changed), rebuilds through the cache (so only
 the stages whose inputs changed run again) and says which stages it reused.
+When an edit names another data file, that file is watched from then on.
 A bad edit prints the error and leaves the last good export in place; the
 next save tries again. Ctrl-C stops it; a build in progress is abandoned and
 its temporary folder removed, as for `bvsr build`.
@@ -45,6 +48,21 @@ def _read(path: Path) -> dict[str, Any] | None:
         return None
 
 
+def _data_file(params: Path, data: dict[str, Any] | None) -> Path | None:
+    """The calibration data file a parsed parameter file names (relative to its folder, as the build
+    reads it), or None."""
+    cal = (data or {}).get("calibration")
+    name = cal.get("data_file") if isinstance(cal, dict) else None
+    return (params.parent / name).resolve() if isinstance(name, str) and name else None
+
+
+def _bytes(path: Path | None) -> bytes | None:
+    try:
+        return path.read_bytes() if path is not None else None
+    except OSError:
+        return None
+
+
 def watch(params: str | Path, out_dir: str | Path | None, say: Callable[[str], None],
           progress: Callable[[str], None] | None = None, stop: threading.Event | None = None,
           debounce_ms: int = DEBOUNCE_MS, build: Callable[..., BuildResult] = build_export) -> int:
@@ -66,19 +84,40 @@ def watch(params: str | Path, out_dir: str | Path | None, say: Callable[[str], N
         say(f"wrote {res.out_dir}/ in {res.seconds:.1f} s; {len(failed)} failed checks; "
             f"rebuilt: {', '.join(built) or 'nothing'}; reused: {', '.join(reused) or 'nothing'}")
 
+    data = _data_file(params, last)
+    data_bytes = _bytes(data)
     try:
         rebuild()
-        say(f"watching {params} (Ctrl-C stops)")
-        for changes in watch_files(params.parent, debounce=debounce_ms, stop_event=stop, raise_interrupt=False,
-                                   watch_filter=lambda _change, path: Path(path).resolve() == params):
-            new = _read(params)
-            diff = changed_keys(last, new) if new is not None else ["(the file is not valid TOML yet)"]
-            if new is not None and not diff:
-                continue  # saved without a change
-            say(f"{params.name} changed: " + "; ".join(diff))
-            if new is not None:
-                last = new
-            rebuild()
+        say(f"watching {params}" + (f" and {data}" if data else "") + " (Ctrl-C stops)")
+        while True:
+            files = {params} | ({data} if data else set())
+            folders = sorted({f.parent for f in files if f.parent.is_dir()})
+            retarget = False
+            for _changes in watch_files(*folders, debounce=debounce_ms, stop_event=stop, raise_interrupt=False,
+                                        recursive=False,  # the files sit in these folders, not below
+                                        watch_filter=lambda _change, path: Path(path).resolve() in files):
+                new = _read(params)
+                diff = changed_keys(last, new) if new is not None else ["(the file is not valid TOML yet)"]
+                new_data = _data_file(params, new) if new is not None else data
+                new_bytes = _bytes(new_data)
+                data_changed = new_data == data and new_bytes != data_bytes
+                if new is not None and not diff and not data_changed:
+                    continue  # saved without a change
+                if diff:
+                    say(f"{params.name} changed: " + "; ".join(diff))
+                if data_changed:
+                    say(f"{data.name} (calibration data) changed" if new_bytes is not None
+                        else f"{data.name} (calibration data) is gone")
+                if new is not None:
+                    last = new
+                data_bytes = new_bytes
+                rebuild()
+                if new_data != data:
+                    data, retarget = new_data, True
+                    say(f"now watching {params}" + (f" and {data}" if data else ""))
+                    break
+            if not retarget:
+                break
     except KeyboardInterrupt:
         pass
     say("stopped")

@@ -60,3 +60,45 @@ def test_watch_rebuilds_on_save_and_survives_a_bad_edit(tmp_path):
     stop.set()
     th.join(10)
     assert not th.is_alive() and lines[-1] == "stopped"
+
+
+def test_watch_rebuilds_when_the_calibration_data_is_saved_and_follows_a_new_data_file(tmp_path):
+    """The build reads ``calibration.data_file`` (the measurement comparison): saving it rebuilds, a touch
+    without a change does not, and once an edit names another file (in another folder) that one is watched."""
+    (tmp_path / "data").mkdir()
+    (tmp_path / "other").mkdir()
+    data = tmp_path / "data" / "rows.csv"
+    data.write_text("quantity,value\na,1\n")
+    params = tmp_path / "tail.toml"
+    params.write_text('name = "t"\n[calibration]\ndata_file = "data/rows.csv"\n')
+    calls, lines = [], []
+
+    def build(path, out, progress):
+        calls.append(Path(path).read_text())
+        return BuildResult(tmp_path / "out", [], 0.01, [{"stage": "analyses", "status": "built", "seconds": 0.0}])
+
+    stop = threading.Event()
+    th = threading.Thread(target=watch, args=(params, None, lines.append),
+                          kwargs={"stop": stop, "debounce_ms": 100, "build": build}, daemon=True)
+    th.start()
+    assert _wait(lambda: any(line.startswith("watching") and str(data) in line for line in lines))
+    data.write_text("quantity,value\na,2\n")
+    assert _wait(lambda: len(calls) == 2)
+    assert any(line == "rows.csv (calibration data) changed" for line in lines)
+    data.write_text("quantity,value\na,2\n")  # saved again, same bytes
+    time.sleep(1.0)
+    assert len(calls) == 2
+    moved = tmp_path / "other" / "more.csv"
+    moved.write_text("quantity,value\nb,1\n")
+    params.write_text('name = "t"\n[calibration]\ndata_file = "other/more.csv"\n')
+    assert _wait(lambda: len(calls) == 3)
+    assert _wait(lambda: any(line.startswith("now watching") and str(moved) in line for line in lines))
+    data.write_text("quantity,value\na,3\n")  # no longer read by the build
+    moved.write_text("quantity,value\nb,2\n")
+    assert _wait(lambda: len(calls) == 4)
+    assert "more.csv (calibration data) changed" in lines
+    time.sleep(1.0)
+    assert len(calls) == 4 and not any("rows.csv" in line for line in lines[lines.index("more.csv (calibration data) changed"):])
+    stop.set()
+    th.join(10)
+    assert not th.is_alive() and lines[-1] == "stopped"

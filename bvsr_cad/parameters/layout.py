@@ -15,13 +15,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from dataclasses import dataclass, field
 from functools import lru_cache
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from .standard_parts import MetricSize, metric, size_for_tap_drill
-from .tables import AUTO, TailSpec
+from .tables import AUTO, TailSpec, feasible_interval, rule_bounds
 
 N_SOA = 5
 
@@ -105,6 +107,69 @@ class PanelLayout:
         r = self.pitch_radius_lower_mm if face == "lower" else self.pitch_radius_upper_mm
         return np.array([polar(r, a) for a in soa_angles_deg()])
 
+
+
+class LayoutProblem(NamedTuple):
+    """A panel rule broken: what, the web it leaves and the one it needs (mm), and the features
+    (:class:`Cyl` names, ``rim``, ``bellows``, ``pocket_depth``) whose keys set it."""
+
+    desc: str
+    measured_mm: float
+    need_mm: float
+    features: tuple[str, ...]
+
+
+#: The parameter keys that size or place a panel feature, by the start of its name (first match).
+_FEATURE_KEYS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("pocket_depth", ("soa.height_mm", "joint.gap_mm", "joint.joint_height_mm", "fabrication.socket_floor_mm")),
+    ("pocket_", ("joint.base_diameter_mm", "fabrication.pocket_clearance_mm", "joint.pitch_diameter_mm")),
+    ("channel_", ("joint.channel_diameter_mm", "joint.pitch_diameter_mm")),
+    ("fitting_port_", ("mount.fitting_tap_drill_mm", "joint.pitch_diameter_mm")),
+    ("tube_port_", ("tubes.outer_diameter_mm",)),
+    ("tube_", ("tubes.outer_diameter_mm", "tubes.clearance_mm")),
+    ("feed_", ("tubes.passage_diameter_mm", "joint.pitch_diameter_mm")),
+    ("passage_", ("tubes.passage_diameter_mm",)),
+    ("rod_bore", ("vertebra.diameter_mm", "socket.rod_clearance_mm")),
+    ("set_screw", ("socket.set_screw_tap_drill_mm",)),
+    ("clamp_boss", ("socket.boss_wall_mm", "vertebra.diameter_mm")),
+    ("mount_insert_", ("mount.insert_diameter_mm", "mount.bolt_circle_diameter_mm")),
+    ("payload_insert_", ("payload.insert_diameter_mm", "payload.insert_circle_diameter_mm", "payload.insert_count")),
+    ("lightening_", ("lightening.hole_diameter_mm",)),
+    ("rim", ("joint.panel_diameter_mm",)),
+    ("bellows", ("soa.long_side_mm", "soa.fillet_radius_mm", "soa.rotation_deg", "joint.pitch_diameter_mm")),
+)
+#: The tube rings: the tubes of segment s sit on this radius.
+_RING_KEYS = {"2": "tubes.inner_radius_mm", "3": "tubes.second_radius_mm"}
+
+
+def feature_keys(name: str) -> tuple[str, ...]:
+    """The parameter keys that size or place the panel feature ``name`` (see :class:`LayoutProblem`)."""
+    keys: tuple[str, ...] = ()
+    for start, found in _FEATURE_KEYS:
+        if name.startswith(start):
+            keys = found
+            break
+    m = re.match(r"(tube|tube_port|passage)_s(\d)_", name)
+    if m and m.group(2) in _RING_KEYS:
+        keys += (_RING_KEYS[m.group(2)],)
+    return keys
+
+
+def key_value(spec: TailSpec, key: str) -> Any:
+    """The value of a dotted parameter key in ``spec``."""
+    value: Any = spec
+    for part in key.split("."):
+        value = getattr(value, part)
+    return value
+
+
+def with_key(spec: TailSpec, key: str, value: Any) -> TailSpec:
+    """``spec`` with one dotted parameter key replaced."""
+    *tables, name = key.split(".")
+    if not tables:
+        return dataclasses.replace(spec, **{name: value})
+    section = key_value(spec, ".".join(tables))
+    return with_key(spec, ".".join(tables), dataclasses.replace(section, **{name: value}))
 
 def half_angle_rad(spec: TailSpec) -> float:
     """The taper half-angle actually used (resolving 'auto')."""
@@ -332,20 +397,20 @@ def _segment_point_distance(p0, p1, q) -> float:
     return float(np.linalg.norm(p0 + t * d - q))
 
 
-def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[tuple[str, float, float]]:
-    """(description, measured web mm, required web mm) for every violated rule."""
+def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
+    """Every violated rule of one panel."""
     fab = spec.fabrication
     out: list[tuple[str, float, float]] = []
     t = lay.thickness_mm
     # Pockets from both faces plus a floor must fit in the panel.
     depth_total = lay.pocket_depth_mm * (int(lay.lower_pockets) + int(lay.upper_pockets))
     if depth_total + fab.socket_floor_mm > t + 1e-9:
-        out.append((f"{lay.name}: flange pockets ({lay.pocket_depth_mm:.3f} mm per face) deeper than the "
-                    f"panel allows (thickness {t:.2f} mm, floor {fab.socket_floor_mm} mm)",
-                    t - depth_total, fab.socket_floor_mm))
+        out.append(LayoutProblem(f"{lay.name}: flange pockets ({lay.pocket_depth_mm:.3f} mm per face) deeper than "
+                                 f"the panel allows (thickness {t:.2f} mm, floor {fab.socket_floor_mm} mm)",
+                                 t - depth_total, fab.socket_floor_mm, ("pocket_depth",)))
     if lay.pocket_depth_mm < 0:
-        out.append((f"{lay.name}: the SOA ({spec.soa.built_height_mm:.2f} mm) is shorter than the gap "
-                    f"H_a ({spec.joint.gap_mm} mm)", lay.pocket_depth_mm, 0.0))
+        out.append(LayoutProblem(f"{lay.name}: the SOA ({spec.soa.built_height_mm:.2f} mm) is shorter than the gap "
+                                 f"H_a ({spec.joint.gap_mm} mm)", lay.pocket_depth_mm, 0.0, ("pocket_depth",)))
     cuts = list(lay.cuts)
     for i, a in enumerate(cuts):
         ra = a.diameter_mm / 2
@@ -356,7 +421,7 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[tuple[str, float, f
         lip = rim - rho - ra
         need = fab.min_rim_lip_mm if a.role == "pocket" else fab.min_wall_mm
         if a.role not in ("setscrew",) and lip < need - 1e-9:
-            out.append((f"{lay.name}: {a.name} is {lip:.2f} mm from the rim", lip, need))
+            out.append(LayoutProblem(f"{lay.name}: {a.name} is {lip:.2f} mm from the rim", lip, need, (a.name, "rim")))
         for b in cuts[i + 1:]:
             if not _z_overlap(a, b) or "setscrew" in (a.role, b.role):
                 continue
@@ -365,7 +430,8 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[tuple[str, float, f
                 continue
             need = fab.min_pocket_gap_mm if a.role == b.role == "pocket" else fab.min_wall_mm
             if gap < need - 1e-9:
-                out.append((f"{lay.name}: {a.name} and {b.name} leave a {gap:.2f} mm web", gap, need))
+                out.append(LayoutProblem(f"{lay.name}: {a.name} and {b.name} leave a {gap:.2f} mm web", gap, need,
+                                         (a.name, b.name)))
     for boss in lay.bosses:
         for b in cuts:
             if b.role in ("rod", "setscrew"):
@@ -374,7 +440,8 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[tuple[str, float, f
                 continue  # e.g. blind inserts on the face away from the collar
             gap, nested = _circle_gap(boss, b)
             if not nested and gap < fab.min_wall_mm - 1e-9:
-                out.append((f"{lay.name}: set-screw collar and {b.name} leave {gap:.2f} mm", gap, fab.min_wall_mm))
+                out.append(LayoutProblem(f"{lay.name}: set-screw collar and {b.name} leave {gap:.2f} mm", gap,
+                                         fab.min_wall_mm, (boss.name, b.name)))
     for p in lay.passages:
         line = p.name.split("_", 1)[1]
         for b in cuts:
@@ -387,21 +454,33 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[tuple[str, float, f
                 continue
             web = _segment_point_distance(p.p0, p.p1, b.xy) - b.diameter_mm / 2 - p.diameter_mm / 2
             if web < fab.min_wall_mm - 1e-9:
-                out.append((f"{lay.name}: {p.name} passes {web:.2f} mm from {b.name}", web, fab.min_wall_mm))
+                out.append(LayoutProblem(f"{lay.name}: {p.name} passes {web:.2f} mm from {b.name}", web,
+                                         fab.min_wall_mm, (p.name, b.name)))
     return out
 
 
-def _problems_at(spec: TailSpec, beta: float) -> list[tuple[str, float, float]]:
+def _problems_at(spec: TailSpec, beta: float) -> list[LayoutProblem]:
     out = []
     for k in range(spec.panels):
         out.extend(panel_problems(spec, panel_layout(spec, k, beta)))
-    # Bellows of neighbouring SOAs at the smallest pitch radius.
+    return out + _problems_at_tip(spec, beta)
+
+
+def _problems_at_tip(spec: TailSpec, beta: float) -> list[LayoutProblem]:
+    """Bellows of neighbouring SOAs at the smallest pitch radius (the tip's)."""
+    out = []
     r_min = spec.joint.pitch_diameter_mm / 2 - (spec.panels - 1) * spec.joint.joint_height_mm * math.tan(beta)
     gap = soa_neighbour_gap_mm(spec, r_min)
     if gap < spec.fabrication.min_pocket_gap_mm - 1e-9:
-        out.append((f"SOA bellows of neighbouring actuators leave {gap:.2f} mm at the tip", gap,
-                    spec.fabrication.min_pocket_gap_mm))
+        out.append(LayoutProblem(f"SOA bellows of neighbouring actuators leave {gap:.2f} mm at the tip", gap,
+                                 spec.fabrication.min_pocket_gap_mm, ("bellows",)))
     return out
+
+
+def _any_problem(spec: TailSpec, beta: float) -> bool:
+    """Some rule of :func:`_problems_at` is broken (it stops at the first panel that breaks one)."""
+    return any(panel_problems(spec, panel_layout(spec, k, beta)) for k in range(spec.panels)) or bool(
+        _problems_at_tip(spec, beta))
 
 
 @lru_cache(maxsize=64)
@@ -494,13 +573,19 @@ def validate_layout(spec: TailSpec) -> list[str]:
         return problems
     radial_out, _ = soa_radial_extent_mm(spec)
     if j.pitch_diameter_mm / 2 + radial_out > j.panel_diameter_mm / 2 + 1e-9:
+        soa = spec.soa
+        reach = j.pitch_diameter_mm / 2 + radial_out
         problems.append(
-            f"joint.panel_diameter_mm = {j.panel_diameter_mm}: the rim lies inside the SOA envelope "
-            f"(pitch radius {j.pitch_diameter_mm / 2:.2f} + bellows {radial_out:.2f} mm = "
-            f"{j.pitch_diameter_mm / 2 + radial_out:.2f} mm > rim {j.panel_diameter_mm / 2:.2f} mm)")
+            f"joint.panel_diameter_mm = {j.panel_diameter_mm}: the rim lies inside the SOA envelope: "
+            f"joint.pitch_diameter_mm / 2 = {j.pitch_diameter_mm / 2:.2f} mm plus the bellows' {radial_out:.2f} mm "
+            f"(soa.long_side_mm = {soa.long_side_mm!r}, soa.fillet_radius_mm = {soa.fillet_radius_mm!r}, "
+            f"soa.rotation_deg = {soa.rotation_deg!r}) reach {reach:.2f} mm, beyond the rim's "
+            f"{j.panel_diameter_mm / 2:.2f} mm; allowed: >= {math.ceil(200 * reach) / 100:g} mm, or a smaller "
+            "joint.pitch_diameter_mm or soa.long_side_mm")
     if spec.taper.half_angle_deg != AUTO:
         beta_max = max_feasible_taper_deg(spec)
-        if float(spec.taper.half_angle_deg) > beta_max + 1e-9:
+        # Rules broken without any cone are the other keys' doing: reported below, not as the taper's.
+        if float(spec.taper.half_angle_deg) > beta_max + 1e-9 and not _problems_at(spec, 0.0):
             problems.append(
                 f"taper.half_angle_deg = {spec.taper.half_angle_deg}: beyond the feasible cone; allowed: 0 to "
                 f"{beta_max:.4f} deg ('auto' picks it); limited by: {binding_constraint(spec)}")
@@ -519,12 +604,84 @@ def validate_layout(spec: TailSpec) -> list[str]:
                 if beta_max >= MIN_BUILDABLE_TAPER_DEG else ""
             problems.append(f"taper.half_angle_deg = {spec.taper.half_angle_deg}: {why}; allowed: 0{wider}")
         return problems
-    for desc, measured, need in _problems_at(spec, half_angle_rad(spec)):
-        keys = " or ".join(f"fabrication.{k} = {getattr(spec.fabrication, k)!r}" for k in _WEB_KEYS
-                           if getattr(spec.fabrication, k) == need) or f"{need:g} mm"
-        problems.append(f"{desc}, {need - measured:.2f} mm short (allowed: >= {keys}; see [joint], [tubes], "
-                        "[lightening], [mount])")
-    return problems
+    return problems + panel_rule_messages(spec, half_angle_rad(spec))
+
+
+def _allowed_values(spec: TailSpec, key: str, holds) -> str | None:
+    """What ``key`` may be for ``holds(spec with that value)``, the other keys as they are (None: nothing)."""
+    *tables, name = key.split(".")
+    section = key_value(spec, ".".join(tables)) if tables else spec
+    meta = {f.name: f.metadata for f in dataclasses.fields(section)}[name]
+    value = getattr(section, name)
+    if meta.get("choices"):
+        ok = [c for c in meta["choices"] if holds(with_key(spec, key, c))]
+        return "one of " + ", ".join(repr(c) for c in ok) if ok else None
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    if isinstance(value, int):
+        lo = meta["ge"] if meta.get("ge") is not None else meta["gt"] + 1
+        hi = meta["le"] if meta.get("le") is not None else meta["lt"] - 1
+        ok = [n for n in range(int(lo), int(hi) + 1) if holds(with_key(spec, key, n))]
+        return ", ".join(str(n) for n in ok) if ok else None
+    span = feasible_interval(meta, lambda x: holds(with_key(spec, key, x)), float(value))
+    if span is None:
+        return None
+    lo, hi = rule_bounds(meta)
+    first, last = math.ceil(span[0] * 100) / 100, math.floor(span[1] * 100) / 100
+    if span[0] == span[1]:
+        return f"{span[0]:g}"
+    low, high = span[0] - lo > 5e-3, hi - span[1] > 5e-3  # ends short of the rule's bounds
+    if low and high:
+        return f"{first:g} to {last:g}"
+    return f">= {first:g}" if low else f"<= {last:g}"
+
+
+def _panels_text(indices: list[int]) -> str:
+    runs: list[list[int]] = []
+    for k in sorted(set(indices)):
+        if runs and k == runs[-1][-1] + 1:
+            runs[-1].append(k)
+        else:
+            runs.append([k])
+    return ", ".join(f"{r[0]}-{r[-1]}" if len(r) > 1 else f"{r[0]}" for r in runs)
+
+
+def panel_rule_messages(spec: TailSpec, beta: float) -> list[str]:
+    """The panel rules broken at cone ``beta`` (rad), as messages that name the keys the user writes.
+
+    First each key that sets a broken feature and could, alone, make every rule hold, with its value and
+    what it may be; then each rule once (the same rule on other panels and feature pairs counted), its
+    worst case, the web it needs and the keys that set its features."""
+    found = _problems_at(spec, beta)
+    if not found:
+        return []
+    at = 0.0 if spec.taper.half_angle_deg == AUTO else beta  # 'auto' finds a cone when the rules hold without one
+    keys = list(dict.fromkeys(k for p in found for f in p.features for k in feature_keys(f)))
+    out = []
+    for key in keys:
+        allowed = _allowed_values(spec, key, lambda candidate: not _any_problem(candidate, at))
+        if allowed is not None:
+            unit = " mm" if key.endswith("_mm") and allowed[0] in "<>0123456789" else ""
+            unit = " deg" if key.endswith("_deg") else unit
+            out.append(f"{key} = {key_value(spec, key)!r}: allowed: {allowed}{unit} for the panel rules below to "
+                       "hold, with the other keys as they are")
+    groups: dict[str, list[LayoutProblem]] = {}
+    for p in found:
+        groups.setdefault(re.sub(r"\d+(\.\d+)?", "#", re.sub(r"^panel\d+: ", "", p.desc)), []).append(p)
+    for same in groups.values():
+        worst = min(same, key=lambda p: p.measured_mm - p.need_mm)
+        need = worst.need_mm
+        web = " or ".join(f"fabrication.{k} = {getattr(spec.fabrication, k)!r}" for k in _WEB_KEYS
+                          if getattr(spec.fabrication, k) == need) or f"{need:g} mm"
+        line = f"{worst.desc}, {need - worst.measured_mm:.2f} mm short (allowed: >= {web})"
+        panels = [int(m.group(1)) for p in same if (m := re.match(r"panel(\d+): ", p.desc))]
+        if len(same) > 1:
+            line += f"; {len(same) - 1} more like it" + (f" (panels {_panels_text(panels)})" if panels else "")
+        set_by = list(dict.fromkeys(k for p in same for f in p.features for k in feature_keys(f)))
+        if set_by:
+            line += "; set by " + ", ".join(f"{k} = {key_value(spec, k)!r}" for k in set_by)
+        out.append(line)
+    return out
 
 
 def replace_taper(spec: TailSpec, half_angle_deg: float | str) -> TailSpec:

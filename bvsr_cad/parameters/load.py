@@ -167,7 +167,7 @@ def spec_from_dict(data: dict[str, Any], source: str | Path = "<dict>") -> TailS
     if spec is not None:
         if not re.fullmatch(r"[A-Za-z0-9_-]+", spec.name):
             problems.append(f"name = {spec.name!r}: only letters, digits, '_' and '-' are allowed")
-        problems += material_problems(spec)
+        problems += material_problems(spec) + actuation_problems(spec)
     if problems:
         raise ParamError(source, problems)
     # Geometry: the panels, then what the generators build on them (one set of derived numbers each,
@@ -201,6 +201,22 @@ def material_problems(spec: TailSpec) -> list[str]:
         out.append(f"materials.{RIGID_TWIN_MATERIAL}: missing; the rigid comparison tail is printed in "
                    f"{RIGID_TWIN_MATERIAL!r} and its mass needs [materials.{RIGID_TWIN_MATERIAL}] (the file names: "
                    f"{allowed})")
+    return out
+
+
+def actuation_problems(spec: TailSpec) -> list[str]:
+    """The workspace protocol draws a pressurised line from atmospheric up to its maximum and a
+    depressurised one from its minimum up to atmospheric: each range must run upwards."""
+    a = spec.actuation
+    out = []
+    if a.workspace_pressurised_max_kpa_abs < a.atmospheric_kpa:
+        out.append(f"actuation.workspace_pressurised_max_kpa_abs = {a.workspace_pressurised_max_kpa_abs!r}: below "
+                   f"actuation.atmospheric_kpa = {a.atmospheric_kpa!r} (a pressurised line draws from atmospheric "
+                   f"up to it); allowed: >= {a.atmospheric_kpa:g} kPa (absolute)")
+    if a.workspace_depressurised_min_kpa_abs > a.atmospheric_kpa:
+        out.append(f"actuation.workspace_depressurised_min_kpa_abs = {a.workspace_depressurised_min_kpa_abs!r}: above "
+                   f"actuation.atmospheric_kpa = {a.atmospheric_kpa!r} (a depressurised line draws from it up to "
+                   f"atmospheric); allowed: 0 to {a.atmospheric_kpa:g} kPa (absolute)")
     return out
 
 

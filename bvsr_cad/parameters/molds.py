@@ -18,7 +18,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-from .tables import Casting, SoaTable
+from .tables import Casting, SoaTable, feasible_span, rule_bounds
 
 #: Sockets are this much deeper than their pins so a pin never bottoms out.
 SOCKET_EXTRA_DEPTH_MM = 0.5
@@ -155,17 +155,15 @@ def _with(c: Casting, name: str, value: float) -> Casting:
 def _allowed(soa: SoaTable, flange_diameter_mm: float, c: Casting, name: str) -> str:
     """What ``casting.<name>`` may be with every other value fixed: the feasible part of its rule range."""
     meta = {f.name: f.metadata for f in dataclasses.fields(Casting)}[name]
-    lo = meta["ge"] if meta.get("ge") is not None else meta["gt"]
-    hi = meta["le"] if meta.get("le") is not None else meta["lt"]
-    steps = 2000
-    ok = [x for x in (lo + (hi - lo) * i / steps for i in range(steps + 1))
-          if (meta.get("gt") is None or x > meta["gt"]) and (meta.get("lt") is None or x < meta["lt"])
-          and not _violations(mold_dimensions(soa, flange_diameter_mm, _with(c, name, x)), _with(c, name, x))]
-    if not ok:
+    lo, hi = rule_bounds(meta)
+    span = feasible_span(meta, lambda x: not _violations(mold_dimensions(soa, flange_diameter_mm, _with(c, name, x)),
+                                                         _with(c, name, x)), 2000)
+    if span is None:
         return "no value within its rule range, with the other [casting] values"
-    if ok[0] > lo and ok[-1] < hi:
-        return f"{ok[0]:.2f} to {ok[-1]:.2f} mm with the other [casting] values"
-    return (f">= {ok[0]:.2f} mm" if ok[0] > lo else f"<= {ok[-1]:.2f} mm") + " with the other [casting] values"
+    first, last = span
+    if first > lo and last < hi:
+        return f"{first:.2f} to {last:.2f} mm with the other [casting] values"
+    return (f">= {first:.2f} mm" if first > lo else f"<= {last:.2f} mm") + " with the other [casting] values"
 
 
 def mold_problems(soa: SoaTable, flange_diameter_mm: float, casting: Casting) -> list[str]:

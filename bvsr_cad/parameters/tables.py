@@ -16,7 +16,7 @@ import sys
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 AUTO = "auto"
@@ -58,6 +58,52 @@ def table(cls: type) -> Any:
         setattr(cls, name, field(default=default, metadata=meta, hash=not unhashable))
     return dataclass(frozen=True)(cls)
 
+
+
+def rule_bounds(meta: Any) -> tuple[float, float]:
+    """(lowest, highest) of a field's rule range (``meta``: its metadata); a strict end is the bound itself."""
+    lo = meta["ge"] if meta.get("ge") is not None else meta["gt"]
+    hi = meta["le"] if meta.get("le") is not None else meta["lt"]
+    return lo, hi
+
+
+def _inside(meta: Any, x: float) -> bool:
+    lo, hi = rule_bounds(meta)
+    return lo <= x <= hi and (meta.get("gt") is None or x > meta["gt"]) and (meta.get("lt") is None or x < meta["lt"])
+
+
+def feasible_span(meta: Any, ok: Callable[[float], bool], samples: int) -> tuple[float, float] | None:
+    """The feasible part of a field's rule range: (first, last) of ``samples`` + 1 evenly spaced values
+    within its bounds (``meta``: a field's metadata; a strict bound is left out) for which ``ok`` holds,
+    or None."""
+    lo, hi = rule_bounds(meta)
+    good = [x for x in (lo + (hi - lo) * i / samples for i in range(samples + 1)) if _inside(meta, x) and ok(x)]
+    return (good[0], good[-1]) if good else None
+
+
+def feasible_interval(meta: Any, ok: Callable[[float], bool], value: float,
+                      steps: int = 14) -> tuple[float, float] | None:
+    """The interval of a field's rule range around ``value`` (which need not hold) where ``ok`` holds,
+    assuming there is one: the value nearest ``value`` that holds, searched in steps of 1.6 % from an
+    eighth to eight times it and then over the whole range in 64 even steps, then each end found by
+    ``steps`` bisections towards the range's bound (None: nothing holds). Cheap when ``ok`` fails fast."""
+    lo, hi = rule_bounds(meta)
+    near = [value * 8.0 ** (i / 128) for k in range(129) for i in ((k, -k) if k else (0,))] if value > 0 else []
+    found = next((x for x in [*near, *(lo + (hi - lo) * i / 64 for i in range(65))] if _inside(meta, x) and ok(x)),
+                 None)
+    if found is None:
+        return None
+
+    def edge(bound: float) -> float:
+        if _inside(meta, bound) and ok(bound):
+            return bound
+        bad, good = bound, found
+        for _ in range(steps):
+            mid = (bad + good) / 2
+            bad, good = (bad, mid) if ok(mid) else (mid, good)
+        return good
+
+    return edge(lo), edge(hi)
 
 @table
 class JointTable:

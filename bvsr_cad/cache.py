@@ -32,8 +32,54 @@ from typing import Any
 
 DEFAULT_MAX_MB = 2048.0
 _DONE = ".done"
+#: In the name of an entry's temporary folder, ``.<key[:12]>.tmp-*``, beside the entries.
+_TMP = ".tmp-"
 #: In an entry of :func:`object_stage`: the objects the stage hands on, pickled.
 _OBJECTS = "objects.pkl"
+
+#: Inside a temporary folder of a build (its export) or of the cache (an entry being written): the
+#: writing process's PID and start time (PID reuse safe), so that a later run removes only dead ones.
+OWNER_FILE = ".bvsr-build-owner"
+#: A replaced export is renamed away and deleted within seconds, and a temporary folder is claimed as
+#: soon as it is made; one older than this without an owner was orphaned.
+ORPHAN_AGE_S = 60.0
+
+
+def process_start(pid: int) -> str | None:
+    """The process's start time in clock ticks (Linux /proc), or None if there is no such process."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        if not Path("/proc/self/stat").exists():  # no /proc: fall back to a signal-0 probe
+            try:
+                os.kill(pid, 0)
+            except ProcessLookupError:
+                return None
+            except PermissionError:
+                return "?"
+            return "?"
+        return None
+    return stat.rsplit(")", 1)[1].split()[19]
+
+
+def claim(tmp: Path) -> None:
+    """Mark a temporary folder as this process's."""
+    pid = os.getpid()
+    (tmp / OWNER_FILE).write_text(f"{pid} {process_start(pid)}\n")
+
+
+def owner_alive(folder: Path) -> bool:
+    """The process that made ``folder`` (:func:`claim`) is still running (or the folder is too new to
+    have been claimed)."""
+    try:
+        pid_s, start = (folder / OWNER_FILE).read_text().split()
+    except (OSError, ValueError):
+        try:
+            return time.time() - folder.stat().st_mtime < ORPHAN_AGE_S  # just created, not yet claimed
+        except OSError:
+            return False
+    now = process_start(int(pid_s))
+    return now is not None and (now == start or now == "?")
 
 
 def cache_root() -> Path:
@@ -116,9 +162,11 @@ class ArtifactCache:
         :meth:`evict` once after them)."""
         entry = self._entry(key)
         entry.parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(prefix=f".{key[:12]}.tmp-", dir=entry.parent))
+        tmp = Path(tempfile.mkdtemp(prefix=f".{key[:12]}{_TMP}", dir=entry.parent))
         try:
+            claim(tmp)
             fill(tmp)
+            (tmp / OWNER_FILE).unlink()
             (tmp / _DONE).write_text(f"{time.time():.3f}\n")
             try:
                 tmp.rename(entry)
@@ -130,6 +178,18 @@ class ArtifactCache:
         if evict:
             self.evict()
         return entry
+
+    def clean_leftovers(self) -> list[Path]:
+        """Remove the temporary folders of entries whose writing process is gone (a build killed with
+        SIGKILL while it filled one); a live writer's are kept. Returns what was removed."""
+        removed = []
+        if not self.root.is_dir():
+            return removed
+        for folder in self.root.glob(f"*/.*{_TMP}*"):
+            if folder.is_dir() and not owner_alive(folder):
+                shutil.rmtree(folder, ignore_errors=True)
+                removed.append(folder)
+        return removed
 
     def entries(self) -> list[tuple[float, int, Path]]:
         """(last use, size in bytes, folder) of every complete entry."""

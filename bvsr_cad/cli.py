@@ -425,6 +425,9 @@ def main(argv: list[str] | None = None) -> int:
         print("bvsr: interrupted; nothing was published", file=sys.stderr)
         return 130
     except Exception as exc:
+        if _interrupted(exc):  # Ctrl-C while a C extension initialised: ImportError from KeyboardInterrupt
+            print("bvsr: interrupted; nothing was published", file=sys.stderr)
+            return 130
         # The error classes are imported here, not before the command runs: `bvsr build` starts its
         # analyses' process before it imports the pipeline (seconds of imports), and these would import it.
         bad_input, geometry_error = _error_classes()
@@ -435,6 +438,19 @@ def main(argv: list[str] | None = None) -> int:
             print(_generator_failure(args, exc), file=sys.stderr)
             return EXIT_BAD_INPUT
         raise  # a bug, not a parameter: keep its traceback
+
+
+def _interrupted(exc: BaseException) -> bool:
+    """``exc`` was caused by a KeyboardInterrupt (pybind11 turns one raised while OCP's module initialises
+    into ``ImportError: initialization failed`` from it; importing OCP again then fails too)."""
+    seen: set[int] = set()
+    cur: BaseException | None = exc
+    while cur is not None and id(cur) not in seen:
+        if isinstance(cur, KeyboardInterrupt):
+            return True
+        seen.add(id(cur))
+        cur = cur.__cause__ or cur.__context__
+    return False
 
 
 def _error_classes() -> tuple[tuple[type[Exception], ...], type[Exception]]:

@@ -9,7 +9,6 @@ partial one.
 from __future__ import annotations
 
 import json
-import os
 import pickle
 import shutil
 import tempfile
@@ -27,7 +26,8 @@ from .assembly.build import build_assembly
 from .assembly.inertia import SolidProperties
 from .assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs, rigid_robot_model
 from .assembly.robot import robot_model
-from .cache import ArtifactCache, copy_tree, object_stage, spec_without, stage_key
+from .cache import (OWNER_FILE, ORPHAN_AGE_S, ArtifactCache, claim, copy_tree, object_stage, owner_alive,
+                    spec_without, stage_key)
 from .checks.result import CheckResult
 from .checks.run import Checks
 from .exporters.analysis_files import write_analyses
@@ -72,43 +72,6 @@ def _check_output(out_dir: Path) -> None:
                               "refusing to replace it; choose another -o")
 
 
-#: Inside a build's temporary folder: the building process's PID and start time (PID reuse safe).
-OWNER_FILE = ".bvsr-build-owner"
-#: A replaced export is renamed away and deleted within seconds; one older than this was orphaned.
-ORPHAN_AGE_S = 60.0
-
-
-def _process_start(pid: int) -> str | None:
-    """The process's start time in clock ticks (Linux /proc), or None if there is no such process."""
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text()
-    except OSError:
-        if not Path("/proc/self/stat").exists():  # no /proc: fall back to a signal-0 probe
-            try:
-                os.kill(pid, 0)
-            except ProcessLookupError:
-                return None
-            except PermissionError:
-                return "?"
-            return "?"
-        return None
-    return stat.rsplit(")", 1)[1].split()[19]
-
-
-def _claim(tmp: Path) -> None:
-    pid = os.getpid()
-    (tmp / OWNER_FILE).write_text(f"{pid} {_process_start(pid)}\n")
-
-
-def _owner_alive(folder: Path) -> bool:
-    try:
-        pid_s, start = (folder / OWNER_FILE).read_text().split()
-    except (OSError, ValueError):
-        return time.time() - folder.stat().st_mtime < ORPHAN_AGE_S  # just created, not yet claimed
-    now = _process_start(int(pid_s))
-    return now is not None and (now == start or now == "?")
-
-
 def clean_leftovers(out_dir: Path) -> list[Path]:
     """Remove what dead builds of ``out_dir`` left beside it: temporary folders whose building
     process is gone (killed with SIGKILL, a power cut) and replaced exports never deleted. A live
@@ -118,7 +81,7 @@ def clean_leftovers(out_dir: Path) -> list[Path]:
     if not parent.is_dir():
         return removed
     for folder in parent.glob(f".{out_dir.name}.tmp-*"):
-        if folder.is_dir() and not _owner_alive(folder):
+        if folder.is_dir() and not owner_alive(folder):
             shutil.rmtree(folder, ignore_errors=True)
             removed.append(folder)
     for folder in parent.glob(f".{out_dir.name}.old-*"):
@@ -232,11 +195,13 @@ def _build_export(params: str | Path, out_dir: str | Path | None, progress: Prog
     for folder in clean_leftovers(out):
         say(f"removed {folder.name}: left by a build that did not finish")
     cache = ArtifactCache() if use_cache else None
+    for folder in cache.clean_leftovers() if cache is not None else []:
+        say(f"removed the cache's {folder.parent.name}/{folder.name}: an entry a build did not finish")
     log = StageLog(say)
     data = _data_bytes(spec, params)
     export_key = stage_key("export", params=params.read_bytes(), data=data, environment=environment_state())
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
-    _claim(tmp)
+    claim(tmp)
     analyses = None
     checks: Checks | None = None
     try:

@@ -12,6 +12,7 @@ import pytest
 import trimesh
 
 from bvsr_cad.assembly.build import build_assembly
+from bvsr_cad import cli
 from bvsr_cad.cli import main
 from bvsr_cad.parameters import paper
 
@@ -253,3 +254,22 @@ def test_the_standby_head_start_is_used_only_for_the_bytes_it_was_built_from(tmp
     params.write_text(params.read_text().replace('name = "bvsr"', 'name = "edited"', 1))
     built = pipeline._analyses_process(str(params), params_sha256(params))
     assert built.spec.name == "edited" and built is not pipeline._PREPARED[str(params.resolve()), first]
+
+
+@pytest.mark.parametrize("during", ["a command", "a C extension's import"])
+def test_ctrl_c_exits_130_with_one_line_not_a_traceback(monkeypatch, capsys, during):
+    """Ctrl-C during OCP's import reaches Python as ``ImportError: initialization failed`` raised from the
+    KeyboardInterrupt (pybind11); it used to end in exit code 1 and a second ImportError's traceback
+    (the error classes import OCP again). Both forms are an interrupt."""
+    def interrupted(args):
+        if during == "a command":
+            raise KeyboardInterrupt
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise ImportError("initialization failed") from exc
+
+    monkeypatch.setattr(cli, "cmd_build", interrupted)
+    monkeypatch.setattr(cli, "_error_classes", lambda: pytest.fail("an interrupt is not an error to classify"))
+    assert cli.main(["build", "params/bvsr.toml"]) == 130
+    assert capsys.readouterr().err == "bvsr: interrupted; nothing was published\n"

@@ -11,7 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from bvsr_cad.pipeline import OWNER_FILE, _process_start, clean_leftovers
+from bvsr_cad.cache import OWNER_FILE, ArtifactCache, process_start
+from bvsr_cad.pipeline import clean_leftovers
 
 from .conftest import PARAMS
 
@@ -30,7 +31,7 @@ def test_leftovers_of_dead_builds_are_removed_live_ones_kept(tmp_path):
     for folder in (dead, live, reused):
         folder.mkdir()
     (dead / OWNER_FILE).write_text(f"{_dead_pid()} 12345\n")
-    (live / OWNER_FILE).write_text(f"{os.getpid()} {_process_start(os.getpid())}\n")
+    (live / OWNER_FILE).write_text(f"{os.getpid()} {process_start(os.getpid())}\n")
     (reused / OWNER_FILE).write_text(f"{os.getpid()} 1\n")
     old_orphan = tmp_path / f".bvsr.old-{int((time.time() - 3600) * 1000)}"
     old_fresh = tmp_path / f".bvsr.old-{int(time.time() * 1000)}"
@@ -69,8 +70,32 @@ def test_sigkill_leaves_no_second_process_and_the_next_build_cleans_up(tmp_path)
     build.send_signal(signal.SIGKILL)
     build.wait()
     for _ in range(50):
-        if _process_start(child) is None:
+        if process_start(child) is None:
             break
         time.sleep(0.1)
-    assert _process_start(child) is None, "the second process outlived its SIGKILLed parent"
+    assert process_start(child) is None, "the second process outlived its SIGKILLed parent"
     assert clean_leftovers(out) == leftovers and not leftovers[0].exists()
+
+
+def test_cache_entries_a_dead_build_was_writing_are_removed_live_ones_kept(tmp_path):
+    """A build SIGKILLed while it filled a cache entry left ``.<key>.tmp-*`` in the cache for good (the
+    helper of 2026-11-25: 6.4 MB of STEP and STL); the next build removes such folders, never a live
+    writer's, and a finished entry carries no owner file."""
+    cache = ArtifactCache(tmp_path / "artifacts")
+    key = "ab" + "0" * 62
+    entry = cache.put(key, lambda folder: (folder / "x.txt").write_text("x"))
+    assert not (entry / OWNER_FILE).exists() and cache.get(key) == entry
+    shard = tmp_path / "artifacts" / "cd"
+    shard.mkdir()
+    dead, live, reused, old, new = (shard / f".cd0000000000.tmp-{n}" for n in ("dead", "live", "reused", "old", "new"))
+    for folder in (dead, live, reused, old, new):
+        folder.mkdir()
+        (folder / "part.stl").write_text("solid\n")
+    (dead / OWNER_FILE).write_text(f"{_dead_pid()} 12345\n")
+    (live / OWNER_FILE).write_text(f"{os.getpid()} {process_start(os.getpid())}\n")
+    (reused / OWNER_FILE).write_text(f"{os.getpid()} 1\n")
+    hour_ago = time.time() - 3600
+    os.utime(old, (hour_ago, hour_ago))  # unclaimed (an older version's): orphaned once it is old
+    removed = cache.clean_leftovers()
+    assert sorted(p.name for p in removed) == sorted(p.name for p in (dead, reused, old))
+    assert live.is_dir() and new.is_dir() and cache.get(key) == entry

@@ -518,6 +518,10 @@ def soa_is_sound(spec: TailSpec) -> bool:
 #: faces nearly coincide with the pocket floors and OCC's boolean cut returns the pockets as loose solids
 #: (found by the property tests: 1e-5 to 0.01 deg fail, 0.02 deg builds, for channels of 2 to 16 mm).
 MIN_BUILDABLE_TAPER_DEG = 0.05
+#: The longest chain whose exported MJCF passes its MuJoCo checks (couplings held within 0.01 rad, settled
+#: within 1 s): measured 2026-11-25, 6 (1 x 6, 2 x 3), 8 (2 x 4) and 9 (3 x 3) joints pass; 10 (2 x 5)
+#: and 12 (2 x 6, 3 x 4) fail.
+MAX_JOINTS = 9
 #: The [fabrication] minimums a panel rule can require (the message names the one that binds).
 _WEB_KEYS = ("min_pocket_gap_mm", "min_wall_mm", "min_rim_lip_mm", "socket_floor_mm")
 
@@ -564,6 +568,12 @@ def validate_layout(spec: TailSpec) -> list[str]:
     if spec.segments > 3:
         problems.append(f"segments = {spec.segments}: tube rings exist for the distal tubes of at most 3 "
                         "segments; allowed: 1 to 3")
+    elif spec.joints > MAX_JOINTS:
+        problems.append(
+            f"joints_per_segment = {spec.joints_per_segment} with segments = {spec.segments}: {spec.joints} joints; "
+            f"allowed: at most {MAX_JOINTS} joints (joints_per_segment <= {MAX_JOINTS // spec.segments} here): the "
+            "exported MJCF's longer chains fail its checks (measured: 10 joints held the couplings to 0.011 rad, "
+            "limit 0.01, and still moved 0.22 rad/s 1 s after release, limit 0.1; 12 joints worse)")
     if spec.tubes.port_depth_mm < j.panel_thickness_mm / 2 or \
             spec.tubes.port_depth_mm > j.panel_thickness_mm - spec.fabrication.socket_floor_mm:
         problems.append(f"tubes.port_depth_mm = {spec.tubes.port_depth_mm}: must reach the mid-plane passage and "
@@ -604,7 +614,34 @@ def validate_layout(spec: TailSpec) -> list[str]:
                 if beta_max >= MIN_BUILDABLE_TAPER_DEG else ""
             problems.append(f"taper.half_angle_deg = {spec.taper.half_angle_deg}: {why}; allowed: 0{wider}")
         return problems
-    return problems + panel_rule_messages(spec, half_angle_rad(spec))
+    return problems + panel_rule_messages(spec, half_angle_rad(spec)) + mjf_problems(spec)
+
+
+def mjf_problems(spec: TailSpec) -> list[str]:
+    """The panels (printed flat in MJF, either way round on the bed, as the print job lays them out) must
+    fit the MJF build volume: the widest (the root's rim) and the tallest (a set-screw collar adds to it)."""
+    fp = spec.fabrication_package
+    beta = half_angle_rad(spec)
+    layouts = [panel_layout(spec, k, beta) for k in range(spec.panels)]
+    wide = max(layouts, key=lambda lay: lay.rim_radius_lower_mm)
+    width = 2.0 * wide.rim_radius_lower_mm
+
+    def height(lay: PanelLayout) -> float:
+        zs = [0.0, lay.thickness_mm] + [z for b in lay.bosses for z in b.z_range]
+        return max(zs) - min(zs)
+
+    tall = max(layouts, key=height)
+    out = []
+    lo_key = "mjf_x_mm" if fp.mjf_x_mm <= fp.mjf_y_mm else "mjf_y_mm"
+    if width > min(fp.mjf_x_mm, fp.mjf_y_mm) + 1e-9:
+        out.append(f"fabrication_package.{lo_key} = {getattr(fp, lo_key)!r}: {wide.name} prints {width:.2f} mm across "
+                   f"(joint.panel_diameter_mm), wider than the {fp.mjf_x_mm:g} x {fp.mjf_y_mm:g} mm MJF bed; allowed: "
+                   f"fabrication_package.mjf_x_mm and mjf_y_mm >= {math.ceil(width * 100) / 100:g} mm")
+    if height(tall) > fp.mjf_z_mm + 1e-9:
+        out.append(f"fabrication_package.mjf_z_mm = {fp.mjf_z_mm!r}: {tall.name} prints {height(tall):.2f} mm tall "
+                   f"(the panel and its set-screw collar), more than the MJF build volume; allowed: >= "
+                   f"{math.ceil(height(tall) * 100) / 100:g} mm")
+    return out
 
 
 def _allowed_values(spec: TailSpec, key: str, holds) -> str | None:

@@ -76,12 +76,17 @@ def serve(_out: str, fn: Callable[..., Any], *args: Any, prepare: Callable[..., 
     deciding (a head start it may waste: the parent stops a child it gives no work)."""
     _die_with_parent()
     if _out == STANDBY:
-        if prepare is not None and args:
-            try:
-                prepare(*args)
-            except Exception:  # noqa: BLE001 - only a head start: the work itself meets any problem again
-                pass
-        line = sys.stdin.readline()
+        # Ctrl-C reaches this child too (it shares the terminal's process group) while it waits: the parent
+        # reports the interrupt; the child leaves quietly, without a traceback among the parent's lines.
+        try:
+            if prepare is not None and args:
+                try:
+                    prepare(*args)
+                except Exception:  # noqa: BLE001 - only a head start: the work itself meets any problem again
+                    pass
+            line = sys.stdin.readline()
+        except KeyboardInterrupt:
+            return 130
         if not line.strip():
             return 0
         work = json.loads(line)

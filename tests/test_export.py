@@ -273,3 +273,29 @@ def test_ctrl_c_exits_130_with_one_line_not_a_traceback(monkeypatch, capsys, dur
     monkeypatch.setattr(cli, "_error_classes", lambda: pytest.fail("an interrupt is not an error to classify"))
     assert cli.main(["build", "params/bvsr.toml"]) == 130
     assert capsys.readouterr().err == "bvsr: interrupted; nothing was published\n"
+
+
+def test_ctrl_c_leaves_a_waiting_standby_process_quietly(tmp_path):
+    """Ctrl-C reaches the standby analyses process too (same process group): it used to print a
+    KeyboardInterrupt traceback (from its wait on stdin) among the build's lines; it leaves with 130."""
+    import signal
+    import time
+
+    from bvsr_cad import worker
+
+    lines: list[str] = []
+    standby = worker.SecondProcess.standby("bvsr_cad.pipeline", progress=lines.append)
+    if standby is None:
+        pytest.skip("one core: the analyses never leave the process")
+    pid, last, still = standby.proc.pid, None, 0
+    deadline = time.time() + 300
+    while still < 4 and time.time() < deadline:  # imports done: its CPU time stops growing, it waits
+        time.sleep(0.25)
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        now = int(fields[11]) + int(fields[12])
+        still, last = (still + 1 if now == last else 0), now
+    standby.proc.send_signal(signal.SIGINT)
+    assert standby.proc.wait(timeout=60) == 130
+    time.sleep(0.5)  # the relay thread's last lines
+    assert not any("Traceback" in line or "KeyboardInterrupt" in line for line in lines), lines
+    standby.close()

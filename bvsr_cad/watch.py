@@ -97,7 +97,8 @@ def watch(params: str | Path, out_dir: str | Path | None, say: Callable[[str], N
                                         recursive=False,  # the files sit in these folders, not below
                                         watch_filter=lambda _change, path: Path(path).resolve() in files):
                 new = _read(params)
-                diff = changed_keys(last, new) if new is not None else ["(the file is not valid TOML yet)"]
+                diff = changed_keys(last, new) if new is not None else [
+                    "(the file is not valid TOML yet)" if params.exists() else "(the file is gone)"]
                 new_data = _data_file(params, new) if new is not None else data
                 new_bytes = _bytes(new_data)
                 data_changed = new_data == data and new_bytes != data_bytes

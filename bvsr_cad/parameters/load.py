@@ -53,19 +53,21 @@ def _allowed(meta: dict[str, Any]) -> str:
     bounds = []
     for key, sym in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<=")):
         if meta.get(key) is not None:
-            bounds.append(f"{sym} {meta[key]:g}")
+            bound = meta[key]  # whole numbers in full (a seed's 2147483647, not 2.14748e+09)
+            bounds.append(f"{sym} {int(bound) if float(bound).is_integer() else format(bound, 'g')}")
     return " and ".join(bounds) if bounds else "any value"
 
 
 def _check_value(key: str, value: Any, typ: Any, meta: dict[str, Any], problems: list[str]) -> Any:
     """Type- and range-check one scalar; returns the converted value or None."""
+    auto = ""
     if typ is Any:  # float or "auto"
         if value == AUTO:
             return AUTO
-        typ = float
+        typ, auto = float, f" or {AUTO!r}"
     if typ is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            problems.append(f"{key} = {value!r}: expected a number ({_allowed(meta)})")
+            problems.append(f"{key} = {value!r}: expected a number ({_allowed(meta)}){auto}")
             return None
         value = float(value)
     elif typ is int:

@@ -207,8 +207,10 @@ def twin_problems(spec: TailSpec) -> list[str]:
                    f"from the top of each SOA column (fabrication_package.pin_length_mm = {fp.pin_length_mm!r}), "
                    f"leaves {web:.2f} mm where the bellows narrows to {2 * half:.2f} mm, "
                    f"{fp.fdm_min_wall_mm - web:.2f} mm short of fabrication_package.fdm_min_wall_mm = "
-                   f"{fp.fdm_min_wall_mm!r}; allowed: a hole <= {2 * (half - fp.fdm_min_wall_mm):.2f} mm or a "
-                   "shorter pin")
+                   f"{fp.fdm_min_wall_mm!r}; allowed: "
+                   + (f"a hole <= {2 * (half - fp.fdm_min_wall_mm):.2f} mm or a shorter pin"
+                      if half > fp.fdm_min_wall_mm else
+                      f"fabrication_package.fdm_min_wall_mm < {half:.2f} mm (no hole fits beside a wall that thick)"))
     # The tie rod through the rod column, and its nuts in the root and tip panels.
     d_tie = tie_rod_hole_mm(spec)
     rod_web = (spec.vertebra.diameter_mm - d_tie) / 2.0
@@ -217,8 +219,11 @@ def twin_problems(spec: TailSpec) -> list[str]:
                    f"tie-rod hole (thread + fabrication_package.tie_rod_clearance_mm) leaves {rod_web:.2f} mm in "
                    f"the {spec.vertebra.diameter_mm:g} mm rod column (vertebra.diameter_mm), "
                    f"{fp.fdm_min_wall_mm - rod_web:.2f} mm short of fabrication_package.fdm_min_wall_mm = "
-                   f"{fp.fdm_min_wall_mm!r}; allowed: a hole <= "
-                   f"{spec.vertebra.diameter_mm - 2 * fp.fdm_min_wall_mm:.2f} mm (a thinner thread)")
+                   f"{fp.fdm_min_wall_mm!r}; allowed: "
+                   + (f"a hole <= {spec.vertebra.diameter_mm - 2 * fp.fdm_min_wall_mm:.2f} mm (a thinner thread)"
+                      if spec.vertebra.diameter_mm > 2 * fp.fdm_min_wall_mm else
+                      f"fabrication_package.fdm_min_wall_mm < {spec.vertebra.diameter_mm / 2:g} mm (no hole fits in "
+                      "the rod column beside a wall that thick)"))
     plate = t - nut_pocket_depth_mm(spec)
     if plate < fp.fdm_min_plate_mm:
         out.append(f"fabrication_package.tie_rod_thread = {fp.tie_rod_thread!r}: the rigid twin's "

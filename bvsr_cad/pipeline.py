@@ -199,10 +199,10 @@ def _build_export(params: str | Path, out_dir: str | Path | None, progress: Prog
         say(f"removed the cache's {folder.parent.name}/{folder.name}: an entry a build did not finish")
     log = StageLog(say)
     data = _data_bytes(spec, params)
-    if spec.calibration.data_file and not (params.resolve().parent / spec.calibration.data_file).is_file():
-        say(f"calibration.data_file = {spec.calibration.data_file!r}: "
-            f"{(params.resolve().parent / spec.calibration.data_file).resolve()} not found (it is relative to the parameter "
-            "file's folder); the export compares no measurements (analysis/measurements.json says why)")
+    data_path = (params.resolve().parent / spec.calibration.data_file).resolve()
+    if spec.calibration.data_file and not data_path.is_file():
+        say(f"calibration.data_file = {spec.calibration.data_file!r}: {data_path} not found (it is relative to the "
+            "parameter file's folder); the export compares no measurements (analysis/measurements.json says why)")
     export_key = stage_key("export", params=params.read_bytes(), data=data, environment=environment_state())
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
     claim(tmp)

@@ -98,7 +98,8 @@ def test_watch_rebuilds_when_the_calibration_data_is_saved_and_follows_a_new_dat
     assert _wait(lambda: len(calls) == 4)
     assert "more.csv (calibration data) changed" in lines
     time.sleep(1.0)
-    assert len(calls) == 4 and not any("rows.csv" in line for line in lines[lines.index("more.csv (calibration data) changed"):])
+    since = lines[lines.index("more.csv (calibration data) changed"):]
+    assert len(calls) == 4 and not any("rows.csv" in line for line in since)
     stop.set()
     th.join(10)
     assert not th.is_alive() and lines[-1] == "stopped"

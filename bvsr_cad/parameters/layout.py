@@ -108,7 +108,6 @@ class PanelLayout:
         return np.array([polar(r, a) for a in soa_angles_deg()])
 
 
-
 class LayoutProblem(NamedTuple):
     """A panel rule broken: what, the web it leaves and the one it needs (mm), and the features
     (:class:`Cyl` names, ``rim``, ``bellows``, ``pocket_depth``) whose keys set it."""
@@ -170,6 +169,7 @@ def with_key(spec: TailSpec, key: str, value: Any) -> TailSpec:
         return dataclasses.replace(spec, **{name: value})
     section = key_value(spec, ".".join(tables))
     return with_key(spec, ".".join(tables), dataclasses.replace(section, **{name: value}))
+
 
 def half_angle_rad(spec: TailSpec) -> float:
     """The taper half-angle actually used (resolving 'auto')."""
@@ -400,7 +400,7 @@ def _segment_point_distance(p0, p1, q) -> float:
 def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
     """Every violated rule of one panel."""
     fab = spec.fabrication
-    out: list[tuple[str, float, float]] = []
+    out: list[LayoutProblem] = []
     t = lay.thickness_mm
     # Pockets from both faces plus a floor must fit in the panel.
     depth_total = lay.pocket_depth_mm * (int(lay.lower_pockets) + int(lay.upper_pockets))
@@ -468,7 +468,7 @@ def _problems_at(spec: TailSpec, beta: float) -> list[LayoutProblem]:
 
 def _problems_at_tip(spec: TailSpec, beta: float) -> list[LayoutProblem]:
     """Bellows of neighbouring SOAs at the smallest pitch radius (the tip's)."""
-    out = []
+    out: list[LayoutProblem] = []
     r_min = spec.joint.pitch_diameter_mm / 2 - (spec.panels - 1) * spec.joint.joint_height_mm * math.tan(beta)
     gap = soa_neighbour_gap_mm(spec, r_min)
     if gap < spec.fabrication.min_pocket_gap_mm - 1e-9:

@@ -59,7 +59,6 @@ def table(cls: type) -> Any:
     return dataclass(frozen=True)(cls)
 
 
-
 def rule_bounds(meta: Any) -> tuple[float, float]:
     """(lowest, highest) of a field's rule range (``meta``: its metadata); a strict end is the bound itself."""
     lo = meta["ge"] if meta.get("ge") is not None else meta["gt"]
@@ -104,6 +103,7 @@ def feasible_interval(meta: Any, ok: Callable[[float], bool], value: float,
         return good
 
     return edge(lo), edge(hi)
+
 
 @table
 class JointTable:

@@ -62,6 +62,11 @@ def cmd_build(args) -> int:
     # builds the tail's assembly from the file while this process decides what the cache holds.
     standby = SecondProcess.standby("bvsr_cad.pipeline", say, [str(Path(args.params).resolve())])
     try:
+        # A bad file is refused in a fraction of a second, before the pipeline's imports (seconds); the
+        # build loads it again (its derived layout is cached in this process).
+        from .parameters.load import load_spec
+
+        load_spec(args.params)
         from .pipeline import build_export
     except BaseException:
         if standby is not None:
@@ -428,13 +433,12 @@ def main(argv: list[str] | None = None) -> int:
         if _interrupted(exc):  # Ctrl-C while a C extension initialised: ImportError from KeyboardInterrupt
             print("bvsr: interrupted; nothing was published", file=sys.stderr)
             return 130
-        # The error classes are imported here, not before the command runs: `bvsr build` starts its
-        # analyses' process before it imports the pipeline (seconds of imports), and these would import it.
-        bad_input, geometry_error = _error_classes()
+        bad_input, geometry_error = _error_classes()  # those loaded: importing them all takes seconds
         if isinstance(exc, bad_input):
             print(f"bvsr: error: {exc}", file=sys.stderr)
             return EXIT_BAD_INPUT
-        if isinstance(exc, geometry_error) or (isinstance(exc, ValueError) and _raised_in_parts(exc) is not None):
+        if (geometry_error is not None and isinstance(exc, geometry_error)) or (
+                isinstance(exc, ValueError) and _raised_in_parts(exc) is not None):
             print(_generator_failure(args, exc), file=sys.stderr)
             return EXIT_BAD_INPUT
         raise  # a bug, not a parameter: keep its traceback
@@ -453,21 +457,25 @@ def _interrupted(exc: BaseException) -> bool:
     return False
 
 
-def _error_classes() -> tuple[tuple[type[Exception], ...], type[Exception]]:
-    """(the errors that are bad input, exit code 2; the CAD kernel's failure on valid-looking input)."""
-    from .analysis.calibrate import CalibrationError
-    from .checks.export import ExportError
-    from .checks.printability import SlicerMissingError
-    from .parameters.load import ParamError
-    from .parameters.measurements import MeasurementError
-    from .parameters.study import StudyError
-    from .parts._kernel import GeometryError
-    from .pipeline import OutputError
-    from .sim import SimulationInputError
-    from .sweep import SweepError
+#: The errors that are bad input (exit code 2), by module and class.
+_BAD_INPUT = (("analysis.calibrate", "CalibrationError"), ("checks.export", "ExportError"),
+              ("checks.printability", "SlicerMissingError"), ("parameters.load", "ParamError"),
+              ("parameters.measurements", "MeasurementError"), ("parameters.study", "StudyError"),
+              ("pipeline", "OutputError"), ("sim", "SimulationInputError"), ("sweep", "SweepError"))
 
-    return ((ParamError, MeasurementError, CalibrationError, OutputError, ExportError, SimulationInputError,
-             SlicerMissingError, StudyError, SweepError), GeometryError)
+
+def _error_classes() -> tuple[tuple[type[Exception], ...], type[Exception] | None]:
+    """(the errors that are bad input, exit code 2; the CAD kernel's failure on valid-looking input).
+
+    Only the classes whose modules are loaded: an error of a class never imported cannot have been
+    raised (one from the second process is unpickled, which imports its module), and importing them all
+    (the pipeline: seconds) would keep a bad parameter file's message waiting."""
+    def loaded(module: str, name: str) -> type[Exception] | None:
+        mod = sys.modules.get(f"{__package__ or 'bvsr_cad'}.{module}")
+        return getattr(mod, name, None) if mod is not None else None
+
+    bad = tuple(c for c in (loaded(m, n) for m, n in _BAD_INPUT) if c is not None)
+    return bad, loaded("parts._kernel", "GeometryError")
 
 
 if __name__ == "__main__":

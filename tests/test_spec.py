@@ -173,3 +173,19 @@ def test_a_value_error_outside_the_generators_keeps_its_traceback(monkeypatch):
     monkeypatch.setattr(build_module, "build_assembly", bug)
     with pytest.raises(ValueError, match="a bug"):
         main(["workspace", str(PARAMS / "bvsr.toml"), "--samples", "1", "-q"])
+
+
+def test_a_bad_file_is_refused_before_the_pipeline_is_imported(tmp_path):
+    """`bvsr build` refuses a bad parameter file without importing the pipeline (4-9 s of imports: the
+    helper of 2026-11-25 waited 8-14 s for a one-key range error), and classifies it without importing it."""
+    import subprocess
+    import sys
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text((PARAMS / "bvsr.toml").read_text().replace("pleats = 2 ", "pleats = 0 "))
+    code = ("import sys; from bvsr_cad.cli import main; rc = main(['build', sys.argv[1], '-o', sys.argv[2], '-q']); "
+            "print(rc, 'bvsr_cad.pipeline' in sys.modules, 'build123d' in sys.modules)")
+    run = subprocess.run([sys.executable, "-c", code, str(bad), str(tmp_path / "out")], capture_output=True, text=True,
+                         timeout=120)
+    assert run.stdout.split() == ["2", "False", "False"], run.stdout + run.stderr
+    assert "soa.pleats = 0" in run.stderr and not (tmp_path / "out").exists()

@@ -104,13 +104,14 @@ def cmd_check(args) -> int:
 
 
 def cmd_simulate(args) -> int:
-    from .exporters.plots import plot_simulation
-    from .sim import check_inputs, joint_limits_rad, simulate
-    from .parameters import paper
     from .parameters.load import load_spec
 
+    spec = load_spec(args.params)  # a bad file is refused before the simulator's imports (seconds)
+    from .exporters.plots import plot_simulation
+    from .parameters import paper
+    from .sim import check_inputs, joint_limits_rad, simulate
+
     say = _progress(args.quiet or args.json)
-    spec = load_spec(args.params)
     check_inputs(spec, args.pressure_bar, args.payload_g)
     limits = joint_limits_rad(spec, say)
     if args.platform == "cart":
@@ -188,16 +189,17 @@ def _simulate_cart(args, spec, limits, say) -> int:
 
 
 def cmd_calibrate(args) -> int:
+    from .parameters.load import load_spec
+    from .parameters.measurements import data_sha256, load_measurements
+
+    spec = load_spec(args.params)  # bad files are refused before the models' imports (seconds)
+    rows = load_measurements(args.data)
     from .analysis.calibrate import calibrate
     from .analysis.predict import Predictor
     from .exporters.calibration_file import write_calibrated_params
-    from .parameters.load import load_spec
-    from .parameters.measurements import data_sha256, load_measurements
     from .sim import protocol_radius_mm
 
     say = _progress(args.quiet or args.json)
-    spec = load_spec(args.params)
-    rows = load_measurements(args.data)
     names = [n.strip() for n in args.fit.split(",") if n.strip()] if args.fit else None
     say(f"{len(rows)} measurements ({sum(m.role == 'fit' for m in rows)} fit, "
         f"{sum(m.role == 'holdout' for m in rows)} holdout); building the geometry")
@@ -279,9 +281,10 @@ def cmd_clearance(args) -> int:
 
 def cmd_sweep(args) -> int:
     from .parameters.study import load_study
+
+    study = load_study(args.study)  # a bad study file is refused before the sweep's imports (seconds)
     from .sweep import run_study
 
-    study = load_study(args.study)
     say = _progress(args.quiet or args.json)
     try:
         res = run_study(study, args.output, scheduler=args.scheduler, workers=args.workers,

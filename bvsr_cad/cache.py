@@ -166,7 +166,7 @@ class ArtifactCache:
         try:
             claim(tmp)
             fill(tmp)
-            (tmp / OWNER_FILE).unlink()
+            (tmp / OWNER_FILE).unlink(missing_ok=True)
             (tmp / _DONE).write_text(f"{time.time():.3f}\n")
             try:
                 tmp.rename(entry)

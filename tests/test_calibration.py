@@ -23,6 +23,13 @@ GOOD = "T3,segment_max_angle,motion=extension,51.9,deg,fit,Table III\n"
     ("T3,segment_max_angle,motion=sideways,51.9,deg,fit,s\n", "row 2, column conditions: motion = 'sideways'"),
     ("T3,segment_max_angle,motion=extension,51.9,deg,maybe,s\n", "row 2, column role = 'maybe'"),
     ("T3,segment_max_angle,motion=extension,51.9,rad,fit,s\n", "row 2, column unit = 'rad'"),
+    # Conditions a model cannot be asked (a protocol range upside down crashed the analyses).
+    ("W,tip_workspace_radius,segments=2; pressurised_max_kpa_abs=50; depressurised_min_kpa_abs=150,100,mm,fit,s\n",
+     "row 2, column conditions: depressurised_min_kpa_abs = 150 exceeds pressurised_max_kpa_abs = 50"),
+    ("W,tip_workspace_radius,segments=2.5; pressurised_max_kpa_abs=150; depressurised_min_kpa_abs=50,100,mm,fit,s\n",
+     "row 2, column conditions: segments = 2.5; allowed: whole numbers 1 to 3"),
+    ("P,segment_peak_velocity,motion=extension; pressure_bar=-6,678.6,deg/s,fit,s\n",
+     "row 2, column conditions: pressure_bar = -6; allowed: 0.01 to 10"),
 ])
 def test_bad_data_exits_2_naming_row_and_column(tmp_path, capsys, row, expected):
     data = tmp_path / "bad.csv"

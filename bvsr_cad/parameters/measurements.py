@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -85,6 +86,17 @@ class Measurement:
         return f"{self.quantity} ({cond})" if cond else self.quantity
 
 
+#: What the models can be asked, per numeric condition: (lowest, highest, whole numbers only). Pressures
+#: in bar and kPa are gauge unless named ``_abs``; a pulse is positive; a vacuum stops at -1 atm.
+CONDITION_RANGES: dict[str, tuple[float, float, bool]] = {
+    "pressure_kpa": (-101.325, 1000.0, False), "pressure_bar": (0.01, 10.0, False),
+    "pressure_min_bar": (0.01, 10.0, False), "pressure_max_bar": (0.01, 10.0, False),
+    "payload_g": (0.0, 10000.0, False), "segments": (1, 3, True),
+    "pressurised_max_kpa_abs": (0.0, 1100.0, False), "depressurised_min_kpa_abs": (0.0, 1100.0, False)}
+#: Conditions that bound a range from below and above: the first may not exceed the second.
+CONDITION_ORDER = (("pressure_min_bar", "pressure_max_bar"), ("depressurised_min_kpa_abs", "pressurised_max_kpa_abs"))
+
+
 def _conditions(text: str, allowed: dict[str, str], where: str, problems: list[str]) -> tuple:
     out = []
     for item in (x.strip() for x in text.split(";")):
@@ -104,9 +116,21 @@ def _conditions(text: str, allowed: dict[str, str], where: str, problems: list[s
             out.append((key, raw))
         else:
             try:
-                out.append((key, float(raw)))
+                value = float(raw)
             except ValueError:
                 problems.append(f"{where}: {key} = {raw!r} is not a number")
+                continue
+            lo, hi, whole = CONDITION_RANGES.get(key, (-math.inf, math.inf, False))
+            if not lo <= value <= hi or (whole and not value.is_integer()):
+                problems.append(f"{where}: {key} = {raw}; allowed: {'whole numbers ' if whole else ''}"
+                                f"{lo:g} to {hi:g}")
+                continue
+            out.append((key, value))
+    given = dict(out)
+    for low, high in CONDITION_ORDER:
+        if low in given and high in given and given[low] > given[high]:
+            problems.append(f"{where}: {low} = {given[low]:g} exceeds {high} = {given[high]:g}; allowed: "
+                            f"{low} <= {high}")
     missing = [k for k in allowed if k not in dict(out)]
     if missing and not any(f"{where}:" in p for p in problems):
         problems.append(f"{where}: missing condition(s) {', '.join(missing)}")

@@ -131,8 +131,9 @@ _FEATURE_KEYS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("rod_bore", ("vertebra.diameter_mm", "socket.rod_clearance_mm")),
     ("set_screw", ("socket.set_screw_tap_drill_mm",)),
     ("clamp_boss", ("socket.boss_wall_mm", "vertebra.diameter_mm")),
-    ("mount_insert_", ("mount.insert_diameter_mm", "mount.bolt_circle_diameter_mm")),
-    ("payload_insert_", ("payload.insert_diameter_mm", "payload.insert_circle_diameter_mm", "payload.insert_count")),
+    ("mount_insert_", ("mount.insert_diameter_mm", "mount.bolt_circle_diameter_mm", "mount.insert_depth_mm")),
+    ("payload_insert_", ("payload.insert_diameter_mm", "payload.insert_circle_diameter_mm", "payload.insert_count",
+                         "payload.insert_depth_mm")),
     ("lightening_", ("lightening.hole_diameter_mm",)),
     ("rim", ("joint.panel_diameter_mm",)),
     ("bellows", ("soa.long_side_mm", "soa.fillet_radius_mm", "soa.rotation_deg", "joint.pitch_diameter_mm")),
@@ -477,10 +478,12 @@ def _problems_at_tip(spec: TailSpec, beta: float) -> list[LayoutProblem]:
     return out
 
 
-def _any_problem(spec: TailSpec, beta: float) -> bool:
-    """Some rule of :func:`_problems_at` is broken (it stops at the first panel that breaks one)."""
-    return any(panel_problems(spec, panel_layout(spec, k, beta)) for k in range(spec.panels)) or bool(
-        _problems_at_tip(spec, beta))
+def _any_problem(spec: TailSpec, beta: float, first: tuple[int, ...] = ()) -> bool:
+    """Some rule of :func:`_problems_at` is broken (it stops at the first panel that breaks one, trying the
+    panels ``first`` before the others)."""
+    order = [k for k in first if k < spec.panels] + [k for k in range(spec.panels) if k not in first]
+    return bool(_problems_at_tip(spec, beta)) or any(panel_problems(spec, panel_layout(spec, k, beta))
+                                                     for k in order)
 
 
 @lru_cache(maxsize=64)
@@ -504,6 +507,15 @@ def binding_constraint(spec: TailSpec) -> str:
     beta = math.radians(max_feasible_taper_deg(spec) + 0.01)
     probs = _problems_at(spec, beta)
     return probs[0][0] if probs else "none"
+
+
+def _binding_text(spec: TailSpec) -> str:
+    """:func:`binding_constraint` with the keys (and their values) that set the features it names."""
+    probs = _problems_at(spec, math.radians(max_feasible_taper_deg(spec) + 0.01))
+    if not probs:
+        return "none"
+    keys = list(dict.fromkeys(k for f in probs[0].features for k in feature_keys(f)))
+    return probs[0].desc + ("; set by " + ", ".join(f"{k} = {key_value(spec, k)!r}" for k in keys) if keys else "")
 
 
 def soa_is_sound(spec: TailSpec) -> bool:
@@ -544,8 +556,12 @@ def validate_layout(spec: TailSpec) -> list[str]:
         return problems
     inner = spec.soa.short_side_mm - 2 * spec.soa.wall_offset_mm
     if inner <= 0.5:
-        problems.append(f"soa.facet_thickness_mm = {spec.soa.facet_thickness_mm}: leaves {inner:.2f} mm of "
-                        f"interior at the valleys (soa.short_side_mm = {spec.soa.short_side_mm}); allowed: > 0.5 mm")
+        soa = spec.soa
+        problems.append(f"soa.facet_thickness_mm = {soa.facet_thickness_mm}: leaves {inner:.2f} mm of interior at the "
+                        f"valleys (soa.short_side_mm = {soa.short_side_mm} less twice the wall's "
+                        f"{soa.wall_offset_mm:.2f} mm offset, which the fold's slope sets: soa.long_side_mm = "
+                        f"{soa.long_side_mm}, soa.origami_height_mm = {soa.origami_height_mm}, soa.pleats = "
+                        f"{soa.pleats}); allowed: > 0.5 mm")
     if 2 * spec.soa.fillet_radius_mm >= spec.soa.short_side_mm:
         problems.append(f"soa.fillet_radius_mm = {spec.soa.fillet_radius_mm}: must be below half of "
                         f"soa.short_side_mm = {spec.soa.short_side_mm}")
@@ -577,7 +593,9 @@ def validate_layout(spec: TailSpec) -> list[str]:
     if spec.tubes.port_depth_mm < j.panel_thickness_mm / 2 or \
             spec.tubes.port_depth_mm > j.panel_thickness_mm - spec.fabrication.socket_floor_mm:
         problems.append(f"tubes.port_depth_mm = {spec.tubes.port_depth_mm}: must reach the mid-plane passage and "
-                        f"keep a floor: allowed {j.panel_thickness_mm / 2:.2f} to "
+                        f"keep a floor (fabrication.socket_floor_mm = {spec.fabrication.socket_floor_mm!r}) in the "
+                        f"{j.panel_thickness_mm:.2f} mm panels (joint.joint_height_mm = {j.joint_height_mm!r} minus "
+                        f"joint.gap_mm = {j.gap_mm!r}): allowed {j.panel_thickness_mm / 2:.2f} to "
                         f"{j.panel_thickness_mm - spec.fabrication.socket_floor_mm:.2f} mm")
     if problems:
         return problems
@@ -598,7 +616,7 @@ def validate_layout(spec: TailSpec) -> list[str]:
         if float(spec.taper.half_angle_deg) > beta_max + 1e-9 and not _problems_at(spec, 0.0):
             problems.append(
                 f"taper.half_angle_deg = {spec.taper.half_angle_deg}: beyond the feasible cone; allowed: 0 to "
-                f"{beta_max:.4f} deg ('auto' picks it); limited by: {binding_constraint(spec)}")
+                f"{beta_max:.4f} deg ('auto' picks it); limited by: {_binding_text(spec)}")
             return problems
     beta_deg = math.degrees(half_angle_rad(spec))
     if 0.0 < beta_deg < MIN_BUILDABLE_TAPER_DEG and spec.joints_per_segment > 1:
@@ -608,7 +626,7 @@ def validate_layout(spec: TailSpec) -> list[str]:
         beta_max = max_feasible_taper_deg(spec)
         if spec.taper.half_angle_deg == AUTO:
             problems.append(f"taper.half_angle_deg = 'auto': the largest feasible cone is {beta_deg:.4f} deg "
-                            f"(limited by: {binding_constraint(spec)}); {why}; allowed: 0 (no taper)")
+                            f"(limited by: {_binding_text(spec)}); {why}; allowed: 0 (no taper)")
         else:
             wider = f", or {MIN_BUILDABLE_TAPER_DEG:g} to {beta_max:.4f} deg" \
                 if beta_max >= MIN_BUILDABLE_TAPER_DEG else ""
@@ -694,9 +712,10 @@ def panel_rule_messages(spec: TailSpec, beta: float) -> list[str]:
         return []
     at = 0.0 if spec.taper.half_angle_deg == AUTO else beta  # 'auto' finds a cone when the rules hold without one
     keys = list(dict.fromkeys(k for p in found for f in p.features for k in feature_keys(f)))
+    hot = tuple(dict.fromkeys(int(m.group(1)) for p in found if (m := re.match(r"panel(\d+): ", p.desc))))
     out = []
     for key in keys:
-        allowed = _allowed_values(spec, key, lambda candidate: not _any_problem(candidate, at))
+        allowed = _allowed_values(spec, key, lambda candidate: not _any_problem(candidate, at, hot))
         if allowed is not None:
             unit = " mm" if key.endswith("_mm") and allowed[0] in "<>0123456789" else ""
             unit = " deg" if key.endswith("_deg") else unit

@@ -142,7 +142,8 @@ def _violations(d: MoldDims, c: Casting) -> list[tuple[str, str]]:
             out.append((f"casting.{what}_diameter_mm",
                         f"the {what} does not fit on the flange face between the core print ({2 * d.core_half_mm:.2f} "
                         f"mm square, casting.min_print_wall_mm = {mw!r} around it) and the flange rim (D "
-                        f"{2 * d.cast_flange_radius_mm:.2f} mm): {lo - hi:.2f} mm too wide"))
+                        f"{2 * d.cast_flange_radius_mm:.2f} mm, from joint.base_diameter_mm; the core from the SOA's "
+                        f"[soa] table): {lo - hi:.2f} mm too wide"))
     return out
 
 

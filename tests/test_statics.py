@@ -92,3 +92,20 @@ def test_forward_matches_an_independent_root_finder(bvsr_spec, statics):
                    options={"xtol": 1e-13})
         assert np.abs(sol.fun).max() < 1e-8  # N mm: equilibrium (hybr may stop at its own xtol floor)
         assert np.abs(sol.x.reshape(n, 2) - w[k]).max() < 1e-9
+
+
+def test_a_one_joint_segment_has_a_blocked_force_in_every_motion(bvsr_spec):
+    """MINPACK stopped a one-joint segment's extension at a root whose equations were all within 2e-16
+    of zero ("not making good progress") and the analyses crashed; a root within the tolerance is one.
+    The force balances the moment of the lines' pressures: flexion and extension differ by the lines'
+    asymmetry only (a few percent), as for the three-joint segment."""
+    import dataclasses
+
+    from bvsr_cad.models.statics import quasi_static_segment
+
+    one = dataclasses.replace(bvsr_spec, joints_per_segment=1)  # refused at load (its rigid twin), fine here
+    seg = TailStatics.from_spec(one).first_segment()
+    assert seg.kin.n_joints == 1
+    forces = {m: quasi_static_segment(seg, m).blocked_force_n for m in ("extension", "flexion", "waggle")}
+    assert all(np.isfinite(f) and f > 0 for f in forces.values()), forces
+    assert forces["extension"] == pytest.approx(forces["flexion"], rel=0.05)

@@ -142,8 +142,8 @@ def _violations(d: MoldDims, c: Casting) -> list[tuple[str, str]]:
             out.append((f"casting.{what}_diameter_mm",
                         f"the {what} does not fit on the flange face between the core print ({2 * d.core_half_mm:.2f} "
                         f"mm square, casting.min_print_wall_mm = {mw!r} around it) and the flange rim (D "
-                        f"{2 * d.cast_flange_radius_mm:.2f} mm, from joint.base_diameter_mm; the core from the SOA's "
-                        f"[soa] table): {lo - hi:.2f} mm too wide"))
+                        f"{2 * d.cast_flange_radius_mm:.2f} mm, from joint.base_diameter_mm): {lo - hi:.2f} mm "
+                        "too wide"))
     return out
 
 
@@ -176,6 +176,9 @@ def mold_problems(soa: SoaTable, flange_diameter_mm: float, casting: Casting) ->
     for key, why in found:
         name = key.split(".")[1]
         line = f"{key} = {getattr(c, name)!r}: mold set: {why}; allowed: {_allowed(soa, flange_diameter_mm, c, name)}"
+        if name in ("gate_diameter_mm", "vent_diameter_mm"):  # the core print: the SOA's interior
+            line += (f" (the core print is the bellows' interior: soa.long_side_mm = {soa.long_side_mm!r} less twice "
+                     f"the wall of soa.facet_thickness_mm = {soa.facet_thickness_mm!r})")
         if name in ("core_print_mm", "bolt_hole_diameter_mm"):  # a thicker wall also makes room
             wall = _allowed(soa, flange_diameter_mm, c, "cavity_wall_mm")
             if wall[0] in "<>0123456789":

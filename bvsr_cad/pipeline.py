@@ -152,12 +152,16 @@ def _volatile(t0: float, log: StageLog) -> dict:
             "stages": log.stages}
 
 
+def _data_path(spec, params: Path) -> Path | None:
+    """The calibration's data file (read by the measurement comparison; relative to the parameter file's
+    folder), or None when the file names none."""
+    return (params.resolve().parent / spec.calibration.data_file).resolve() if spec.calibration.data_file else None
+
+
 def _data_bytes(spec, params: Path) -> bytes:
-    """The calibration's data file (read by the measurement comparison), or nothing."""
-    if not spec.calibration.data_file:
-        return b""
-    path = params.resolve().parent / spec.calibration.data_file
-    return path.read_bytes() if path.is_file() else b""
+    """The calibration's data file's bytes, or nothing."""
+    path = _data_path(spec, params)
+    return path.read_bytes() if path is not None and path.is_file() else b""
 
 
 def build_export(params: str | Path, out_dir: str | Path | None = None,
@@ -199,8 +203,8 @@ def _build_export(params: str | Path, out_dir: str | Path | None, progress: Prog
         say(f"removed the cache's {folder.parent.name}/{folder.name}: an entry a build did not finish")
     log = StageLog(say)
     data = _data_bytes(spec, params)
-    data_path = (params.resolve().parent / spec.calibration.data_file).resolve()
-    if spec.calibration.data_file and not data_path.is_file():
+    data_path = _data_path(spec, params)
+    if data_path is not None and not data_path.is_file():
         say(f"calibration.data_file = {spec.calibration.data_file!r}: {data_path} not found (it is relative to the "
             "parameter file's folder); the export compares no measurements (analysis/measurements.json says why)")
     export_key = stage_key("export", params=params.read_bytes(), data=data, environment=environment_state())

@@ -502,20 +502,33 @@ def max_feasible_taper_deg(spec: TailSpec) -> float:
     return math.degrees(lo)
 
 
+def _binding_problem(spec: TailSpec) -> LayoutProblem | None:
+    """The first rule broken just past the feasible cone, or None."""
+    probs = _problems_at(spec, math.radians(max_feasible_taper_deg(spec) + 0.01))
+    return probs[0] if probs else None
+
+
 def binding_constraint(spec: TailSpec) -> str:
     """What stops a larger taper: the first rule broken just past the feasible cone."""
-    beta = math.radians(max_feasible_taper_deg(spec) + 0.01)
-    probs = _problems_at(spec, beta)
-    return probs[0][0] if probs else "none"
+    found = _binding_problem(spec)
+    return found.desc if found else "none"
+
+
+def _keys_of(problems: list[LayoutProblem]) -> list[str]:
+    """The parameter keys that set the features of ``problems``, each once, in order."""
+    return list(dict.fromkeys(k for p in problems for f in p.features for k in feature_keys(f)))
+
+
+def _set_by(spec: TailSpec, problems: list[LayoutProblem]) -> str:
+    """``; set by key = value, ...`` for the keys of ``problems`` (empty without any)."""
+    keys = _keys_of(problems)
+    return "; set by " + ", ".join(f"{k} = {key_value(spec, k)!r}" for k in keys) if keys else ""
 
 
 def _binding_text(spec: TailSpec) -> str:
     """:func:`binding_constraint` with the keys (and their values) that set the features it names."""
-    probs = _problems_at(spec, math.radians(max_feasible_taper_deg(spec) + 0.01))
-    if not probs:
-        return "none"
-    keys = list(dict.fromkeys(k for f in probs[0].features for k in feature_keys(f)))
-    return probs[0].desc + ("; set by " + ", ".join(f"{k} = {key_value(spec, k)!r}" for k in keys) if keys else "")
+    found = _binding_problem(spec)
+    return found.desc + _set_by(spec, [found]) if found else "none"
 
 
 def soa_is_sound(spec: TailSpec) -> bool:
@@ -711,7 +724,7 @@ def panel_rule_messages(spec: TailSpec, beta: float) -> list[str]:
     if not found:
         return []
     at = 0.0 if spec.taper.half_angle_deg == AUTO else beta  # 'auto' finds a cone when the rules hold without one
-    keys = list(dict.fromkeys(k for p in found for f in p.features for k in feature_keys(f)))
+    keys = _keys_of(found)
     hot = tuple(dict.fromkeys(int(m.group(1)) for p in found if (m := re.match(r"panel(\d+): ", p.desc))))
     out = []
     for key in keys:
@@ -733,10 +746,7 @@ def panel_rule_messages(spec: TailSpec, beta: float) -> list[str]:
         panels = [int(m.group(1)) for p in same if (m := re.match(r"panel(\d+): ", p.desc))]
         if len(same) > 1:
             line += f"; {len(same) - 1} more like it" + (f" (panels {_panels_text(panels)})" if panels else "")
-        set_by = list(dict.fromkeys(k for p in same for f in p.features for k in feature_keys(f)))
-        if set_by:
-            line += "; set by " + ", ".join(f"{k} = {key_value(spec, k)!r}" for k in set_by)
-        out.append(line)
+        out.append(line + _set_by(spec, same))
     return out
 
 

@@ -6,7 +6,7 @@ Run: .venv/bin/python benchmarks/clearance_bench.py [params/bvsr.toml] [subset]
 
 from __future__ import annotations
 
-import sys
+import argparse
 import time
 
 import numpy as np
@@ -18,8 +18,11 @@ from bvsr_cad.parameters.load import load_spec
 
 
 def main() -> None:
-    params = sys.argv[1] if len(sys.argv) > 1 else "params/bvsr.toml"
-    subset = int(sys.argv[2]) if len(sys.argv) > 2 else 20
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("params", nargs="?", default="params/bvsr.toml")
+    ap.add_argument("subset", nargs="?", type=int, default=20, help="poses checked by brute force (default 20)")
+    args = ap.parse_args()
+    params, subset = args.params, args.subset
     asm = build_assembly(load_spec(params))
     ws = run_workspace(asm, 2000, 7)
     rng = np.random.default_rng(3)

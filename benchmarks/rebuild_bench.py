@@ -61,14 +61,15 @@ def main() -> None:
     args = ap.parse_args()
     work = Path(tempfile.mkdtemp(prefix="bvsr-rebuild-bench-"))
     os.environ["BVSR_CACHE"] = str(work / "cache")
-    from bvsr_cad.pipeline import _process_start, build_export
+    from bvsr_cad.cache import process_start
+    from bvsr_cad.pipeline import build_export
     from bvsr_cad.worker import SecondProcess
 
     base = Path(args.params).resolve()
     text = base.read_text()
     for stale in base.parent.glob(".bench-*.toml"):  # left by a benchmark that was killed
         pid = stale.name.split("-")[1]
-        if pid.isdigit() and _process_start(int(pid)) is None:
+        if pid.isdigit() and process_start(int(pid)) is None:
             stale.unlink(missing_ok=True)
     rows = []
 

@@ -1,0 +1,89 @@
+"""The benchmark scripts run against the package as it is (79aa18c moved a helper the rebuild benchmark
+imported and nothing noticed until the benchmark was next run): each runs here with its builds stood in."""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import shutil
+import sys
+from pathlib import Path
+
+import pytest
+
+from bvsr_cad.parameters.load import load_spec
+from bvsr_cad.pipeline import BuildResult
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _script(name: str):
+    spec = importlib.util.spec_from_file_location(f"bench_{name}", ROOT / "benchmarks" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _value(spec, table: str, key: str):
+    return getattr(getattr(spec, table), key) if table else getattr(spec, key)
+
+
+def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, monkeypatch, capsys):
+    """The benchmark's whole flow with ``build_export`` stood in: every edit of :data:`EDITS` is applied
+    to the default file beside it (its data file resolves as the base's), loads with the new value, and is
+    removed afterwards; an edit file left by a dead benchmark is removed, a live one's kept; the table
+    lists the cold build, the no-op and each edit with its ratio to cold."""
+    import bvsr_cad.pipeline
+    import bvsr_cad.worker
+
+    bench = _script("rebuild_bench")
+    (tmp_path / "params").mkdir()
+    base = tmp_path / "params" / "bvsr.toml"
+    shutil.copyfile(ROOT / "params" / "bvsr.toml", base)
+    shutil.copytree(ROOT / "data", tmp_path / "data")
+    dead = base.parent / ".bench-999999999-rod_material.toml"  # above Linux's pid_max: no such process
+    live = base.parent / f".bench-{os.getppid()}-taper.toml"  # a live process: another run of it
+    dead.write_text("")
+    live.write_text("")
+    built: list[tuple[Path, object]] = []
+
+    def fake_build(path, out, standby=None):
+        spec = load_spec(path)  # a ParamError propagates, as the real build's would
+        built.append((Path(path), spec))
+        return BuildResult(Path(out), [], 1.0, [{"stage": "export", "status": "built", "seconds": 1.0}])
+
+    monkeypatch.setattr(bvsr_cad.pipeline, "build_export", fake_build)
+    monkeypatch.setattr(bvsr_cad.worker.SecondProcess, "standby", classmethod(lambda cls, *a, **k: None))
+    monkeypatch.setattr(sys, "argv", ["rebuild_bench.py", str(base)])
+    bench.main()
+    out = capsys.readouterr().out
+
+    assert not dead.exists() and live.exists()
+    assert [p for p, _ in built[:2]] == [base, base]
+    assert len(built) == 2 + len(bench.EDITS)
+    default = load_spec(base)
+    for (path, spec), (name, (table, key, value)) in zip(built[2:], bench.EDITS.items()):
+        assert path.parent == base.parent and not path.exists(), name
+        new = _value(spec, table, key)
+        assert new != _value(default, table, key), name
+        assert (str(new) == value.strip('"')) if value.startswith('"') else float(new) == float(value), name
+    table = out.splitlines()[-(2 + len(bench.EDITS)):]
+    assert [line[:18].strip() for line in table] == ["cold", "no-op", *bench.EDITS]
+    assert float(table[0].split()[-2]) == 1.0  # its seconds / cold
+
+
+def test_rebuild_bench_edit_names_a_missing_key():
+    bench = _script("rebuild_bench")
+    with pytest.raises(KeyError, match="vertebra.no_such_key"):
+        bench.edited((ROOT / "params" / "bvsr.toml").read_text(), "vertebra", "no_such_key", "1")
+
+
+@pytest.mark.parametrize("name", ["clearance_bench", "dynamics_crosscheck", "rebuild_bench", "sim_bench"])
+def test_every_benchmark_answers_help(name, monkeypatch, capsys):
+    """Each script parses its arguments before any work, so ``--help`` says how to run it."""
+    module = _script(name)
+    monkeypatch.setattr(sys, "argv", [f"{name}.py", "--help"])
+    with pytest.raises(SystemExit) as done:
+        module.main()
+    assert done.value.code == 0
+    assert "usage:" in capsys.readouterr().out

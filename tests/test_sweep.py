@@ -234,3 +234,24 @@ def test_pareto_mask_closed_form():
     # minimise the first, maximise the second: (0.5,0.5), (1,1), (2,3) are not dominated
     assert pareto_mask(pts, (False, True)).tolist() == [True, True, False, False, True]
     assert math.isclose(pts[pareto_mask(pts, (True, True))][:, 0].max(), 3.0)
+
+
+@pytest.mark.parametrize("name", ["vertebra", "optimise"])
+def test_the_shipped_studies_load_and_every_variant_and_search_bound_is_a_tail(name):
+    """The README's `bvsr sweep studies/*.toml`: each shipped study loads against the current schema, and
+    every tail it will build loads too (the grid and listed variants; each search dimension at its
+    choices or at both ends of its range, the other keys at the base's values)."""
+    from bvsr_cad.parameters.load import spec_from_dict
+    from bvsr_cad.parameters.study import load_study
+
+    study = load_study(ROOT / "studies" / f"{name}.toml")
+    tails = list(study.variants())
+    for d in study.space:
+        for value in d.choices if d.choices is not None else (d.low, d.high):
+            tails.append(study.variant({d.key: value}))
+    assert len(tails) >= (13 if name == "vertebra" else 1 + 3 + 2 + 2 + 2)
+    for v in tails:
+        spec = spec_from_dict(v.data, v.label)
+        for key, value in v.overrides.items():
+            table, field_name = key.split(".")
+            assert getattr(getattr(spec, table), field_name) == value, (v.label, key)

@@ -738,3 +738,19 @@ def test_mold_cast_is_the_soa_grown_by_the_shrinkage(asm, bvsr_data):
     assert k == pytest.approx(1.003)
     box = molds.cast.bounding_box()
     assert box.max.Z - box.min.Z == pytest.approx(bvsr_data["soa"]["height_mm"] * k, abs=1e-4)
+
+
+def test_composed_inertia_by_hand():
+    """Two small bodies composed about their common centre of mass (the parallel-axis theorem), worked
+    by hand: 0.2 kg at (0.1, 0, 0) m and 0.3 kg at (0, 0.2, 0) m, each with 1e-6 kg m^2 of its own about
+    every axis. The CoM is (0.04, 0.12, 0); the offsets (0.06, -0.12, 0) and (-0.04, 0.08, 0) give
+    Ixx = 0.2 x 0.0144 + 0.3 x 0.0064 = 0.0048, Iyy = 0.2 x 0.0036 + 0.3 x 0.0016 = 0.0012,
+    Izz = Ixx + Iyy, Ixy = -(0.2 x 0.06 x -0.12 + 0.3 x -0.04 x 0.08) = 0.0024 (plus 2e-6 on the diagonal)."""
+    from bvsr_cad.assembly.inertia import Inertial, compose
+
+    own = np.eye(3) * 1e-6
+    both = compose([Inertial.make(0.2, (0.1, 0.0, 0.0), own), Inertial.make(0.3, (0.0, 0.2, 0.0), own)])
+    assert both.mass_kg == pytest.approx(0.5, rel=1e-15)
+    assert np.allclose(both.com, (0.04, 0.12, 0.0), rtol=0, atol=1e-15)
+    expected = np.array([[0.0048, 0.0024, 0.0], [0.0024, 0.0012, 0.0], [0.0, 0.0, 0.006]]) + 2 * own
+    assert np.allclose(both.inertia, expected, rtol=1e-12, atol=1e-15)

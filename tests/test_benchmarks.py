@@ -55,7 +55,12 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, 
     monkeypatch.setattr(bvsr_cad.pipeline, "build_export", fake_build)
     monkeypatch.setattr(bvsr_cad.worker.SecondProcess, "standby", classmethod(lambda cls, *a, **k: None))
     monkeypatch.setattr(sys, "argv", ["rebuild_bench.py", str(base)])
+    # The benchmark points BVSR_CACHE at its own private cache and leaves it so (it is the whole process):
+    # restored afterwards, or the later tests of this worker would build beside the session's cache.
+    monkeypatch.setenv("BVSR_CACHE", os.environ.get("BVSR_CACHE", str(tmp_path / "cache")))
+    before = os.environ["BVSR_CACHE"]
     bench.main()
+    assert os.environ["BVSR_CACHE"] != before
     out = capsys.readouterr().out
 
     assert not dead.exists() and live.exists()

@@ -60,6 +60,7 @@ def main() -> None:
     ap.add_argument("--edits", default=",".join(EDITS), help="comma-separated edit names (default: all)")
     args = ap.parse_args()
     work = Path(tempfile.mkdtemp(prefix="bvsr-rebuild-bench-"))
+    users_cache = os.environ.get("BVSR_CACHE")
     os.environ["BVSR_CACHE"] = str(work / "cache")
     from bvsr_cad.cache import process_start
     from bvsr_cad.pipeline import build_export
@@ -109,6 +110,10 @@ def main() -> None:
             print(f"{label:18} {seconds:8.1f} {seconds / cold:7.2f} {cpu:7.1f}")
     finally:
         shutil.rmtree(work, ignore_errors=True)
+        if users_cache is None:  # the environment as it was (main() may run inside a longer process)
+            os.environ.pop("BVSR_CACHE", None)
+        else:
+            os.environ["BVSR_CACHE"] = users_cache
 
 
 if __name__ == "__main__":

@@ -45,29 +45,32 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, 
     live = base.parent / f".bench-{os.getppid()}-taper.toml"  # a live process: another run of it
     dead.write_text("")
     live.write_text("")
-    built: list[tuple[Path, object]] = []
+    built: list[tuple[Path, object, str]] = []
 
     def fake_build(path, out, standby=None):
         spec = load_spec(path)  # a ParamError propagates, as the real build's would
-        built.append((Path(path), spec))
+        built.append((Path(path), spec, os.environ["BVSR_CACHE"]))
         return BuildResult(Path(out), [], 1.0, [{"stage": "export", "status": "built", "seconds": 1.0}])
 
     monkeypatch.setattr(bvsr_cad.pipeline, "build_export", fake_build)
     monkeypatch.setattr(bvsr_cad.worker.SecondProcess, "standby", classmethod(lambda cls, *a, **k: None))
     monkeypatch.setattr(sys, "argv", ["rebuild_bench.py", str(base)])
-    # The benchmark points BVSR_CACHE at its own private cache and leaves it so (it is the whole process):
-    # restored afterwards, or the later tests of this worker would build beside the session's cache.
+    # The benchmark builds in a private cache of its own and then gives the environment back: the later
+    # tests of this worker build in the session's cache (a leaked BVSR_CACHE once failed a cached-rebuild
+    # test of the same worker). monkeypatch restores it here as well, should main() fail.
     monkeypatch.setenv("BVSR_CACHE", os.environ.get("BVSR_CACHE", str(tmp_path / "cache")))
     before = os.environ["BVSR_CACHE"]
     bench.main()
-    assert os.environ["BVSR_CACHE"] != before
+    assert os.environ["BVSR_CACHE"] == before
+    caches = {c for _, _, c in built}
+    assert len(caches) == 1 and before not in caches and not Path(caches.pop()).exists()
     out = capsys.readouterr().out
 
     assert not dead.exists() and live.exists()
-    assert [p for p, _ in built[:2]] == [base, base]
+    assert [p for p, _, _ in built[:2]] == [base, base]
     assert len(built) == 2 + len(bench.EDITS)
     default = load_spec(base)
-    for (path, spec), (name, (table, key, value)) in zip(built[2:], bench.EDITS.items()):
+    for (path, spec, _), (name, (table, key, value)) in zip(built[2:], bench.EDITS.items()):
         assert path.parent == base.parent and not path.exists(), name
         new = _value(spec, table, key)
         assert new != _value(default, table, key), name

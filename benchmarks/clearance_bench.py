@@ -18,7 +18,7 @@ from bvsr_cad.parameters.load import load_spec
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()))
     ap.add_argument("params", nargs="?", default="params/bvsr.toml")
     ap.add_argument("subset", nargs="?", type=int, default=20, help="poses checked by brute force (default 20)")
     args = ap.parse_args()

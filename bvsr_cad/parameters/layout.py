@@ -109,13 +109,15 @@ class PanelLayout:
 
 
 class LayoutProblem(NamedTuple):
-    """A panel rule broken: what, the web it leaves and the one it needs (mm), and the features
-    (:class:`Cyl` names, ``rim``, ``bellows``, ``pocket_depth``) whose keys set it."""
+    """A panel rule broken: what, the web it leaves and the one it needs (mm), the features
+    (:class:`Cyl` names, ``rim``, ``bellows``, ``pocket_depth``) whose keys set it, and the panel's
+    index (None: a rule of the whole tail)."""
 
     desc: str
     measured_mm: float
     need_mm: float
     features: tuple[str, ...]
+    panel: int | None = None
 
 
 #: The parameter keys that size or place a panel feature, by the start of its name (first match).
@@ -457,7 +459,7 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
             if web < fab.min_wall_mm - 1e-9:
                 out.append(LayoutProblem(f"{lay.name}: {p.name} passes {web:.2f} mm from {b.name}", web,
                                          fab.min_wall_mm, (p.name, b.name)))
-    return out
+    return [found._replace(panel=lay.index) for found in out]
 
 
 def _problems_at(spec: TailSpec, beta: float) -> list[LayoutProblem]:
@@ -725,7 +727,7 @@ def panel_rule_messages(spec: TailSpec, beta: float) -> list[str]:
         return []
     at = 0.0 if spec.taper.half_angle_deg == AUTO else beta  # 'auto' finds a cone when the rules hold without one
     keys = _keys_of(found)
-    hot = tuple(dict.fromkeys(int(m.group(1)) for p in found if (m := re.match(r"panel(\d+): ", p.desc))))
+    hot = tuple(dict.fromkeys(p.panel for p in found if p.panel is not None))
     out = []
     for key in keys:
         allowed = _allowed_values(spec, key, lambda candidate: not _any_problem(candidate, at, hot))
@@ -736,14 +738,14 @@ def panel_rule_messages(spec: TailSpec, beta: float) -> list[str]:
                        "hold, with the other keys as they are")
     groups: dict[str, list[LayoutProblem]] = {}
     for p in found:
-        groups.setdefault(re.sub(r"\d+(\.\d+)?", "#", re.sub(r"^panel\d+: ", "", p.desc)), []).append(p)
+        groups.setdefault(re.sub(r"\d+(\.\d+)?", "#", p.desc), []).append(p)  # same rule, any panel or size
     for same in groups.values():
         worst = min(same, key=lambda p: p.measured_mm - p.need_mm)
         need = worst.need_mm
         web = " or ".join(f"fabrication.{k} = {getattr(spec.fabrication, k)!r}" for k in _WEB_KEYS
                           if getattr(spec.fabrication, k) == need) or f"{need:g} mm"
         line = f"{worst.desc}, {need - worst.measured_mm:.2f} mm short (allowed: >= {web})"
-        panels = [int(m.group(1)) for p in same if (m := re.match(r"panel(\d+): ", p.desc))]
+        panels = [p.panel for p in same if p.panel is not None]
         if len(same) > 1:
             line += f"; {len(same) - 1} more like it" + (f" (panels {_panels_text(panels)})" if panels else "")
         out.append(line + _set_by(spec, same))

@@ -158,12 +158,6 @@ def _data_path(spec, params: Path) -> Path | None:
     return (params.resolve().parent / spec.calibration.data_file).resolve() if spec.calibration.data_file else None
 
 
-def _data_bytes(spec, params: Path) -> bytes:
-    """The calibration's data file's bytes, or nothing."""
-    path = _data_path(spec, params)
-    return path.read_bytes() if path is not None and path.is_file() else b""
-
-
 def build_export(params: str | Path, out_dir: str | Path | None = None,
                  progress: Progress | None = None, use_cache: bool = True,
                  standby: SecondProcess | None = None) -> BuildResult:
@@ -202,8 +196,8 @@ def _build_export(params: str | Path, out_dir: str | Path | None, progress: Prog
     for folder in cache.clean_leftovers() if cache is not None else []:
         say(f"removed the cache's {folder.parent.name}/{folder.name}: an entry a build did not finish")
     log = StageLog(say)
-    data = _data_bytes(spec, params)
     data_path = _data_path(spec, params)
+    data = data_path.read_bytes() if data_path is not None and data_path.is_file() else b""
     if data_path is not None and not data_path.is_file():
         say(f"calibration.data_file = {spec.calibration.data_file!r}: {data_path} not found (it is relative to the "
             "parameter file's folder); the export compares no measurements (analysis/measurements.json says why)")

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from bvsr_cad.parameters.layout import key_value
 from bvsr_cad.parameters.load import load_spec
 from bvsr_cad.pipeline import BuildResult
 
@@ -25,7 +26,7 @@ def _script(name: str):
 
 
 def _value(spec, table: str, key: str):
-    return getattr(getattr(spec, table), key) if table else getattr(spec, key)
+    return key_value(spec, f"{table}.{key}" if table else key)
 
 
 def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, monkeypatch, capsys):

@@ -241,6 +241,7 @@ def test_the_shipped_studies_load_and_every_variant_and_search_bound_is_a_tail(n
     """The README's `bvsr sweep studies/*.toml`: each shipped study loads against the current schema, and
     every tail it will build loads too (the grid and listed variants; each search dimension at its
     choices or at both ends of its range, the other keys at the base's values)."""
+    from bvsr_cad.parameters.layout import key_value
     from bvsr_cad.parameters.load import spec_from_dict
     from bvsr_cad.parameters.study import load_study
 
@@ -253,5 +254,4 @@ def test_the_shipped_studies_load_and_every_variant_and_search_bound_is_a_tail(n
     for v in tails:
         spec = spec_from_dict(v.data, v.label)
         for key, value in v.overrides.items():
-            table, field_name = key.split(".")
-            assert getattr(getattr(spec, table), field_name) == value, (v.label, key)
+            assert key_value(spec, key) == value, (v.label, key)

@@ -131,7 +131,7 @@ def _conditions(text: str, allowed: dict[str, str], where: str, problems: list[s
         if low in given and high in given and given[low] > given[high]:
             problems.append(f"{where}: {low} = {given[low]:g} exceeds {high} = {given[high]:g}; allowed: "
                             f"{low} <= {high}")
-    missing = [k for k in allowed if k not in dict(out)]
+    missing = [k for k in allowed if k not in given]
     if missing and not any(f"{where}:" in p for p in problems):
         problems.append(f"{where}: missing condition(s) {', '.join(missing)}")
     return tuple(out)

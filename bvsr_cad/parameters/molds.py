@@ -178,7 +178,8 @@ def mold_problems(soa: SoaTable, flange_diameter_mm: float, casting: Casting) ->
         line = f"{key} = {getattr(c, name)!r}: mold set: {why}; allowed: {_allowed(soa, flange_diameter_mm, c, name)}"
         if name in ("gate_diameter_mm", "vent_diameter_mm"):  # the core print: the SOA's interior
             line += (f" (the core print is the bellows' interior: soa.long_side_mm = {soa.long_side_mm!r} less twice "
-                     f"the wall of soa.facet_thickness_mm = {soa.facet_thickness_mm!r})")
+                     f"the wall's {soa.wall_offset_mm:.2f} mm offset, which soa.facet_thickness_mm = "
+                     f"{soa.facet_thickness_mm!r} sets along the fold's slope)")
         if name in ("core_print_mm", "bolt_hole_diameter_mm"):  # a thicker wall also makes room
             wall = _allowed(soa, flange_diameter_mm, c, "cavity_wall_mm")
             if wall[0] in "<>0123456789":

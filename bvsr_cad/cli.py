@@ -62,17 +62,19 @@ def cmd_build(args) -> int:
     # builds the tail's assembly from the file while this process decides what the cache holds.
     standby = SecondProcess.standby("bvsr_cad.pipeline", say, [str(Path(args.params).resolve())])
     try:
-        # A bad file is refused in a fraction of a second, before the pipeline's imports (seconds); the
-        # build loads it again (its derived layout is cached in this process).
-        from .parameters.load import load_spec
+        # A bad file is refused, and an export the cache holds whole is published, in a fraction of a
+        # second: before the pipeline's imports (seconds). The build loads the file again (its derived
+        # layout is cached in this process).
+        from .publish import open_build, reuse_whole
 
-        load_spec(args.params)
-        from .pipeline import build_export
-    except BaseException:
+        res = reuse_whole(open_build(args.params, args.output, say, use_cache=not args.no_cache))
+        if res is None:
+            from .pipeline import build_export
+
+            res = build_export(args.params, args.output, say, use_cache=not args.no_cache, standby=standby)
+    finally:
         if standby is not None:
-            standby.close()
-        raise
-    res = build_export(args.params, args.output, say, use_cache=not args.no_cache, standby=standby)
+            standby.close()  # stops one given no work (a no-op once the build has closed it)
     failed = [r for r in res.results if r.passed is False]
     summary = {"out": str(res.out_dir), "seconds": round(res.seconds, 2),
                "passed": not failed, "failed_checks": [r.name for r in failed], "stages": res.stages}
@@ -464,7 +466,7 @@ def _interrupted(exc: BaseException) -> bool:
 _BAD_INPUT = (("analysis.calibrate", "CalibrationError"), ("checks.export", "ExportError"),
               ("checks.printability", "SlicerMissingError"), ("parameters.load", "ParamError"),
               ("parameters.measurements", "MeasurementError"), ("parameters.study", "StudyError"),
-              ("pipeline", "OutputError"), ("sim", "SimulationInputError"), ("sweep", "SweepError"))
+              ("publish", "OutputError"), ("sim", "SimulationInputError"), ("sweep", "SweepError"))
 
 
 def _error_classes() -> tuple[tuple[type[Exception], ...], type[Exception] | None]:

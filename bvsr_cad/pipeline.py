@@ -11,10 +11,8 @@ from __future__ import annotations
 import json
 import pickle
 import shutil
-import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -26,89 +24,28 @@ from .assembly.build import build_assembly
 from .assembly.inertia import SolidProperties
 from .assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs, rigid_robot_model
 from .assembly.robot import robot_model
-from .cache import (OWNER_FILE, ORPHAN_AGE_S, ArtifactCache, claim, copy_tree, object_stage, owner_alive,
-                    spec_without, stage_key)
-from .checks.result import CheckResult
+from .cache import OWNER_FILE, copy_tree, object_stage, spec_without, stage_key
 from .checks.run import Checks
 from .exporters.analysis_files import write_analyses
 from .exporters.cad import write_assembly_step, write_part_step, write_part_stl
 from .exporters.drawings import stamp_drawings, write_drawing_sheets
-from .exporters.manifest import manifest_dict, write_manifest
+from .exporters.manifest import manifest_dict
+from .exporters.manifest_file import write_manifest
 from .exporters.mold_files import molds_manifest, write_mold_files
 from .exporters.fabrication_files import write_fabrication, write_rigid_files
 from .exporters.render import render_previews
-from .checks.printability import environment_state
 from .exporters.report import report_pictures, write_report
 from .exporters.reproducible import make_reproducible
 from .exporters.robot_files import write_robot
 from .exporters.viewer import write_viewer
 from .parameters.load import load_spec, params_sha256
+from .publish import BuildResult, open_build, publish, reuse_whole, temporary_folder, volatile
 from .sim import protocol_radius_mm
 from .worker import SecondProcess, result_or
 
 Progress = Callable[[str], None]
 #: In the geometry analyses' cache entry: :class:`bvsr_cad.analysis.run.GeometryAnalyses`, pickled.
 GEOMETRY_FILE = "geometry.pkl"
-
-
-class OutputError(ValueError):
-    """The output path cannot take an export (exit code 2)."""
-
-
-@dataclass
-class BuildResult:
-    out_dir: Path
-    results: list[CheckResult]
-    seconds: float
-    stages: list[dict] = field(default_factory=list)  # {"stage", "status": reused|built, "seconds"}
-
-
-def _check_output(out_dir: Path) -> None:
-    if out_dir.exists():
-        if not out_dir.is_dir():
-            raise OutputError(f"{out_dir}: exists and is not a folder; choose another -o")
-        if any(out_dir.iterdir()) and not (out_dir / "manifest.json").is_file():
-            raise OutputError(f"{out_dir}: a non-empty folder that is not a bvsr export (no manifest.json); "
-                              "refusing to replace it; choose another -o")
-
-
-def clean_leftovers(out_dir: Path) -> list[Path]:
-    """Remove what dead builds of ``out_dir`` left beside it: temporary folders whose building
-    process is gone (killed with SIGKILL, a power cut) and replaced exports never deleted. A live
-    build's folders are kept. Returns what was removed."""
-    removed = []
-    parent = out_dir.parent
-    if not parent.is_dir():
-        return removed
-    for folder in parent.glob(f".{out_dir.name}.tmp-*"):
-        if folder.is_dir() and not owner_alive(folder):
-            shutil.rmtree(folder, ignore_errors=True)
-            removed.append(folder)
-    for folder in parent.glob(f".{out_dir.name}.old-*"):
-        try:
-            renamed_s = int(folder.name.rsplit("-", 1)[1]) / 1000.0  # _publish names it by the time, in ms
-        except ValueError:
-            continue
-        if folder.is_dir() and time.time() - renamed_s > ORPHAN_AGE_S:
-            shutil.rmtree(folder, ignore_errors=True)
-            removed.append(folder)
-    return removed
-
-
-def _publish(tmp: Path, out_dir: Path) -> None:
-    (tmp / OWNER_FILE).unlink(missing_ok=True)
-    old = None
-    if out_dir.exists():
-        old = out_dir.with_name(f".{out_dir.name}.old-{int(time.time() * 1000)}")
-        out_dir.rename(old)
-    try:
-        tmp.rename(out_dir)
-    except BaseException:
-        if old is not None:
-            old.rename(out_dir)
-        raise
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
 
 
 #: What each cached stage does not read (``table`` or ``table.key``); everything else of the
@@ -132,30 +69,6 @@ DRAWINGS_IGNORE = tuple(k for k in PART_FILES_IGNORE if k != "casting") + ("name
 #: for (``fabrication_package``); its pieces are named by joint, not after the tail. (The mold set's
 #: key is its arguments, :func:`bvsr_cad.assembly.products.mold_set_inputs`.)
 TWIN_IGNORE = tuple(k for k in PART_FILES_IGNORE if k != "fabrication_package") + ("name",)
-
-
-@dataclass
-class StageLog:
-    """Per stage: reused from the cache or built, and the seconds it took (``bvsr build`` prints it)."""
-
-    say: Progress
-    stages: list[dict] = field(default_factory=list)
-
-    def record(self, stage: str, reused: bool, seconds: float) -> None:
-        self.stages.append({"stage": stage, "status": "reused" if reused else "built", "seconds": round(seconds, 3)})
-        self.say(f"stage {stage}: {'reused' if reused else 'built'} in {seconds:.2f} s")
-
-
-def _volatile(t0: float, log: StageLog) -> dict:
-    """The manifest's one place for what changes from build to build of the same file."""
-    return {"built_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "build_seconds": time.perf_counter() - t0,
-            "stages": log.stages}
-
-
-def _data_path(spec, params: Path) -> Path | None:
-    """The calibration's data file (read by the measurement comparison; relative to the parameter file's
-    folder), or None when the file names none."""
-    return (params.resolve().parent / spec.calibration.data_file).resolve() if spec.calibration.data_file else None
 
 
 def build_export(params: str | Path, out_dir: str | Path | None = None,
@@ -184,40 +97,15 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
 def _build_export(params: str | Path, out_dir: str | Path | None, progress: Progress | None, use_cache: bool,
                   standby: SecondProcess | None) -> BuildResult:
     say = progress or (lambda _m: None)
-    t0 = time.perf_counter()
-    params = Path(params)
-    spec = load_spec(params)
-    out = Path(out_dir) if out_dir is not None else Path("exports") / spec.name
-    _check_output(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    for folder in clean_leftovers(out):
-        say(f"removed {folder.name}: left by a build that did not finish")
-    cache = ArtifactCache() if use_cache else None
-    for folder in cache.clean_leftovers() if cache is not None else []:
-        say(f"removed the cache's {folder.parent.name}/{folder.name}: an entry a build did not finish")
-    log = StageLog(say)
-    data_path = _data_path(spec, params)
-    data = data_path.read_bytes() if data_path is not None and data_path.is_file() else b""
-    if data_path is not None and not data_path.is_file():
-        say(f"calibration.data_file = {spec.calibration.data_file!r}: {data_path} not found (it is relative to the "
-            "parameter file's folder); the export compares no measurements (analysis/measurements.json says why)")
-    export_key = stage_key("export", params=params.read_bytes(), data=data, environment=environment_state())
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
-    claim(tmp)
+    opened = open_build(params, out_dir, say, use_cache)
+    params, spec, out, cache, data, log = opened.params, opened.spec, opened.out, opened.cache, opened.data, opened.log
+    reused = reuse_whole(opened)
+    if reused is not None:
+        return reused
+    tmp = temporary_folder(out)
     analyses = None
     checks: Checks | None = None
     try:
-        hit = cache.get(export_key) if cache else None
-        if hit is not None:
-            t = time.perf_counter()
-            copy_tree(hit, tmp)
-            manifest = json.loads((tmp / "manifest.json").read_text())
-            log.record("export", True, time.perf_counter() - t)
-            results = [CheckResult(**c) for c in manifest["checks"]]
-            manifest["volatile"] = _volatile(t0, log)
-            write_manifest(tmp, manifest)
-            _publish(tmp, out)
-            return BuildResult(out, results, time.perf_counter() - t0, log.stages)
         say(f"building {spec.name}: {spec.segments} segments, {spec.joints} joints, {spec.panels} panels")
         analyses_key = stage_key("analyses", spec=spec_without(spec, *ANALYSES_IGNORE), data=data,
                                  tubes=(spec.fabrication_package.tube_lead_mm,
@@ -372,11 +260,11 @@ def _build_export(params: str | Path, out_dir: str | Path | None, progress: Prog
         say("report")
         manifest.update(write_report(tmp, manifest, cache, pictures))
         log.record("report", False, pictures_s + time.perf_counter() - t)
-        manifest["volatile"] = _volatile(t0, log)
+        manifest["volatile"] = volatile(opened.t0, log)
         write_manifest(tmp, manifest)
         if cache is not None:
-            cache.put(export_key, lambda folder: copy_tree(tmp, folder, skip=(OWNER_FILE,)))
-        _publish(tmp, out)
+            cache.put(opened.export_key, lambda folder: copy_tree(tmp, folder, skip=(OWNER_FILE,)))
+        publish(tmp, out)
     except BaseException:
         if analyses is not None:
             analyses.close()
@@ -384,7 +272,7 @@ def _build_export(params: str | Path, out_dir: str | Path | None, progress: Prog
             checks.close()
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    return BuildResult(out, results, time.perf_counter() - t0, log.stages)
+    return BuildResult(out, results, time.perf_counter() - opened.t0, log.stages)
 
 
 #: The standby analyses process's head start (:func:`_prepare_analyses`): (params path, SHA-256) -> assembly.

@@ -22,7 +22,8 @@ from typing import Any
 
 from .parameters.load import ParamError
 from .parts._kernel import GeometryError
-from .pipeline import BuildResult, OutputError, build_export
+from .pipeline import build_export
+from .publish import BuildResult, OutputError
 
 DEBOUNCE_MS = 400
 

@@ -13,7 +13,7 @@ import pytest
 
 from bvsr_cad.parameters.layout import key_value
 from bvsr_cad.parameters.load import load_spec
-from bvsr_cad.pipeline import BuildResult
+from bvsr_cad.publish import BuildResult
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -33,7 +33,7 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, 
     """The benchmark's whole flow with ``build_export`` stood in: every edit of :data:`EDITS` is applied
     to the default file beside it (its data file resolves as the base's), loads with the new value, and is
     removed afterwards; an edit file left by a dead benchmark is removed, a live one's kept; the table
-    lists the cold build, the no-op and each edit with its ratio to cold."""
+    lists the cold build, the no-op (in the process and as the command) and each edit with its ratio to cold."""
     import bvsr_cad.pipeline
     import bvsr_cad.worker
 
@@ -53,7 +53,14 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, 
         built.append((Path(path), spec, os.environ["BVSR_CACHE"]))
         return BuildResult(Path(out), [], 1.0, [{"stage": "export", "status": "built", "seconds": 1.0}])
 
+    commands: list[tuple[Path, str]] = []
+
+    def fake_command(path, out):
+        commands.append((Path(path), os.environ["BVSR_CACHE"]))
+        return 0.5, 0.4, "export"
+
     monkeypatch.setattr(bvsr_cad.pipeline, "build_export", fake_build)
+    monkeypatch.setattr(bench, "command_seconds", fake_command)
     monkeypatch.setattr(bvsr_cad.worker.SecondProcess, "standby", classmethod(lambda cls, *a, **k: None))
     monkeypatch.setattr(sys, "argv", ["rebuild_bench.py", str(base)])
     # The benchmark builds in a private cache of its own and then gives the environment back: the later
@@ -63,12 +70,12 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, 
     before = os.environ["BVSR_CACHE"]
     bench.main()
     assert os.environ["BVSR_CACHE"] == before
-    caches = {c for _, _, c in built}
+    caches = {c for _, _, c in built} | {c for _, c in commands}
     assert len(caches) == 1 and before not in caches and not Path(caches.pop()).exists()
     out = capsys.readouterr().out
 
     assert not dead.exists() and live.exists()
-    assert [p for p, _, _ in built[:2]] == [base, base]
+    assert [p for p, _, _ in built[:2]] == [base, base] and [p for p, _ in commands] == [base]
     assert len(built) == 2 + len(bench.EDITS)
     default = load_spec(base)
     for (path, spec, _), (name, (table, key, value)) in zip(built[2:], bench.EDITS.items()):
@@ -76,9 +83,11 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, 
         new = _value(spec, table, key)
         assert new != _value(default, table, key), name
         assert (str(new) == value.strip('"')) if value.startswith('"') else float(new) == float(value), name
-    table = out.splitlines()[-(2 + len(bench.EDITS)):]
-    assert [line[:18].strip() for line in table] == ["cold", "no-op", *bench.EDITS]
+    table = out.splitlines()[-(3 + len(bench.EDITS)):]
+    assert [line[:18].strip() for line in table] == ["cold", "no-op", "no-op, command", *bench.EDITS]
     assert float(table[0].split()[-2]) == 1.0  # its seconds / cold
+    command = table[2].split()
+    assert (command[-3], command[-1]) == ("0.5", "0.4")  # the command's seconds and CPU seconds as measured
 
 
 def test_rebuild_bench_edit_names_a_missing_key():

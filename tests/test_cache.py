@@ -159,6 +159,29 @@ def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(bvsr_expo
         assert _differences(tmp_path / f"cached{i}", tmp_path / "fresh") == []
 
 
+#: What a rebuild that finds its whole export in the cache must not import (seconds of the command's time).
+HEAVY_MODULES = {"build123d", "OCP", "cadquery", "trimesh", "manifold3d", "scipy", "mujoco", "matplotlib", "pyvista",
+                 "bvsr_cad.pipeline", "bvsr_cad.assembly", "bvsr_cad.checks.printability"}
+
+
+@pytest.mark.slow
+def test_a_noop_build_command_publishes_the_cached_export_before_the_cad_imports(bvsr_export, tmp_path):
+    """`bvsr build` of a file the cache holds whole (bvsr_export filled the session's cache) publishes that
+    export from the parameters, the cache and the checks' environment alone: the command's interpreter
+    never imports the CAD kernel, the mesh libraries, the simulator or the pipeline (``-X importtime`` lists
+    every module it imported), and the export equals the first build's, file for file."""
+    out = tmp_path / "again"
+    done = subprocess.run([sys.executable, "-X", "importtime", "-m", "bvsr_cad.cli", "build", str(PARAMS / "bvsr.toml"),
+                           "-o", str(out), "--json", "-q"], capture_output=True, text=True, timeout=600,
+                          cwd=PARAMS.parent)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert [(s["stage"], s["status"]) for s in json.loads(done.stdout)["stages"]] == [("export", "reused")]
+    imported = {line.rsplit("|", 1)[1].strip() for line in done.stderr.splitlines() if line.startswith("import time:")}
+    assert "bvsr_cad.publish" in imported  # the listing is there to read
+    assert not imported & HEAVY_MODULES
+    assert _differences(bvsr_export, out) == []
+
+
 def main_no_cache(params: Path, out: Path) -> int:
     from bvsr_cad.cli import main
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from bvsr_cad.cache import OWNER_FILE, ArtifactCache, process_start
-from bvsr_cad.pipeline import clean_leftovers
+from bvsr_cad.publish import clean_leftovers
 
 from .conftest import PARAMS
 

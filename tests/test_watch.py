@@ -10,7 +10,7 @@ from pathlib import Path
 
 from bvsr_cad.parameters.load import ParamError
 from bvsr_cad.parts._kernel import GeometryError
-from bvsr_cad.pipeline import BuildResult
+from bvsr_cad.publish import BuildResult
 from bvsr_cad.watch import changed_keys, watch
 
 

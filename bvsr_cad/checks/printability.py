@@ -34,7 +34,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import shutil
 import subprocess
 import tempfile
 import time
@@ -51,12 +50,12 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from shapely.geometry import MultiPoint
 
+from .environment import SLICER, slice_cache_path, slicer_exe, slicer_identity
 from .export import Export
 from .memo import CheckMemo
 from .queries import contains
 from .result import CheckResult
 
-SLICER = "prusa-slicer"
 SLICER_INSTALL = "apt-get install prusa-slicer"
 #: How ``bvsr`` slices an export; the slicing checks name it when a result is missing.
 SLICE_COMMAND = "bvsr check {export} --slice"
@@ -253,17 +252,6 @@ def slice_items(exp: Export) -> list[SliceItem]:
             for job in exp.manifest.get("print_jobs") or [] for it in job["items"]]
 
 
-def _slicer_exe() -> str | None:
-    return shutil.which(SLICER)
-
-
-def _slicer_identity(exe: str) -> str:
-    """The installed slicer without running it: its resolved path, size and modification time."""
-    real = os.path.realpath(exe)
-    st = os.stat(real)
-    return f"{real}|{st.st_size}|{st.st_mtime_ns}"
-
-
 def _slicer_version(exe: str) -> str:
     """The version PrusaSlicer prints (this starts the slicer; only :func:`slice_stls` calls it)."""
     try:
@@ -276,19 +264,14 @@ def _slicer_version(exe: str) -> str:
     return "PrusaSlicer (unknown version)"
 
 
-def _cache_path() -> Path:
-    base = Path(os.environ.get("BVSR_CACHE", Path.home() / ".cache" / "bvsr_cad"))
-    return base / "slices.json"
-
-
-#: Key of the cache entry that maps an installed slicer (see :func:`_slicer_identity`) to its version,
+#: Key of the cache entry that maps an installed slicer (see :func:`slicer_identity`) to its version,
 #: so that the checks find cached results without starting the slicer.
 _CACHE_SLICERS = "slicers"
 
 
 def _read_cache() -> dict[str, Any]:
     try:
-        cache = json.loads(_cache_path().read_text())
+        cache = json.loads(slice_cache_path().read_text())
     except (OSError, ValueError):
         return {}
     return cache if isinstance(cache, dict) else {}
@@ -296,7 +279,7 @@ def _read_cache() -> dict[str, Any]:
 
 def _update_cache(entries: dict[str, Any], slicers: dict[str, str]) -> None:
     """Merge into the cache file as it is now (another process may have added to it) and replace it atomically."""
-    path = _cache_path()
+    path = slice_cache_path()
     cache = _read_cache()
     cache.update(entries)
     known = cache.get(_CACHE_SLICERS)
@@ -344,16 +327,6 @@ def _slice_command(exp: Export) -> str:
     return SLICE_COMMAND.format(export="EXPORT")
 
 
-def environment_state() -> dict[str, Any]:
-    """What outside the export the checks' results depend on: the installed slicer and the slice
-    cache, and Debian's ``check_urdf`` (a cached export is reused only while these are unchanged)."""
-    exe = _slicer_exe()
-    cache = _cache_path()
-    return {"slicer": _slicer_identity(exe) if exe else None,
-            "slice_cache": cache.read_bytes() if cache.is_file() else b"",
-            "check_urdf": shutil.which("check_urdf")}
-
-
 def slice_stls(exp: Export, items: list[SliceItem] | None = None, progress: Callable[[str], None] | None = None,
                workers: int = SLICE_WORKERS) -> dict[str, dict[str, Any]]:
     """Slice every STL of ``items`` (default: all of the export's) that the cache does not hold yet, with
@@ -366,21 +339,21 @@ def slice_stls(exp: Export, items: list[SliceItem] | None = None, progress: Call
         SlicerMissingError: PrusaSlicer's command line is not installed.
     """
     say = progress or (lambda _m: None)
-    exe = _slicer_exe()
+    exe = slicer_exe()
     if exe is None:
         raise SlicerMissingError(f"slicing needs PrusaSlicer's command line, `{SLICER}`, which is not on PATH; "
                                  f"install it with `{SLICER_INSTALL}` (or put a PrusaSlicer 2.5+ `{SLICER}` "
                                  "on PATH)")
     items = slice_items(exp) if items is None else items
     version = _slicer_version(exe)
-    slicers = {_slicer_identity(exe): version}
+    slicers = {slicer_identity(exe): version}
     cache = _read_cache()
     keys = {it.name: _cache_key(it, version) for it in items}
     todo = [it for it in items if keys[it.name] not in cache]
     timeout_s = float(exp.manifest["fabrication"]["slicer_timeout_s"])
     n = max(1, min(workers, os.cpu_count() or 1))
     say(f"slicing {len(todo)} of {len(items)} STLs with {version} ({n} at a time; "
-        f"{len(items) - len(todo)} already in {_cache_path()})")
+        f"{len(items) - len(todo)} already in {slice_cache_path()})")
     done: dict[str, dict[str, Any]] = {}
     if not todo:
         _update_cache({}, slicers)
@@ -406,12 +379,12 @@ def check_slicing(exp: Export, items: list[SliceItem] | None = None,
     """
     items = slice_items(exp) if items is None else items
     command = _slice_command(exp)
-    exe = _slicer_exe()
+    exe = slicer_exe()
     cache = _read_cache()
     version = None
     if exe is not None:
         try:
-            version = (cache.get(_CACHE_SLICERS) or {}).get(_slicer_identity(exe))
+            version = (cache.get(_CACHE_SLICERS) or {}).get(slicer_identity(exe))
         except (OSError, AttributeError):
             version = None
     out = []

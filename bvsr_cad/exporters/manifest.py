@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import json
-import math
-from pathlib import Path
 from typing import Any
 
 import build123d as bd
@@ -68,10 +65,3 @@ def manifest_dict(asm: Assembly, params_sha256: str, files: dict[str, dict[str, 
     }
 
 
-def write_manifest(root: Path, manifest: dict[str, Any]) -> None:
-    def default(o: Any) -> Any:
-        if isinstance(o, float) and not math.isfinite(o):
-            return None
-        raise TypeError(f"not JSON serialisable: {type(o)}")
-
-    (root / "manifest.json").write_text(json.dumps(manifest, indent=2, default=default) + "\n")

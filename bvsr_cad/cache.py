@@ -2,7 +2,8 @@
 
 A stage's entry is keyed by the SHA-256 of exactly what the stage reads:
 its name, the fingerprint of this package's code (every ``.py`` and data
-file of ``bvsr_cad``, so an edited model never serves a stale result) and
+file of ``bvsr_cad``, so an edited model never serves a stale result, and
+the versions of Python and of the libraries it computes with) and
 the inputs the stage declares where it is defined (a projection of the
 parameters, the bytes of a data file). An entry is a folder of files written
 into a temporary folder and renamed into place, so two builds at once never
@@ -88,15 +89,40 @@ def cache_root() -> Path:
     return (Path(os.environ.get("BVSR_CACHE", Path.home() / ".cache" / "bvsr_cad")) / "artifacts").absolute()
 
 
+#: The installed distributions whose code computes what the stages store: every runtime dependency of
+#: ``pyproject.toml`` (``tests/test_cache.py`` holds the two lists together) and the OCP builds under
+#: build123d and CadQuery (the CAD kernel that tessellates every STL). A new MuJoCo or OCP moves results
+#: that this package's source does not.
+RESULT_DISTRIBUTIONS = ("build123d", "cadquery", "cadquery-ocp", "cadquery-ocp-novtk", "dask", "distributed", "manifold3d",
+                        "matplotlib", "mujoco", "networkx", "numpy", "optuna", "pandas", "pyarrow", "pybullet",
+                        "python-fcl", "pyvista", "rtree", "scipy", "shapely", "trimesh", "vtk", "watchfiles",
+                        "yourdfpy")
+
+
+def distribution_versions() -> dict[str, str | None]:
+    """The installed version of each of :data:`RESULT_DISTRIBUTIONS` (None: not installed), and Python's."""
+    from importlib import metadata
+
+    def version(name: str) -> str | None:
+        try:
+            return metadata.version(name)
+        except metadata.PackageNotFoundError:
+            return None
+
+    return {"python": sys.version, **{name: version(name) for name in RESULT_DISTRIBUTIONS}}
+
+
 @lru_cache(maxsize=1)
 def code_fingerprint() -> str:
-    """SHA-256 over this package's source and data files (path and bytes, sorted)."""
+    """SHA-256 over this package's source and data files (path and bytes, sorted) and the versions of
+    Python and of the libraries it computes with (:func:`distribution_versions`)."""
     pkg = Path(__file__).resolve().parent
     h = hashlib.sha256()
     for p in sorted(pkg.rglob("*")):
         if p.is_file() and p.suffix in (".py", ".toml", ".json", ".csv") and "__pycache__" not in p.parts:
             h.update(p.relative_to(pkg).as_posix().encode())
             h.update(p.read_bytes())
+    h.update(json.dumps(distribution_versions(), sort_keys=True).encode())
     return h.hexdigest()
 
 
@@ -305,5 +331,5 @@ def file_sha256(path: Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-__all__ = ["ArtifactCache", "value_stage", "file_sha256", "stage_key", "spec_without", "code_fingerprint", "cache_root", "copy_tree",
-           "object_stage"]
+__all__ = ["ArtifactCache", "value_stage", "file_sha256", "stage_key", "spec_without", "code_fingerprint",
+           "distribution_versions", "RESULT_DISTRIBUTIONS", "cache_root", "copy_tree", "object_stage"]

@@ -88,6 +88,33 @@ def test_keys_follow_exactly_the_declared_inputs(bvsr_spec):
     assert key("analysis_geometry", thin, GEO) != key("analysis_geometry", bvsr_spec, GEO)
 
 
+def test_keys_follow_the_libraries_the_results_are_computed_with(monkeypatch):
+    """Every runtime dependency of pyproject.toml (and the OCP builds under build123d and CadQuery) is in
+    the code's fingerprint: another installed MuJoCo, or OCP, gives every stage another key."""
+    import re
+    import tomllib
+    from importlib import metadata
+
+    from bvsr_cad import cache
+
+    project = tomllib.loads((PARAMS.parent / "pyproject.toml").read_text())["project"]
+    declared = {re.split(r"[ ;=<>!~\[]", r, maxsplit=1)[0].lower() for r in project["dependencies"]}
+    assert declared | {"cadquery", "cadquery-ocp", "cadquery-ocp-novtk"} == set(cache.RESULT_DISTRIBUTIONS)
+    base = stage_key("analyses", x=1)
+    real = metadata.version
+    try:
+        for name in ("mujoco", "cadquery-ocp-novtk"):
+            monkeypatch.setattr(metadata, "version", lambda n, name=name: "0.0.1" if n == name else real(n))
+            cache.code_fingerprint.cache_clear()
+            assert stage_key("analyses", x=1) != base, name
+        monkeypatch.setattr(metadata, "version", real)
+        cache.code_fingerprint.cache_clear()
+        assert stage_key("analyses", x=1) == base
+    finally:  # the later tests of this process key with the libraries as installed
+        monkeypatch.setattr(metadata, "version", real)
+        cache.code_fingerprint.cache_clear()
+
+
 def test_check_verdicts_follow_the_bytes_of_the_files_they_read(tmp_path):
     """A group's verdicts are reused while its files' bytes and manifest values are unchanged (a file
     rewritten with the same bytes too), and computed again when either changes."""

@@ -63,18 +63,18 @@ def cmd_build(args) -> int:
     standby = SecondProcess.standby("bvsr_cad.pipeline", say, [str(Path(args.params).resolve())])
     try:
         # A bad file is refused, and an export the cache holds whole is published, in a fraction of a
-        # second: before the pipeline's imports (seconds). The build loads the file again (its derived
-        # layout is cached in this process).
+        # second: before the pipeline's imports (seconds).
         from .publish import open_build, reuse_whole
 
-        res = reuse_whole(open_build(args.params, args.output, say, use_cache=not args.no_cache))
+        opened = open_build(args.params, args.output, say, use_cache=not args.no_cache)
+        res = reuse_whole(opened)
         if res is None:
-            from .pipeline import build_export
+            from .pipeline import build_opened
 
-            res = build_export(args.params, args.output, say, use_cache=not args.no_cache, standby=standby)
+            res = build_opened(opened, standby)
     finally:
         if standby is not None:
-            standby.close()  # stops one given no work (a no-op once the build has closed it)
+            standby.close()  # a no-op once it gave its result; stops one given no work
     failed = [r for r in res.results if r.passed is False]
     summary = {"out": str(res.out_dir), "seconds": round(res.seconds, 2),
                "passed": not failed, "failed_checks": [r.name for r in failed], "stages": res.stages}

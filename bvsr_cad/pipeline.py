@@ -1,9 +1,9 @@
 """`bvsr build`: parameters -> assembly -> files -> checks, published atomically.
 
 Everything is written into a temporary folder beside the output and moved
-into place only when every file was written; a failure (bad parameters, a
-kernel error, a full disk, Ctrl-C) leaves any earlier export untouched and no
-partial one.
+into place only when every file was written (:mod:`bvsr_cad.publish`); a
+failure (bad parameters, a kernel error, a full disk, Ctrl-C) leaves any
+earlier export untouched and no partial one.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ from .exporters.reproducible import make_reproducible
 from .exporters.robot_files import write_robot
 from .exporters.viewer import write_viewer
 from .parameters.load import load_spec, params_sha256
-from .publish import BuildResult, open_build, publish, reuse_whole, temporary_folder, volatile
+from .publish import BuildResult, OpenedBuild, open_build, publish, reuse_whole, temporary_folder, volatile
 from .sim import protocol_radius_mm
 from .worker import SecondProcess, result_or
 
@@ -88,20 +88,23 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
         GeometryError: the CAD kernel failed.
     """
     try:
-        return _build_export(params, out_dir, progress, use_cache, standby)
+        opened = open_build(params, out_dir, progress or (lambda _m: None), use_cache)
+        return reuse_whole(opened) or build_opened(opened, standby)
     finally:
         if standby is not None:
             standby.close()  # a no-op once it gave its result; stops one given no work
 
 
-def _build_export(params: str | Path, out_dir: str | Path | None, progress: Progress | None, use_cache: bool,
-                  standby: SecondProcess | None) -> BuildResult:
-    say = progress or (lambda _m: None)
-    opened = open_build(params, out_dir, say, use_cache)
+def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> BuildResult:
+    """Build, stage by stage, the export that :func:`bvsr_cad.publish.open_build` prepared and the cache
+    does not hold whole (:func:`bvsr_cad.publish.reuse_whole`). ``standby``: as in :func:`build_export`;
+    the caller closes it.
+
+    Raises:
+        GeometryError: the CAD kernel failed.
+    """
     params, spec, out, cache, data, log = opened.params, opened.spec, opened.out, opened.cache, opened.data, opened.log
-    reused = reuse_whole(opened)
-    if reused is not None:
-        return reused
+    say = log.say
     tmp = temporary_folder(out)
     analyses = None
     checks: Checks | None = None

@@ -4,7 +4,7 @@ A build writes into a temporary folder beside the output (claimed by its process
 place only when every file was written, so a failure leaves any earlier export untouched and no
 partial one; the next build removes what dead builds left (:func:`clean_leftovers`).
 
-A rebuild of a file the cache holds whole (:func:`reuse_export`) needs only the parameters, the
+A rebuild of a file the cache holds whole (:func:`reuse_whole`) needs only the parameters, the
 cache and the environment the checks depend on: this module imports none of the CAD kernel, the
 mesh libraries or the simulator, so that `bvsr build` of an unchanged file answers without their
 imports (seconds); :mod:`bvsr_cad.pipeline` builds what it does not find.
@@ -138,15 +138,14 @@ class OpenedBuild:
     t0: float
 
 
-def open_build(params: str | Path, out_dir: str | Path | None, say: Progress, use_cache: bool,
-               t0: float | None = None) -> OpenedBuild:
+def open_build(params: str | Path, out_dir: str | Path | None, say: Progress, use_cache: bool) -> OpenedBuild:
     """Load ``params`` and prepare ``out_dir`` (default ``exports/<name>``) for a build.
 
     Raises:
         ParamError: the parameter file is unreadable or describes an impossible tail.
         OutputError: ``out_dir`` cannot be replaced.
     """
-    t0 = time.perf_counter() if t0 is None else t0
+    t0 = time.perf_counter()
     params = Path(params)
     spec = load_spec(params)
     out = Path(out_dir) if out_dir is not None else Path("exports") / spec.name
@@ -188,17 +187,5 @@ def reuse_whole(build: OpenedBuild) -> BuildResult | None:
                        time.perf_counter() - build.t0, build.log.stages)
 
 
-def reuse_export(params: str | Path, out_dir: str | Path | None = None,
-                 progress: Progress | None = None) -> BuildResult | None:
-    """`bvsr build` of a file whose whole export the artifact cache holds: that export published as
-    :func:`bvsr_cad.pipeline.build_export` would, or None (nothing written) when the cache lacks it.
-
-    Raises:
-        ParamError: the parameter file is unreadable or describes an impossible tail.
-        OutputError: ``out_dir`` cannot be replaced.
-    """
-    return reuse_whole(open_build(params, out_dir, progress or (lambda _m: None), use_cache=True))
-
-
 __all__ = ["BuildResult", "OpenedBuild", "OutputError", "StageLog", "check_output", "clean_leftovers", "data_path",
-           "open_build", "publish", "reuse_export", "reuse_whole", "temporary_folder", "volatile"]
+           "open_build", "publish", "reuse_whole", "temporary_folder", "volatile"]

@@ -60,18 +60,16 @@ def edited(text: str, table: str, key: str, value: str) -> str:
     raise KeyError(f"{table}.{key} not in the file")
 
 
-def command_seconds(path: Path, out: Path) -> tuple[float, float, str]:
+def command_seconds(path: Path, out: Path) -> tuple[float, float, list[dict]]:
     """`bvsr build PATH -o OUT --json` in a new interpreter: (wall seconds, CPU seconds of it and its
-    children, the stages it reused)."""
+    children, its stages as ``--json`` lists them)."""
     c0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     done = subprocess.run([sys.executable, "-m", "bvsr_cad.cli", "build", str(path), "-o", str(out), "--json"],
                           cwd=ROOT, capture_output=True, text=True, check=True)
     seconds = time.perf_counter() - t0
     c1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    stages = json.loads(done.stdout.splitlines()[-1])["stages"]
-    reused = ", ".join(s["stage"] for s in stages if s["status"] == "reused")
-    return seconds, (c1.ru_utime + c1.ru_stime) - (c0.ru_utime + c0.ru_stime), reused
+    return seconds, (c1.ru_utime + c1.ru_stime) - (c0.ru_utime + c0.ru_stime), json.loads(done.stdout)["stages"]
 
 
 def main() -> None:
@@ -98,23 +96,23 @@ def main() -> None:
         return sum(u.ru_utime + u.ru_stime for u in (resource.getrusage(resource.RUSAGE_SELF),
                                                      resource.getrusage(resource.RUSAGE_CHILDREN)))
 
+    def row(label: str, seconds: float, cpu: float, stages: list[dict]) -> float:
+        reused = [s["stage"] for s in stages if s["status"] == "reused"]
+        rows.append((label, seconds, cpu))
+        print(f"{label:18} {seconds:7.1f} s  {cpu:6.1f} CPU s  reused: {', '.join(reused) or '-'}", flush=True)
+        print("    " + "; ".join(f"{s['stage']} {s['status']} {s['seconds']:.1f} s" for s in stages), flush=True)
+        return seconds
+
     def run(label: str, path: Path) -> float:
         t0, c0 = time.perf_counter(), cpu_s()
         # As `bvsr build` does: the analyses' process started ahead, building the assembly of the file.
         res = build_export(path, work / "out", standby=SecondProcess.standby("bvsr_cad.pipeline", None, [str(path)]))
-        seconds, cpu = time.perf_counter() - t0, cpu_s() - c0
-        reused = [s["stage"] for s in res.stages if s["status"] == "reused"]
-        rows.append((label, seconds, cpu))
-        print(f"{label:18} {seconds:7.1f} s  {cpu:6.1f} CPU s  reused: {', '.join(reused) or '-'}", flush=True)
-        print("    " + "; ".join(f"{s['stage']} {s['status']} {s['seconds']:.1f} s" for s in res.stages), flush=True)
-        return seconds
+        return row(label, time.perf_counter() - t0, cpu_s() - c0, res.stages)
 
     try:
         cold = run("cold", base)
         run("no-op", base)
-        seconds, cpu, reused = command_seconds(base, work / "out")
-        rows.append(("no-op, command", seconds, cpu))
-        print(f"{'no-op, command':18} {seconds:7.1f} s  {cpu:6.1f} CPU s  reused: {reused or '-'}", flush=True)
+        row("no-op, command", *command_seconds(base, work / "out"))
         for name in (n.strip() for n in args.edits.split(",") if n.strip()):
             table, key, value = EDITS[name]
             # Beside the base, so its data_file resolves as the base's does; named by this process, so

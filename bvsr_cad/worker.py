@@ -109,11 +109,17 @@ def serve(_out: str, fn: Callable[..., Any], *args: Any, prepare: Callable[..., 
     return 0
 
 
+#: Environment variables that name a folder, taken from where the user stands: a child works elsewhere.
+PATH_VARIABLES = ("BVSR_CACHE",)
+
+
 def child_env() -> dict[str, str]:
     """The environment of a child started as ``python -m bvsr_cad...``: it imports the bvsr_cad this
-    process runs, and knows its parent's PID (so that it dies with it: :func:`serve`)."""
+    process runs, knows its parent's PID (so that it dies with it: :func:`serve`) and is given the
+    folders of :data:`PATH_VARIABLES` as absolute paths (it starts in another working folder)."""
     package_root = str(Path(__file__).resolve().parents[1])
-    return {**os.environ, PARENT_PID_ENV: str(os.getpid()), "PYTHONPATH": os.pathsep.join(
+    folders = {k: str(Path(os.environ[k]).absolute()) for k in PATH_VARIABLES if os.environ.get(k)}
+    return {**os.environ, **folders, PARENT_PID_ENV: str(os.getpid()), "PYTHONPATH": os.pathsep.join(
         [package_root] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])}
 
 

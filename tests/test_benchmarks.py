@@ -57,7 +57,7 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, 
 
     def fake_command(path, out):
         commands.append((Path(path), os.environ["BVSR_CACHE"]))
-        return 0.5, 0.4, "export"
+        return 0.5, 0.4, [{"stage": "export", "status": "reused", "seconds": 0.1}]
 
     monkeypatch.setattr(bvsr_cad.pipeline, "build_export", fake_build)
     monkeypatch.setattr(bench, "command_seconds", fake_command)

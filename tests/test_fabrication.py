@@ -9,6 +9,8 @@ import csv
 import json
 import os
 import shutil
+import subprocess
+import sys
 import zipfile
 from pathlib import Path
 
@@ -232,6 +234,24 @@ def test_a_relative_cache_is_where_the_user_stands_not_in_the_export(bvsr_export
     run_checks(bvsr_export, cache=ArtifactCache())
     assert sorted(p.relative_to(bvsr_export) for p in bvsr_export.rglob("*")) == before
     assert any((tmp_path / "relative_cache" / "artifacts").rglob(".done"))
+
+
+def test_a_second_process_in_another_folder_reads_the_slice_cache_the_user_names(monkeypatch, tmp_path):
+    """With a relative BVSR_CACHE, a child started in another working folder (as the printability process
+    is, in the export's) finds slices.json where the user stands, not under its own folder."""
+    from bvsr_cad.checks.environment import slice_cache_path
+    from bvsr_cad.worker import child_env
+
+    (tmp_path / "user").mkdir()
+    (tmp_path / "elsewhere").mkdir()
+    monkeypatch.chdir(tmp_path / "user")
+    monkeypatch.setenv("BVSR_CACHE", "relative_cache")
+    here = slice_cache_path()
+    assert here == tmp_path / "user" / "relative_cache" / "slices.json"
+    there = subprocess.run([sys.executable, "-c", "from bvsr_cad.checks.environment import slice_cache_path; "
+                            "print(slice_cache_path())"], cwd=tmp_path / "elsewhere", env=child_env(),
+                           capture_output=True, text=True, check=True).stdout.strip()
+    assert Path(there) == here
 
 
 def test_printability_runs_here_when_the_second_process_fails(bvsr_export, monkeypatch):

@@ -13,6 +13,8 @@ import threading
 import time
 from pathlib import Path
 
+from .worker import SecondProcess, interrupts_held
+
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 
 
@@ -56,7 +58,6 @@ def _print_results(results, as_json: bool, extra: dict | None = None) -> int:
 
 def cmd_build(args) -> int:
     say = _progress(args.quiet or args.json)
-    from .worker import SecondProcess
 
     # The analyses' second process imports its modules beside this process's imports of the pipeline, and
     # builds the tail's assembly from the file while this process decides what the cache holds.
@@ -69,7 +70,8 @@ def cmd_build(args) -> int:
         opened = open_build(args.params, args.output, say, use_cache=not args.no_cache)
         res = reuse_whole(opened)
         if res is None:
-            from .pipeline import build_opened
+            with interrupts_held():  # a Ctrl-C in the pipeline's imports stops the build (worker.interrupts_held)
+                from .pipeline import build_opened
 
             res = build_opened(opened, standby)
     finally:
@@ -90,7 +92,8 @@ def cmd_build(args) -> int:
 
 
 def cmd_watch(args) -> int:
-    from .watch import watch
+    with interrupts_held():
+        from .watch import watch
 
     def say(msg: str) -> None:
         print(msg, flush=True)
@@ -99,7 +102,8 @@ def cmd_watch(args) -> int:
 
 
 def cmd_check(args) -> int:
-    from .checks.run import run_checks
+    with interrupts_held():
+        from .checks.run import run_checks
 
     results = run_checks(args.export, _progress(args.quiet or args.json), run_slicer=args.slice)
     return _print_results(results, args.json)
@@ -109,9 +113,10 @@ def cmd_simulate(args) -> int:
     from .parameters.load import load_spec
 
     spec = load_spec(args.params)  # a bad file is refused before the simulator's imports (seconds)
-    from .exporters.plots import plot_simulation
-    from .parameters import paper
-    from .sim import check_inputs, joint_limits_rad, simulate
+    with interrupts_held():
+        from .exporters.plots import plot_simulation
+        from .parameters import paper
+        from .sim import check_inputs, joint_limits_rad, simulate
 
     say = _progress(args.quiet or args.json)
     check_inputs(spec, args.pressure_bar, args.payload_g)
@@ -167,8 +172,9 @@ def _simulate_impact(args, spec, limits, say) -> int:
 
 
 def _simulate_cart(args, spec, limits, say) -> int:
-    from .exporters.plots import plot_cart
-    from .sim import cart_comparison, simulate_cart
+    with interrupts_held():
+        from .exporters.plots import plot_cart
+        from .sim import cart_comparison, simulate_cart
 
     runs = simulate_cart(spec, limits, args.pressure_bar, progress=say, supply=args.supply)
     say("Eq 20-22 on the Eq 6-12 tail model")
@@ -196,10 +202,11 @@ def cmd_calibrate(args) -> int:
 
     spec = load_spec(args.params)  # bad files are refused before the models' imports (seconds)
     rows = load_measurements(args.data)
-    from .analysis.calibrate import calibrate
-    from .analysis.predict import Predictor
-    from .exporters.calibration_file import write_calibrated_params
-    from .sim import protocol_radius_mm
+    with interrupts_held():
+        from .analysis.calibrate import calibrate
+        from .analysis.predict import Predictor
+        from .exporters.calibration_file import write_calibrated_params
+        from .sim import protocol_radius_mm
 
     say = _progress(args.quiet or args.json)
     names = [n.strip() for n in args.fit.split(",") if n.strip()] if args.fit else None
@@ -244,9 +251,10 @@ def _number(minimum: float, inclusive: bool, kind: type = float):
 
 
 def cmd_workspace(args) -> int:
-    from .analysis.workspace import run_workspace
-    from .assembly.build import build_assembly
-    from .parameters.load import load_spec
+    with interrupts_held():
+        from .analysis.workspace import run_workspace
+        from .assembly.build import build_assembly
+        from .parameters.load import load_spec
 
     spec = load_spec(args.params)
     say = _progress(args.quiet)
@@ -259,10 +267,11 @@ def cmd_workspace(args) -> int:
 
 
 def cmd_clearance(args) -> int:
-    from .analysis.clearance import clearance_over, posed_tail
-    from .analysis.workspace import run_workspace
-    from .assembly.build import build_assembly
-    from .parameters.load import load_spec
+    with interrupts_held():
+        from .analysis.clearance import clearance_over, posed_tail
+        from .analysis.workspace import run_workspace
+        from .assembly.build import build_assembly
+        from .parameters.load import load_spec
 
     spec = load_spec(args.params)
     say = _progress(args.quiet)
@@ -285,7 +294,8 @@ def cmd_sweep(args) -> int:
     from .parameters.study import load_study
 
     study = load_study(args.study)  # a bad study file is refused before the sweep's imports (seconds)
-    from .sweep import run_study
+    with interrupts_held():
+        from .sweep import run_study
 
     say = _progress(args.quiet or args.json)
     try:

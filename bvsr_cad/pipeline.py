@@ -283,9 +283,10 @@ _PREPARED: dict[tuple[str, str], object] = {}
 
 
 def _prepare_analyses(params: str) -> None:
-    """A standby analyses process's head start (``python -m bvsr_cad.pipeline --standby PARAMS``): the
-    tail's assembly, built from the file while the build imports and reads its cache; used only if the
-    work that comes names the same file with the same SHA-256 (the bytes the assembly was built from)."""
+    """A standby analyses process's head start (``python -m bvsr_cad.worker bvsr_cad.pipeline --standby
+    PARAMS``): the tail's assembly, built from the file while the build imports and reads its cache; used
+    only if the work that comes names the same file with the same SHA-256 (the bytes the assembly was
+    built from)."""
     from .assembly.build import build_assembly
 
     before = params_sha256(params)
@@ -295,9 +296,9 @@ def _prepare_analyses(params: str) -> None:
 
 
 def _analyses_process(params: str, sha256: str, geometry: str = ""):
-    """The analyses' second process (``python -m bvsr_cad.pipeline - PARAMS SHA256 [GEOMETRY]``): here, not
-    in the analysis layer, because a measured workspace is predicted in the simulator. ``GEOMETRY``: the
-    cached geometry analyses' pickle (computed here when it is gone)."""
+    """The analyses' second process (``python -m bvsr_cad.worker bvsr_cad.pipeline - PARAMS SHA256
+    [GEOMETRY]``): here, not in the analysis layer, because a measured workspace is predicted in the
+    simulator. ``GEOMETRY``: the cached geometry analyses' pickle (computed here when it is gone)."""
     from .analysis.run import from_params
 
     try:
@@ -308,10 +309,5 @@ def _analyses_process(params: str, sha256: str, geometry: str = ""):
                                                                                 None))
 
 
-if __name__ == "__main__":
-    import sys
-
-    from . import pipeline  # the module itself, not __main__: its results must pickle by their real names
-    from .worker import serve
-
-    sys.exit(serve(sys.argv[1], pipeline._analyses_process, *sys.argv[2:], prepare=pipeline._prepare_analyses))
+#: What the analyses' second process serves (:func:`bvsr_cad.worker.child_main`): its work and its head start.
+SECOND_PROCESS = (_analyses_process, _prepare_analyses)

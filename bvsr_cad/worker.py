@@ -1,12 +1,15 @@
 """Work in a second Python process, beside the main one (the machine's second core).
 
-The child is a fresh interpreter started as ``python -m MODULE - ARGS...``;
-the module's ``__main__`` block calls :func:`serve`, which runs one function
-and pickles ``("ok", result)`` or ``("error", exception)`` onto its standard
-output (anything else printed there goes to stderr instead). Nothing is
-written to disk: the result travels in memory through the pipe. A fresh interpreter rather than :mod:`multiprocessing`: a spawned
-child would first re-run the caller's main script (a user's build script
-without a ``__main__`` guard would build twice).
+The child is a fresh interpreter started as ``python -m bvsr_cad.worker MODULE -
+ARGS...`` (:func:`child_main`): it imports MODULE with Ctrl-C held back
+(:func:`interrupts_held`) and calls :func:`serve` with the module's
+``SECOND_PROCESS`` (its function and, for a standby child, what prepares it), which
+runs that function and pickles ``("ok", result)`` or ``("error", exception)``
+onto its standard output (anything else printed there goes to stderr instead).
+Nothing is written to disk: the result travels in memory through the pipe. A
+fresh interpreter rather than :mod:`multiprocessing`: a spawned child would
+first re-run the caller's main script (a user's build script without a
+``__main__`` guard would build twice).
 
 The parent starts it with :meth:`SecondProcess.start` (``None`` on one core
 or when it cannot start: the caller then does the work itself), collects it
@@ -16,15 +19,18 @@ with :meth:`SecondProcess.result` and always :meth:`SecondProcess.close`\\ s it
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import pickle
+import signal
 import subprocess
 import sys
 import tempfile
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -66,6 +72,42 @@ def _die_with_parent() -> None:
 STANDBY = "--standby"
 
 
+@contextmanager
+def interrupts_held() -> Iterator[None]:
+    """Ctrl-C (SIGINT) held back while the block runs and raised as KeyboardInterrupt when it ends: for
+    imports of the libraries. trimesh's optional imports catch ``BaseException``, so an interrupt that
+    lands in one is swallowed (measured: Ctrl-C 0.6 s into ``bvsr build``, during the pipeline's imports,
+    and the build ran on to the end), and pybind11 turns one into OCP's ``ImportError: initialization
+    failed``. Off the main thread, or where SIGINT is not Python's own handler (ignored, or the caller's),
+    the block runs as it is."""
+    if threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield
+        return
+    came: list[int] = []
+    signal.signal(signal.SIGINT, lambda signum, _frame: came.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    if came:
+        raise KeyboardInterrupt
+
+
+def child_main(argv: list[str]) -> int:
+    """A child's entry, ``python -m bvsr_cad.worker MODULE OUT ARGS...``: it dies with its parent from the
+    start, imports MODULE with Ctrl-C held (an interrupt during the imports ends it quietly with 130, its
+    parent reports it) and serves the module's ``SECOND_PROCESS``, ``(fn, prepare)`` (see :func:`serve`)."""
+    _die_with_parent()
+    module, out, *args = argv
+    try:
+        with interrupts_held():
+            fn, prepare = importlib.import_module(module).SECOND_PROCESS
+    except KeyboardInterrupt:
+        return 130
+    return serve(out, fn, *args, prepare=prepare)
+
+
 def serve(_out: str, fn: Callable[..., Any], *args: Any, prepare: Callable[..., None] | None = None) -> int:
     """Run ``fn(*args)`` and pickle its result, or its exception, onto stdout (the child's side).
 
@@ -74,7 +116,6 @@ def serve(_out: str, fn: Callable[..., Any], *args: Any, prepare: Callable[..., 
     quietly at end of input (the parent did not need it). A standby child's own ``args`` are its hint
     (what the parent expects to ask of it): ``prepare(*args)`` runs first, while the parent is still
     deciding (a head start it may waste: the parent stops a child it gives no work)."""
-    _die_with_parent()
     if _out == STANDBY:
         # Ctrl-C reaches this child too (it shares the terminal's process group) while it waits: the parent
         # reports the interrupt; the child leaves quietly, without a traceback among the parent's lines.
@@ -139,14 +180,14 @@ class SecondProcess:
     @classmethod
     def start(cls, module: str, args: list[str], cwd: Path,
               progress: Callable[[str], None] | None = None, standby: bool = False) -> "SecondProcess | None":
-        """``python -m module - *args`` in ``cwd``; each line of its stderr goes to ``progress``
-        (from a reader thread) or, without it, nowhere. ``standby``: see :meth:`standby`."""
+        """``python -m bvsr_cad.worker module - *args`` (:func:`child_main`) in ``cwd``; each line of its
+        stderr goes to ``progress`` (from a reader thread) or, without it, nowhere. ``standby``: see :meth:`standby`."""
         if (os.cpu_count() or 1) < 2:
             return None
         try:
-            proc = subprocess.Popen([sys.executable, "-m", module, STANDBY if standby else "-", *args], cwd=cwd,
-                                    env=child_env(), stdin=subprocess.PIPE if standby else subprocess.DEVNULL,
-                                    stdout=subprocess.PIPE,
+            cmd = [sys.executable, "-m", "bvsr_cad.worker", module, STANDBY if standby else "-", *args]
+            proc = subprocess.Popen(cmd, cwd=cwd, env=child_env(),
+                                    stdin=subprocess.PIPE if standby else subprocess.DEVNULL, stdout=subprocess.PIPE,
                                     stderr=subprocess.DEVNULL if progress is None else subprocess.PIPE)
         except OSError:
             return None
@@ -163,7 +204,7 @@ class SecondProcess:
     @classmethod
     def standby(cls, module: str, progress: Callable[[str], None] | None = None,
                 hint: list[str] | None = None) -> "SecondProcess | None":
-        """``python -m module --standby [HINT...]``: a child that imports its modules now, while this
+        """``python -m bvsr_cad.worker module --standby [HINT...]``: a child that imports its modules now, while this
         process imports its own, prepares what ``hint`` lets it (see :func:`serve`) and waits for its work
         (:meth:`begin`); ``None`` where :meth:`start` would give none. A child never given work exits when
         it is :meth:`close`\\ d."""
@@ -235,3 +276,9 @@ def result_or(proc: SecondProcess | None, here: Callable[[], Any], say: Callable
         return here()
     say(f"{what}: done in the second process ({proc.seconds:.1f} s)")
     return out
+
+
+if __name__ == "__main__":
+    from bvsr_cad.worker import child_main as _child_main  # the module by its real name, not __main__
+
+    sys.exit(_child_main(sys.argv[1:]))

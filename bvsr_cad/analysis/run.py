@@ -6,7 +6,7 @@ certified clearance, the exact joint limits and the tip joint's clearance map;
 model takes its joint limits from it (nothing reads a file the build wrote).
 
 :func:`from_params` is the build's second process (:mod:`bvsr_cad.worker`,
-started as ``python -m bvsr_cad.pipeline``, which gives it the simulator): the
+started as ``python -m bvsr_cad.worker bvsr_cad.pipeline``, which gives it the simulator): the
 same analyses from the parameter file, the result pickled back to the build.
 """
 

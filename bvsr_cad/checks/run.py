@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import json
-import sys
 from collections.abc import Callable, Collection
 from pathlib import Path
 from typing import Any
 
 from ..cache import ArtifactCache
-from ..worker import SecondProcess, result_or, serve
+from ..worker import SecondProcess, result_or
 from .export import Export, clear_cache
 from .layout import check_layout
 from .mass import check_masses
@@ -205,6 +204,6 @@ def run_checks(root: str | Path, progress: Callable[[str], None] | None = None, 
     return Checks.start(root, progress, run_slicer=run_slicer, parallel=parallel, cache=cache).finish()
 
 
-if __name__ == "__main__":
-    sys.exit(serve(sys.argv[1], _printability, *sys.argv[2:]))
+#: What the printability checks' second process serves (:func:`bvsr_cad.worker.child_main`).
+SECOND_PROCESS = (_printability, None)
 

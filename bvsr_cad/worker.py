@@ -78,8 +78,8 @@ def interrupts_held() -> Iterator[None]:
     imports of the libraries. trimesh's optional imports catch ``BaseException``, so an interrupt that
     lands in one is swallowed (measured: Ctrl-C 0.6 s into ``bvsr build``, during the pipeline's imports,
     and the build ran on to the end), and pybind11 turns one into OCP's ``ImportError: initialization
-    failed``. Off the main thread, or where SIGINT is not Python's own handler (ignored, or the caller's),
-    the block runs as it is."""
+    failed``. An interrupt that came wins over an error the block raised. Off the main thread, or where
+    SIGINT is not Python's own handler (ignored, or the caller's), the block runs as it is."""
     if threading.current_thread() is not threading.main_thread() or \
             signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
         yield
@@ -90,8 +90,8 @@ def interrupts_held() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGINT, signal.default_int_handler)
-    if came:
-        raise KeyboardInterrupt
+        if came:  # before any error the block raised (the user asked to stop): that one is its context
+            raise KeyboardInterrupt
 
 
 def child_main(argv: list[str]) -> int:

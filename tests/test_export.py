@@ -358,6 +358,14 @@ def test_an_interrupt_is_held_through_imports_that_catch_base_exception():
         assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
         with interrupts_held():  # no interrupt: nothing raised
             pass
+        with pytest.raises(KeyboardInterrupt) as info:  # an interrupt wins over the block's own error
+            with interrupts_held():
+                optional_import()
+                raise ImportError("a library's import failed after the Ctrl-C")
+        assert isinstance(info.value.__context__, ImportError)
+        with pytest.raises(ImportError):  # without one, the block's error as it was
+            with interrupts_held():
+                raise ImportError("a library's import failed")
     finally:
         signal.signal(signal.SIGINT, before)
 

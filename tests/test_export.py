@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import shutil
@@ -294,18 +295,35 @@ def _reads_stdin(pid: int) -> bool | None:
     return fields[:2] == [number, "0x0"]
 
 
+@contextlib.contextmanager
+def _sigint_reaches_children():
+    """Children started in the block get SIGINT's default action whatever this process has: a runner that
+    ignores it (a background job of a shell script, nohup: how CI was run here) hands SIG_IGN on to every
+    child, and an ignored Ctrl-C stops nothing (as it should: ``nohup bvsr build &`` is not to be
+    interrupted)."""
+    import signal
+
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)  # handled here: default after exec
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
 def test_ctrl_c_leaves_a_waiting_standby_process_quietly(tmp_path):
     """Ctrl-C reaches the standby analyses process too (same process group): it used to print a
     KeyboardInterrupt traceback (from its wait on stdin) among the build's lines; it leaves with 130.
-    The test waits until the child is blocked on its stdin: it used to wait until the child's CPU time
-    stood still for a second, which a loaded machine (CI's parallel tests) also shows during the imports."""
+    It failed when CI ran as a background job: the child inherited an ignored SIGINT (now given the
+    default: :func:`_sigint_reaches_children`). It waits until the child is blocked on its stdin, not
+    until its CPU time stands still for a second (which a process waiting for a core shows too)."""
     import signal
     import time
 
     from bvsr_cad import worker
 
     lines: list[str] = []
-    standby = worker.SecondProcess.standby("bvsr_cad.pipeline", progress=lines.append)
+    with _sigint_reaches_children():
+        standby = worker.SecondProcess.standby("bvsr_cad.pipeline", progress=lines.append)
     if standby is None:
         pytest.skip("one core: the analyses never leave the process")
     pid, last, still = standby.proc.pid, None, 0
@@ -387,8 +405,10 @@ def test_ctrl_c_while_the_build_imports_stops_it_quietly(tmp_path, after_s):
     bvsr = Path(sys.executable).with_name("bvsr")
     cmd = [str(bvsr)] if bvsr.exists() else [sys.executable, "-m", "bvsr_cad.cli"]
     env = {**os.environ, "BVSR_CACHE": str(tmp_path / "cache")}  # a cold cache: the pipeline is imported
-    build = subprocess.Popen([*cmd, "build", str(PARAMS / "bvsr.toml"), "-o", str(out)], env=env,
-                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    with _sigint_reaches_children():
+        build = subprocess.Popen([*cmd, "build", str(PARAMS / "bvsr.toml"), "-o", str(out)], env=env,
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                                 start_new_session=True)
     try:
         time.sleep(after_s)
         os.killpg(build.pid, signal.SIGINT)

@@ -26,6 +26,10 @@ from .pipeline import build_export
 from .publish import BuildResult, OutputError
 
 DEBOUNCE_MS = 400
+#: How often the watcher also compares the files with what was last built, without an event: a save
+#: before its watcher was listening (during the first build, or between the last "watching" line and
+#: the watcher's start) sends no event it can see, and was missed until the next save (CI saw one).
+CATCH_UP_MS = 500
 
 
 def changed_keys(old: dict[str, Any], new: dict[str, Any], prefix: str = "") -> list[str]:
@@ -87,6 +91,7 @@ def watch(params: str | Path, out_dir: str | Path | None, say: Callable[[str], N
 
     data = _data_file(params, last)
     data_bytes = _bytes(data)
+    seen = (_bytes(params), data_bytes)  # the bytes last acted on (read before the build: a save during it is new)
     try:
         rebuild()
         say(f"watching {params}" + (f" and {data}" if data else "") + " (Ctrl-C stops)")
@@ -94,9 +99,14 @@ def watch(params: str | Path, out_dir: str | Path | None, say: Callable[[str], N
             files = {params} | ({data} if data else set())
             folders = sorted({f.parent for f in files if f.parent.is_dir()})
             retarget = False
-            for _changes in watch_files(*folders, debounce=debounce_ms, stop_event=stop, raise_interrupt=False,
-                                        recursive=False,  # the files sit in these folders, not below
-                                        watch_filter=lambda _change, path: Path(path).resolve() in files):
+            for changes in watch_files(*folders, debounce=debounce_ms, stop_event=stop, raise_interrupt=False,
+                                       recursive=False,  # the files sit in these folders, not below
+                                       watch_filter=lambda _change, path: Path(path).resolve() in files,
+                                       rust_timeout=CATCH_UP_MS, yield_on_timeout=True):
+                now = (_bytes(params), _bytes(data))
+                if not changes and now == seen:
+                    continue  # no event, and the files are as last acted on
+                seen = now
                 new = _read(params)
                 diff = changed_keys(last, new) if new is not None else [
                     "(the file is not valid TOML yet)" if params.exists() else "(the file is gone)"]

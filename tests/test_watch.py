@@ -103,3 +103,32 @@ def test_watch_rebuilds_when_the_calibration_data_is_saved_and_follows_a_new_dat
     stop.set()
     th.join(10)
     assert not th.is_alive() and lines[-1] == "stopped"
+
+
+def test_a_save_before_the_watcher_listens_is_built(tmp_path):
+    """A save during the first build comes before the watcher is listening: it sends no event the watcher
+    can see, and was missed until the next save (a CI run lost one between the "watching" line and the
+    watcher's start). The watcher also compares the files with what it last acted on (every
+    ``CATCH_UP_MS`` without an event), so it is built; and a file left as it was is not built again."""
+    params = tmp_path / "tail.toml"
+    params.write_text('name = "t"\n[vertebra]\nmaterial = "nylon"\n')
+    calls, lines = [], []
+
+    def build(path, out, progress):
+        calls.append(Path(path).read_text())
+        if len(calls) == 1:  # the designer saves while the first build runs
+            params.write_text('name = "t"\n[vertebra]\nmaterial = "pvc"\n')
+        return BuildResult(tmp_path / "out", [], 0.01, [{"stage": "analyses", "status": "built", "seconds": 0.0}])
+
+    stop = threading.Event()
+    th = threading.Thread(target=watch, args=(params, None, lines.append),
+                          kwargs={"stop": stop, "debounce_ms": 100, "build": build}, daemon=True)
+    th.start()
+    assert _wait(lambda: len(calls) == 2)
+    assert "material = \"pvc\"" in calls[1]
+    assert any("vertebra.material: 'nylon' -> 'pvc'" in line for line in lines)
+    time.sleep(1.5)  # three catch-up intervals, nothing new
+    assert len(calls) == 2
+    stop.set()
+    th.join(10)
+    assert not th.is_alive() and lines[-1] == "stopped"

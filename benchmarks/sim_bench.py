@@ -11,6 +11,10 @@ the code path; their rates say nothing about a GPU. MJX and Warp come with the e
 
     python benchmarks/sim_bench.py EXPORT_DIR [--scene robot/scene.xml] [--steps 100]
     python benchmarks/sim_bench.py /tmp/x --cpu-batches 1,4 --no-mjx     # skip MJX's CPU compile (25-40 s a batch)
+    python benchmarks/sim_bench.py /tmp/x --gpu-batches 8192,65536 --profile   # where a Warp step's GPU time goes
+
+``--profile`` (CUDA only) ends with MuJoCo Warp's slowest kernels at the largest batch, in GPU ms per
+step, from steps launched one by one under Warp's kernel timing.
 """
 
 from __future__ import annotations
@@ -83,8 +87,16 @@ def main(argv=None) -> int:
     ap.add_argument("--cpu-seconds", type=float, default=3.0)
     ap.add_argument("--pressure-fraction", type=float, default=0.6, help="held pressure, fraction of the range's top")
     ap.add_argument("--cpu-batches", default="1,4", help="batch sizes on the CPU backends when there is no GPU")
+    ap.add_argument("--gpu-batches", default=",".join(map(str, GPU_BATCHES)), help="batch sizes on a CUDA GPU")
+    ap.add_argument("--profile", action="store_true",
+                    help="on a CUDA GPU, end with MuJoCo Warp's slowest kernels at the largest batch")
+    ap.add_argument("--profile-rows", type=int, default=15, help="kernels --profile lists")
     ap.add_argument("--no-mjx", action="store_true", help="skip MJX (its CPU compile of the tail takes 25-40 s per batch size)")
     args = ap.parse_args(argv)
+    try:
+        gpu_batches, cpu_batches = _sizes(args.gpu_batches), _sizes(args.cpu_batches)
+    except ValueError as exc:
+        ap.error(str(exc))
 
     path = args.export / args.scene if args.scene else sim_gpu.scene_path(args.export)
     model = mujoco.MjModel.from_xml_path(str(path))
@@ -106,16 +118,20 @@ def main(argv=None) -> int:
     gpu = cuda_present()
     if gpu:
         print(f"GPU: {gpu}")
-        batches, device = GPU_BATCHES, "cuda:0"
+        batches, device = gpu_batches, "cuda:0"
     else:
-        batches, device = tuple(int(b) for b in args.cpu_batches.split(",")), "cpu"
+        batches, device = cpu_batches, "cpu"
         print(f"no CUDA GPU here: tiny batches {batches} on the CPU backends prove the code path "
               "(their rates are not GPU figures)")
 
     engines = []
+
+    def warp_engine(f):
+        return sim_gpu.warp_batch(model, ctrl, f, buffers, device=device)
+
     try:
         sim_gpu.import_warp()
-        engines.append(lambda f: sim_gpu.warp_batch(model, ctrl, f, buffers, device=device))
+        engines.append(warp_engine)
     except ImportError as exc:
         print(f"MuJoCo Warp skipped: {exc}")
     if not args.no_mjx:
@@ -129,7 +145,35 @@ def main(argv=None) -> int:
     for make in engines:
         for nworld in batches:
             print(batch_row(make, model, ctrl, nworld, args.steps, rand), flush=True)
+    if args.profile:
+        if not gpu or not engines or engines[0] is not warp_engine:
+            print("--profile: per-kernel times need MuJoCo Warp on a CUDA GPU; skipped")
+        else:
+            print(profile_lines(model, ctrl, max(batches), buffers, rand, args.profile_rows))
     return 0
+
+
+def _sizes(text: str) -> tuple[int, ...]:
+    """Batch sizes from ``1,1024,8192``."""
+    try:
+        sizes = tuple(int(b) for b in text.split(","))
+    except ValueError:
+        sizes = ()
+    if not sizes or min(sizes) < 1:
+        raise ValueError(f"batch sizes must be positive integers separated by commas, got {text!r}")
+    return sizes
+
+
+def profile_lines(model, ctrl, nworld: int, buffers, rand, rows: int) -> str:
+    """MuJoCo Warp's slowest kernels at batch ``nworld`` (GPU ms per step), as printed lines."""
+    fields = sim_gpu.randomised_fields(model, nworld, rand)
+    times = sim_gpu.warp_kernel_profile(model, ctrl, fields, buffers)
+    total = sum(k.ms_per_step for k in times)
+    lines = [f"MuJoCo Warp kernels at batch {nworld}: {sum(k.launches_per_step for k in times):.0f} launches "
+             f"and {total:.3f} ms of GPU time per step (launched one by one); the slowest {rows}:"]
+    lines += [f"  {k.ms_per_step:8.4f} ms {k.ms_per_step / total:6.1%}  x{k.launches_per_step:<3g} {k.name}"
+              for k in times[:rows]]
+    return "\n".join(lines)
 
 
 if __name__ == "__main__":

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import copy
 import json
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -245,6 +246,19 @@ def mjx_batch(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndar
     return Batch("mjx", nworld, step, lambda: np.asarray(state["d"].qpos), check)
 
 
+def _warp_model_data(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndarray],
+                     buffers: ConstraintBuffers):
+    """MuJoCo Warp's batched model and data on Warp's current device (:func:`warp_batch`)."""
+    _, mjw = import_warp()
+    nworld = len(next(iter(fields.values())))
+    data = mujoco.MjData(model)
+    data.ctrl[:] = ctrl
+    mw = mjw.put_model(model, batch_sizes={name: nworld for name in fields})
+    for name, rows in fields.items():
+        getattr(mw, name).assign(rows)
+    return mw, mjw.put_data(model, data, nworld=nworld, nconmax=buffers.nconmax, njmax=buffers.njmax)
+
+
 def warp_batch(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndarray],
                buffers: ConstraintBuffers, device: str = "cpu", graph: bool | None = None) -> Batch:
     """MuJoCo Warp: ``put_model`` with ``batch_sizes`` giving the randomised fields one row per world,
@@ -252,13 +266,8 @@ def warp_batch(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.nda
     one step is captured as a CUDA graph (``graph`` overrides) and replayed."""
     wp, mjw = import_warp()
     nworld = len(next(iter(fields.values())))
-    data = mujoco.MjData(model)
-    data.ctrl[:] = ctrl
     with wp.ScopedDevice(device):
-        mw = mjw.put_model(model, batch_sizes={name: nworld for name in fields})
-        for name, rows in fields.items():
-            getattr(mw, name).assign(rows)
-        dw = mjw.put_data(model, data, nworld=nworld, nconmax=buffers.nconmax, njmax=buffers.njmax)
+        mw, dw = _warp_model_data(model, ctrl, fields, buffers)
         captured = None
         if graph if graph is not None else wp.get_device(device).is_cuda:
             mjw.step(mw, dw)  # compile outside the capture
@@ -304,6 +313,57 @@ def cpu_reference(model: mujoco.MjModel, ctrl: np.ndarray, steps: int) -> tuple[
         mujoco.mj_step(model, data)
     warned = [mujoco.mjtWarning(i).name for i, w in enumerate(data.warning) if w.number]
     return data.qpos.copy(), warned
+
+
+@dataclass(frozen=True)
+class KernelTime:
+    """One GPU kernel of a MuJoCo Warp step: its time and launches per step, over every world."""
+
+    name: str
+    ms_per_step: float
+    launches_per_step: float
+
+
+def kernel_label(name: str) -> str:
+    """A Warp timing name without Warp's decorations: ``forward kernel _spring_damper_tendon_passive
+    __locals__kernel_1c3d22e2`` -> ``_spring_damper_tendon_passive`` (the module hash and the closure's
+    ``__locals__`` suffix differ between builds of the same kernel)."""
+    name = re.sub(r"^(forward|backward) kernel ", "", name)
+    return re.sub(r"(__locals__\w*?)?_[0-9a-f]{8}$", "", name)
+
+
+def kernel_times(results, steps: int) -> list[KernelTime]:
+    """Warp's timing results (objects with ``name`` and ``elapsed`` in ms) of ``steps`` steps, summed
+    per kernel, slowest first."""
+    total: dict[str, list[float]] = {}
+    for r in results:
+        entry = total.setdefault(kernel_label(r.name), [0.0, 0])
+        entry[0] += r.elapsed
+        entry[1] += 1
+    rows = [KernelTime(name, ms / steps, count / steps) for name, (ms, count) in total.items()]
+    return sorted(rows, key=lambda k: -k.ms_per_step)
+
+
+def warp_kernel_profile(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndarray],
+                        buffers: ConstraintBuffers, device: str = "cuda:0", steps: int = 5) -> list[KernelTime]:
+    """Where a MuJoCo Warp step of this batch spends its GPU time: ``steps`` steps launched one by one
+    (not as a graph) under Warp's CUDA kernel timing, after a step that compiles. Slowest kernel first.
+
+    Raises:
+        ValueError: ``device`` is not a CUDA device (Warp times only CUDA kernels).
+    """
+    wp, mjw = import_warp()
+    if not wp.get_device(device).is_cuda:
+        raise ValueError(f"per-kernel times need a CUDA device; {device!r} is not one")
+    with wp.ScopedDevice(device):
+        mw, dw = _warp_model_data(model, ctrl, fields, buffers)
+        mjw.step(mw, dw)
+        wp.synchronize_device(device)
+        wp.timing_begin(cuda_filter=wp.TIMING_KERNEL)
+        for _ in range(steps):
+            mjw.step(mw, dw)
+        results = wp.timing_end()
+    return kernel_times(results, steps)
 
 
 def world_difference(batch: Batch, model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndarray],

@@ -105,3 +105,14 @@ def test_every_benchmark_answers_help(name, monkeypatch, capsys):
         module.main()
     assert done.value.code == 0
     assert "usage:" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("flag,value", [("--gpu-batches", "0"), ("--gpu-batches", "8192,"),
+                                        ("--cpu-batches", "two"), ("--gpu-batches", "-4")])
+def test_sim_bench_refuses_bad_batch_sizes_before_any_work(flag, value, capsys):
+    """A bad size is exit 2 naming the flag's value, before the export is even read."""
+    bench = _script("sim_bench")
+    with pytest.raises(SystemExit) as done:
+        bench.main(["/nonexistent-export", flag, value])
+    assert done.value.code == 2
+    assert f"batch sizes must be positive integers separated by commas, got {value!r}" in capsys.readouterr().err

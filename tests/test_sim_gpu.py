@@ -156,3 +156,65 @@ def test_mjx_steps_the_exported_scene_like_cpu(scenes, jax_x64):
     lines = np.array([model.actuator(i).name.rsplit("_", 1)[-1] in ("soa3", "soa4") for i in range(model.nu)])
     ctrl = np.where(lines, model.actuator_ctrlrange[:, 1], 0.0)
     _agrees(sim_gpu.mjx_batch(model, ctrl, fields), model, ctrl, fields, round(0.05 / model.opt.timestep), 1e-13)
+
+
+# --- the benchmark's per-kernel profile ------------------------------------------------------------
+
+
+def test_kernel_label_strips_warp_decorations():
+    """Names as Warp 1.19 timed them on an H200 (2026-11-26): the module hash and the closure suffix
+    go, so one kernel is one row however many builds of it ran."""
+    assert sim_gpu.kernel_label("forward kernel _qderiv_tendon_damping_2a52f8da") == "_qderiv_tendon_damping"
+    assert sim_gpu.kernel_label("forward kernel _spring_damper_tendon_passive__locals__kernel_1c3d22e2") \
+        == "_spring_damper_tendon_passive"
+    assert sim_gpu.kernel_label("forward kernel mul_m_kernel__locals___mul_m_2eb0ef19") == "mul_m_kernel"
+    assert sim_gpu.kernel_label("forward kernel _comvel_branch_0f933c58") == "_comvel_branch"
+    # a name without Warp's suffix is kept whole (a short hex-like tail is not a hash)
+    assert sim_gpu.kernel_label("memcpy HtoD") == "memcpy HtoD"
+    assert sim_gpu.kernel_label("forward kernel solve_cafe") == "solve_cafe"
+
+
+def test_kernel_times_sum_each_kernel_per_step_slowest_first():
+    class R:  # a warp.TimingResult's two fields the profile reads
+        def __init__(self, name, elapsed):
+            self.name, self.elapsed = name, elapsed
+
+    steps = 2
+    results = [R("forward kernel _a_0000aaaa", 1.0), R("forward kernel _b__locals__kernel_1111bbbb", 0.5),
+               R("forward kernel _a_2222cccc", 3.0), R("forward kernel _b__locals__kernel_1111bbbb", 0.5),
+               R("forward kernel _b__locals__kernel_1111bbbb", 0.25)]
+    times = sim_gpu.kernel_times(results, steps)
+    assert [t.name for t in times] == ["_a", "_b"]
+    assert times[0] == sim_gpu.KernelTime("_a", 2.0, 1.0)
+    assert times[1] == sim_gpu.KernelTime("_b", 0.625, 1.5)
+    assert sum(t.ms_per_step for t in times) * steps == pytest.approx(sum(r.elapsed for r in results))
+
+
+def test_warp_kernel_profile_refuses_a_cpu_device():
+    _needs_warp()
+    model = mujoco.MjModel.from_xml_string(TWO_LINKS)
+    fields = sim_gpu.randomised_fields(model, 1)
+    with pytest.raises(ValueError, match="per-kernel times need a CUDA device; 'cpu' is not one"):
+        sim_gpu.warp_kernel_profile(model, np.zeros(2), fields, sim_gpu.constraint_buffers(model), device="cpu")
+
+
+def test_sim_bench_runs_on_the_cpu_and_says_profile_needs_cuda(bvsr_export, capsys, monkeypatch):
+    """The benchmark end to end on a machine without a CUDA GPU (CI): CPU MuJoCo's rate at the exported
+    step, Warp's CPU batch checked against CPU MuJoCo, and --profile declining in one line."""
+    _needs_warp()
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "sim_bench.py"
+    spec = importlib.util.spec_from_file_location("bench_sim_bench", path)
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    monkeypatch.setattr(bench, "cuda_present", lambda: None)
+    assert bench.main([str(bvsr_export), "--no-mjx", "--cpu-batches", "2", "--steps", "3",
+                       "--cpu-seconds", "0.2", "--profile"]) == 0
+    out = capsys.readouterr().out
+    step_ms = mujoco.MjModel.from_xml_path(str(sim_gpu.scene_path(bvsr_export))).opt.timestep * 1e3
+    assert f"time step {step_ms:g} ms" in out and "real-time factor" in out and "WARNINGS" not in out
+    warp_line = next(line for line in out.splitlines() if "warp  batch     2:" in line)
+    assert float(warp_line.rsplit("max|dqpos| ", 1)[1].split()[0]) < 1e-5 and "PROBLEMS" not in warp_line
+    assert out.rstrip().endswith("--profile: per-kernel times need MuJoCo Warp on a CUDA GPU; skipped")

@@ -97,6 +97,8 @@ def main(argv=None) -> int:
         gpu_batches, cpu_batches = _sizes(args.gpu_batches), _sizes(args.cpu_batches)
     except ValueError as exc:
         ap.error(str(exc))
+    if args.profile_rows < 1:
+        ap.error(f"--profile-rows must be at least 1, got {args.profile_rows}")
 
     path = args.export / args.scene if args.scene else sim_gpu.scene_path(args.export)
     model = mujoco.MjModel.from_xml_path(str(path))

@@ -116,3 +116,11 @@ def test_sim_bench_refuses_bad_batch_sizes_before_any_work(flag, value, capsys):
         bench.main(["/nonexistent-export", flag, value])
     assert done.value.code == 2
     assert f"batch sizes must be positive integers separated by commas, got {value!r}" in capsys.readouterr().err
+
+
+def test_sim_bench_refuses_a_profile_of_no_rows(capsys):
+    bench = _script("sim_bench")
+    with pytest.raises(SystemExit) as done:
+        bench.main(["/nonexistent-export", "--profile-rows", "0"])
+    assert done.value.code == 2
+    assert "--profile-rows must be at least 1, got 0" in capsys.readouterr().err

@@ -14,6 +14,8 @@ Shared by the tests (``tests/test_sim_gpu.py``) and the benchmark (``benchmarks/
 - :func:`mjx_batch` / :func:`warp_batch`: the batched model (those fields with one row per world)
   and data, with a step function; :func:`world_model` is the CPU MuJoCo model of one world, the
   reference each batch's world is checked against.
+- :func:`warp_kernel_profile`: where a MuJoCo Warp step's GPU time goes, per kernel (CUDA only;
+  ``benchmarks/sim_bench.py --profile``).
 
 MJX, JAX and MuJoCo Warp come with the optional extra ``.[gpu]``; they are imported inside the
 functions that use them, so the base install never needs them.
@@ -350,8 +352,10 @@ def warp_kernel_profile(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[st
     (not as a graph) under Warp's CUDA kernel timing, after a step that compiles. Slowest kernel first.
 
     Raises:
-        ValueError: ``device`` is not a CUDA device (Warp times only CUDA kernels).
+        ValueError: ``device`` is not a CUDA device (Warp times only CUDA kernels), or ``steps`` < 1.
     """
+    if steps < 1:
+        raise ValueError(f"steps must be at least 1, got {steps}")
     wp, mjw = import_warp()
     if not wp.get_device(device).is_cuda:
         raise ValueError(f"per-kernel times need a CUDA device; {device!r} is not one")

@@ -156,7 +156,7 @@ PATH_VARIABLES = ("BVSR_CACHE",)
 
 def child_env() -> dict[str, str]:
     """The environment of a child started as ``python -m bvsr_cad...``: it imports the bvsr_cad this
-    process runs, knows its parent's PID (so that it dies with it: :func:`serve`) and is given the
+    process runs, knows its parent's PID (so that it dies with it: :func:`child_main`) and is given the
     folders of :data:`PATH_VARIABLES` as absolute paths (it starts in another working folder)."""
     package_root = str(Path(__file__).resolve().parents[1])
     folders = {k: str(Path(os.environ[k]).absolute()) for k in PATH_VARIABLES if os.environ.get(k)}

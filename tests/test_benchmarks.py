@@ -124,3 +124,24 @@ def test_sim_bench_refuses_a_profile_of_no_rows(capsys):
         bench.main(["/nonexistent-export", "--profile-rows", "0"])
     assert done.value.code == 2
     assert "--profile-rows must be at least 1, got 0" in capsys.readouterr().err
+
+
+def test_sim_bench_runs_on_the_cpu_and_says_profile_needs_cuda(bvsr_export, capsys, monkeypatch):
+    """The benchmark end to end on a machine without a CUDA GPU (CI): CPU MuJoCo's rate at the exported
+    step, Warp's CPU batch checked against CPU MuJoCo, and --profile declining in one line."""
+    pytest.importorskip("warp", reason="needs the optional extra .[gpu]")
+    pytest.importorskip("mujoco_warp", reason="needs the optional extra .[gpu]")
+    import mujoco
+
+    from bvsr_cad import sim_gpu
+
+    bench = _script("sim_bench")
+    monkeypatch.setattr(bench, "cuda_present", lambda: None)
+    assert bench.main([str(bvsr_export), "--no-mjx", "--cpu-batches", "2", "--steps", "3",
+                       "--cpu-seconds", "0.2", "--profile"]) == 0
+    out = capsys.readouterr().out
+    step_ms = mujoco.MjModel.from_xml_path(str(sim_gpu.scene_path(bvsr_export))).opt.timestep * 1e3
+    assert f"time step {step_ms:g} ms" in out and "real-time factor" in out and "WARNINGS" not in out
+    warp_line = next(line for line in out.splitlines() if "warp  batch     2:" in line)
+    assert float(warp_line.rsplit("max|dqpos| ", 1)[1].split()[0]) < 1e-5 and "PROBLEMS" not in warp_line
+    assert out.rstrip().endswith("--profile: per-kernel times need MuJoCo Warp on a CUDA GPU; skipped")

@@ -197,24 +197,3 @@ def test_warp_kernel_profile_refuses_a_cpu_device():
     with pytest.raises(ValueError, match="per-kernel times need a CUDA device; 'cpu' is not one"):
         sim_gpu.warp_kernel_profile(model, np.zeros(2), fields, sim_gpu.constraint_buffers(model), device="cpu")
 
-
-def test_sim_bench_runs_on_the_cpu_and_says_profile_needs_cuda(bvsr_export, capsys, monkeypatch):
-    """The benchmark end to end on a machine without a CUDA GPU (CI): CPU MuJoCo's rate at the exported
-    step, Warp's CPU batch checked against CPU MuJoCo, and --profile declining in one line."""
-    _needs_warp()
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "sim_bench.py"
-    spec = importlib.util.spec_from_file_location("bench_sim_bench", path)
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
-    monkeypatch.setattr(bench, "cuda_present", lambda: None)
-    assert bench.main([str(bvsr_export), "--no-mjx", "--cpu-batches", "2", "--steps", "3",
-                       "--cpu-seconds", "0.2", "--profile"]) == 0
-    out = capsys.readouterr().out
-    step_ms = mujoco.MjModel.from_xml_path(str(sim_gpu.scene_path(bvsr_export))).opt.timestep * 1e3
-    assert f"time step {step_ms:g} ms" in out and "real-time factor" in out and "WARNINGS" not in out
-    warp_line = next(line for line in out.splitlines() if "warp  batch     2:" in line)
-    assert float(warp_line.rsplit("max|dqpos| ", 1)[1].split()[0]) < 1e-5 and "PROBLEMS" not in warp_line
-    assert out.rstrip().endswith("--profile: per-kernel times need MuJoCo Warp on a CUDA GPU; skipped")

@@ -196,4 +196,3 @@ def test_warp_kernel_profile_refuses_a_cpu_device():
     fields = sim_gpu.randomised_fields(model, 1)
     with pytest.raises(ValueError, match="per-kernel times need a CUDA device; 'cpu' is not one"):
         sim_gpu.warp_kernel_profile(model, np.zeros(2), fields, sim_gpu.constraint_buffers(model), device="cpu")
-

@@ -114,6 +114,10 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
                                  tubes=(spec.fabrication_package.tube_lead_mm,
                                         spec.fabrication_package.tube_bend_allowance))
         cached_analyses = cache.get(analyses_key) if cache else None
+        if cached_analyses is not None and standby is not None:
+            # Nothing for it to do: stopped now, not at the end, so that its imports and its head start
+            # (the tail's assembly) do not take a core from this build's stages.
+            standby.close()
         geometry_key = stage_key("analysis_geometry", spec=spec_without(spec, *ANALYSIS_GEOMETRY_IGNORE),
                                  rod=spec.vertebra.has_rod, min_clearance_mm=spec.analysis.min_clearance_mm)
         geometry_hit = cache.get(geometry_key) if cache and cached_analyses is None else None

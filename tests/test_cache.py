@@ -186,6 +186,43 @@ def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(bvsr_expo
         assert _differences(tmp_path / f"cached{i}", tmp_path / "fresh") == []
 
 
+class _StageReached(Exception):
+    """Raised where a test stops a build: at its first stage, the assembly."""
+
+
+@pytest.mark.slow
+def test_a_build_whose_analyses_are_cached_stops_its_standby_before_its_stages(bvsr_export, tmp_path, data,
+                                                                                monkeypatch):
+    """bvsr_export filled the session's cache. A printer-volume edit reads the same analyses: the build takes
+    them from the cache and stops its standby analyses' process before the assembly, so that its imports
+    and head start do not take a core from the build's stages. Without the cache it is given the
+    analyses, and runs beside them."""
+    from bvsr_cad import pipeline, worker
+
+    folder = tmp_path / "params"
+    folder.mkdir()
+    (tmp_path / "data").mkdir()  # the calibration's data file, where its relative path leads
+    data_file = (PARAMS / data["calibration"]["data_file"]).resolve()
+    (tmp_path / "data" / data_file.name).write_bytes(data_file.read_bytes())
+    data["fabrication_package"]["printer_x_mm"] = 220.0
+    edit = write_toml(folder / "bvsr.toml", data)
+    seen: list[bool] = []
+
+    def first_stage(*_args, **_kw):
+        seen.append(standby.running)
+        raise _StageReached
+
+    monkeypatch.setattr(pipeline, "build_assembly", first_stage)
+    for use_cache in (True, False):
+        standby = worker.SecondProcess.standby("bvsr_cad.pipeline", None, [str(edit)])
+        if standby is None:
+            pytest.skip("one core: the analyses never leave the process")
+        with pytest.raises(_StageReached):
+            pipeline.build_export(edit, tmp_path / "out", use_cache=use_cache, standby=standby)
+        assert standby.proc is None  # closed by the build either way
+    assert seen == [False, True]
+
+
 #: What a rebuild that finds its whole export in the cache must not import (seconds of the command's time).
 HEAVY_MODULES = {"build123d", "OCP", "cadquery", "trimesh", "manifold3d", "scipy", "mujoco", "matplotlib", "pyvista",
                  "bvsr_cad.pipeline", "bvsr_cad.assembly", "bvsr_cad.checks.printability"}

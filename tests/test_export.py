@@ -123,6 +123,40 @@ def test_checks_started_early_see_a_file_changed_before_they_finish(bvsr_export,
     assert [r.to_json() for r in late] == [r.to_json() for r in run_checks(copy, parallel=False)]
 
 
+def test_mold_checks_in_the_second_process_see_a_mold_file_changed_before_they_finish(bvsr_export, tmp_path):
+    """The mold checks run in the printability process from Checks.start; a mold file changed before
+    Checks.finish (whether that process had read it yet or not) is checked again, on the file as it is."""
+    import os
+
+    from bvsr_cad.checks.export import Export
+    from bvsr_cad.checks.molds import check_molds
+    from bvsr_cad.checks.run import Checks
+
+    if (os.cpu_count() or 1) < 2:
+        pytest.skip("one core: the mold checks never leave the process")
+    copy = tmp_path / "copy"
+    shutil.copytree(bvsr_export, copy)
+    said: list[str] = []
+    checks = Checks.start(copy, said.append)
+    assert checks._printability.proc is not None
+    half = copy / "molds" / "assembled" / "half_a.stl"
+    mesh = trimesh.load(half)
+    mesh.apply_translation(-3.0 * mesh.centroid / np.linalg.norm(mesh.centroid))  # into the cavity
+    mesh.export(half)
+    late = checks.finish()
+    molds = check_molds(Export.open(copy))
+    names = {r.name for r in molds}
+    assert "mold_intrusion" in {r.name for r in molds if r.passed is False}
+    assert [r.to_json() for r in late if r.name in names] == [r.to_json() for r in molds]
+    # Unchanged, the mold verdicts are the second process's.
+    said.clear()
+    checks = Checks.start(bvsr_export, said.append)
+    kept = checks.finish()
+    assert any(m.startswith("printability and molds: done in the second process") for m in said), said
+    assert "molds" not in said
+    assert {r.name for r in kept} >= names
+
+
 def test_check_moved_pocket_fails_the_pentagon(bvsr_export, tmp_path, capsys):
     moved = tmp_path / "moved"
     shutil.copytree(bvsr_export, moved)

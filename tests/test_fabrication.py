@@ -221,7 +221,7 @@ def test_printability_in_a_second_process_gives_the_same_results(bvsr_export):
     alone = run_checks(bvsr_export, parallel=False)
     assert json.dumps([r.to_json() for r in beside]) == json.dumps([r.to_json() for r in alone])
     if (os.cpu_count() or 1) >= 2:
-        assert any(m.startswith("printability: done in the second process") for m in said), said
+        assert any(m.startswith("printability and molds: done in the second process") for m in said), said
 
 
 def test_a_relative_cache_is_where_the_user_stands_not_in_the_export(bvsr_export, monkeypatch, tmp_path):

@@ -22,35 +22,56 @@ from .result import CheckResult
 from .robot import check_robot
 
 
-def _printability(root: str, sliced_now: str, cache_root: str = "") -> list[CheckResult]:
-    """The second process's work: the printability checks of the export at ``root`` (verdicts of
-    unchanged inputs from the artifact cache at ``cache_root``, when given)."""
+def _printability(root: str, sliced_now: str, cache_root: str = "") -> dict[str, list[CheckResult]]:
+    """The second process's work: the printability checks and the mold checks of the export at ``root``
+    (verdicts of unchanged inputs from the artifact cache at ``cache_root``, when given), by group."""
     exp = Export.open(root)
     memo = CheckMemo(exp, ArtifactCache(Path(cache_root)) if cache_root else None)
-    return check_printability(exp, sliced_now=set(json.loads(sliced_now)), memo=memo)
+    return {"printability": check_printability(exp, sliced_now=set(json.loads(sliced_now)), memo=memo),
+            "molds": memo("molds", molds_reads(exp), lambda: check_molds(exp))}
 
 
 class _Printability:
-    """The printability checks, the slowest group, in a second process (given only the export's
-    path, it opens the export itself) while the other groups run here. On one core, or when the
-    process fails, they run here."""
+    """The printability checks, the slowest group, and the mold checks in a second process (given only
+    the export's path, it opens the export itself) while the other groups run here. On one core, or when
+    the process fails, they run here."""
 
     def __init__(self, exp: Export, sliced_now: Collection[str], say: Callable[[str], None], parallel: bool,
                  memo: CheckMemo | None = None):
         self.exp, self.sliced_now, self.say = exp, sliced_now, say
         self.memo = memo = memo or CheckMemo(exp)
         self.proc = None
+        self._got: dict[str, list[CheckResult]] | None = None
         if parallel:
             # cwd: MuJoCo may write its log into the working folder, as in the robot checks.
             cache_root = str(memo.cache.root) if memo.cache is not None else ""
             self.proc = SecondProcess.start("bvsr_cad.checks.run", [str(exp.root), json.dumps(sorted(sliced_now)),
                                                                    cache_root], exp.root)
             if self.proc is not None:
-                say("printability: started in a second process")
+                say("printability and molds: started in a second process")
+
+    def _from_process(self) -> dict[str, list[CheckResult]]:
+        """The second process's verdicts by group; empty without one, or when it was lost (then each
+        group runs here)."""
+        if self.proc is None:
+            return {}
+        if self._got is None:
+            self._got = result_or(self.proc, dict, self.say, "printability and molds")
+        return self._got
 
     def results(self) -> list[CheckResult]:
-        return result_or(self.proc, lambda: check_printability(self.exp, sliced_now=self.sliced_now,
-                                                               memo=self.memo), self.say, "printability")
+        got = self._from_process()
+        if "printability" in got:
+            return got["printability"]
+        self.say("printability")
+        return check_printability(self.exp, sliced_now=self.sliced_now, memo=self.memo)
+
+    def molds(self) -> list[CheckResult]:
+        got = self._from_process()
+        if "molds" in got:
+            return got["molds"]
+        self.say("molds")
+        return self.memo("molds", molds_reads(self.exp), lambda: check_molds(self.exp))
 
     def close(self) -> None:
         if self.proc is not None:
@@ -96,7 +117,7 @@ def _state(exp: Export, reads: tuple) -> tuple:
 
 class Checks:
     """Every check on an export, in two steps: :meth:`start` runs the groups that read only the CAD
-    files (the part meshes, the molds, and the printability checks in a second process), so that a build
+    files (the part meshes here, the printability and mold checks in a second process), so that a build
     can run them before its analyses are in; :meth:`finish` runs the rest on the export as it is then
     and returns every result in one order. A group started early whose reads changed since (its manifest
     values, its files' names, sizes or modification times; for the printability checks, the manifest
@@ -108,7 +129,7 @@ class Checks:
         self.parallel = parallel
         self.sliced_now: dict = {}
         self._mesh: dict[str, tuple[tuple, list[CheckResult]]] = {}
-        self._molds: tuple[tuple, list[CheckResult]] | None = None
+        self._molds_state: tuple | None = None  # the molds' reads when the early checks started
         self._printability: _Printability | None = None
         self._printability_reads = ""
         exp = Export.open(root)
@@ -118,21 +139,21 @@ class Checks:
 
     @classmethod
     def start(cls, root: str | Path, progress: Callable[[str], None] | None = None, **kw) -> "Checks":
-        """Open the export, start the printability checks and run the part meshes' and the molds'."""
+        """Open the export, start the printability and mold checks (in a second process) and run the part
+        meshes' here."""
         run = cls(root, progress, **kw)
         exp, say = run._exp, run.say
         memo = CheckMemo(exp, run.cache)
-        run._printability = _Printability(exp, run.sliced_now, say, run.parallel, memo)
+        # What the second process is about to read: its verdicts stand only while these are unchanged.
         run._printability_reads = _printability_reads(exp)
+        run._molds_state = _state(exp, molds_reads(exp))
+        run._printability = _Printability(exp, run.sliced_now, say, run.parallel, memo)
         try:
             for part in exp.parts:
                 say(f"mesh {part['name']}")
                 reads = part_mesh_reads(part)
                 run._mesh[part["name"]] = (_state(exp, reads),
                                            memo("part_mesh", reads, lambda: check_part_mesh(exp, part)))
-            say("molds")
-            reads = molds_reads(exp)
-            run._molds = (_state(exp, reads), memo("molds", reads, lambda: check_molds(exp)))
         except BaseException:
             run.close()
             raise
@@ -161,17 +182,18 @@ class Checks:
             results.extend(check_analyses(exp))
             say("robot descriptions (URDF, MJCF, MuJoCo, PyBullet)")
             results.extend(check_robot(exp))
-            printability = self._printability
-            if printability is None or self._printability_reads != _printability_reads(exp):
-                if printability is not None:
-                    printability.close()
+            early = self._printability
+            printability = early
+            if early is None or self._printability_reads != _printability_reads(exp):
+                if early is not None:
+                    early.close()
                 printability = self._printability = _Printability(exp, self.sliced_now, say, False, memo)
             results.extend(printability.results())
-            reads = molds_reads(exp)
-            if self._molds is None or self._molds[0] != _state(exp, reads):
+            if printability is early and self._molds_state == _state(exp, molds_reads(exp)):
+                results.extend(early.molds())
+            else:  # started on files that changed since: run on the export as it is now
                 say("molds")
-                self._molds = (None, memo("molds", reads, lambda: check_molds(exp)))
-            results.extend(self._molds[1])
+                results.extend(memo("molds", molds_reads(exp), lambda: check_molds(exp)))
         finally:
             self.close()
         if self.cache is not None:

@@ -22,13 +22,18 @@ from .result import CheckResult
 from .robot import check_robot
 
 
+def _mold_checks(exp: Export, memo: CheckMemo) -> list[CheckResult]:
+    """The mold checks of ``exp`` (their verdicts from ``memo``'s cache while their reads are unchanged)."""
+    return memo("molds", molds_reads(exp), lambda: check_molds(exp))
+
+
 def _printability(root: str, sliced_now: str, cache_root: str = "") -> dict[str, list[CheckResult]]:
     """The second process's work: the printability checks and the mold checks of the export at ``root``
     (verdicts of unchanged inputs from the artifact cache at ``cache_root``, when given), by group."""
     exp = Export.open(root)
     memo = CheckMemo(exp, ArtifactCache(Path(cache_root)) if cache_root else None)
     return {"printability": check_printability(exp, sliced_now=set(json.loads(sliced_now)), memo=memo),
-            "molds": memo("molds", molds_reads(exp), lambda: check_molds(exp))}
+            "molds": _mold_checks(exp, memo)}
 
 
 class _Printability:
@@ -71,7 +76,7 @@ class _Printability:
         if "molds" in got:
             return got["molds"]
         self.say("molds")
-        return self.memo("molds", molds_reads(self.exp), lambda: check_molds(self.exp))
+        return _mold_checks(self.exp, self.memo)
 
     def close(self) -> None:
         if self.proc is not None:
@@ -182,18 +187,18 @@ class Checks:
             results.extend(check_analyses(exp))
             say("robot descriptions (URDF, MJCF, MuJoCo, PyBullet)")
             results.extend(check_robot(exp))
-            early = self._printability
-            printability = early
-            if early is None or self._printability_reads != _printability_reads(exp):
-                if early is not None:
-                    early.close()
+            printability = self._printability
+            fresh = printability is not None and self._printability_reads == _printability_reads(exp)
+            if not fresh:
+                if printability is not None:
+                    printability.close()
                 printability = self._printability = _Printability(exp, self.sliced_now, say, False, memo)
             results.extend(printability.results())
-            if printability is early and self._molds_state == _state(exp, molds_reads(exp)):
-                results.extend(early.molds())
+            if fresh and self._molds_state == _state(exp, molds_reads(exp)):
+                results.extend(printability.molds())
             else:  # started on files that changed since: run on the export as it is now
                 say("molds")
-                results.extend(memo("molds", molds_reads(exp), lambda: check_molds(exp)))
+                results.extend(_mold_checks(exp, memo))
         finally:
             self.close()
         if self.cache is not None:

@@ -182,17 +182,6 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         molds = molds_manifest(spec, mold_set, *mold_entries)
         log.record("molds", reused, time.perf_counter() - t)
         t = time.perf_counter()
-        say("drawings (SVG sheets)")
-        drawings_key = stage_key("drawings", spec=spec_without(spec, *DRAWINGS_IGNORE))
-        drawings_hit = cache.get(drawings_key) if cache else None
-        draw = lambda folder: write_drawing_sheets(asm, mold_set, folder)  # noqa: E731
-        if cache is None:
-            draw(tmp)
-        else:
-            copy_tree(drawings_hit if drawings_hit is not None else cache.put(drawings_key, draw), tmp)
-        manifest.update(stamp_drawings(tmp, asm, mold_set, params_sha256(params)))
-        log.record("drawings", drawings_hit is not None, time.perf_counter() - t)
-        t = time.perf_counter()
         say("rigid comparison tail")
 
         def make_twin(folder: Path) -> tuple:
@@ -215,7 +204,8 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         manifest.update(fabrication)
         log.record("print jobs, BOM", False, time.perf_counter() - t)
         # What reads only the CAD files goes on while the analyses finish: the checks of the meshes, the
-        # molds and the print files (on the manifest so far), the 3D view and the report's pictures.
+        # molds and the print files (on the manifest so far), the drawings, the 3D view and the report's
+        # pictures.
         t = time.perf_counter()
         write_manifest(tmp, manifest)
         fixed: set[Path] = set()
@@ -223,6 +213,19 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         say("checks of the CAD files")
         checks = Checks.start(tmp, say, cache=cache)
         checks_s = time.perf_counter() - t
+        # The drawings after the checks' start: the printability and mold checks, the longest chain of
+        # the build's end, read none of them (the checks of the drawings run at the finish).
+        t = time.perf_counter()
+        say("drawings (SVG sheets)")
+        drawings_key = stage_key("drawings", spec=spec_without(spec, *DRAWINGS_IGNORE))
+        drawings_hit = cache.get(drawings_key) if cache else None
+        draw = lambda folder: write_drawing_sheets(asm, mold_set, folder)  # noqa: E731
+        if cache is None:
+            draw(tmp)
+        else:
+            copy_tree(drawings_hit if drawings_hit is not None else cache.put(drawings_key, draw), tmp)
+        manifest.update(stamp_drawings(tmp, asm, mold_set, params_sha256(params)))
+        log.record("drawings", drawings_hit is not None, time.perf_counter() - t)
         t = time.perf_counter()
         say("interactive 3D view")
         manifest.update(write_viewer(tmp, viewer_scenes(asm, mold_view, twin_view, progress=say)))

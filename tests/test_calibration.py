@@ -152,18 +152,51 @@ def test_shipped_fitted_rigidity_reaches_the_mjcf(bvsr_data, bvsr_spec):
             assert m.jnt_stiffness[m.joint(name).id] == pytest.approx(2 * ei_l, rel=1e-9), (chain, name)
 
 
-def test_inherited_calibration_is_noted_not_compared(bvsr_spec):
-    """A tail that takes another tail's fitted values (BVSR_L) gets a note, not predictions of the
-    other tail's measurements."""
+def test_inherited_calibration_compares_only_the_rows_of_its_own_tail(bvsr_spec):
+    """A tail that takes another tail's fitted values compares the rows that name its segment count, and
+    no other: BVSR_L (3 segments) the BVSR_L workspace row, with the tables' and the fitted values (here
+    through a stand-in for the simulator that records what it was asked); a tail no row measured gets a
+    note. The BVSR build's rows are the others, each row in exactly one of the two."""
     from types import SimpleNamespace
 
     from bvsr_cad.analysis.calibrate import uncalibrated
-    from bvsr_cad.analysis.measured import compare_measurements
+    from bvsr_cad.analysis.measured import compare_measurements, rows_of_tail
+    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.parameters.load import load_spec
+    from bvsr_cad.parameters.measurements import load_measurements
 
-    other = dataclasses.replace(bvsr_spec, name="bvsr_l")
-    res = compare_measurements(SimpleNamespace(spec=other), "params/bvsr_l.toml")
-    assert res is not None and not res.rows and "inherited from the bvsr tail" in res.note
+    from .conftest import PARAMS, ROOT
+
+    data = load_measurements(ROOT / "data" / "paper_bvsr.csv")
+    bvsr, bvsr_others = rows_of_tail(data, 2, inherited=False)
+    bvsr_l, bvsr_l_others = rows_of_tail(data, 3, inherited=True)
+    assert [m.row for m in bvsr_l] == [m.row for m in bvsr_others] == [
+        m.row for m in data if m.condition("segments") == 3] and len(bvsr_l) == 1
+    assert sorted(m.row for m in bvsr + bvsr_l) == [m.row for m in data]
+    assert [m.row for m in bvsr_l_others] == [m.row for m in bvsr]
+
+    spec_l = load_spec(PARAMS / "bvsr_l.toml")
+    asked = []
+
+    def sim(asm, spec, limits):
+        asked.append((asm.spec.segments, spec.segments, spec.actuation.workspace_pressurised_max_kpa_abs,
+                      spec.actuation.workspace_depressurised_min_kpa_abs, bool(spec.calibration.fitted),
+                      tuple(limits)))
+        return 310.0 if spec.calibration.fitted else 300.0
+
+    limits = [0.9] * spec_l.joints
+    res = compare_measurements(build_assembly(spec_l), PARAMS / "bvsr_l.toml", None, sim, limits)
+    assert [r["row"] for r in res.rows] == [bvsr_l[0].row]
+    assert "inherited from the bvsr tail" in res.note and "3-segment tail" in res.note
+    assert [(r["uncalibrated"], r["calibrated"]) for r in res.rows] == [(300.0, 310.0)]
+    assert sorted(a[:5] for a in asked) == [(3, 3, 251.0, 21.0, False), (3, 3, 251.0, 21.0, True)]
+    assert all(a[5] == tuple(limits) for a in asked)
     assert res.fitted == dict(bvsr_spec.calibration.fitted)
+    assert res.to_json()["holdout_landed"] == [1, 1] and "rms_rel_fit" not in res.to_json()
+
+    nobody = dataclasses.replace(bvsr_spec, name="bvsr_4", segments=4)
+    res = compare_measurements(SimpleNamespace(spec=nobody), PARAMS / "bvsr_l.toml")
+    assert res is not None and not res.rows and "inherited from the bvsr tail" in res.note
     assert compare_measurements(SimpleNamespace(spec=uncalibrated(bvsr_spec)), None) is None
 
 

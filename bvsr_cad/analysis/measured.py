@@ -2,11 +2,18 @@
 
 A parameter file calibrated by `bvsr calibrate` names its data file
 (``calibration.data_file``, relative to the parameter file) and the tail the
-data measured (``calibration.measured_tail``). For that tail the build
-predicts every data row twice, with the tables' values and with the fitted
-ones, exactly as `bvsr calibrate` does (:func:`bvsr_cad.analysis.calibrate.compare_rows`);
-a tail that inherits the values (BVSR_L takes BVSR's) or whose data file is
-missing or changed gets a note instead of rows.
+data measured (``calibration.measured_tail``). A build predicts the rows
+that measured its own tail twice, with the tables' values and with the
+fitted ones, exactly as `bvsr calibrate` does (:func:`bvsr_cad.analysis.calibrate.compare_rows`):
+
+- a row whose conditions name a segment count (``segments=3``) measured a
+  tail with that many segments: the build of such a tail compares it,
+  whether it is the measured tail or one that takes its fitted values
+  (BVSR_L takes BVSR's and compares the BVSR_L workspace row);
+- a row that names none measured the calibration's tail: its build compares it.
+
+`bvsr calibrate` fits and reports over every row. A tail with another rod,
+or whose data file is missing or changed, gets a note instead of rows.
 """
 
 from __future__ import annotations
@@ -16,7 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..assembly.build import Assembly
-from ..parameters.measurements import MeasurementError, data_sha256, load_measurements
+from ..parameters.measurements import Measurement, MeasurementError, data_sha256, load_measurements
 from .calibrate import compare_rows, rms_relative, uncalibrated
 from .predict import Predictor, WorkspaceSim
 
@@ -42,9 +49,10 @@ class MeasuredComparison:
     def to_json(self) -> dict:
         out = {"data_file": self.data_file, "note": self.note, "fitted": self.fitted, "rows": self.rows,
                "lands_within_rel": LANDS_WITHIN_REL}
-        if self.rows:
-            out |= {f"rms_rel_{role}{suffix}": self.rms(role, key) for role in ("fit", "holdout")
-                    for suffix, key in (("", "rel_calibrated"), ("_uncalibrated", "rel_uncalibrated"))}
+        roles = [role for role in ("fit", "holdout") if any(r["role"] == role for r in self.rows)]
+        out |= {f"rms_rel_{role}{suffix}": self.rms(role, key) for role in roles
+                for suffix, key in (("", "rel_calibrated"), ("_uncalibrated", "rel_uncalibrated"))}
+        if "holdout" in roles:
             out["holdout_landed"] = list(self.landed("holdout"))
         return out
 
@@ -64,9 +72,9 @@ def compare_measurements(asm: Assembly, params_path: str | Path | None,
     if not cal.fitted:
         return None
     fitted = dict(cal.fitted)
-    if cal.measured_tail and cal.measured_tail != spec.name:
-        return MeasuredComparison(cal.data_file, f"fitted values inherited from the {cal.measured_tail} tail's "
-                                  "calibration; its report compares every row", fitted=fitted)
+    inherited = bool(cal.measured_tail) and cal.measured_tail != spec.name
+    inherited_note = (f"fitted values inherited from the {cal.measured_tail} tail's calibration; its report "
+                      "compares the rows that measured it")
     rod = (spec.vertebra.material, float(spec.vertebra.diameter_mm))
     if cal.rod_material and (cal.rod_material, float(cal.rod_diameter_mm)) != rod:
         return MeasuredComparison(cal.data_file, f"the data measured a tail with a {cal.rod_material} "
@@ -86,13 +94,41 @@ def compare_measurements(asm: Assembly, params_path: str | Path | None,
         rows = load_measurements(data)
     except MeasurementError as exc:
         return MeasuredComparison(cal.data_file, f"data file unreadable: {exc}", fitted=fitted)
+    rows, others = rows_of_tail(rows, spec.segments, inherited)
+    if not rows:
+        return MeasuredComparison(cal.data_file, inherited_note if inherited else
+                                  f"no row of {cal.data_file} measured this tail", fitted=fitted)
     pred = Predictor(asm, spec, workspace_sim)
     if theta_max_rad is not None:
         pred.known_limits(theta_max_rad)
     table = compare_rows(pred.with_spec(uncalibrated(spec)), pred, rows,
                          None if progress is None else (lambda m: progress(f"measurements: {m}")))
-    return MeasuredComparison(cal.data_file, f"every row of {cal.data_file}, predicted with the tables' values and "
-                              "with the fitted ones", table, fitted)
+    what = (f"the rows of {cal.data_file} that measured a {spec.segments}-segment tail" if inherited
+            else f"every row of {cal.data_file} that measured this tail")
+    note = f"{what}, predicted with the tables' values and with the fitted ones"
+    if inherited:
+        note += f"; {inherited_note} ({len(others)} rows)"
+    elif others:
+        counts = sorted({int(m.condition("segments")) for m in others})
+        note += (f"; {_rows(others)} measured a {' or '.join(map(str, counts))}-segment tail: the build of such a "
+                 "tail that takes these fitted values compares them (`bvsr calibrate` fits and reports over every row)")
+    return MeasuredComparison(cal.data_file, note, table, fitted)
 
 
-__all__ = ["MeasuredComparison", "compare_measurements", "LANDS_WITHIN_REL"]
+def rows_of_tail(rows: list[Measurement], segments: int, inherited: bool
+                 ) -> tuple[list[Measurement], list[Measurement]]:
+    """(the rows a build of a ``segments``-segment tail compares, the others): a row naming a segment count
+    measured a tail with that many segments; one naming none measured the calibration's tail, which
+    the build is unless it ``inherited`` the fitted values."""
+    def own(m: Measurement) -> bool:
+        named = m.condition("segments")
+        return int(named) == segments if named is not None else not inherited
+
+    return [m for m in rows if own(m)], [m for m in rows if not own(m)]
+
+
+def _rows(rows: list[Measurement]) -> str:
+    return ("row " if len(rows) == 1 else "rows ") + ", ".join(str(m.row) for m in rows)
+
+
+__all__ = ["MeasuredComparison", "compare_measurements", "rows_of_tail", "LANDS_WITHIN_REL"]

@@ -218,11 +218,12 @@ def _measurements_section(root: Path, manifest: dict[str, Any]) -> str:
     if not meas["rows"]:
         return "\n".join(h)
     band = 100 * meas["lands_within_rel"]
-    landed, total = meas["holdout_landed"]
-    h.append(f"<p>RMS relative error: fit rows {meas['rms_rel_fit_uncalibrated']:.3f} uncalibrated, "
-             f"{meas['rms_rel_fit']:.3f} calibrated; holdout rows {meas['rms_rel_holdout_uncalibrated']:.3f} "
-             f"uncalibrated, {meas['rms_rel_holdout']:.3f} calibrated. {landed} of {total} holdout rows land "
-             f"within +/-{band:.0f} %.</p>")
+    rms = "; ".join(f"{role} rows {meas[f'rms_rel_{role}_uncalibrated']:.3f} uncalibrated, "
+                    f"{meas[f'rms_rel_{role}']:.3f} calibrated" for role in ("fit", "holdout")
+                    if f"rms_rel_{role}" in meas)
+    landed = (f" {meas['holdout_landed'][0]} of {meas['holdout_landed'][1]} holdout rows land within "
+              f"+/-{band:.0f} %." if "holdout_landed" in meas else "")
+    h.append(f"<p>RMS relative error: {rms}.{landed}</p>")
     h.append("<table><tr><th>row</th><th>role</th><th>quantity (conditions)</th><th>unit</th><th>reported</th>"
              "<th>uncalibrated</th><th>calibrated</th><th>error</th><th>source</th></tr>")
     for r in meas["rows"]:

@@ -122,19 +122,22 @@ def _cyl_faces(solid: bd.Solid) -> list[tuple[bd.Face, np.ndarray, np.ndarray, f
     return out
 
 
-def _end_is_closed(solid_planes: list[tuple[bd.Face, np.ndarray, np.ndarray]], point: np.ndarray,
-                   axis: np.ndarray, radius: float) -> bool:
+def _end_is_closed(solid_planes: list[tuple[bd.Face, np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
+                   point: np.ndarray, axis: np.ndarray, radius: float) -> bool:
     """A floor: a plane face across the bore's end (perpendicular to it, through ``point``) that holds
-    points of the bore's disc. At an open end the face there surrounds the bore instead."""
+    points of the bore's disc. At an open end the face there surrounds the bore instead. Each face
+    comes with its bounding box (low and high corners): a point outside it is not on the face, so only
+    the faces whose box holds a point of the disc are asked (OCCT's classifier is the slow part)."""
     helper = np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0])
     helper /= np.linalg.norm(helper)
     other = np.cross(axis, helper)
     ring = [point + 0.7 * radius * (math.cos(a) * helper + math.sin(a) * other) for a in np.linspace(0, 2 * math.pi, 8,
                                                                                                     endpoint=False)]
-    for face, origin, normal in solid_planes:
+    for face, origin, normal, lo, hi in solid_planes:
         if abs(abs(float(normal @ axis)) - 1.0) > 1e-6 or abs(float(normal @ (point - origin))) > 1e-4:
             continue
-        if any(face.is_inside(bd.Vector(*p), 1e-4) for p in ring):
+        if any(face.is_inside(bd.Vector(*p), 1e-4) for p in ring
+               if np.all(p >= lo - 1e-4) and np.all(p <= hi + 1e-4)):
             return True
     return False
 
@@ -149,7 +152,8 @@ def hole_table(solid: bd.Solid, features: list[Cyl]) -> list[HoleRow]:
     planes = []
     for f in solid.faces():
         if f.geom_type == bd.GeomType.PLANE:
-            planes.append((f, _np(f.center()), _np(f.normal_at())))
+            box = f.bounding_box()
+            planes.append((f, _np(f.center()), _np(f.normal_at()), _np(box.min), _np(box.max)))
     rows: dict[tuple, dict[str, Any]] = {}
     for feat in features:
         p0, p1 = np.array(feat.p0), np.array(feat.p1)

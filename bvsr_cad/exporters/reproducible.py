@@ -188,6 +188,12 @@ def _fixed_entries(name: str, zin: zipfile.ZipFile) -> tuple[list[tuple[zipfile.
     return entries, same
 
 
+#: Deflate's level for the 3MF files: 1, the fastest. The print jobs' 3MFs are meshes as XML; zlib's
+#: default level (6) wrote them 21 % smaller (FDM_PLA 6.7 MB against 8.4) for 3.5 times the CPU (0.85 s
+#: against 0.24 for the three jobs, on a cold build's critical path); no slicer minds the size.
+ZIP_COMPRESSLEVEL = 1
+
+
 def _write_zip(path: Path, entries: list[tuple[zipfile.ZipInfo, bytes]], compress_type: int | None = None) -> None:
     tmp = path.with_name(path.name + ".tmp")
     with zipfile.ZipFile(tmp, "w") as zout:
@@ -195,7 +201,7 @@ def _write_zip(path: Path, entries: list[tuple[zipfile.ZipInfo, bytes]], compres
             fixed = zipfile.ZipInfo(info.filename, date_time=FIXED_ZIP_TIME)
             fixed.compress_type = info.compress_type if compress_type is None else compress_type
             fixed.external_attr = info.external_attr
-            zout.writestr(fixed, data)
+            zout.writestr(fixed, data, compresslevel=ZIP_COMPRESSLEVEL)  # a ZipInfo ignores the file's level
     tmp.replace(path)
 
 

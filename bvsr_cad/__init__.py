@@ -12,6 +12,10 @@ It is imported on first use, so that ``import bvsr_cad.<layer>`` stays light.
 
 __version__ = "0.1.0"
 
+from ._deferred import defer_sklearn_cluster  # noqa: E402 - before any layer imports build123d
+
+defer_sklearn_cluster()
+
 #: The public names of :mod:`bvsr_cad.api`, importable from the package.
 _API = ("ParamError", "SLICES_PER_GAP", "Tail", "load")
 __all__ = ["__version__", *_API]

@@ -19,11 +19,12 @@ import numpy as np
 import trimesh
 
 from .analysis.poses import mold_scene, twin_scene, viewer_scenes
+from .analysis.limits import per_joint_rad
 from .analysis.run import run_analyses
 from .assembly.build import build_assembly
 from .assembly.inertia import SolidProperties
 from .assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs, rigid_robot_model
-from .assembly.robot import robot_model
+from .assembly.robot import collision_shapes, robot_model
 from .cache import OWNER_FILE, copy_tree, object_stage, spec_without, stage_key
 from .checks.run import Checks
 from .exporters.analysis_files import write_analyses
@@ -234,6 +235,21 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         say("report pictures")
         pictures = report_pictures(tmp, manifest, cache)
         pictures_s = time.perf_counter() - t
+        # The robot's collision shapes read the geometry alone: made here, before the wait for the
+        # analyses (whose joint limits the rest of the robot model needs).
+        t = time.perf_counter()
+        shapes = collision_shapes(asm)
+
+        def robot_files(theta_max_rad: list[float]) -> dict:
+            say("robot model (B-rep inertials)")
+            return write_robot(robot_model(asm, theta_max_rad, shapes=shapes), tmp, say, spec.cart)
+
+        # Joint limits from the cache (an edit that moves no solid): the robot's files need nothing of
+        # the analyses still running, so they are written before the wait too (entered in the manifest
+        # after the analyses' files, as in every build).
+        robot_entries = (robot_files(per_joint_rad(geometry.limits))
+                         if geometry is not None and cached_analyses is None else None)
+        robot_s = time.perf_counter() - t
         t = time.perf_counter()
         if cached_analyses is not None:
             with (cached_analyses / "analyses.pkl").open("rb") as fh:
@@ -253,14 +269,12 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
             log.record("analyses", False, results.seconds)
         t = time.perf_counter()
         manifest.update(write_analyses(results, tmp, spec.name))
-        say("robot model (B-rep inertials)")
-        robot = robot_model(asm, results.theta_max_per_joint())
-        manifest.update(write_robot(robot, tmp, say, spec.cart))
+        manifest.update(robot_entries if robot_entries is not None else robot_files(results.theta_max_per_joint()))
         write_manifest(tmp, manifest)
         # STEP and 3MF time stamps (the build time is in the manifest's volatile section), of the files
         # written since the first go.
         make_reproducible(tmp, fixed)
-        log.record("analysis files and robot descriptions", False, time.perf_counter() - t)
+        log.record("analysis files and robot descriptions", False, robot_s + time.perf_counter() - t)
         t = time.perf_counter()
         say("checks")
         results = checks.finish()

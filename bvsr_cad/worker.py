@@ -109,7 +109,8 @@ def child_main(argv: list[str]) -> int:
 
 
 def serve(_out: str, fn: Callable[..., Any], *args: Any, prepare: Callable[..., None] | None = None) -> int:
-    """Run ``fn(*args)`` and pickle its result, or its exception, onto stdout (the child's side).
+    """Run ``fn(*args)``, pickle its result, or its exception, onto stdout and end the process at once
+    (the child's side; nothing after it runs).
 
     ``_out`` is the placeholder argument the parent passes (``-``), or :data:`STANDBY`: then the child,
     its modules imported, waits for one JSON line on stdin, ``{"args": [...], "cwd": ...}``, and exits
@@ -147,7 +148,11 @@ def serve(_out: str, fn: Callable[..., Any], *args: Any, prepare: Callable[..., 
         data = pickle.dumps(("error", RuntimeError(f"second process failed: {payload[1]}")))
     with os.fdopen(result_fd, "wb") as out:
         out.write(data)
-    return 0
+    # Its work is handed over: leave without the interpreter's teardown, which frees every object of
+    # the CAD kernel, MuJoCo and the rest one by one (0.75 s measured after the analyses: the parent
+    # waits for this process's end, and on a busy machine it is CPU taken from the build).
+    sys.stderr.flush()
+    os._exit(0)
 
 
 #: Environment variables that name a folder, taken from where the user stands: a child works elsewhere.

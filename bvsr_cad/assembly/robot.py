@@ -223,7 +223,14 @@ def _rod_solid(ranges: list[tuple[float, float]], diameter_mm: float, z_frame_mm
     return pieces[0] if len(pieces) == 1 else bd.Compound(pieces)
 
 
-def robot_model(asm: Assembly, theta_max_rad: list[float], collisions: bool = True) -> RobotModel:
+def collision_shapes(asm: Assembly) -> dict[int, list[Collision]]:
+    """Per panel index, its link's collision shapes (``robot.collision_geometry``): geometry alone, so a
+    build makes them while its analyses (the joints' limits) are still running."""
+    return panel_collisions(asm, _rod_pieces(asm)[1], asm.spec.robot.collision_geometry)
+
+
+def robot_model(asm: Assembly, theta_max_rad: list[float], collisions: bool = True,
+                shapes: dict[int, list[Collision]] | None = None) -> RobotModel:
     """The robot model of the tail at rest, in SI.
 
     Args:
@@ -232,6 +239,7 @@ def robot_model(asm: Assembly, theta_max_rad: list[float], collisions: bool = Tr
             :func:`bvsr_cad.analysis.limits.per_joint_rad`.
         collisions: False leaves the links without collision shapes (a simulation of the tail alone,
             which nothing can touch: the shapes' fits are most of the model's making).
+        shapes: :func:`collision_shapes` of ``asm`` where the caller made them ahead.
 
     The velocity limit of a joint is the segment's peak rate shared by its joints
     times a margin (``[robot]``); the effort limits are what all N_SOA SOAs can
@@ -255,8 +263,10 @@ def robot_model(asm: Assembly, theta_max_rad: list[float], collisions: bool = Tr
     soa_mat = spec.material(spec.use.soa)
     in_panel, in_gap = _rod_pieces(asm)
     # Every collision shape rides on a panel (assembly/collision): exact at rest whatever the chain.
-    shapes = (panel_collisions(asm, in_gap, spec.robot.collision_geometry) if collisions
-              else {lay.index: [] for lay in asm.panel_layouts})
+    if not collisions:
+        shapes = {lay.index: [] for lay in asm.panel_layouts}
+    elif shapes is None:
+        shapes = panel_collisions(asm, in_gap, spec.robot.collision_geometry)
     links: dict[str, Link] = {}
     joints: list[Joint] = []
     sites: list[Site] = []

@@ -2,12 +2,22 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from .. import units
 from .export import Export
 from .result import CheckResult
 
 MASS_TOLERANCE = 0.002  # the mesh mass and the B-rep mass agree to 0.2 %
 SUM_TOLERANCE_G = 1e-6
+
+
+def masses_reads(exp: Export) -> tuple[list[str], Any]:
+    """What :func:`check_masses` reads: every part's STL and entry (name, kind, material, density, mass,
+    count, instances) and the manifest's ``mass_g``."""
+    parts = [[p["name"], p["kind"], p["material"], p["density_g_cm3"], p["mass_g"], p["count"],
+              p.get("instances", []), p["files"]["stl"]] for p in exp.parts]
+    return [p["files"]["stl"] for p in exp.parts], {"parts": parts, "mass_g": exp.manifest["mass_g"]}
 
 
 def check_masses(exp: Export) -> list[CheckResult]:

@@ -11,7 +11,7 @@ from ..cache import ArtifactCache
 from ..worker import SecondProcess, result_or
 from .export import Export, clear_cache
 from .layout import check_layout
-from .mass import check_masses
+from .mass import check_masses, masses_reads
 from .memo import CheckMemo
 from .mesh import check_part_mesh, part_mesh_reads
 from .analyses import check_analyses
@@ -134,6 +134,7 @@ class Checks:
         self.parallel = parallel
         self.sliced_now: dict = {}
         self._mesh: dict[str, tuple[tuple, list[CheckResult]]] = {}
+        self._masses: tuple[tuple, list[CheckResult]] | None = None  # (its reads then, its results)
         self._molds_state: tuple | None = None  # the molds' reads when the early checks started
         self._printability: _Printability | None = None
         self._printability_reads = ""
@@ -145,7 +146,7 @@ class Checks:
     @classmethod
     def start(cls, root: str | Path, progress: Callable[[str], None] | None = None, **kw) -> "Checks":
         """Open the export, start the printability and mold checks (in a second process) and run the part
-        meshes' here."""
+        meshes' and the masses' here."""
         run = cls(root, progress, **kw)
         exp, say = run._exp, run.say
         memo = CheckMemo(exp, run.cache)
@@ -159,6 +160,8 @@ class Checks:
                 reads = part_mesh_reads(part)
                 run._mesh[part["name"]] = (_state(exp, reads),
                                            memo("part_mesh", reads, lambda: check_part_mesh(exp, part)))
+            say("masses")  # on the meshes just read
+            run._masses = (_state(exp, masses_reads(exp)), check_masses(exp))
         except BaseException:
             run.close()
             raise
@@ -178,8 +181,11 @@ class Checks:
                     say(f"mesh {part['name']}")
                     early = (None, memo("part_mesh", reads, lambda: check_part_mesh(exp, part)))
                 results.extend(early[1])
-            say("masses")
-            results.extend(check_masses(exp))
+            early_masses = self._masses
+            if early_masses is None or early_masses[0] != _state(exp, masses_reads(exp)):
+                say("masses")
+                early_masses = (None, check_masses(exp))
+            results.extend(early_masses[1])
             say("pentagon layout")
             results.extend(check_layout(exp))
             results.extend(check_paper(exp))

@@ -236,7 +236,9 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         pictures = report_pictures(tmp, manifest, cache)
         pictures_s = time.perf_counter() - t
         # The robot's collision shapes read the geometry alone: made here, before the wait for the
-        # analyses (whose joint limits the rest of the robot model needs).
+        # analyses (whose joint limits the rest of the robot model needs). Not a cached stage: their fits
+        # mesh the parts' faces at 0.01 mm, the triangulation the robot's meshes then take (OCCT keeps
+        # the finest), whichever stages came from the cache.
         t = time.perf_counter()
         shapes = collision_shapes(asm)
 
@@ -250,6 +252,11 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         robot_entries = (robot_files(per_joint_rad(geometry.limits))
                          if geometry is not None and cached_analyses is None else None)
         robot_s = time.perf_counter() - t
+        if robot_entries is not None:  # and their checks (the manifest is written again, in its order, below)
+            t = time.perf_counter()
+            write_manifest(tmp, {**manifest, **robot_entries})
+            checks.robot_ahead()
+            checks_s += time.perf_counter() - t
         t = time.perf_counter()
         if cached_analyses is not None:
             with (cached_analyses / "analyses.pkl").open("rb") as fh:

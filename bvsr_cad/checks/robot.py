@@ -352,6 +352,16 @@ def check_fk(exp: Export) -> list[CheckResult]:
     return out
 
 
+def robot_reads(exp: Export) -> tuple[list[str], object]:
+    """What :func:`check_robot` reads: every file under ``robot/`` and the parameter file, the manifest's
+    ``robot`` section, the tail's mass and the parameter file's name."""
+    root = exp.root
+    files = sorted(p.relative_to(root).as_posix() for p in (root / "robot").rglob("*") if p.is_file())
+    params = exp.manifest.get("params_file")
+    return files + ([params] if params else []), {
+        "robot": exp.manifest.get("robot"), "mass_g": exp.manifest.get("mass_g"), "params_file": params}
+
+
 def check_robot(exp: Export) -> list[CheckResult]:
     if "robot" not in exp.manifest:
         return []

@@ -19,7 +19,7 @@ from .molds import check_molds, molds_reads
 from .paper import check_paper
 from .printability import check_printability, slice_stls
 from .result import CheckResult
-from .robot import check_robot
+from .robot import check_robot, robot_reads
 
 
 def _mold_checks(exp: Export, memo: CheckMemo) -> list[CheckResult]:
@@ -135,6 +135,7 @@ class Checks:
         self.sliced_now: dict = {}
         self._mesh: dict[str, tuple[tuple, list[CheckResult]]] = {}
         self._masses: tuple[tuple, list[CheckResult]] | None = None  # (its reads then, its results)
+        self._robot: tuple[tuple, list[CheckResult]] | None = None  # the same, of :meth:`robot_ahead`
         self._molds_state: tuple | None = None  # the molds' reads when the early checks started
         self._printability: _Printability | None = None
         self._printability_reads = ""
@@ -161,11 +162,19 @@ class Checks:
                 run._mesh[part["name"]] = (_state(exp, reads),
                                            memo("part_mesh", reads, lambda: check_part_mesh(exp, part)))
             say("masses")  # on the meshes just read
-            run._masses = (_state(exp, masses_reads(exp)), check_masses(exp))
+            run._masses = (_state(exp, masses_reads(exp)), check_masses(exp, memo))
         except BaseException:
             run.close()
             raise
         return run
+
+    def robot_ahead(self) -> None:
+        """The robot descriptions' checks now, on the export as it is (a build that wrote its robot files
+        before its analyses were in); :meth:`finish` keeps their results while their reads are unchanged."""
+        exp = Export.open(self.root)
+        if "robot" in exp.manifest:
+            self.say("robot descriptions (URDF, MJCF, MuJoCo, PyBullet)")
+            self._robot = (_state(exp, robot_reads(exp)), check_robot(exp))
 
     def finish(self) -> list[CheckResult]:
         """Every result, in the order of :func:`run_checks`."""
@@ -184,15 +193,18 @@ class Checks:
             early_masses = self._masses
             if early_masses is None or early_masses[0] != _state(exp, masses_reads(exp)):
                 say("masses")
-                early_masses = (None, check_masses(exp))
+                early_masses = (None, check_masses(exp, memo))
             results.extend(early_masses[1])
             say("pentagon layout")
             results.extend(check_layout(exp))
             results.extend(check_paper(exp))
             say("analyses")
             results.extend(check_analyses(exp))
-            say("robot descriptions (URDF, MJCF, MuJoCo, PyBullet)")
-            results.extend(check_robot(exp))
+            early_robot = self._robot
+            if early_robot is None or early_robot[0] != _state(exp, robot_reads(exp)):
+                say("robot descriptions (URDF, MJCF, MuJoCo, PyBullet)")
+                early_robot = (None, check_robot(exp))
+            results.extend(early_robot[1])
             printability = self._printability
             fresh = printability is not None and self._printability_reads == _printability_reads(exp)
             if not fresh:

@@ -14,11 +14,11 @@ SUM_TOLERANCE_G = 1e-6
 
 
 def masses_reads(exp: Export) -> tuple[list[str], Any]:
-    """What :func:`check_masses` reads: every part's STL and entry (name, kind, material, density, mass,
-    count, instances) and the manifest's ``mass_g``."""
-    parts = [[p["name"], p["kind"], p["material"], p["density_g_cm3"], p["mass_g"], p["count"],
-              p.get("instances", []), p["files"]["stl"]] for p in exp.parts]
-    return [p["files"]["stl"] for p in exp.parts], {"parts": parts, "mass_g": exp.manifest["mass_g"]}
+    """What :func:`check_masses` reads: each part's :func:`part_mass_reads` and kind (the sums leave the
+    rigid twin out), and the manifest's ``mass_g``."""
+    reads = [part_mass_reads(p) for p in exp.parts]
+    return [f for files, _ in reads for f in files], {
+        "parts": [[p["kind"], values] for p, (_, values) in zip(exp.parts, reads)], "mass_g": exp.manifest["mass_g"]}
 
 
 def part_mass_reads(part: dict[str, Any]) -> tuple[list[str], Any]:

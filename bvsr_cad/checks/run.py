@@ -120,6 +120,16 @@ def _state(exp: Export, reads: tuple) -> tuple:
     return reads, stats
 
 
+def _kept(early: tuple[tuple, list[CheckResult]] | None, exp: Export, reads: tuple,
+          check: Callable[[], list[CheckResult]], say: Callable[[str], None], what: str) -> list[CheckResult]:
+    """A group run early (``(its state then, its results)``): its results while its reads are unchanged,
+    else ``check()`` run now on ``exp``."""
+    if early is not None and early[0] == _state(exp, reads):
+        return early[1]
+    say(what)
+    return check()
+
+
 class Checks:
     """Every check on an export, in two steps: :meth:`start` runs the groups that read only the CAD
     files (the part meshes here, the printability and mold checks in a second process), so that a build
@@ -190,21 +200,15 @@ class Checks:
                     say(f"mesh {part['name']}")
                     early = (None, memo("part_mesh", reads, lambda: check_part_mesh(exp, part)))
                 results.extend(early[1])
-            early_masses = self._masses
-            if early_masses is None or early_masses[0] != _state(exp, masses_reads(exp)):
-                say("masses")
-                early_masses = (None, check_masses(exp, memo))
-            results.extend(early_masses[1])
+            results.extend(_kept(self._masses, exp, masses_reads(exp), lambda: check_masses(exp, memo), say,
+                                 "masses"))
             say("pentagon layout")
             results.extend(check_layout(exp))
             results.extend(check_paper(exp))
             say("analyses")
             results.extend(check_analyses(exp))
-            early_robot = self._robot
-            if early_robot is None or early_robot[0] != _state(exp, robot_reads(exp)):
-                say("robot descriptions (URDF, MJCF, MuJoCo, PyBullet)")
-                early_robot = (None, check_robot(exp))
-            results.extend(early_robot[1])
+            results.extend(_kept(self._robot, exp, robot_reads(exp), lambda: check_robot(exp), say,
+                                 "robot descriptions (URDF, MJCF, MuJoCo, PyBullet)"))
             printability = self._printability
             fresh = printability is not None and self._printability_reads == _printability_reads(exp)
             if not fresh:

@@ -93,10 +93,10 @@ def cache_root() -> Path:
 #: ``pyproject.toml`` (``tests/test_cache.py`` holds the two lists together) and the OCP builds under
 #: build123d and CadQuery (the CAD kernel that tessellates every STL). A new MuJoCo or OCP moves results
 #: that this package's source does not.
-RESULT_DISTRIBUTIONS = ("build123d", "cadquery", "cadquery-ocp", "cadquery-ocp-novtk", "dask", "distributed", "manifold3d",
-                        "matplotlib", "mujoco", "networkx", "numpy", "optuna", "pandas", "pyarrow", "pybullet",
-                        "python-fcl", "pyvista", "rtree", "scipy", "shapely", "trimesh", "vtk", "watchfiles",
-                        "yourdfpy")
+RESULT_DISTRIBUTIONS = ("build123d", "cadquery", "cadquery-ocp", "cadquery-ocp-novtk", "dask", "distributed", "libigl",
+                        "manifold3d", "matplotlib", "mujoco", "networkx", "numpy", "optuna", "pandas", "pyarrow",
+                        "pybullet", "python-fcl", "pyvista", "rtree", "scipy", "shapely", "trimesh", "vtk",
+                        "watchfiles", "yourdfpy")
 
 
 def distribution_versions() -> dict[str, str | None]:

@@ -42,6 +42,7 @@ from .exporters.viewer import write_viewer
 from .parameters.load import load_spec, params_sha256
 from .publish import BuildResult, OpenedBuild, open_build, publish, reuse_whole, temporary_folder, volatile
 from .sim import protocol_radius_mm
+from . import units
 from .worker import SecondProcess, result_or
 
 Progress = Callable[[str], None]
@@ -188,9 +189,11 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         def make_twin(folder: Path) -> tuple:
             made = build_rigid_twin(asm)
             visual = write_rigid_files(made, folder)
+            arrays = [(m.vertices.view(np.ndarray), m.faces.view(np.ndarray)) for m in visual]
+            # The 3D view shows the twin's visual meshes (metres, tail frame) rather than meshing it again.
             # Measured on the solids made here: OCCT's integrals of a B-rep read back differ in the last bit.
-            return (made, [(m.vertices.view(np.ndarray), m.faces.view(np.ndarray)) for m in visual],
-                    twin_scene(made), [SolidProperties.of(p.solid) for p in made])
+            return (made, arrays, twin_scene(made, [(units.m_to_mm(v), f) for v, f in arrays]),
+                    [SolidProperties.of(p.solid) for p in made])
 
         (pieces, visual, twin_view, twin_props), reused = object_stage(
             cache, stage_key("rigid_twin", spec=spec_without(spec, *TWIN_IGNORE)), make_twin, tmp)

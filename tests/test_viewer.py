@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import trimesh
 
 from bvsr_cad.colors import rgb
 from .conftest import PARAMS
@@ -171,6 +172,40 @@ def test_rigid_twin_has_the_tail_outer_envelope(built, decoded):
     # "Identical geometric parameters": the twin's cross-section spans the BVSR's panels.
     np.testing.assert_allclose(pts[:, :2].min(0), rest[:, :2].min(0), atol=0.5)
     np.testing.assert_allclose(pts[:, :2].max(0), rest[:, :2].max(0), atol=0.5)
+
+
+def test_build_twin_scene_is_the_rigid_robots_visual_meshes(built, tmp_path):
+    """The build's 3D view takes the twin's visual meshes (the rigid robot's, metres, tail frame) instead of
+    meshing the pieces a second time: each piece as given, in the tail frame, where the viewer's own
+    meshing puts it to within the two tessellations."""
+    import dataclasses
+
+    from bvsr_cad import units
+    from bvsr_cad.analysis.poses import twin_scene
+    from bvsr_cad.exporters.fabrication_files import write_rigid_files
+    from bvsr_cad.parts._kernel import fresh_copy
+
+    pieces = [dataclasses.replace(p, solid=fresh_copy(p.solid)) for p in built["pieces"]]  # leave the fixture's be
+    visual = write_rigid_files(pieces, tmp_path)
+    given = twin_scene(pieces, [(units.m_to_mm(np.asarray(m.vertices)), np.asarray(m.faces)) for m in visual])
+    own = built["scenes"]["rigid_twin"]
+    assert [o.label for o in given.objects] == [o.label for o in own.objects] == [p.name for p in pieces]
+    for a, b, m in zip(own.objects, given.objects, visual):
+        assert b.rgb == a.rgb
+        np.testing.assert_array_equal(b.transform, np.eye(4))
+        # the visual mesh itself: its triangles, on its corners (merged), in millimetres
+        assert len(b.triangles) == len(m.faces)
+        from scipy.spatial import cKDTree
+
+        corners = units.m_to_mm(np.asarray(m.vertices))
+        assert cKDTree(corners).query(b.vertices_mm)[0].max() < 1e-4  # float32 of a few hundred mm
+        assert cKDTree(b.vertices_mm).query(corners)[0].max() < 1e-4
+        placed = a.vertices_mm @ a.transform[:3, :3].T + a.transform[:3, 3]
+        np.testing.assert_allclose(b.vertices_mm.min(0), placed.min(0), atol=0.5)
+        np.testing.assert_allclose(b.vertices_mm.max(0), placed.max(0), atol=0.5)
+        # the same surface: the given mesh's area within 1 % of the B-rep's faces meshed by the viewer
+        assert trimesh.Trimesh(b.vertices_mm, b.triangles).area == pytest.approx(
+            trimesh.Trimesh(a.vertices_mm, a.triangles).area, rel=0.01)
 
 
 def test_nothing_reaches_for_the_network(export):

@@ -234,14 +234,21 @@ def mold_scene(mold_set: MoldSet) -> ViewScene:
                      "gate and vents in red", tuple(objs), (0.0, 0.0, 1.0), tuple(float(v) for v in eye))
 
 
-def twin_scene(pieces: list[RigidPiece]) -> ViewScene:
-    """The rigid twin assembled in the tail frame, alternate pieces shaded apart; meshed at the viewer's
-    tolerance from a copy of each piece (the build has meshed the pieces for print by then, 0.01 mm, and
-    OCCT would hand that mesh back: 40 times the triangles, most of the stage's time)."""
+def twin_scene(pieces: list[RigidPiece], meshes_mm: list[tuple[np.ndarray, np.ndarray]] | None = None
+               ) -> ViewScene:
+    """The rigid twin assembled in the tail frame, alternate pieces shaded apart.
+
+    ``meshes_mm``: each piece's mesh in the tail frame (vertices mm, triangles) where the caller has one
+    (the build: the rigid robot's visual meshes, so the viewer shows the twin as a simulator does);
+    otherwise each piece is meshed here at the viewer's tolerance from a copy (by then the build has
+    meshed the pieces for print, 0.01 mm, and OCCT would hand that mesh back: 40 times the triangles)."""
     base = np.array(rgb("rigid_tail"))
-    objs = tuple(_obj(p.name, "rigid_tail", _fresh_mesh(p.solid), piece_transform_mm(p),
-                      tuple(float(c) for c in base * (1.0 if i % 2 == 0 else 0.88)))
-                 for i, p in enumerate(pieces))
+    if meshes_mm is None:
+        placed = [(_fresh_mesh(p.solid), piece_transform_mm(p)) for p in pieces]
+    else:
+        placed = [(trimesh.Trimesh(np.asarray(v, float), np.asarray(f), process=True), np.eye(4)) for v, f in meshes_mm]
+    objs = tuple(_obj(p.name, "rigid_tail", m, t, tuple(float(c) for c in base * (1.0 if i % 2 == 0 else 0.88)))
+                 for i, (p, (m, t)) in enumerate(zip(pieces, placed)))
     return ViewScene("rigid_twin", "Rigid PLA twin",
                      f"{len(pieces)} printed pieces stacked in the tail frame (alternate pieces shaded darker)",
                      objs)

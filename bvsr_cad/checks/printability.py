@@ -433,70 +433,30 @@ def _in_features(points: np.ndarray, features: list[dict[str, Any]], margin_mm: 
 
 
 class _SurfaceIndex:
-    """Closest points on a triangle mesh, exactly as ``trimesh.proximity.closest_point`` and
-    ``signed_distance`` compute them, with the search structures built once and in bulk: a k-d tree
-    of the triangles' centroids and an R-tree of their boxes, bulk-loaded from arrays rather than
-    from a Python stream. Each query's search box is bounded by the distance to the triangles of
-    the k nearest centroids, which is tighter than trimesh's nearest-vertex bound on large facets."""
+    """Closest points on a triangle mesh (as ``trimesh.proximity.closest_point`` finds them, to rounding:
+    the tests compare the two) from libigl's AABB tree, built once per mesh in C++: on the twin and the
+    BVSR at rest (380 000 and 630 000 triangles) a third of the time of trimesh-exact R-tree searches.
+    Points equally near two triangles (an edge, a corner) get either; :meth:`signed_distance` takes the
+    sign from a triangle's normal only where the point lies over that triangle, which either gives."""
 
-    def __init__(self, mesh: trimesh.Trimesh, k: int = 4):
-        import rtree
-        from scipy.spatial import cKDTree
+    def __init__(self, mesh: trimesh.Trimesh):
+        import igl
 
         self.mesh = mesh
-        self.tri = np.asarray(mesh.triangles, np.float64)
-        self.k = min(k, len(self.tri))
-        self.centroids = cKDTree(self.tri.mean(axis=1))
-        self.tree = rtree.index.Index((np.arange(len(self.tri), dtype=np.int64), self.tri.min(axis=1),
-                                       self.tri.max(axis=1)), properties=rtree.index.Property(dimension=3))
-
-    def upper_bound(self, points: np.ndarray) -> np.ndarray:
-        """A distance to the mesh no smaller than the true one: to the triangles of the nearest centroids.
-        A degenerate triangle gives no distance; a point near only those is bounded by the mesh's size."""
-        from trimesh.triangles import closest_point as on_triangles
-
-        pts = np.asarray(points, np.float64)
-        n = len(pts)
-        _, near = self.centroids.query(pts, k=self.k)
-        near = np.asarray(near).reshape(n, -1)
-        first = np.repeat(pts, near.shape[1], axis=0)
-        bound = np.fmin.reduce(np.linalg.norm(on_triangles(self.tri[near.ravel()], first) - first, axis=1)
-                               .reshape(n, -1), axis=1)
-        lo, hi = self.tri.reshape(-1, 3).min(axis=0), self.tri.reshape(-1, 3).max(axis=0)
-        far = np.linalg.norm(np.maximum(np.abs(pts - lo), np.abs(pts - hi)), axis=1)
-        return np.where(np.isfinite(bound), bound, far)
+        self.vertices = np.ascontiguousarray(mesh.vertices, np.float64)
+        self.faces = np.ascontiguousarray(mesh.faces, np.int64)
+        self.tri = self.vertices[self.faces]
+        self.tree = igl.AABB()
+        self.tree.init(self.vertices, self.faces)
 
     def closest_point(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(closest point, distance, triangle id) per point; ties as ``trimesh.proximity.closest_point``."""
-        from trimesh.constants import tol
-        from trimesh.triangles import closest_point as on_triangles
-
-        pts = np.asarray(points, np.float64)
-        n = len(pts)
-        r = (self.upper_bound(pts) * (1.0 + 1e-9) + 1e-9)[:, None]
-        cand, counts = self.tree.intersection_v(pts - r, pts + r)
-        counts = counts.astype(np.int64)
-        if (counts == 0).any():  # cannot happen: the k nearest triangles lie in the box
-            raise RuntimeError("closest point: a query found no candidate triangle")
-        qi = np.repeat(np.arange(n), counts)
-        close = on_triangles(self.tri[cand], pts[qi])
-        vec = pts[qi] - close
-        d2 = np.einsum("ij,ij->i", vec, vec)
-        # The two nearest candidates of each point: the first is the answer, unless both are
-        # equally near (an edge or a corner): then the face whose normal points at the query.
-        order = np.lexsort((d2, qi))
-        start = np.concatenate([[0], np.cumsum(counts)[:-1]])
-        a = order[start]
-        b = order[np.minimum(start + 1, start + counts - 1)]
-        pick = a.copy()
-        tie = (np.abs(d2[b] - d2[a]) < tol.merge) & (d2[a] > tol.merge) & (d2[b] > tol.merge) & (b != a)
-        if tie.any():
-            normals = self.mesh.face_normals
-            va = vec[a[tie]] / np.sqrt(d2[a[tie]])[:, None]
-            vb = vec[b[tie]] / np.sqrt(d2[b[tie]])[:, None]
-            use_b = np.einsum("ij,ij->i", normals[cand[b[tie]]], vb) > np.einsum("ij,ij->i", normals[cand[a[tie]]], va)
-            pick[np.flatnonzero(tie)[use_b]] = b[tie][use_b]
-        return close[pick], np.sqrt(d2[pick]), cand[pick]
+        """(closest point, distance, triangle id) per point."""
+        pts = np.ascontiguousarray(points, np.float64).reshape(-1, 3)
+        if len(pts) == 0:
+            return np.zeros((0, 3)), np.zeros(0), np.zeros(0, np.int64)
+        d2, tid, close = self.tree.squared_distance(self.vertices, self.faces, pts)
+        return np.asarray(close, np.float64), np.sqrt(np.maximum(np.asarray(d2, np.float64), 0.0)), \
+            np.asarray(tid, np.int64).ravel()
 
     def signed_distance(self, points: np.ndarray, contains: Callable[[np.ndarray], np.ndarray] | None = None
                         ) -> np.ndarray:

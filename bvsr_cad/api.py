@@ -31,7 +31,7 @@ from OCP.TopLoc import TopLoc_Location
 from OCP.TopTools import TopTools_ListOfShape
 
 from . import units
-from .analysis.clearance import PosedTail, posed_tail
+from .analysis.clearance import PosedTail, plane_sections
 from .assembly.build import Assembly, build_assembly
 from .assembly.placed import PlacedShape, labelled_compound, placed_instances
 from .exporters.cad import write_labelled_step
@@ -114,7 +114,7 @@ class Tail:
     @cached_property
     def _plane_sections(self) -> PosedTail:
         """The clearance analysis's deformation of the tail (PosedTail.deform_points); no pairs."""
-        return posed_tail(self._assembly, cutoff_mm=-1.0)
+        return plane_sections(self._assembly)
 
     @property
     def instance_names(self) -> list[str]:

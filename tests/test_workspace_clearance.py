@@ -113,3 +113,17 @@ def test_the_limit_searchs_shortcuts_give_the_same_numbers(asm):
     stack = fold_stack(asm.spec)
     full = joint_limits(pt, need, n_phi=12, stack=stack)
     assert lowest_limits_rad(pt, need, n_phi=12, stack=stack) == per_joint_rad(full)
+
+
+def test_plane_sections_is_the_posed_tails_map_without_its_meshes(asm):
+    """The 3D view and the API pose with the plane-section map alone: the same map, value for value, as the
+    clearance analysis's PosedTail (which meshes every instance and finds its pairs first)."""
+    from bvsr_cad.analysis.clearance import plane_sections, posed_tail
+
+    full, bare = posed_tail(asm, cutoff_mm=-1.0), plane_sections(asm)
+    assert bare.meshes == [] and len(bare.pairs) == 0 and len(full.meshes) == len(asm.instances)
+    rng = np.random.default_rng(7)
+    pts = np.c_[rng.uniform(-40, 40, (4000, 2)), rng.uniform(-5.0, asm.spec.length_mm + 5.0, 4000)]
+    for _ in range(4):
+        w = rng.uniform(-0.6, 0.6, (asm.spec.joints, 2))
+        np.testing.assert_array_equal(bare.deform_points(pts, w), full.deform_points(pts, w))

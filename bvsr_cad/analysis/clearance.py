@@ -293,6 +293,16 @@ def must_not_touch(asm: Assembly) -> list[tuple[str, str]]:
     return [(a.name, b.name) for a, b in itertools.combinations(asm.instances, 2) if not joined(a, b)]
 
 
+def plane_sections(asm: Assembly) -> PosedTail:
+    """The tail's plane-section map alone (:meth:`PosedTail.deform_points`, which reads only the joints'
+    kinematics): no meshes, no pairs. The 3D view and :class:`bvsr_cad.api.Tail` pose with it;
+    :func:`posed_tail` with no pairs gives the same map after meshing every instance for nothing."""
+    spec = asm.spec
+    return PosedTail(TailKinematics.from_spec(spec), [], [], spec.joint.joint_height_mm, np.zeros((0, 2), int),
+                     np.zeros(0), np.zeros((0, spec.joints), bool), np.zeros((0, SUPPORT_BINS)), [], [],
+                     instances=list(asm.instances))
+
+
 def posed_tail(asm: Assembly, progress: Progress | None = None, cutoff_mm: float | None = None) -> PosedTail:
     """Meshes, pairs and their exact rest clearances. Pairs farther apart at rest
     than one joint pitch (and never spanning a common joint) are dropped: the

@@ -41,7 +41,7 @@ from ..parameters.tables import TailSpec
 from ..parts.mold import MoldSet
 from ..parts._kernel import fresh_copy, mesh_arrays
 from ..parts.rigid_tail import RigidPiece
-from .clearance import PosedTail, _cut_at_z, _rod_mesh, posed_tail
+from .clearance import PosedTail, _cut_at_z, _rod_mesh, plane_sections
 from .workspace import tail_statics
 
 Progress = Callable[[str], None]
@@ -272,7 +272,7 @@ def viewer_scenes(asm: Assembly, mold_set: MoldSet | ViewScene, pieces: list[Rig
     meshes = _tail_meshes(asm)
     say("viewer: poses at the pressure limits")
     poses = limit_poses(asm, spec)
-    deformer = posed_tail(asm, cutoff_mm=-1.0)  # no pairs: only its plane-section map is used
+    deformer = plane_sections(asm)
     scenes = [rest_scene(asm, meshes)]
     scenes += [posed_scene(asm, meshes, pose, deformer) for pose in poses.values()]
     say("viewer: mold set and rigid twin")

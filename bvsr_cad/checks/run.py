@@ -195,11 +195,9 @@ class Checks:
             results: list[CheckResult] = []
             for part in exp.parts:
                 reads = part_mesh_reads(part)
-                early = self._mesh.get(part["name"])
-                if early is None or early[0] != _state(exp, reads):
-                    say(f"mesh {part['name']}")
-                    early = (None, memo("part_mesh", reads, lambda: check_part_mesh(exp, part)))
-                results.extend(early[1])
+                results.extend(_kept(self._mesh.get(part["name"]), exp, reads,
+                                     lambda: memo("part_mesh", reads, lambda: check_part_mesh(exp, part)), say,
+                                     f"mesh {part['name']}"))
             results.extend(_kept(self._masses, exp, masses_reads(exp), lambda: check_masses(exp, memo), say,
                                  "masses"))
             say("pentagon layout")

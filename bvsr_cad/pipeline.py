@@ -40,6 +40,7 @@ from .exporters.reproducible import make_reproducible
 from .exporters.robot_files import write_robot
 from .exporters.viewer import write_viewer
 from .parameters.load import load_spec, params_sha256
+from .parts._kernel import kernel_threads
 from .publish import BuildResult, OpenedBuild, open_build, publish, reuse_whole, temporary_folder, volatile
 from .sim import protocol_radius_mm
 from . import units
@@ -110,6 +111,7 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
     tmp = temporary_folder(out)
     analyses = None
     checks: Checks | None = None
+    kernel_before = None
     try:
         say(f"building {spec.name}: {spec.segments} segments, {spec.joints} joints, {spec.panels} panels")
         analyses_key = stage_key("analyses", spec=spec_without(spec, *ANALYSES_IGNORE), data=data,
@@ -137,6 +139,8 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
                         else SecondProcess.start("bvsr_cad.pipeline", work, tmp, say))
             if analyses is not None:
                 say("analyses: started in a second process")
+                # Both cores are busy from here to the end: OCCT's own threads would only contend.
+                kernel_before = kernel_threads(1)
         t = time.perf_counter()
         asm = build_assembly(spec, say)
         log.record("assembly", False, time.perf_counter() - t)
@@ -148,7 +152,7 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         part_hit = cache.get(part_key) if cache else None
 
         def write_parts(folder: Path) -> None:
-            """The parts' STEP and STL, the assembly STEP and the previews (their paths in previews.json)."""
+            """The parts' STEP and STL and the assembly STEP."""
             (folder / "step").mkdir()
             (folder / "stl").mkdir()
             for name, part in asm.parts.items():
@@ -157,19 +161,15 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
                 write_part_stl(part, folder / files[name]["stl"])
             say("export assembly STEP")
             write_assembly_step(asm, folder / "step" / "assembly.step")
-            say("previews (off-screen renders)")
-            (folder / "previews.json").write_text(json.dumps(render_previews(asm, folder)))
 
         if cache is None:
             write_parts(tmp)
         else:
             copy_tree(part_hit if part_hit is not None else cache.put(part_key, write_parts), tmp)
-        previews = json.loads((tmp / "previews.json").read_text())
-        (tmp / "previews.json").unlink()
-        log.record("part files and previews", part_hit is not None, time.perf_counter() - t)
+        log.record("part files", part_hit is not None, time.perf_counter() - t)
         shutil.copyfile(params, tmp / "params.toml")
         manifest = manifest_dict(asm, params_sha256(params), files, "step/assembly.step")
-        manifest["previews"] = previews
+        manifest["previews"] = {}  # rendered once the checks of the print files have started (below)
         t = time.perf_counter()
         say("SOA mold set")
 
@@ -234,6 +234,23 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         say("interactive 3D view")
         manifest.update(write_viewer(tmp, viewer_scenes(asm, mold_view, twin_view, progress=say)))
         log.record("interactive 3D view", False, time.perf_counter() - t)
+        t = time.perf_counter()
+        say("previews (off-screen renders)")
+
+        def render(folder: Path) -> None:
+            (folder / "previews.json").write_text(json.dumps(render_previews(asm, folder)))
+
+        # The parts' geometry and the tail's name (the part files' inputs); after the printability
+        # checks' start, which wait for the print files and nothing drawn here.
+        previews_key = stage_key("previews", spec=spec_without(spec, *PART_FILES_IGNORE), rod=spec.vertebra.has_rod)
+        previews_hit = cache.get(previews_key) if cache else None
+        if cache is None:
+            render(tmp)
+        else:
+            copy_tree(previews_hit if previews_hit is not None else cache.put(previews_key, render), tmp)
+        manifest["previews"] = json.loads((tmp / "previews.json").read_text())
+        (tmp / "previews.json").unlink()
+        log.record("previews", previews_hit is not None, time.perf_counter() - t)
         t = time.perf_counter()
         say("report pictures")
         pictures = report_pictures(tmp, manifest, cache)
@@ -306,6 +323,9 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
             checks.close()
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+    finally:
+        if kernel_before is not None:
+            kernel_threads(kernel_before)
     return BuildResult(out, results, time.perf_counter() - opened.t0, log.stages)
 
 
@@ -320,6 +340,7 @@ def _prepare_analyses(params: str) -> None:
     built from)."""
     from .assembly.build import build_assembly
 
+    kernel_threads(1)  # beside the build, which keeps the other core busy
     before = params_sha256(params)
     asm = build_assembly(load_spec(params))
     if params_sha256(params) == before:
@@ -332,6 +353,7 @@ def _analyses_process(params: str, sha256: str, geometry: str = ""):
     simulator. ``GEOMETRY``: the cached geometry analyses' pickle (computed here when it is gone)."""
     from .analysis.run import from_params
 
+    kernel_threads(1)  # beside the build, which keeps the other core busy
     try:
         given = pickle.loads(Path(geometry).read_bytes()) if geometry else None
     except OSError:  # evicted since the build looked: computed here

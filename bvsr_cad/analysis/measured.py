@@ -24,7 +24,7 @@ from pathlib import Path
 
 from ..assembly.build import Assembly
 from ..parameters.measurements import Measurement, MeasurementError, data_sha256, load_measurements
-from .calibrate import compare_rows, rms_relative, uncalibrated
+from .calibrate import COMPARE_THREADS, compare_rows, rms_relative, uncalibrated
 from .predict import Predictor, WorkspaceSim
 
 #: A row "lands" when the calibrated prediction is within this relative error of the reported figure.
@@ -60,13 +60,14 @@ class MeasuredComparison:
 def compare_measurements(asm: Assembly, params_path: str | Path | None,
                          progress: Callable[[str], None] | None = None,
                          workspace_sim: WorkspaceSim | None = None,
-                         theta_max_rad: list[float] | Callable[[], list[float]] | None = None
-                         ) -> MeasuredComparison | None:
+                         theta_max_rad: list[float] | Callable[[], list[float]] | None = None,
+                         threads: int = COMPARE_THREADS) -> MeasuredComparison | None:
     """The comparison for ``asm``'s spec, or None when the file carries no calibration.
 
     ``workspace_sim``: what predicts the measured tip workspace (:class:`Predictor`); the pipeline
     gives :func:`bvsr_cad.sim.protocol_radius_mm`. ``theta_max_rad``: the joints' limits of ``asm``
-    where the build has them, or what gives them when first needed (they may still be computing)."""
+    where the build has them, or what gives them when first needed (they may still be computing).
+    ``threads``: as in :func:`bvsr_cad.analysis.calibrate.compare_rows`."""
     spec = asm.spec
     cal = spec.calibration
     if not cal.fitted:
@@ -102,7 +103,7 @@ def compare_measurements(asm: Assembly, params_path: str | Path | None,
     if theta_max_rad is not None:
         pred.known_limits(theta_max_rad)
     table = compare_rows(pred.with_spec(uncalibrated(spec)), pred, rows,
-                         None if progress is None else (lambda m: progress(f"measurements: {m}")))
+                         None if progress is None else (lambda m: progress(f"measurements: {m}")), threads)
     what = (f"the rows of {cal.data_file} that measured a {spec.segments}-segment tail" if inherited
             else f"every row of {cal.data_file} that measured this tail")
     note = f"{what}, predicted with the tables' values and with the fitted ones"

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..assembly.build import Assembly
+from .calibrate import COMPARE_THREADS
 from .measured import MeasuredComparison, compare_measurements
 from .predict import WorkspaceSim
 from .clearance import ClearanceResult, PosedTail, clearance_map, clearance_over, posed_tail
@@ -96,11 +97,13 @@ def geometry_analyses(asm: Assembly, pt: PosedTail, progress: Callable[[str], No
 
 def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
                  params_path: str | None = None, workspace_sim: WorkspaceSim | None = None,
-                 geometry: GeometryAnalyses | None = None) -> AnalysisResults:
+                 geometry: GeometryAnalyses | None = None, threads: int = COMPARE_THREADS) -> AnalysisResults:
     """``params_path``: the parameter file ``asm`` was built from (its calibration's data file is
     resolved relative to it); ``workspace_sim``: what predicts a measured tip workspace (see
     :func:`bvsr_cad.analysis.measured.compare_measurements`); ``geometry``: :func:`geometry_analyses`
-    of this geometry when the caller has them (from the build's cache), else they are computed."""
+    of this geometry when the caller has them (from the build's cache), else they are computed;
+    ``threads``: those that predict the measured rows, at most (see
+    :func:`bvsr_cad.analysis.calibrate.compare_rows`)."""
     say = progress or (lambda _m: None)
     spec = asm.spec
     cfg = spec.analysis
@@ -109,7 +112,7 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
     # MuJoCo without Python's lock); only a workspace row of this geometry waits for its joints' limits.
     limits: Future = Future()
     with ThreadPoolExecutor(1) as pool:
-        measuring = pool.submit(compare_measurements, asm, params_path, say, workspace_sim, limits.result)
+        measuring = pool.submit(compare_measurements, asm, params_path, say, workspace_sim, limits.result, threads)
         try:
             say("analysis: clearance")
             pt = posed_tail(asm, say)
@@ -132,6 +135,15 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
                            seconds, 0.0 if geometry is not None else geo.seconds)
 
 
+#: Threads predicting the measured rows in the build's second process: the workspace protocol's
+#: simulations one after the other, beside one thread for the other rows. The build's own stages keep
+#: the other core busy, and the kernel shares the cores by thread: with a thread per simulation (3
+#: threads and this one against the build's one) this process ended its work about 2 s before the build
+#: had written the print files whose checks come next, and a core stood idle between (measured on the
+#: default tail, 2 cores: 32.2 s; with 2 threads 30.7-30.9 s and no idle core until the checks' end).
+BESIDE_BUILD_THREADS = 2
+
+
 def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = None,
                 geometry: GeometryAnalyses | None = None, asm: Assembly | None = None) -> AnalysisResults:
     """The second process's work: the analyses of the parameter file the build read (``sha256``),
@@ -151,4 +163,4 @@ def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = N
 
     if asm is None:
         asm = build_assembly(load_spec(params))
-    return run_analyses(asm, say, params, workspace_sim, geometry)
+    return run_analyses(asm, say, params, workspace_sim, geometry, BESIDE_BUILD_THREADS)

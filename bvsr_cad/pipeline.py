@@ -8,7 +8,6 @@ earlier export untouched and no partial one.
 
 from __future__ import annotations
 
-import json
 import pickle
 import shutil
 import time
@@ -236,21 +235,12 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         log.record("interactive 3D view", False, time.perf_counter() - t)
         t = time.perf_counter()
         say("previews (off-screen renders)")
-
-        def render(folder: Path) -> None:
-            (folder / "previews.json").write_text(json.dumps(render_previews(asm, folder)))
-
         # The parts' geometry and the tail's name (the part files' inputs); after the printability
         # checks' start, which wait for the print files and nothing drawn here.
-        previews_key = stage_key("previews", spec=spec_without(spec, *PART_FILES_IGNORE), rod=spec.vertebra.has_rod)
-        previews_hit = cache.get(previews_key) if cache else None
-        if cache is None:
-            render(tmp)
-        else:
-            copy_tree(previews_hit if previews_hit is not None else cache.put(previews_key, render), tmp)
-        manifest["previews"] = json.loads((tmp / "previews.json").read_text())
-        (tmp / "previews.json").unlink()
-        log.record("previews", previews_hit is not None, time.perf_counter() - t)
+        manifest["previews"], reused = object_stage(
+            cache, stage_key("previews", spec=spec_without(spec, *PART_FILES_IGNORE), rod=spec.vertebra.has_rod),
+            lambda folder: render_previews(asm, folder), tmp)
+        log.record("previews", reused, time.perf_counter() - t)
         t = time.perf_counter()
         say("report pictures")
         pictures = report_pictures(tmp, manifest, cache)

@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bvsr_cad.models.kinematics import (TailKinematics, joint_transform, joint_transform_chain, soa_lengths_and_jacobian,
-                                        soa_lengths_mm, uv_from_theta_phi)
+from bvsr_cad.models.kinematics import (TailKinematics, joint_rotation_translation, joint_transform,
+                                        joint_transform_and_derivatives, joint_transform_chain,
+                                        joint_transform_derivatives, soa_lengths_and_jacobian, soa_lengths_mm,
+                                        uv_from_theta_phi)
 
 L = 36.51
 
@@ -27,6 +29,26 @@ def test_eq2_closed_form_entries():
     assert t[2, 3] == pytest.approx(L * np.sin(th) / th, abs=1e-12)
     np.testing.assert_allclose(joint_transform(0.0, 1.0, L), np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, L],
                                                                       [0, 0, 0, 1.0]]), atol=1e-15)
+
+
+def test_eq2_derivatives_match_differences_and_the_shared_path_gives_the_same_numbers():
+    """dR/dw, dp/dw against central differences of Eq 2 on both sides of the series' switch (theta
+    1e-2), and joint_transform_and_derivatives (one twist for both) equal to the two separate calls,
+    bit for bit, on arrays and on scalars."""
+    rng = np.random.default_rng(3)
+    u = np.r_[0.0, 3e-3, -7e-3, rng.uniform(-1.2, 1.2, 40)]
+    v = np.r_[0.0, 4e-3, 6e-3, rng.uniform(-1.2, 1.2, 40)]
+    h = 1e-6
+    dR_u, dR_v, dp_u, dp_v = joint_transform_derivatives(u, v, L)
+    for d_rot, d_p, du, dv in ((dR_u, dp_u, h, 0.0), (dR_v, dp_v, 0.0, h)):
+        (r1, p1), (r0, p0) = joint_rotation_translation(u + du, v + dv, L), joint_rotation_translation(u - du, v - dv, L)
+        np.testing.assert_allclose(d_rot, (r1 - r0) / (2 * h), atol=1e-8)
+        np.testing.assert_allclose(d_p, (p1 - p0) / (2 * h), atol=1e-7)
+    for uu, vv in ((u, v), (np.array(0.31), np.array(-0.2)), (np.array(0.0), np.array(0.0))):
+        (rot, trans), derivs = joint_transform_and_derivatives(uu, vv, L)
+        alone = joint_rotation_translation(uu, vv, L) + joint_transform_derivatives(uu, vv, L)
+        assert all(a.tobytes() == b.tobytes() and a.shape == b.shape
+                   for a, b in zip((rot, trans) + derivs, alone))
 
 
 def test_soa_lengths_and_jacobian(bvsr_spec):

@@ -43,9 +43,59 @@ def _series_coefficients(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.
 
 
 def _hat(x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
-    zero = np.zeros_like(x)
-    return np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1),
-                     np.stack([-y, x, zero], -1)], -2)
+    x, y, z = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float), np.asarray(z, float))
+    out = np.zeros(x.shape + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -z, y
+    out[..., 1, 0], out[..., 1, 2] = z, -x
+    out[..., 2, 0], out[..., 2, 1] = -y, x
+    return out
+
+
+def _bending_hat(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """hat(-v, u, 0), the bending vector's skew matrix (Eq 2's Omega)."""
+    out = np.zeros(u.shape + (3, 3))
+    out[..., 0, 1] = -0.0  # -z of hat(x, y, z), z = 0: the same signed zeros as _hat
+    out[..., 0, 2], out[..., 1, 2] = u, v
+    out[..., 2, 0], out[..., 2, 1] = -u, -v
+    return out
+
+
+@dataclass(frozen=True)
+class _Twist:
+    """What Eq 2 and its derivatives share at bending vectors (u, v): computed once per call."""
+
+    u: np.ndarray
+    v: np.ndarray
+    S: np.ndarray
+    C: np.ndarray
+    S1: np.ndarray
+    C1: np.ndarray
+    om: np.ndarray  # Omega (..., 3, 3)
+    om2: np.ndarray  # Omega @ Omega
+
+    @classmethod
+    def at(cls, u: np.ndarray, v: np.ndarray) -> "_Twist":
+        u, v = np.broadcast_arrays(np.asarray(u, float), np.asarray(v, float))
+        S, C, S1, C1 = _series_coefficients(np.hypot(u, v))
+        om = _bending_hat(u, v)
+        return cls(u, v, S, C, S1, C1, om, om @ om)
+
+    def rotation_translation(self, length_mm: float) -> tuple[np.ndarray, np.ndarray]:
+        S, C = self.S, self.C
+        rot = np.eye(3) + S[..., None, None] * self.om + C[..., None, None] * self.om2
+        trans = length_mm * np.stack([self.u * C, self.v * C, S], -1)
+        return rot, trans
+
+    def derivatives(self, length_mm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        u, v, S, C, S1, C1, om, om2 = self.u, self.v, self.S, self.C, self.S1, self.C1, self.om, self.om2
+        e = (..., None, None)
+        # d(Omega)/du = hat(0, 1, 0), d(Omega)/dv = hat(-1, 0, 0).
+        d_om_u, d_om_v = _EY, -_EX
+        dR_u = (S1 * u)[e] * om + S[e] * d_om_u + (C1 * u)[e] * om2 + C[e] * (d_om_u @ om + om @ d_om_u)
+        dR_v = (S1 * v)[e] * om + S[e] * d_om_v + (C1 * v)[e] * om2 + C[e] * (d_om_v @ om + om @ d_om_v)
+        dp_u = length_mm * np.stack([C + u * u * C1, u * v * C1, u * S1], -1)
+        dp_v = length_mm * np.stack([u * v * C1, C + v * v * C1, v * S1], -1)
+        return dR_u, dR_v, dp_u, dp_v
 
 
 _EX = _hat(np.array(1.0), np.array(0.0), np.array(0.0))
@@ -55,13 +105,7 @@ _EY = _hat(np.array(0.0), np.array(1.0), np.array(0.0))
 def joint_rotation_translation(u: np.ndarray, v: np.ndarray, length_mm: float
                                ) -> tuple[np.ndarray, np.ndarray]:
     """Rotation (..., 3, 3) and translation (..., 3) of Eq 2 at bending vector (u, v)."""
-    u, v = np.broadcast_arrays(np.asarray(u, float), np.asarray(v, float))
-    theta = np.hypot(u, v)
-    S, C, _, _ = _series_coefficients(theta)
-    om = _hat(-v, u, np.zeros_like(u))
-    rot = np.eye(3) + S[..., None, None] * om + C[..., None, None] * (om @ om)
-    trans = length_mm * np.stack([u * C, v * C, S], -1)
-    return rot, trans
+    return _Twist.at(u, v).rotation_translation(length_mm)
 
 
 def joint_transform_uv(u: np.ndarray, v: np.ndarray, length_mm: float) -> np.ndarray:
@@ -83,19 +127,15 @@ def joint_transform(theta_rad: np.ndarray, phi_rad: np.ndarray, length_mm: float
 def joint_transform_derivatives(u: np.ndarray, v: np.ndarray, length_mm: float
                                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """dR/du, dR/dv (..., 3, 3) and dp/du, dp/dv (..., 3), analytic."""
-    u, v = np.broadcast_arrays(np.asarray(u, float), np.asarray(v, float))
-    theta = np.hypot(u, v)
-    S, C, S1, C1 = _series_coefficients(theta)
-    om = _hat(-v, u, np.zeros_like(u))
-    om2 = om @ om
-    e = (..., None, None)
-    # d(Omega)/du = hat(0, 1, 0), d(Omega)/dv = hat(-1, 0, 0).
-    d_om_u, d_om_v = _EY, -_EX
-    dR_u = (S1 * u)[e] * om + S[e] * d_om_u + (C1 * u)[e] * om2 + C[e] * (d_om_u @ om + om @ d_om_u)
-    dR_v = (S1 * v)[e] * om + S[e] * d_om_v + (C1 * v)[e] * om2 + C[e] * (d_om_v @ om + om @ d_om_v)
-    dp_u = length_mm * np.stack([C + u * u * C1, u * v * C1, u * S1], -1)
-    dp_v = length_mm * np.stack([u * v * C1, C + v * v * C1, v * S1], -1)
-    return dR_u, dR_v, dp_u, dp_v
+    return _Twist.at(u, v).derivatives(length_mm)
+
+
+def joint_transform_and_derivatives(u: np.ndarray, v: np.ndarray, length_mm: float
+                                    ) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, ...]]:
+    """(:func:`joint_rotation_translation`, :func:`joint_transform_derivatives`) at once: the series
+    coefficients and Omega computed once (the same numbers as the two calls)."""
+    twist = _Twist.at(u, v)
+    return twist.rotation_translation(length_mm), twist.derivatives(length_mm)
 
 
 def _rz(a: np.ndarray) -> np.ndarray:
@@ -177,8 +217,7 @@ def socket_lengths_and_jacobian(base: np.ndarray, moving: np.ndarray, u: np.ndar
                                 length: float) -> tuple[np.ndarray, np.ndarray]:
     """Eq 1 and its derivative for socket centres ``base``/``moving`` (..., 5, 3), broadcast against
     the bending vectors (u, v) (...,): (l (..., 5), dl/dw (..., 5, 2)), in the sockets' length unit."""
-    rot, trans = joint_rotation_translation(u, v, length)
-    dR_u, dR_v, dp_u, dp_v = joint_transform_derivatives(u, v, length)
+    (rot, trans), (dR_u, dR_v, dp_u, dp_v) = joint_transform_and_derivatives(u, v, length)
     d = np.einsum("...ij,...sj->...si", rot, moving) + trans[..., None, :] - base
     lengths = np.linalg.norm(d, axis=-1)
     e = d / lengths[..., None]

@@ -122,7 +122,7 @@ class TailStatics:
 
     def load_forces(self, w: np.ndarray, tip_force_n: np.ndarray | None) -> np.ndarray:
         """Generalised forces of gravity and the tip force on every joint, (..., n_joints, 2), N mm."""
-        from .kinematics import joint_rotation_translation, joint_transform_derivatives
+        from .kinematics import joint_transform_and_derivatives
 
         w = np.asarray(w, float)
         n = self.kin.n_joints
@@ -134,7 +134,8 @@ class TailStatics:
         f_joint = np.zeros(lead + (n, 3))
         f_tip = np.zeros(lead + (3,))
         x_panel = panel[..., :3, 3] + 0.5 * t * panel[..., :3, 2]
-        rot_all, p_all = joint_rotation_translation(w[..., 0], w[..., 1], self.kin.length_mm)
+        (rot_all, p_all), (dR_u, dR_v, dp_u, dp_v) = joint_transform_and_derivatives(w[..., 0], w[..., 1],
+                                                                                 self.kin.length_mm)
         b_rot, b_org = base[..., :3, :3], base[..., :3, 3]
         x_joint = b_org + 0.5 * np.einsum("...ij,...j->...i", b_rot, p_all)
         if self.masses is not None:
@@ -153,7 +154,6 @@ class TailStatics:
         fx_j = np.flip(np.cumsum(np.flip(fj_x, -3), -3), -3) - fj_x
         fs = fs_p + fs_j + f_tip[..., None, :]
         fx = fx_p + fx_j + np.einsum("...i,...j->...ij", f_tip, x_tip)[..., None, :, :]
-        dR_u, dR_v, dp_u, dp_v = joint_transform_derivatives(w[..., 0], w[..., 1], self.kin.length_mm)
         bt = np.swapaxes(b_rot, -1, -2)
         # G = sum_b g_b y_b^T with g_b = B_R^T f_b, y_b = B_R^T (x_b - B_o) - p.
         g_mat = bt @ (fx - np.einsum("...i,...j->...ij", fs, b_org)) @ b_rot \

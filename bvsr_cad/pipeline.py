@@ -214,7 +214,7 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         fixed: set[Path] = set()
         make_reproducible(tmp, fixed)  # the files the early checks hash are the published ones
         say("checks of the CAD files")
-        checks = Checks.start(tmp, say, cache=cache)
+        checks = Checks.start(tmp, say, cache=cache, meshes_beside=True)
         checks_s = time.perf_counter() - t
         # The drawings after the checks' start: the printability and mold checks, the longest chain of
         # the build's end, read none of them (the checks of the drawings run at the finish).

@@ -123,6 +123,35 @@ def test_checks_started_early_see_a_file_changed_before_they_finish(bvsr_export,
     assert [r.to_json() for r in late] == [r.to_json() for r in run_checks(copy, parallel=False)]
 
 
+def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_changed(bvsr_export, tmp_path):
+    """A build sends the part meshes' and the masses' checks to the printability process too
+    (``meshes_beside``): unchanged, their verdicts come from there (none of them runs here); a part's
+    STL changed after the start is checked again here, and the results are one run of every check's."""
+    import os
+
+    from bvsr_cad.checks.run import Checks, run_checks
+
+    if (os.cpu_count() or 1) < 2:
+        pytest.skip("one core: the checks never leave the process")
+    said: list[str] = []
+    checks = Checks.start(bvsr_export, said.append, meshes_beside=True)
+    assert checks._printability.proc is not None and not any(m.startswith("mesh ") for m in said)
+    kept = checks.finish()
+    assert not any(m.startswith("mesh ") or m == "masses" for m in said), said
+    assert [r.to_json() for r in kept] == [r.to_json() for r in run_checks(bvsr_export, parallel=False)]
+    copy = tmp_path / "copy"
+    shutil.copytree(bvsr_export, copy)
+    said.clear()
+    checks = Checks.start(copy, said.append, meshes_beside=True)
+    mesh = trimesh.load(copy / "stl" / "soa.stl")
+    mesh.update_faces(np.arange(len(mesh.faces)) % 50 != 0)  # punch holes after the start
+    mesh.export(copy / "stl" / "soa.stl")
+    late = checks.finish()
+    assert "mesh soa" in said and "mesh panel0" not in said
+    assert {"stl_watertight:soa", "stl_volume:soa"} <= {r.name for r in late if r.passed is False}
+    assert [r.to_json() for r in late] == [r.to_json() for r in run_checks(copy, parallel=False)]
+
+
 def test_mold_checks_in_the_second_process_see_a_mold_file_changed_before_they_finish(bvsr_export, tmp_path):
     """The mold checks run in the printability process from Checks.start; a mold file changed before
     Checks.finish (whether that process had read it yet or not) is checked again, on the file as it is."""

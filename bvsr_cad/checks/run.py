@@ -27,35 +27,48 @@ def _mold_checks(exp: Export, memo: CheckMemo) -> list[CheckResult]:
     return memo("molds", molds_reads(exp), lambda: check_molds(exp))
 
 
-def _printability(root: str, sliced_now: str, cache_root: str = "") -> dict[str, list[CheckResult]]:
+def _mesh_checks(exp: Export, memo: CheckMemo) -> dict[str, list[CheckResult]]:
+    """The part meshes' checks of ``exp``, by part (verdicts from ``memo``'s cache while their reads are
+    unchanged)."""
+    return {part["name"]: memo("part_mesh", part_mesh_reads(part), lambda part=part: check_part_mesh(exp, part))
+            for part in exp.parts}
+
+
+def _printability(root: str, sliced_now: str, cache_root: str = "", meshes: str = "") -> dict[str, Any]:
     """The second process's work: the printability checks and the mold checks of the export at ``root``
-    (verdicts of unchanged inputs from the artifact cache at ``cache_root``, when given), by group."""
+    (verdicts of unchanged inputs from the artifact cache at ``cache_root``, when given), by group; with
+    ``meshes`` (``"1"``) the part meshes' and the masses' checks after them (``"part_mesh"``: by part)."""
     exp = Export.open(root)
     memo = CheckMemo(exp, ArtifactCache(Path(cache_root)) if cache_root else None)
-    return {"printability": check_printability(exp, sliced_now=set(json.loads(sliced_now)), memo=memo),
-            "molds": _mold_checks(exp, memo)}
+    out: dict[str, Any] = {"printability": check_printability(exp, sliced_now=set(json.loads(sliced_now)), memo=memo),
+                           "molds": _mold_checks(exp, memo)}
+    if meshes:
+        out["part_mesh"] = _mesh_checks(exp, memo)
+        out["masses"] = check_masses(exp, memo)
+    return out
 
 
 class _Printability:
     """The printability checks, the slowest group, and the mold checks in a second process (given only
-    the export's path, it opens the export itself) while the other groups run here. On one core, or when
-    the process fails, they run here."""
+    the export's path, it opens the export itself) while the other groups run here; with ``meshes`` the
+    part meshes' and the masses' checks too, after them. On one core, or when the process fails, they
+    run here."""
 
     def __init__(self, exp: Export, sliced_now: Collection[str], say: Callable[[str], None], parallel: bool,
-                 memo: CheckMemo | None = None):
+                 memo: CheckMemo | None = None, meshes: bool = False):
         self.exp, self.sliced_now, self.say = exp, sliced_now, say
         self.memo = memo = memo or CheckMemo(exp)
         self.proc = None
-        self._got: dict[str, list[CheckResult]] | None = None
+        self._got: dict[str, Any] | None = None
         if parallel:
             # cwd: MuJoCo may write its log into the working folder, as in the robot checks.
             cache_root = str(memo.cache.root) if memo.cache is not None else ""
             self.proc = SecondProcess.start("bvsr_cad.checks.run", [str(exp.root), json.dumps(sorted(sliced_now)),
-                                                                   cache_root], exp.root)
+                                                                   cache_root, "1" if meshes else ""], exp.root)
             if self.proc is not None:
-                say("printability and molds: started in a second process")
+                say(f"printability, molds{', part meshes' if meshes else ''}: started in a second process")
 
-    def _from_process(self) -> dict[str, list[CheckResult]]:
+    def _from_process(self) -> dict[str, Any]:
         """The second process's verdicts by group; empty without one, or when it was lost (then each
         group runs here)."""
         if self.proc is None:
@@ -77,6 +90,12 @@ class _Printability:
             return got["molds"]
         self.say("molds")
         return _mold_checks(self.exp, self.memo)
+
+    def part_meshes(self) -> tuple[dict[str, list[CheckResult]], list[CheckResult]] | None:
+        """The part meshes' verdicts by part and the masses' from the second process, or None (not asked of
+        it, or it was lost)."""
+        got = self._from_process()
+        return (got["part_mesh"], got["masses"]) if "part_mesh" in got else None
 
     def close(self) -> None:
         if self.proc is not None:
@@ -136,15 +155,24 @@ class Checks:
     can run them before its analyses are in; :meth:`finish` runs the rest on the export as it is then
     and returns every result in one order. A group started early whose reads changed since (its manifest
     values, its files' names, sizes or modification times; for the printability checks, the manifest
-    sections they read) is run again: the results are what one run on the final export gives."""
+    sections they read) is run again: the results are what one run on the final export gives.
+
+    ``meshes_beside``: the part meshes' and the masses' checks go to the second process too, after its
+    own groups, for a caller with work of its own until :meth:`finish` (a build: its drawings, views and
+    robot files; the second process, started later on the print files, ended ~4 s before the build's
+    process, which then ran alone). :meth:`finish` runs this process's groups before it waits."""
 
     def __init__(self, root: str | Path, progress: Callable[[str], None] | None = None, *,
-                 run_slicer: bool = False, parallel: bool = True, cache: ArtifactCache | None = None):
+                 run_slicer: bool = False, parallel: bool = True, cache: ArtifactCache | None = None,
+                 meshes_beside: bool = False):
         self.root, self.say, self.cache = root, progress or (lambda _m: None), cache
-        self.parallel = parallel
+        self.parallel, self.meshes_beside = parallel, meshes_beside
         self.sliced_now: dict = {}
         self._mesh: dict[str, tuple[tuple, list[CheckResult]]] = {}
         self._masses: tuple[tuple, list[CheckResult]] | None = None  # (its reads then, its results)
+        # Of groups the second process runs: their reads' state when it started.
+        self._mesh_state: dict[str, tuple] = {}
+        self._masses_state: tuple | None = None
         self._robot: tuple[tuple, list[CheckResult]] | None = None  # the same, of :meth:`robot_ahead`
         self._molds_state: tuple | None = None  # the molds' reads when the early checks started
         self._printability: _Printability | None = None
@@ -164,7 +192,11 @@ class Checks:
         # What the second process is about to read: its verdicts stand only while these are unchanged.
         run._printability_reads = _printability_reads(exp)
         run._molds_state = _state(exp, molds_reads(exp))
-        run._printability = _Printability(exp, run.sliced_now, say, run.parallel, memo)
+        run._printability = _Printability(exp, run.sliced_now, say, run.parallel, memo, run.meshes_beside)
+        if run.meshes_beside and run._printability.proc is not None:
+            run._mesh_state = {part["name"]: _state(exp, part_mesh_reads(part)) for part in exp.parts}
+            run._masses_state = _state(exp, masses_reads(exp))
+            return run
         try:
             for part in exp.parts:
                 say(f"mesh {part['name']}")
@@ -192,6 +224,19 @@ class Checks:
         exp = Export.open(self.root)  # the export as it is now (the manifest may have grown)
         memo = CheckMemo(exp, self.cache)
         try:
+            # This process's own groups first, then what the second process ran (waited for here).
+            say("pentagon layout")
+            own = check_layout(exp) + check_paper(exp)
+            say("analyses")
+            own += check_analyses(exp)
+            own += _kept(self._robot, exp, robot_reads(exp), lambda: check_robot(exp), say,
+                         "robot descriptions (URDF, MJCF, MuJoCo, PyBullet)")
+            printability = self._printability
+            beside = printability.part_meshes() if self._mesh_state and printability is not None else None
+            if beside is not None:
+                self._mesh = {name: (self._mesh_state[name], r) for name, r in beside[0].items()
+                              if name in self._mesh_state}
+                self._masses = (self._masses_state, beside[1])
             results: list[CheckResult] = []
             for part in exp.parts:
                 reads = part_mesh_reads(part)
@@ -200,14 +245,7 @@ class Checks:
                                      f"mesh {part['name']}"))
             results.extend(_kept(self._masses, exp, masses_reads(exp), lambda: check_masses(exp, memo), say,
                                  "masses"))
-            say("pentagon layout")
-            results.extend(check_layout(exp))
-            results.extend(check_paper(exp))
-            say("analyses")
-            results.extend(check_analyses(exp))
-            results.extend(_kept(self._robot, exp, robot_reads(exp), lambda: check_robot(exp), say,
-                                 "robot descriptions (URDF, MJCF, MuJoCo, PyBullet)"))
-            printability = self._printability
+            results.extend(own)
             fresh = printability is not None and self._printability_reads == _printability_reads(exp)
             if not fresh:
                 if printability is not None:

@@ -12,7 +12,10 @@ filled. Each build starts its analyses' process ahead, as `bvsr build` does
 Prints one row per build: seconds, ratio to cold, the CPU seconds of the
 build's processes (this one and its second processes: on two cores a build
 is CPU-bound when they are near twice its seconds), and which stages were
-reused.
+reused. A reference loop (ten million additions in plain Python) is timed
+before and after: the machines this runs on differ by up to 1.7x in it, and a
+shared machine's speed drifts, so seconds compare between runs only where
+that figure does.
 """
 
 from __future__ import annotations
@@ -72,6 +75,16 @@ def command_seconds(path: Path, out: Path) -> tuple[float, float, list[dict]]:
     return seconds, (c1.ru_utime + c1.ru_stime) - (c0.ru_utime + c0.ru_stime), json.loads(done.stdout)["stages"]
 
 
+def reference_loop_s() -> float:
+    """Seconds of ten million additions in plain Python, this machine's single-core speed as the notes
+    and the README quote it."""
+    t0 = time.perf_counter()
+    total = 0
+    for i in range(10_000_000):
+        total += i
+    return time.perf_counter() - t0
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("params", nargs="?", default=str(ROOT / "params" / "bvsr.toml"))
@@ -109,6 +122,8 @@ def main() -> None:
         res = build_export(path, work / "out", standby=SecondProcess.standby("bvsr_cad.pipeline", None, [str(path)]))
         return row(label, time.perf_counter() - t0, cpu_s() - c0, res.stages)
 
+    before = reference_loop_s()
+    print(f"reference loop {before:.2f} s, {os.cpu_count()} cores", flush=True)
     try:
         cold = run("cold", base)
         run("no-op", base)
@@ -129,6 +144,7 @@ def main() -> None:
         print(f"{'build':18} {'seconds':>8} {'/ cold':>7} {'CPU s':>7}")
         for label, seconds, cpu in rows:
             print(f"{label:18} {seconds:8.1f} {seconds / cold:7.2f} {cpu:7.1f}")
+        print(f"reference loop {before:.2f} s before, {reference_loop_s():.2f} s after")
     finally:
         shutil.rmtree(work, ignore_errors=True)
         if users_cache is None:  # the environment as it was (main() may run inside a longer process)

@@ -61,6 +61,8 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, 
 
     monkeypatch.setattr(bvsr_cad.pipeline, "build_export", fake_build)
     monkeypatch.setattr(bench, "command_seconds", fake_command)
+    loops = iter([0.91, 0.97])  # the reference loop, before and after
+    monkeypatch.setattr(bench, "reference_loop_s", lambda: next(loops))
     monkeypatch.setattr(bvsr_cad.worker.SecondProcess, "standby", classmethod(lambda cls, *a, **k: None))
     monkeypatch.setattr(sys, "argv", ["rebuild_bench.py", str(base)])
     # The benchmark builds in a private cache of its own and then gives the environment back: the later
@@ -83,7 +85,9 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, 
         new = _value(spec, table, key)
         assert new != _value(default, table, key), name
         assert (str(new) == value.strip('"')) if value.startswith('"') else float(new) == float(value), name
-    table = out.splitlines()[-(3 + len(bench.EDITS)):]
+    assert out.splitlines()[0] == f"reference loop 0.91 s, {os.cpu_count()} cores"
+    assert out.splitlines()[-1] == "reference loop 0.91 s before, 0.97 s after"
+    table = out.splitlines()[-(4 + len(bench.EDITS)):-1]
     assert [line[:18].strip() for line in table] == ["cold", "no-op", "no-op, command", *bench.EDITS]
     assert float(table[0].split()[-2]) == 1.0  # its seconds / cold
     command = table[2].split()

@@ -66,7 +66,8 @@ class _Printability:
             self.proc = SecondProcess.start("bvsr_cad.checks.run", [str(exp.root), json.dumps(sorted(sliced_now)),
                                                                    cache_root, "1" if meshes else ""], exp.root)
             if self.proc is not None:
-                say(f"printability, molds{', part meshes' if meshes else ''}: started in a second process")
+                say("printability and molds: started in a second process"
+                    + (" (the part meshes and the masses after them)" if meshes else ""))
 
     def _from_process(self) -> dict[str, Any]:
         """The second process's verdicts by group; empty without one, or when it was lost (then each

@@ -127,3 +127,27 @@ def test_plane_sections_is_the_posed_tails_map_without_its_meshes(asm):
     for _ in range(4):
         w = rng.uniform(-0.6, 0.6, (asm.spec.joints, 2))
         np.testing.assert_array_equal(bare.deform_points(pts, w), full.deform_points(pts, w))
+
+
+def test_stage_1b_shares_a_shortened_mesh_between_spans_that_differ_only_above_it(asm):
+    """A gap that starts above a mesh moves none of its vertices: d_lambda from the shared BVHs equals
+    (bit for bit) the distance of both meshes shortened by the pair's whole span, and fewer meshes are
+    built than (instance, grid value, span) combinations asked for."""
+    import trimesh
+
+    from bvsr_cad.analysis.clearance import LAMBDA_GRID, _fcl_distance, posed_tail
+
+    pt = posed_tail(asm)
+    asked = set()
+    spanned = [p for p in range(len(pt.pairs)) if pt.span[p].any()]
+    rng = np.random.default_rng(2)
+    picks = [(int(p), int(k)) for p, k in zip(rng.choice(spanned, 40), rng.integers(0, len(LAMBDA_GRID) - 1, 40))]
+    for p, k in picks:
+        shortened = []
+        for i in pt.pairs[p]:
+            asked.add((int(i), k, pt.span[p].tobytes()))
+            v = pt.cut[int(i)].vertices.copy()
+            v[:, 2] = pt.shorten_z(v[:, 2], float(LAMBDA_GRID[k]), pt.span[p])
+            shortened.append(trimesh.Trimesh(v, pt.cut[int(i)].faces, process=False))
+        assert pt.aniso_rest(p, k) == _fcl_distance(*shortened)
+    assert len(pt._scaled) < len(asked)

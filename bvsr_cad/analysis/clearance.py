@@ -89,6 +89,8 @@ class PosedTail:
             if len(on):
                 groups.setdefault((int(on[0]), int(on[-1])), []).append(p)
         self._groups = [(lo, hi, np.array(ids)) for (lo, hi), ids in sorted(groups.items())]
+        # Each joint's gap starts at its lower panel's upper face (see shorten_z).
+        self._gap_lo_mm = np.arange(self.kin.n_joints) * self.joint_height_mm + self.kin.panel_thickness_mm
         # Instances that lie inside one panel's thickness move with that panel as a rigid body:
         # their posed mesh is the rest BVH under a transform (no rebuild).
         hj, t = self.joint_height_mm, self.kin.panel_thickness_mm
@@ -158,12 +160,14 @@ class PosedTail:
             if LAMBDA_GRID[k] == 1.0 or not self.span[pair].any():
                 self._aniso[key] = float(self.rest_mm[pair])
             else:
-                span = self.span[pair]
                 objs = []
                 for i in self.pairs[pair]:
+                    m = self.cut[int(i)]
+                    # A gap that starts above the mesh moves none of its vertices (z - 0.0, the same
+                    # bits): left out of the key, meshes shortened by different spans share one BVH.
+                    span = self.span[pair] & (self._gap_lo_mm < m.vertices[:, 2].max())
                     ck = (int(i), k, span.tobytes())
                     if ck not in self._scaled:
-                        m = self.cut[int(i)]
                         v = m.vertices.copy()
                         v[:, 2] = self.shorten_z(v[:, 2], float(LAMBDA_GRID[k]), span)
                         self._scaled[ck] = _fcl_object(trimesh.Trimesh(v, m.faces, process=False))

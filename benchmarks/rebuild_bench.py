@@ -75,13 +75,18 @@ def command_seconds(path: Path, out: Path) -> tuple[float, float, list[dict]]:
     return seconds, (c1.ru_utime + c1.ru_stime) - (c0.ru_utime + c0.ru_stime), json.loads(done.stdout)["stages"]
 
 
+#: The reference loop as the notes and the README quote it: ``time python3 -c`` of this, at module level
+#: (global names: about 2.5 times the seconds of the same loop inside a function); timed here without
+#: the interpreter's start, which the notes' figures include (0.1-0.15 s more).
+REFERENCE_LOOP = "s = 0\nfor i in range(10000000):\n    s += i\n"
+
+
 def reference_loop_s() -> float:
-    """Seconds of ten million additions in plain Python, this machine's single-core speed as the notes
-    and the README quote it."""
+    """Seconds of :data:`REFERENCE_LOOP` (ten million additions in plain Python), this machine's
+    single-core speed."""
+    code = compile(REFERENCE_LOOP, "<reference loop>", "exec")
     t0 = time.perf_counter()
-    total = 0
-    for i in range(10_000_000):
-        total += i
+    exec(code, {})
     return time.perf_counter() - t0
 
 

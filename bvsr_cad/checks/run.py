@@ -27,11 +27,14 @@ def _mold_checks(exp: Export, memo: CheckMemo) -> list[CheckResult]:
     return memo("molds", molds_reads(exp), lambda: check_molds(exp))
 
 
+def _part_mesh(exp: Export, memo: CheckMemo, part: dict[str, Any]) -> list[CheckResult]:
+    """One part's mesh checks (its verdicts from ``memo``'s cache while their reads are unchanged)."""
+    return memo("part_mesh", part_mesh_reads(part), lambda: check_part_mesh(exp, part))
+
+
 def _mesh_checks(exp: Export, memo: CheckMemo) -> dict[str, list[CheckResult]]:
-    """The part meshes' checks of ``exp``, by part (verdicts from ``memo``'s cache while their reads are
-    unchanged)."""
-    return {part["name"]: memo("part_mesh", part_mesh_reads(part), lambda part=part: check_part_mesh(exp, part))
-            for part in exp.parts}
+    """The part meshes' checks of ``exp``, by part."""
+    return {part["name"]: _part_mesh(exp, memo, part) for part in exp.parts}
 
 
 def _printability(root: str, sliced_now: str, cache_root: str = "", meshes: str = "") -> dict[str, Any]:
@@ -202,8 +205,7 @@ class Checks:
             for part in exp.parts:
                 say(f"mesh {part['name']}")
                 reads = part_mesh_reads(part)
-                run._mesh[part["name"]] = (_state(exp, reads),
-                                           memo("part_mesh", reads, lambda: check_part_mesh(exp, part)))
+                run._mesh[part["name"]] = (_state(exp, reads), _part_mesh(exp, memo, part))
             say("masses")  # on the meshes just read
             run._masses = (_state(exp, masses_reads(exp)), check_masses(exp, memo))
         except BaseException:
@@ -241,9 +243,8 @@ class Checks:
             results: list[CheckResult] = []
             for part in exp.parts:
                 reads = part_mesh_reads(part)
-                results.extend(_kept(self._mesh.get(part["name"]), exp, reads,
-                                     lambda: memo("part_mesh", reads, lambda: check_part_mesh(exp, part)), say,
-                                     f"mesh {part['name']}"))
+                results.extend(_kept(self._mesh.get(part["name"]), exp, reads, lambda: _part_mesh(exp, memo, part),
+                                     say, f"mesh {part['name']}"))
             results.extend(_kept(self._masses, exp, masses_reads(exp), lambda: check_masses(exp, memo), say,
                                  "masses"))
             results.extend(own)

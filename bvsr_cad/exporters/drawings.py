@@ -180,9 +180,9 @@ def hole_table(solid: bd.Solid, features: list[Cyl]) -> list[HoleRow]:
             rows[key]["names"].append(feat.name)
             continue
         start, end = p0 + lo * axis, p0 + hi * axis
-        through = feat.role != "pin" and not (_end_is_closed(planes, start, axis, r)
-                                              or _end_is_closed(planes, end, axis, r))
-        if feat.role != "pin" and not through and _end_is_closed(planes, start, axis, r):
+        start_closed = feat.role != "pin" and _end_is_closed(planes, start, axis, r)
+        through = feat.role != "pin" and not (start_closed or _end_is_closed(planes, end, axis, r))
+        if start_closed:
             start, end, axis = end, start, -axis  # the table gives a blind bore from its opening
         rows[key] = {"names": [feat.name], "feat": feat, "start": start, "axis": axis, "length": hi - lo,
                      "through": through}

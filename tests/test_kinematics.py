@@ -46,6 +46,10 @@ def test_eq2_derivatives_match_differences_and_the_shared_path_gives_the_same_nu
         np.testing.assert_allclose(d_p, (p1 - p0) / (2 * h), atol=1e-7)
     for uu, vv in ((u, v), (np.array(0.31), np.array(-0.2)), (np.array(0.0), np.array(0.0))):
         (rot, trans), derivs = joint_transform_and_derivatives(uu, vv, L)
+        # Against the URDF's chain of rotations and a slide (computed without the series or Omega).
+        chain = joint_transform_chain(np.hypot(uu, vv), np.arctan2(vv, uu), L)
+        np.testing.assert_allclose(rot, chain[..., :3, :3], atol=1e-12)
+        np.testing.assert_allclose(trans, chain[..., :3, 3], atol=1e-12)
         alone = joint_rotation_translation(uu, vv, L) + joint_transform_derivatives(uu, vv, L)
         assert all(a.tobytes() == b.tobytes() and a.shape == b.shape
                    for a, b in zip((rot, trans) + derivs, alone))

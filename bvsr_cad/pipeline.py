@@ -147,7 +147,8 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         files: dict[str, dict[str, str]] = {name: {"step": f"step/{name}.step", "stl": f"stl/{name}.stl"}
                                              for name in asm.parts}
         # A rod material of "none" removes the rod part: the one material fact the part files read.
-        part_key = stage_key("part_files", spec=spec_without(spec, *PART_FILES_IGNORE), rod=spec.vertebra.has_rod)
+        part_inputs = {"spec": spec_without(spec, *PART_FILES_IGNORE), "rod": spec.vertebra.has_rod}
+        part_key = stage_key("part_files", **part_inputs)
         part_hit = cache.get(part_key) if cache else None
 
         def write_parts(folder: Path) -> None:
@@ -238,8 +239,7 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         # The parts' geometry and the tail's name (the part files' inputs); after the printability
         # checks' start, which wait for the print files and nothing drawn here.
         manifest["previews"], reused = object_stage(
-            cache, stage_key("previews", spec=spec_without(spec, *PART_FILES_IGNORE), rod=spec.vertebra.has_rod),
-            lambda folder: render_previews(asm, folder), tmp)
+            cache, stage_key("previews", **part_inputs), lambda folder: render_previews(asm, folder), tmp)
         log.record("previews", reused, time.perf_counter() - t)
         t = time.perf_counter()
         say("report pictures")

@@ -89,8 +89,10 @@ class PosedTail:
             if len(on):
                 groups.setdefault((int(on[0]), int(on[-1])), []).append(p)
         self._groups = [(lo, hi, np.array(ids)) for (lo, hi), ids in sorted(groups.items())]
-        # Each joint's gap starts at its lower panel's upper face (see shorten_z).
+        # Each joint's gap starts at its lower panel's upper face and ends at the next panel's lower face.
         self._gap_lo_mm = np.arange(self.kin.n_joints) * self.joint_height_mm + self.kin.panel_thickness_mm
+        # Per cut mesh, the gaps that start below its top: shortening any other moves none of its vertices.
+        self._gaps_under = [self._gap_lo_mm < m.vertices[:, 2].max() for m in self.cut]
         # Instances that lie inside one panel's thickness move with that panel as a rigid body:
         # their posed mesh is the rest BVH under a transform (no rebuild).
         hj, t = self.joint_height_mm, self.kin.panel_thickness_mm
@@ -146,10 +148,10 @@ class PosedTail:
 
     def shorten_z(self, z: np.ndarray, lam: float, joints: np.ndarray) -> np.ndarray:
         """z after the gaps of ``joints`` (bool, n_joints) are shortened by ``lam`` (panels unchanged)."""
-        hj, t = self.joint_height_mm, self.kin.panel_thickness_mm
+        hj = self.joint_height_mm
         out = np.array(z, float)
         for j in np.flatnonzero(joints):
-            lo, hi = j * hj + t, (j + 1) * hj
+            lo, hi = self._gap_lo_mm[j], (j + 1) * hj
             out -= (1.0 - lam) * np.clip(z - lo, 0.0, hi - lo)
         return out
 
@@ -165,7 +167,7 @@ class PosedTail:
                     m = self.cut[int(i)]
                     # A gap that starts above the mesh moves none of its vertices (z - 0.0, the same
                     # bits): left out of the key, meshes shortened by different spans share one BVH.
-                    span = self.span[pair] & (self._gap_lo_mm < m.vertices[:, 2].max())
+                    span = self.span[pair] & self._gaps_under[int(i)]
                     ck = (int(i), k, span.tobytes())
                     if ck not in self._scaled:
                         v = m.vertices.copy()

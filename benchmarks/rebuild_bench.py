@@ -11,8 +11,9 @@ filled. Each build starts its analyses' process ahead, as `bvsr build` does
 (it imports and builds the file's assembly while the build reads its cache).
 Prints one row per build: seconds, ratio to cold, the CPU seconds of the
 build's processes (this one and its second processes: on two cores a build
-is CPU-bound when they are near twice its seconds), and which stages were
-reused. A reference loop (ten million additions in plain Python) is timed
+is CPU-bound when they are near twice its seconds), the same by process as
+the build reports them (``build``, ``analyses``, ``checks``), and which
+stages were reused. A reference loop (ten million additions in plain Python) is timed
 before and after: the machines this runs on differ by up to 1.7x in it, and a
 shared machine's speed drifts, so seconds compare between runs only where
 that figure does.
@@ -63,16 +64,18 @@ def edited(text: str, table: str, key: str, value: str) -> str:
     raise KeyError(f"{table}.{key} not in the file")
 
 
-def command_seconds(path: Path, out: Path) -> tuple[float, float, list[dict]]:
+def command_seconds(path: Path, out: Path) -> tuple[float, float, list[dict], dict[str, float]]:
     """`bvsr build PATH -o OUT --json` in a new interpreter: (wall seconds, CPU seconds of it and its
-    children, its stages as ``--json`` lists them)."""
+    children, its stages and its CPU seconds by process as ``--json`` lists them)."""
     c0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     done = subprocess.run([sys.executable, "-m", "bvsr_cad.cli", "build", str(path), "-o", str(out), "--json"],
                           cwd=ROOT, capture_output=True, text=True, check=True)
     seconds = time.perf_counter() - t0
     c1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return seconds, (c1.ru_utime + c1.ru_stime) - (c0.ru_utime + c0.ru_stime), json.loads(done.stdout)["stages"]
+    summary = json.loads(done.stdout)
+    return seconds, (c1.ru_utime + c1.ru_stime) - (c0.ru_utime + c0.ru_stime), summary["stages"], \
+        summary["cpu_seconds"]
 
 
 #: The reference loop as the notes and the README quote it: ``time python3 -c`` of this, at module level
@@ -114,18 +117,20 @@ def main() -> None:
         return sum(u.ru_utime + u.ru_stime for u in (resource.getrusage(resource.RUSAGE_SELF),
                                                      resource.getrusage(resource.RUSAGE_CHILDREN)))
 
-    def row(label: str, seconds: float, cpu: float, stages: list[dict]) -> float:
+    def row(label: str, seconds: float, cpu: float, stages: list[dict], by_process: dict[str, float]) -> float:
         reused = [s["stage"] for s in stages if s["status"] == "reused"]
-        rows.append((label, seconds, cpu))
+        split = " + ".join(f"{name} {s:.1f}" for name, s in by_process.items())
+        rows.append((label, seconds, cpu, split))
         print(f"{label:18} {seconds:7.1f} s  {cpu:6.1f} CPU s  reused: {', '.join(reused) or '-'}", flush=True)
         print("    " + "; ".join(f"{s['stage']} {s['status']} {s['seconds']:.1f} s" for s in stages), flush=True)
+        print(f"    CPU s by process, as the build reports them: {split}", flush=True)
         return seconds
 
     def run(label: str, path: Path) -> float:
         t0, c0 = time.perf_counter(), cpu_s()
         # As `bvsr build` does: the analyses' process started ahead, building the assembly of the file.
         res = build_export(path, work / "out", standby=SecondProcess.standby("bvsr_cad.pipeline", None, [str(path)]))
-        return row(label, time.perf_counter() - t0, cpu_s() - c0, res.stages)
+        return row(label, time.perf_counter() - t0, cpu_s() - c0, res.stages, res.cpu_s)
 
     before = reference_loop_s()
     print(f"reference loop {before:.2f} s, {os.cpu_count()} cores", flush=True)
@@ -146,9 +151,9 @@ def main() -> None:
             finally:
                 path.unlink()
         print()
-        print(f"{'build':18} {'seconds':>8} {'/ cold':>7} {'CPU s':>7}")
-        for label, seconds, cpu in rows:
-            print(f"{label:18} {seconds:8.1f} {seconds / cold:7.2f} {cpu:7.1f}")
+        print(f"{'build':18} {'seconds':>8} {'/ cold':>7} {'CPU s':>7}  CPU s by process")
+        for label, seconds, cpu, split in rows:
+            print(f"{label:18} {seconds:8.1f} {seconds / cold:7.2f} {cpu:7.1f}  {split}")
         print(f"reference loop {before:.2f} s before, {reference_loop_s():.2f} s after")
     finally:
         shutil.rmtree(work, ignore_errors=True)

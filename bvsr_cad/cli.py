@@ -80,12 +80,15 @@ def cmd_build(args) -> int:
             standby.close()  # a no-op once it gave its result; stops one given no work
     failed = [r for r in res.results if r.passed is False]
     summary = {"out": str(res.out_dir), "seconds": round(res.seconds, 2),
-               "passed": not failed, "failed_checks": [r.name for r in failed], "stages": res.stages}
+               "passed": not failed, "failed_checks": [r.name for r in failed], "stages": res.stages,
+               "cpu_seconds": res.cpu_s}
     if args.json:
         print(json.dumps(summary))
     else:
         reused = [s["stage"] for s in res.stages if s["status"] == "reused"]
-        print(f"wrote {res.out_dir}/ in {res.seconds:.1f} s; {len(res.results)} checks, {len(failed)} failed"
+        cpu = ", ".join(f"{name} {s:.1f} s" for name, s in res.cpu_s.items())
+        print(f"wrote {res.out_dir}/ in {res.seconds:.1f} s (CPU by process: {cpu}); {len(res.results)} checks, "
+              f"{len(failed)} failed"
               + (f"; reused from the cache: {', '.join(reused)}" if reused else ""))
         for r in failed:
             print(r.line())

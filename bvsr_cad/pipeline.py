@@ -284,6 +284,7 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
                 cache.put(analyses_key, lambda folder: (folder / "analyses.pkl").write_bytes(pickle.dumps(results)))
             # Their own time (in the second process, beside the stages above); the wait was shorter.
             log.record("analyses", False, results.seconds)
+            log.process("analyses", analyses.cpu_s if analyses is not None else None)
         t = time.perf_counter()
         manifest.update(write_analyses(results, tmp, spec.name))
         manifest.update(robot_entries if robot_entries is not None else robot_files(results.theta_max_per_joint()))
@@ -295,6 +296,7 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         t = time.perf_counter()
         say("checks")
         results = checks.finish()
+        log.process("checks", checks.cpu_s)
         manifest["checks"] = [r.to_json() for r in results]
         log.record("checks", False, checks_s + time.perf_counter() - t)
         t = time.perf_counter()
@@ -316,7 +318,7 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
     finally:
         if kernel_before is not None:
             kernel_threads(kernel_before)
-    return BuildResult(out, results, time.perf_counter() - opened.t0, log.stages)
+    return BuildResult(out, results, time.perf_counter() - opened.t0, log.stages, manifest["volatile"]["cpu_seconds"])
 
 
 #: The standby analyses process's head start (:func:`_prepare_analyses`): (params path, SHA-256) -> assembly.

@@ -26,6 +26,7 @@ from .checks.result import CheckResult
 from .exporters.manifest_file import write_manifest
 from .parameters.load import load_spec
 from .parameters.tables import TailSpec
+from .worker import cpu_seconds
 
 Progress = Callable[[str], None]
 
@@ -40,24 +41,41 @@ class BuildResult:
     results: list[CheckResult]
     seconds: float
     stages: list[dict] = field(default_factory=list)  # {"stage", "status": reused|built, "seconds"}
+    #: CPU seconds by process: ``build`` (this one, since the build opened) and each second process that
+    #: gave its result (``analyses``, ``checks``); see :meth:`StageLog.cpu_s`.
+    cpu_s: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass
 class StageLog:
-    """Per stage: reused from the cache or built, and the seconds it took (``bvsr build`` prints it)."""
+    """Per stage: reused from the cache or built, and the seconds it took (``bvsr build`` prints it);
+    and the CPU seconds of the build's processes."""
 
     say: Progress
     stages: list[dict] = field(default_factory=list)
+    cpu0: float = field(default_factory=cpu_seconds)  # this process's CPU seconds when the build opened
+    processes: dict[str, float] = field(default_factory=dict)
 
     def record(self, stage: str, reused: bool, seconds: float) -> None:
         self.stages.append({"stage": stage, "status": "reused" if reused else "built", "seconds": round(seconds, 3)})
         self.say(f"stage {stage}: {'reused' if reused else 'built'} in {seconds:.2f} s")
 
+    def process(self, name: str, cpu_s: float | None) -> None:
+        """A second process's CPU seconds (None: it gave no result, its work ran here or was not needed)."""
+        if cpu_s is not None:
+            self.processes[name] = cpu_s
+
+    def cpu_s(self) -> dict[str, float]:
+        """CPU seconds so far, by process: ``build``, this one since the build opened (its parameters loaded;
+        the pipeline's imports come after) and the second processes recorded, each from its own start
+        (its imports included). A CPU-bound build on two cores has their sum near twice its seconds."""
+        return {"build": round(cpu_seconds() - self.cpu0, 2), **{k: round(v, 2) for k, v in self.processes.items()}}
+
 
 def volatile(t0: float, log: StageLog) -> dict:
     """The manifest's one place for what changes from build to build of the same file."""
     return {"built_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "build_seconds": time.perf_counter() - t0,
-            "stages": log.stages}
+            "stages": log.stages, "cpu_seconds": log.cpu_s()}
 
 
 def check_output(out_dir: Path) -> None:
@@ -184,7 +202,7 @@ def reuse_whole(build: OpenedBuild) -> BuildResult | None:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return BuildResult(build.out, [CheckResult(**c) for c in manifest["checks"]],
-                       time.perf_counter() - build.t0, build.log.stages)
+                       time.perf_counter() - build.t0, build.log.stages, manifest["volatile"]["cpu_seconds"])
 
 
 __all__ = ["BuildResult", "OpenedBuild", "OutputError", "StageLog", "check_output", "clean_leftovers", "data_path",

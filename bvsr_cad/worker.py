@@ -4,8 +4,9 @@ The child is a fresh interpreter started as ``python -m bvsr_cad.worker MODULE -
 ARGS...`` (:func:`child_main`): it imports MODULE with Ctrl-C held back
 (:func:`interrupts_held`) and calls :func:`serve` with the module's
 ``SECOND_PROCESS`` (its function and, for a standby child, what prepares it), which
-runs that function and pickles ``("ok", result)`` or ``("error", exception)``
-onto its standard output (anything else printed there goes to stderr instead).
+runs that function and pickles ``("ok", result, cpu_s)`` or ``("error",
+exception, cpu_s)`` (``cpu_s``: the CPU seconds the child used, its threads
+and its imports included) onto its standard output (anything else printed there goes to stderr instead).
 Nothing is written to disk: the result travels in memory through the pipe. A
 fresh interpreter rather than :mod:`multiprocessing`: a spawned child would
 first re-run the caller's main script (a user's build script without a
@@ -142,10 +143,10 @@ def serve(_out: str, fn: Callable[..., Any], *args: Any, prepare: Callable[..., 
     except BaseException as exc:  # noqa: BLE001 - handed to the parent, which raises it
         payload = ("error", exc)
     try:
-        data = pickle.dumps(payload)
+        data = pickle.dumps((*payload, cpu_seconds()))
         pickle.loads(data)  # an exception class with its own __init__ may not come back
     except Exception:  # an exception or a result that does not pickle
-        data = pickle.dumps(("error", RuntimeError(f"second process failed: {payload[1]}")))
+        data = pickle.dumps(("error", RuntimeError(f"second process failed: {payload[1]}"), cpu_seconds()))
     with os.fdopen(result_fd, "wb") as out:
         out.write(data)
     # Its work is handed over: leave without the interpreter's teardown, which frees every object of
@@ -153,6 +154,12 @@ def serve(_out: str, fn: Callable[..., Any], *args: Any, prepare: Callable[..., 
     # waits for this process's end, and on a busy machine it is CPU taken from the build).
     sys.stderr.flush()
     os._exit(0)
+
+
+def cpu_seconds() -> float:
+    """CPU seconds (user and system, every thread) this process has used since it started."""
+    t = os.times()
+    return t.user + t.system
 
 
 #: Environment variables that name a folder, taken from where the user stands: a child works elsewhere.
@@ -173,6 +180,8 @@ class SecondProcess:
     def __init__(self, proc: subprocess.Popen):
         self.proc: subprocess.Popen | None = proc
         self.t0 = time.perf_counter()
+        #: The CPU seconds the child used, once :meth:`result` has its answer (None before, or when it was lost).
+        self.cpu_s: float | None = None
         self._chunks: list[bytes] = []
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
@@ -248,7 +257,7 @@ class SecondProcess:
         code = self.proc.wait()
         self._reader.join()
         try:
-            status, payload = pickle.loads(b"".join(self._chunks))
+            status, payload, self.cpu_s = pickle.loads(b"".join(self._chunks))
         except (EOFError, pickle.UnpicklingError) as exc:
             raise WorkerLost(f"the second process ended (exit code {code}) without a result") from exc
         finally:

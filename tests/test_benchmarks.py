@@ -51,13 +51,14 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, 
     def fake_build(path, out, standby=None):
         spec = load_spec(path)  # a ParamError propagates, as the real build's would
         built.append((Path(path), spec, os.environ["BVSR_CACHE"]))
-        return BuildResult(Path(out), [], 1.0, [{"stage": "export", "status": "built", "seconds": 1.0}])
+        return BuildResult(Path(out), [], 1.0, [{"stage": "export", "status": "built", "seconds": 1.0}],
+                           {"build": 0.6, "analyses": 0.25})
 
     commands: list[tuple[Path, str]] = []
 
     def fake_command(path, out):
         commands.append((Path(path), os.environ["BVSR_CACHE"]))
-        return 0.5, 0.4, [{"stage": "export", "status": "reused", "seconds": 0.1}]
+        return 0.5, 0.4, [{"stage": "export", "status": "reused", "seconds": 0.1}], {"build": 0.31}
 
     monkeypatch.setattr(bvsr_cad.pipeline, "build_export", fake_build)
     monkeypatch.setattr(bench, "command_seconds", fake_command)
@@ -89,9 +90,12 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, 
     assert out.splitlines()[-1] == "reference loop 0.91 s before, 0.97 s after"
     table = out.splitlines()[-(4 + len(bench.EDITS)):-1]
     assert [line[:18].strip() for line in table] == ["cold", "no-op", "no-op, command", *bench.EDITS]
-    assert float(table[0].split()[-2]) == 1.0  # its seconds / cold
-    command = table[2].split()
-    assert (command[-3], command[-1]) == ("0.5", "0.4")  # the command's seconds and CPU seconds as measured
+    # seconds, / cold, CPU s, then the CPU seconds by process as the build reported them
+    cold = table[0][18:].split()
+    assert cold[1] == "1.00" and cold[3:] == ["build", "0.6", "+", "analyses", "0.2"]
+    command = table[2][18:].split()
+    assert (command[0], *command[2:]) == ("0.5", "0.4", "build", "0.3")  # the command's, as measured
+    assert "    CPU s by process, as the build reports them: build 0.6 + analyses 0.2" in out.splitlines()
 
 
 def test_rebuild_bench_edit_names_a_missing_key():

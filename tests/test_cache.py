@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import resource
 import subprocess
 import sys
 import threading
@@ -175,12 +176,28 @@ def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(bvsr_expo
     edit = write_toml(tmp_path / "pvc.toml", data)
     bvsr = Path(sys.executable).with_name("bvsr")
     cmd = [str(bvsr)] if bvsr.exists() else [sys.executable, "-m", "bvsr_cad.cli"]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     runs = [subprocess.Popen([*cmd, "build", str(edit), "-o", str(tmp_path / f"cached{i}"), "--json", "-q"],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for i in (1, 2)]
     outs = [r.communicate(timeout=1200) for r in runs]
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     assert [r.returncode for r in runs] == [0, 0], [o[1][-2000:] for o in outs]
-    stages = {s["stage"]: s["status"] for s in json.loads(outs[0][0])["stages"]}
+    summaries = [json.loads(o[0]) for o in outs]
+    stages = {s["stage"]: s["status"] for s in summaries[0]["stages"]}
     assert stages["part files"] == stages["previews"] == "reused"  # the rod's material moves no solid
+    # The CPU seconds each build reports by process (its own since it opened, each second process's
+    # own) against the kernel's count of the two commands and everything they started: all of it but
+    # their interpreters' start, imports and parameter loading, and the tools the checks run (measured:
+    # 43.8 of 46.6 s; without its analyses' process a build would report about half of it).
+    for summary in summaries:
+        cpu = summary["cpu_seconds"]
+        built = {s["stage"] for s in summary["stages"] if s["status"] == "built"}
+        expected = {"build"} | ({"analyses", "checks"} if (os.cpu_count() or 1) > 1 else set())
+        assert set(cpu) == (expected if "analyses" in built else expected - {"analyses"}), (cpu, built)
+        assert all(v > 0 for v in cpu.values()), cpu
+    reported = sum(v for summary in summaries for v in summary["cpu_seconds"].values())
+    counted = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+    assert 0.85 * counted <= reported <= counted + 0.05, (reported, counted)  # rounded to 0.01 s each
     assert main_no_cache(edit, tmp_path / "fresh") == 0
     for i in (1, 2):
         assert _differences(tmp_path / f"cached{i}", tmp_path / "fresh") == []

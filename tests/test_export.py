@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import resource
 import shutil
 from pathlib import Path
 
@@ -245,14 +246,21 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
     from bvsr_cad.parameters.load import ParamError
 
     changed = write_toml(tmp_path / "edited.toml", {"name": "edited"})
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     proc = worker.SecondProcess.start("bvsr_cad.pipeline", [str(changed), "sha256 of what the build read"],
                                       tmp_path)
     if proc is None:
         pytest.skip("one core: the analyses never leave the process")
+    assert proc.cpu_s is None
     # The child's exception is raised here, as it was raised there.
     with pytest.raises(ParamError, match=r"edited.toml(.|\n)*changed while the build was running"):
         proc.result()
     assert not proc.running
+    # With the CPU seconds it used (its imports of the pipeline), as the kernel counted them but for its
+    # last steps (pickling the answer, leaving).
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    counted = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+    assert counted > 0.5 and counted - 0.2 <= proc.cpu_s <= counted, (proc.cpu_s, counted)
     # A process that dies without a result: the work runs here instead.
     monkeypatch.setattr(worker.sys, "executable", shutil.which("false") or "/bin/false")
     lost = worker.SecondProcess.start("bvsr_cad.pipeline", [], tmp_path)
@@ -260,6 +268,7 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
     assert worker.result_or(lost, lambda: {"analysis": "computed here"}, said.append, "analyses") == {
         "analysis": "computed here"}
     assert any("without a result; running them here" in m for m in said), said
+    assert lost.cpu_s is None
 
 
 def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path, monkeypatch):

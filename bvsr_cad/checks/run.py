@@ -181,6 +181,8 @@ class Checks:
         self._molds_state: tuple | None = None  # the molds' reads when the early checks started
         self._printability: _Printability | None = None
         self._printability_reads = ""
+        #: The CPU seconds of the second process, once :meth:`finish` has its verdicts (else None).
+        self.cpu_s: float | None = None
         exp = Export.open(root)
         if run_slicer:
             self.sliced_now = slice_stls(exp, progress=self.say)
@@ -234,7 +236,7 @@ class Checks:
             own += check_analyses(exp)
             own += _kept(self._robot, exp, robot_reads(exp), lambda: check_robot(exp), say,
                          "robot descriptions (URDF, MJCF, MuJoCo, PyBullet)")
-            printability = self._printability
+            printability = started = self._printability
             beside = printability.part_meshes() if self._mesh_state and printability is not None else None
             if beside is not None:
                 self._mesh = {name: (self._mesh_state[name], r) for name, r in beside[0].items()
@@ -259,6 +261,8 @@ class Checks:
             else:  # started on files that changed since: run on the export as it is now
                 say("molds")
                 results.extend(_mold_checks(exp, memo))
+            if started is not None and started.proc is not None:
+                self.cpu_s = started.proc.cpu_s
         finally:
             self.close()
         if self.cache is not None:

@@ -163,7 +163,7 @@ def evaluate(task: dict[str, Any]) -> dict[str, Any]:
         raise
     else:
         try:
-            kind, result = pickle.loads(out)
+            kind, result, _cpu_s = pickle.loads(out)  # worker.serve's answer
         except Exception:  # noqa: BLE001 - the child died without a result
             tail = err.decode("utf-8", "replace").strip().splitlines()[-3:]
             row["reason"] = f"the variant's process ended with code {proc.returncode}: " + " | ".join(tail)

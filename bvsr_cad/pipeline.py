@@ -19,7 +19,7 @@ import trimesh
 
 from .analysis.poses import mold_scene, twin_scene, viewer_scenes
 from .analysis.limits import per_joint_rad
-from .analysis.run import run_analyses
+from .analysis.run import BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS, run_analyses
 from .assembly.build import build_assembly
 from .assembly.inertia import SolidProperties
 from .assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs, rigid_robot_model
@@ -132,8 +132,11 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         if cached_analyses is None:
             # The analyses (workspace, clearance, limits) need only the parameters: a second process
             # runs them from the file while this one builds, exports and fabricates.
+            # With its geometry analyses cached the tail's solids are unchanged: the CAD stages come from
+            # the cache, and the analyses take both cores while this process waits for them.
             work = [str(params.resolve()), params_sha256(params),
-                    str(geometry_hit / GEOMETRY_FILE) if geometry_hit is not None else ""]
+                    str(geometry_hit / GEOMETRY_FILE) if geometry_hit is not None else "",
+                    str(BESIDE_BUILD_THREADS if geometry_hit is None else BESIDE_IDLE_BUILD_THREADS)]
             analyses = (standby if standby is not None and standby.begin(work, tmp)
                         else SecondProcess.start("bvsr_cad.pipeline", work, tmp, say))
             if analyses is not None:
@@ -339,10 +342,12 @@ def _prepare_analyses(params: str) -> None:
         _PREPARED[str(Path(params).resolve()), before] = asm
 
 
-def _analyses_process(params: str, sha256: str, geometry: str = ""):
+def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str = ""):
     """The analyses' second process (``python -m bvsr_cad.worker bvsr_cad.pipeline - PARAMS SHA256
-    [GEOMETRY]``): here, not in the analysis layer, because a measured workspace is predicted in the
-    simulator. ``GEOMETRY``: the cached geometry analyses' pickle (computed here when it is gone)."""
+    [GEOMETRY [THREADS]]``): here, not in the analysis layer, because a measured workspace is predicted in
+    the simulator. ``GEOMETRY``: the cached geometry analyses' pickle (computed here when it is gone);
+    ``THREADS``: those that predict the measured rows (default
+    :data:`bvsr_cad.analysis.run.BESIDE_BUILD_THREADS`)."""
     from .analysis.run import from_params
 
     kernel_threads(1)  # beside the build, which keeps the other core busy
@@ -350,8 +355,9 @@ def _analyses_process(params: str, sha256: str, geometry: str = ""):
         given = pickle.loads(Path(geometry).read_bytes()) if geometry else None
     except OSError:  # evicted since the build looked: computed here
         given = None
-    return from_params(params, sha256, protocol_radius_mm, given, _PREPARED.pop((str(Path(params).resolve()), sha256),
-                                                                                None))
+    return from_params(params, sha256, protocol_radius_mm, given,
+                       _PREPARED.pop((str(Path(params).resolve()), sha256), None),
+                       int(threads) if threads else BESIDE_BUILD_THREADS)
 
 
 #: What the analyses' second process serves (:func:`bvsr_cad.worker.child_main`): its work and its head start.

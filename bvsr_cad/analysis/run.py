@@ -142,14 +142,19 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
 #: had written the print files whose checks come next, and a core stood idle between (measured on the
 #: default tail, 2 cores: 32.2 s; with 2 threads 30.7-30.9 s and no idle core until the checks' end).
 BESIDE_BUILD_THREADS = 2
+#: The same where the build's own stages are few (its geometry unchanged: the part files, previews and
+#: drawings come from the cache): the protocol's two simulations side by side, beside one thread for the
+#: other rows, so that both cores work while the build waits for them.
+BESIDE_IDLE_BUILD_THREADS = 3
 
 
 def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = None,
-                geometry: GeometryAnalyses | None = None, asm: Assembly | None = None) -> AnalysisResults:
+                geometry: GeometryAnalyses | None = None, asm: Assembly | None = None,
+                threads: int = BESIDE_BUILD_THREADS) -> AnalysisResults:
     """The second process's work: the analyses of the parameter file the build read (``sha256``),
     progress on stderr (the parent relays it). Its entry point is the pipeline's (which gives
-    ``workspace_sim``, from its cache ``geometry``, and ``asm`` when it built the assembly of this very
-    file ahead)."""
+    ``workspace_sim``, from its cache ``geometry``, ``asm`` when it built the assembly of this very
+    file ahead, and ``threads``: :data:`BESIDE_BUILD_THREADS` or :data:`BESIDE_IDLE_BUILD_THREADS`)."""
     import sys
 
     from ..assembly.build import build_assembly
@@ -163,4 +168,4 @@ def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = N
 
     if asm is None:
         asm = build_assembly(load_spec(params))
-    return run_analyses(asm, say, params, workspace_sim, geometry, BESIDE_BUILD_THREADS)
+    return run_analyses(asm, say, params, workspace_sim, geometry, threads)

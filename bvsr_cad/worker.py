@@ -5,10 +5,11 @@ ARGS...`` (:func:`child_main`): it imports MODULE with Ctrl-C held back
 (:func:`interrupts_held`) and calls :func:`serve` with the module's
 ``SECOND_PROCESS`` (its function and, for a standby child, what prepares it), which
 runs that function and pickles ``("ok", result, cpu_s)`` or ``("error",
-exception, cpu_s)`` (``cpu_s``: the CPU seconds the child used, its threads
-and its imports included) onto its standard output (anything else printed there goes to stderr instead).
-Nothing is written to disk: the result travels in memory through the pipe. A
-fresh interpreter rather than :mod:`multiprocessing`: a spawned child would
+exception, cpu_s)`` onto its standard output (``cpu_s``: the CPU seconds the
+child used, its threads and its imports included; anything else printed there
+goes to stderr instead). Nothing is written to disk: the result travels in
+memory through the pipe. A fresh interpreter rather than
+:mod:`multiprocessing`: a spawned child would
 first re-run the caller's main script (a user's build script without a
 ``__main__`` guard would build twice).
 

@@ -187,8 +187,10 @@ def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(bvsr_expo
     assert stages["part files"] == stages["previews"] == "reused"  # the rod's material moves no solid
     # The CPU seconds each build reports by process (its own since it opened, each second process's
     # own) against the kernel's count of the two commands and everything they started: all of it but
-    # their interpreters' start, imports and parameter loading, and the tools the checks run (measured:
-    # 43.8 of 46.6 s; without its analyses' process a build would report about half of it).
+    # their interpreters' start, imports and parameter loading, the tools the checks run, and a standby
+    # analyses' process closed unused where a build took the analyses from the other's cache entry
+    # (measured: 43.8 of 46.6 s, both building them; without its analyses' process a build would
+    # report about half of it).
     for summary in summaries:
         cpu = summary["cpu_seconds"]
         built = {s["stage"] for s in summary["stages"] if s["status"] == "built"}
@@ -197,7 +199,7 @@ def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(bvsr_expo
         assert all(v > 0 for v in cpu.values()), cpu
     reported = sum(v for summary in summaries for v in summary["cpu_seconds"].values())
     counted = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
-    assert 0.85 * counted <= reported <= counted + 0.05, (reported, counted)  # rounded to 0.01 s each
+    assert 0.8 * counted <= reported <= counted + 0.05, (reported, counted)  # rounded to 0.01 s each
     assert main_no_cache(edit, tmp_path / "fresh") == 0
     for i in (1, 2):
         assert _differences(tmp_path / f"cached{i}", tmp_path / "fresh") == []

@@ -205,6 +205,16 @@ def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(bvsr_expo
         assert _differences(tmp_path / f"cached{i}", tmp_path / "fresh") == []
 
 
+def _edit_beside_its_data(tmp_path: Path, data: dict) -> Path:
+    """``data`` written as ``tmp_path/params/bvsr.toml``, with the calibration's data file where its
+    relative path leads (so that the edit's analyses compare the same rows as the default file's)."""
+    (tmp_path / "params").mkdir()
+    (tmp_path / "data").mkdir()
+    data_file = (PARAMS / data["calibration"]["data_file"]).resolve()
+    (tmp_path / "data" / data_file.name).write_bytes(data_file.read_bytes())
+    return write_toml(tmp_path / "params" / "bvsr.toml", data)
+
+
 class _StageReached(Exception):
     """Raised where a test stops a build: at its first stage, the assembly."""
 
@@ -218,13 +228,8 @@ def test_a_build_whose_analyses_are_cached_stops_its_standby_before_its_stages(b
     analyses, and runs beside them."""
     from bvsr_cad import pipeline, worker
 
-    folder = tmp_path / "params"
-    folder.mkdir()
-    (tmp_path / "data").mkdir()  # the calibration's data file, where its relative path leads
-    data_file = (PARAMS / data["calibration"]["data_file"]).resolve()
-    (tmp_path / "data" / data_file.name).write_bytes(data_file.read_bytes())
     data["fabrication_package"]["printer_x_mm"] = 220.0
-    edit = write_toml(folder / "bvsr.toml", data)
+    edit = _edit_beside_its_data(tmp_path, data)
     seen: list[bool] = []
 
     def first_stage(*_args, **_kw):
@@ -252,29 +257,22 @@ def test_analyses_take_both_cores_when_the_geometry_is_cached(bvsr_export, tmp_p
     from bvsr_cad import pipeline, worker
     from bvsr_cad.analysis.run import BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS
 
-    folder = tmp_path / "params"
-    folder.mkdir()
-    (tmp_path / "data").mkdir()
-    data_file = (PARAMS / data["calibration"]["data_file"]).resolve()
-    (tmp_path / "data" / data_file.name).write_bytes(data_file.read_bytes())
     data["actuation"]["effective_area_mm2"] = 150.0
-    edit = write_toml(folder / "bvsr.toml", data)
+    edit = _edit_beside_its_data(tmp_path, data)
     given: list[list[str]] = []
 
-    def begin(self, args, cwd):
+    def start(cls, module, args, *_rest, **_kw):
         given.append(list(args))
-        return False  # then the build starts a second process of its own: stopped at the first stage
+        return None  # no second process: the build would run its analyses itself, after its stages
 
     def first_stage(*_args, **_kw):
         raise _StageReached
 
-    monkeypatch.setattr(worker.SecondProcess, "begin", begin)
-    monkeypatch.setattr(worker.SecondProcess, "start", classmethod(lambda cls, *a, **k: None))
+    monkeypatch.setattr(worker.SecondProcess, "start", classmethod(start))
     monkeypatch.setattr(pipeline, "build_assembly", first_stage)
     for use_cache in (True, False):
         with pytest.raises(_StageReached):
-            pipeline.build_export(edit, tmp_path / "out", use_cache=use_cache, standby=worker.SecondProcess(
-                subprocess.Popen([sys.executable, "-c", "pass"], stdout=subprocess.PIPE)))
+            pipeline.build_export(edit, tmp_path / "out", use_cache=use_cache)
     assert [(bool(args[2]), args[3]) for args in given] == [(True, str(BESIDE_IDLE_BUILD_THREADS)),
                                                            (False, str(BESIDE_BUILD_THREADS))]
     assert BESIDE_IDLE_BUILD_THREADS > BESIDE_BUILD_THREADS

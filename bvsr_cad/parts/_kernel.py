@@ -144,14 +144,32 @@ def remembered(make: Callable[..., bd.Shape]) -> Callable[..., bd.Shape]:
     return remember
 
 
+def _boolean(base: bd.Shape, tools: list[bd.Shape], operation) -> bd.Shape:
+    """build123d's boolean of ``base`` and ``tools`` (its clean and history included: what
+    ``Shape.cut`` and ``Shape.fuse`` run) with OCCT's oriented bounding boxes on
+    (``SetUseOBB``): the kernel then rejects the pairs of sub-shapes whose oriented boxes do not
+    meet before it intersects them, for the same solid. Measured on the default tail, alternated (4
+    each, one core): the mold set 2.2-2.9 -> 0.8-1.4 CPU s, the assembly and the rigid twin within
+    the machine's noise; the exports byte-identical (the test of the part generators' volumes and
+    ``tests/test_cache.py`` compare them)."""
+    operation.SetUseOBB(True)
+    return base._bool_op((base,), tools, operation)  # build123d 0.12's one boolean path (pinned)
+
+
 def cut_all(base: bd.Shape, tools: Iterable[bd.Shape]) -> bd.Shape:
+    """``base`` less every one of ``tools`` (itself when there are none)."""
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Cut
+
     tools = list(tools)
-    return base.cut(*tools) if tools else base
+    return _boolean(base, tools, BRepAlgoAPI_Cut()) if tools else base
 
 
 def fuse_all(base: bd.Shape, tools: Iterable[bd.Shape]) -> bd.Shape:
+    """``base`` and every one of ``tools`` as one shape (itself when there are none)."""
+    from OCP.BRepAlgoAPI import BRepAlgoAPI_Fuse
+
     tools = list(tools)
-    return base.fuse(*tools) if tools else base
+    return _boolean(base, tools, BRepAlgoAPI_Fuse()) if tools else base
 
 
 def deg(angle_rad: float) -> float:

@@ -224,16 +224,16 @@ def mold_set(soa: SoaTable, flange_diameter_mm: float, casting: Casting) -> Mold
 
     def shell(side: int) -> bd.Solid:
         u0, u1 = (0.0, w) if side > 0 else (-w, 0.0)
-        body = _uez_box(u0, u1, -w, w, z_lo, z_hi).cut(envelope)
+        body = cut_all(_uez_box(u0, u1, -w, w, z_lo, z_hi), [envelope])
         mine = [f for f in shell_features(side) if f.role != "pin"]
         body = cut_all(body, solids(mine))
         body = fuse_all(body, ab_pins) if side > 0 else body
         return single_solid(body, f"mold half_{'a' if side > 0 else 'b'}")
 
     half_a, half_b = shell(1), shell(-1)
-    plate = _uez_box(-w, w, -w, w, z_bot, z_lo).cut(envelope, core, gate, *bolts)
+    plate = cut_all(_uez_box(-w, w, -w, w, z_bot, z_lo), [envelope, core, gate, *bolts])
     plate = single_solid(fuse_all(plate, plate_pins), "mold bottom_plate")
-    lid = _uez_box(-w, w, -w, w, z_hi, z_top).cut(envelope, core, *vents, *bolts)
+    lid = cut_all(_uez_box(-w, w, -w, w, z_hi, z_top), [envelope, core, *vents, *bolts])
     lid = single_solid(fuse_all(lid, lid_pins), "mold lid")
 
     parts = {

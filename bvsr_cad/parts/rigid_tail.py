@@ -129,7 +129,7 @@ def rigid_tail_pieces(spec: TailSpec, layouts: list[PanelLayout],
         if k < n:
             rod = bd.Solid.make_cylinder(spec.vertebra.diameter_mm / 2.0, top - z0)
             columns = [soa_env.moved(location(down @ m)) for m in soa_transforms[k]]
-            body = body.fuse(rod, *columns)
+            body = fuse_all(body, [rod, *columns])
         cuts = [cylinder_between(c.p0, c.p1, c.diameter_mm) for c in lay.cuts if c.role in KEPT_ROLES]
         h = top - z0
         # Tie rod along the axis, through the whole piece.

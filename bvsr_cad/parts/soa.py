@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import build123d as bd
 
 from ..parameters.tables import SoaTable
-from ._kernel import remembered, single_solid
+from ._kernel import cut_all, fuse_all, remembered, single_solid
 
 
 @dataclass(frozen=True)
@@ -66,7 +66,7 @@ def soa_envelope(soa: SoaTable, flange_diameter_mm: float) -> bd.Solid:
     r = flange_diameter_mm / 2.0
     lower = bd.Solid.make_cylinder(r, p.flange_thickness_mm)
     upper = bd.Solid.make_cylinder(r, p.flange_thickness_mm, bd.Plane.XY.offset(p.height_mm - p.flange_thickness_mm))
-    return single_solid(lower.fuse(outer, upper), "SOA envelope")
+    return single_solid(fuse_all(lower, [outer, upper]), "SOA envelope")
 
 
 @remembered
@@ -92,5 +92,5 @@ def soa_body(soa: SoaTable, flange_diameter_mm: float) -> bd.Solid:
         GeometryError: the kernel did not produce one valid solid.
     """
     # The interior runs straight through both flanges at the end size.
-    body = soa_envelope(soa, flange_diameter_mm).cut(soa_interior(soa, flange_diameter_mm))
+    body = cut_all(soa_envelope(soa, flange_diameter_mm), [soa_interior(soa, flange_diameter_mm)])
     return single_solid(body, "SOA body")

@@ -12,6 +12,10 @@ import build123d as bd
 import numpy as np
 
 
+#: A B-spline face is flat (:func:`ruled_loft`) when no point of it leaves its plane by more.
+PLANAR_TOLERANCE_MM = 1e-7
+
+
 class GeometryError(RuntimeError):
     """The CAD kernel could not make a valid solid from valid parameters."""
 
@@ -170,6 +174,45 @@ def fuse_all(base: bd.Shape, tools: Iterable[bd.Shape]) -> bd.Shape:
 
     tools = list(tools)
     return _boolean(base, tools, BRepAlgoAPI_Fuse()) if tools else base
+
+
+def ruled_loft(sections: Sequence[bd.Face], what: str) -> bd.Solid:
+    """The ruled loft through ``sections`` (bottom to top) with every planar band a plane.
+
+    OCCT's ruled loft makes each band between two section edges a B-spline surface, also where the
+    band is flat (between two straight edges). Those faces are given their plane here (the same
+    edges, so the same solid): what reads the solid then meets a plane, not a B-spline, and a CAD
+    user picks a flat face that is one. The SOA's outer loft has 16 flat bands of 32, its interior
+    all 16. Measured on the default tail: its parts, mold set and rigid twin mesh for print (0.01 mm)
+    to 255,188 triangles instead of 523,656 (OCCT refines a B-spline face's interior, flat or not), in
+    5.1-6.3 CPU s instead of 6.5-7.8 (alternated, one core); their volumes unchanged to 1e-4 mm^3;
+    the export 72 MB instead of 104 MB.
+    """
+    from OCP.BRep import BRep_Builder, BRep_Tool
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+    from OCP.BRepLib import BRepLib
+    from OCP.BRepTools import BRepTools
+    from OCP.GeomAbs import GeomAbs_BSplineSurface
+    from OCP.GeomLib import GeomLib_IsPlanarSurface
+    from OCP.TopoDS import TopoDS_Shell, TopoDS_Solid
+
+    loft = bd.loft(list(sections), ruled=True)
+    builder = BRep_Builder()
+    shell = TopoDS_Shell()
+    builder.MakeShell(shell)
+    for f in loft.faces():
+        face = f.wrapped
+        if BRepAdaptor_Surface(face).GetType() == GeomAbs_BSplineSurface:
+            planar = GeomLib_IsPlanarSurface(BRep_Tool.Surface_s(face), PLANAR_TOLERANCE_MM)
+            if planar.IsPlanar():
+                face = BRepBuilderAPI_MakeFace(planar.Plan(), BRepTools.OuterWire_s(face), True).Face()
+        builder.Add(shell, face)
+    solid = TopoDS_Solid()
+    builder.MakeSolid(solid)
+    builder.Add(solid, shell)
+    BRepLib.OrientClosedSolid_s(solid)
+    return single_solid(bd.Solid(solid), what)
 
 
 def deg(angle_rad: float) -> float:

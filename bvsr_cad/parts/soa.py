@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import build123d as bd
 
 from ..parameters.tables import SoaTable
-from ._kernel import cut_all, fuse_all, remembered, single_solid
+from ._kernel import cut_all, fuse_all, remembered, ruled_loft, single_solid
 
 
 @dataclass(frozen=True)
@@ -62,7 +62,7 @@ def soa_envelope(soa: SoaTable, flange_diameter_mm: float) -> bd.Solid:
     rigid twin's columns all start from it.
     """
     p = bellows_profile(soa, flange_diameter_mm)
-    outer = bd.loft([rounded_square(s, p.corner_radius_mm, z) for s, z in zip(p.outer_side_mm, p.z_mm)], ruled=True)
+    outer = ruled_loft([rounded_square(s, p.corner_radius_mm, z) for s, z in zip(p.outer_side_mm, p.z_mm)], "SOA outer loft")
     r = flange_diameter_mm / 2.0
     lower = bd.Solid.make_cylinder(r, p.flange_thickness_mm)
     upper = bd.Solid.make_cylinder(r, p.flange_thickness_mm, bd.Plane.XY.offset(p.height_mm - p.flange_thickness_mm))
@@ -76,8 +76,7 @@ def soa_interior(soa: SoaTable, flange_diameter_mm: float, beyond_ends_mm: float
     p = bellows_profile(soa, flange_diameter_mm)
     inner_z = (-beyond_ends_mm, *p.z_mm, p.height_mm + beyond_ends_mm)
     inner_s = (p.inner_side_mm[0], *p.inner_side_mm, p.inner_side_mm[-1])
-    return single_solid(bd.loft([rounded_square(s, 0.0, z) for s, z in zip(inner_s, inner_z)], ruled=True),
-                        "SOA interior")
+    return ruled_loft([rounded_square(s, 0.0, z) for s, z in zip(inner_s, inner_z)], "SOA interior")
 
 
 @remembered

@@ -129,7 +129,7 @@ def main() -> None:
     def run(label: str, path: Path) -> float:
         t0, c0 = time.perf_counter(), cpu_s()
         # As `bvsr build` does: the analyses' process started ahead, building the assembly of the file.
-        res = build_export(path, work / "out", standby=SecondProcess.standby("bvsr_cad.pipeline", None, [str(path)]))
+        res = build_export(path, work / "out", standby=SecondProcess.standby("bvsr_cad.analyses_process", None, [str(path)]))
         return row(label, time.perf_counter() - t0, cpu_s() - c0, res.stages, res.cpu_s)
 
     before = reference_loop_s()

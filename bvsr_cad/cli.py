@@ -62,7 +62,7 @@ def cmd_build(args) -> int:
 
     # The analyses' second process imports its modules beside this process's imports of the pipeline, and
     # builds the tail's assembly from the file while this process decides what the cache holds.
-    standby = SecondProcess.standby("bvsr_cad.pipeline", say, [str(Path(args.params).resolve())])
+    standby = SecondProcess.standby("bvsr_cad.analyses_process", say, [str(Path(args.params).resolve())])
     try:
         # A bad file is refused, and an export the cache holds whole is published, in a fraction of a
         # second: before the pipeline's imports (seconds).

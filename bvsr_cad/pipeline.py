@@ -38,7 +38,7 @@ from .exporters.report import report_pictures, write_report
 from .exporters.reproducible import make_reproducible
 from .exporters.robot_files import write_robot
 from .exporters.viewer import write_viewer
-from .parameters.load import load_spec, params_sha256
+from .parameters.load import params_sha256
 from .parts._kernel import kernel_threads
 from .publish import BuildResult, OpenedBuild, open_build, publish, reuse_whole, temporary_folder, volatile
 from .sim import protocol_radius_mm
@@ -80,7 +80,7 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
 
     With ``use_cache`` the stages whose inputs are unchanged are taken from the artifact cache
     (:mod:`bvsr_cad.cache`): the whole export, the analyses, the parts' files and previews.
-    ``standby``: the analyses' second process started ahead (``SecondProcess.standby("bvsr_cad.pipeline")``,
+    ``standby``: the analyses' second process started ahead (``SecondProcess.standby("bvsr_cad.analyses_process")``,
     as the command line does before it imports this module, so that the two import side by side), given
     its work here if the analyses are to be run, else stopped.
 
@@ -138,7 +138,7 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
                     str(geometry_hit / GEOMETRY_FILE) if geometry_hit is not None else "",
                     str(BESIDE_BUILD_THREADS if geometry_hit is None else BESIDE_IDLE_BUILD_THREADS)]
             analyses = (standby if standby is not None and standby.begin(work, tmp)
-                        else SecondProcess.start("bvsr_cad.pipeline", work, tmp, say))
+                        else SecondProcess.start("bvsr_cad.analyses_process", work, tmp, say))
             if analyses is not None:
                 say("analyses: started in a second process")
                 # Both cores are busy from here to the end: OCCT's own threads would only contend.
@@ -322,43 +322,3 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         if kernel_before is not None:
             kernel_threads(kernel_before)
     return BuildResult(out, results, time.perf_counter() - opened.t0, log.stages, manifest["volatile"]["cpu_seconds"])
-
-
-#: The standby analyses process's head start (:func:`_prepare_analyses`): (params path, SHA-256) -> assembly.
-_PREPARED: dict[tuple[str, str], object] = {}
-
-
-def _prepare_analyses(params: str) -> None:
-    """A standby analyses process's head start (``python -m bvsr_cad.worker bvsr_cad.pipeline --standby
-    PARAMS``): the tail's assembly, built from the file while the build imports and reads its cache; used
-    only if the work that comes names the same file with the same SHA-256 (the bytes the assembly was
-    built from)."""
-    from .assembly.build import build_assembly
-
-    kernel_threads(1)  # beside the build, which keeps the other core busy
-    before = params_sha256(params)
-    asm = build_assembly(load_spec(params))
-    if params_sha256(params) == before:
-        _PREPARED[str(Path(params).resolve()), before] = asm
-
-
-def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str = ""):
-    """The analyses' second process (``python -m bvsr_cad.worker bvsr_cad.pipeline - PARAMS SHA256
-    [GEOMETRY [THREADS]]``): here, not in the analysis layer, because a measured workspace is predicted in
-    the simulator. ``GEOMETRY``: the cached geometry analyses' pickle (computed here when it is gone);
-    ``THREADS``: those that predict the measured rows (default
-    :data:`bvsr_cad.analysis.run.BESIDE_BUILD_THREADS`)."""
-    from .analysis.run import from_params
-
-    kernel_threads(1)  # beside the build, which keeps the other core busy
-    try:
-        given = pickle.loads(Path(geometry).read_bytes()) if geometry else None
-    except OSError:  # evicted since the build looked: computed here
-        given = None
-    return from_params(params, sha256, protocol_radius_mm, given,
-                       _PREPARED.pop((str(Path(params).resolve()), sha256), None),
-                       int(threads) if threads else BESIDE_BUILD_THREADS)
-
-
-#: What the analyses' second process serves (:func:`bvsr_cad.worker.child_main`): its work and its head start.
-SECOND_PROCESS = (_analyses_process, _prepare_analyses)

@@ -238,7 +238,7 @@ def test_a_build_whose_analyses_are_cached_stops_its_standby_before_its_stages(b
 
     monkeypatch.setattr(pipeline, "build_assembly", first_stage)
     for use_cache in (True, False):
-        standby = worker.SecondProcess.standby("bvsr_cad.pipeline", None, [str(edit)])
+        standby = worker.SecondProcess.standby("bvsr_cad.analyses_process", None, [str(edit)])
         if standby is None:
             pytest.skip("one core: the analyses never leave the process")
         with pytest.raises(_StageReached):

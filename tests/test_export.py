@@ -247,7 +247,7 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
 
     changed = write_toml(tmp_path / "edited.toml", {"name": "edited"})
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    proc = worker.SecondProcess.start("bvsr_cad.pipeline", [str(changed), "sha256 of what the build read"],
+    proc = worker.SecondProcess.start("bvsr_cad.analyses_process", [str(changed), "sha256 of what the build read"],
                                       tmp_path)
     if proc is None:
         pytest.skip("one core: the analyses never leave the process")
@@ -263,7 +263,7 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
     assert counted > 0.5 and counted - 0.2 <= proc.cpu_s <= counted, (proc.cpu_s, counted)
     # A process that dies without a result: the work runs here instead.
     monkeypatch.setattr(worker.sys, "executable", shutil.which("false") or "/bin/false")
-    lost = worker.SecondProcess.start("bvsr_cad.pipeline", [], tmp_path)
+    lost = worker.SecondProcess.start("bvsr_cad.analyses_process", [], tmp_path)
     said: list[str] = []
     assert worker.result_or(lost, lambda: {"analysis": "computed here"}, said.append, "analyses") == {
         "analysis": "computed here"}
@@ -283,7 +283,7 @@ def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path, monkeypatch
     gone.mkdir()
     monkeypatch.chdir(gone)
     gone.rmdir()
-    standby = worker.SecondProcess.standby("bvsr_cad.pipeline")
+    standby = worker.SecondProcess.standby("bvsr_cad.analyses_process")
     if standby is None:
         pytest.skip("one core: the analyses never leave the process")
     assert standby.begin([str(changed), "sha256 of what the build read"], tmp_path)
@@ -294,11 +294,11 @@ def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path, monkeypatch
     here = tmp_path / "here"
     (here / "exports").mkdir(parents=True)
     monkeypatch.chdir(here)
-    relative = worker.SecondProcess.standby("bvsr_cad.pipeline")
+    relative = worker.SecondProcess.standby("bvsr_cad.analyses_process")
     assert relative.begin([str(changed), "sha256 of what the build read"], Path("exports"))
     with pytest.raises(ParamError, match=r"edited.toml(.|\n)*changed while the build was running"):
         relative.result()
-    idle = worker.SecondProcess.standby("bvsr_cad.pipeline")
+    idle = worker.SecondProcess.standby("bvsr_cad.analyses_process")
     idle.proc.stdin.close()  # no work: it imports, reads the end of its input and exits quietly
     assert idle.proc.wait(timeout=300) == 0
     assert not idle.begin([str(changed), "x"], tmp_path)  # gone: the build starts another
@@ -310,7 +310,7 @@ def test_the_standby_head_start_is_used_only_for_the_bytes_it_was_built_from(tmp
     """`bvsr build` names the file to its standby analyses' process, which builds the assembly while the
     build reads its cache; the work that comes uses it only if it names the same file with the same
     SHA-256, else it builds the file as it is now."""
-    from bvsr_cad import pipeline
+    from bvsr_cad import analyses_process as pipeline
     from bvsr_cad.analysis import run
     from bvsr_cad.parameters.load import params_sha256
 
@@ -395,7 +395,7 @@ def test_ctrl_c_leaves_a_waiting_standby_process_quietly(tmp_path):
 
     lines: list[str] = []
     with _sigint_reaches_children():
-        standby = worker.SecondProcess.standby("bvsr_cad.pipeline", progress=lines.append)
+        standby = worker.SecondProcess.standby("bvsr_cad.analyses_process", progress=lines.append)
     if standby is None:
         pytest.skip("one core: the analyses never leave the process")
     pid, last, still = standby.proc.pid, None, 0

@@ -7,7 +7,7 @@ from pathlib import Path
 
 PKG = Path(__file__).resolve().parents[1] / "bvsr_cad"
 LAYER = {"_deferred": 0, "units": 0, "colors": 0, "worker": 0, "parameters": 1, "models": 2, "parts": 3, "assembly": 4, "analysis": 5,
-         "exporters": 6, "checks": 6, "cache": 6, "publish": 7, "pipeline": 7, "sim": 7, "sim_gpu": 7, "api": 7, "sweep": 7, "watch": 8, "cli": 8}
+         "exporters": 6, "checks": 6, "cache": 6, "publish": 7, "pipeline": 7, "analyses_process": 7, "sim": 7, "sim_gpu": 7, "api": 7, "sweep": 7, "watch": 8, "cli": 8}
 
 
 def _layer(module: str) -> int:

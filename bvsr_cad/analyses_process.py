@@ -1,0 +1,56 @@
+"""The analyses' second process of `bvsr build` (``python -m bvsr_cad.worker bvsr_cad.analyses_process``).
+
+Its own module, beside :mod:`bvsr_cad.pipeline` rather than in it, so that the process imports what
+the analyses read (the CAD kernel, the models, the simulator) and not the exporters the build's own
+process writes with (matplotlib, pyvista, the drawings' SVG): measured with ``python -X importtime``,
+about 2.4 CPU s of imports instead of 2.9. Here, not in the analysis layer, because a measured
+workspace is predicted in the simulator.
+"""
+
+from __future__ import annotations
+
+import pickle
+from pathlib import Path
+
+from .analysis.run import BESIDE_BUILD_THREADS
+from .parameters.load import load_spec, params_sha256
+from .parts._kernel import kernel_threads
+from .sim import protocol_radius_mm
+
+#: The standby analyses process's head start (:func:`_prepare_analyses`): (params path, SHA-256) -> assembly.
+_PREPARED: dict[tuple[str, str], object] = {}
+
+
+def _prepare_analyses(params: str) -> None:
+    """A standby analyses process's head start (``python -m bvsr_cad.worker bvsr_cad.analyses_process --standby
+    PARAMS``): the tail's assembly, built from the file while the build imports and reads its cache; used
+    only if the work that comes names the same file with the same SHA-256 (the bytes the assembly was
+    built from)."""
+    from .assembly.build import build_assembly
+
+    kernel_threads(1)  # beside the build, which keeps the other core busy
+    before = params_sha256(params)
+    asm = build_assembly(load_spec(params))
+    if params_sha256(params) == before:
+        _PREPARED[str(Path(params).resolve()), before] = asm
+
+
+def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str = ""):
+    """The analyses' second process (``python -m bvsr_cad.worker bvsr_cad.analyses_process - PARAMS SHA256
+    [GEOMETRY [THREADS]]``). ``GEOMETRY``: the cached geometry analyses' pickle (computed here when it is gone);
+    ``THREADS``: those that predict the measured rows (default
+    :data:`bvsr_cad.analysis.run.BESIDE_BUILD_THREADS`)."""
+    from .analysis.run import from_params
+
+    kernel_threads(1)  # beside the build, which keeps the other core busy
+    try:
+        given = pickle.loads(Path(geometry).read_bytes()) if geometry else None
+    except OSError:  # evicted since the build looked: computed here
+        given = None
+    return from_params(params, sha256, protocol_radius_mm, given,
+                       _PREPARED.pop((str(Path(params).resolve()), sha256), None),
+                       int(threads) if threads else BESIDE_BUILD_THREADS)
+
+
+#: What the analyses' second process serves (:func:`bvsr_cad.worker.child_main`): its work and its head start.
+SECOND_PROCESS = (_analyses_process, _prepare_analyses)

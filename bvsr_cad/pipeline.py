@@ -136,7 +136,8 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
             # the cache, and the analyses take both cores while this process waits for them.
             work = [str(params.resolve()), params_sha256(params),
                     str(geometry_hit / GEOMETRY_FILE) if geometry_hit is not None else "",
-                    str(BESIDE_BUILD_THREADS if geometry_hit is None else BESIDE_IDLE_BUILD_THREADS)]
+                    str(BESIDE_BUILD_THREADS if geometry_hit is None else BESIDE_IDLE_BUILD_THREADS),
+                    str(tmp), spec.name]
             analyses = (standby if standby is not None and standby.begin(work, tmp)
                         else SecondProcess.start("bvsr_cad.analyses_process", work, tmp, say))
             if analyses is not None:
@@ -273,11 +274,12 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         t = time.perf_counter()
         if cached_analyses is not None:
             with (cached_analyses / "analyses.pkl").open("rb") as fh:
-                results = pickle.load(fh)
+                results, drawn = pickle.load(fh), False
             log.record("analyses", True, time.perf_counter() - t)
         else:
-            results = result_or(analyses, lambda: run_analyses(asm, say, str(params), protocol_radius_mm, geometry),
-                                say, "analyses")
+            # With their pictures, drawn in the second process (not when it was lost: then run here).
+            results, drawn = result_or(analyses, lambda: (run_analyses(asm, say, str(params), protocol_radius_mm,
+                                                                       geometry), False), say, "analyses")
             if geometry is None:
                 log.record("analysis geometry (joint limits, clearance map)", False, results.geometry_seconds)
                 if cache is not None:
@@ -289,7 +291,7 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
             log.record("analyses", False, results.seconds)
             log.process("analyses", analyses.cpu_s if analyses is not None else None)
         t = time.perf_counter()
-        manifest.update(write_analyses(results, tmp, spec.name))
+        manifest.update(write_analyses(results, tmp, spec.name, pictures=not drawn))
         manifest.update(robot_entries if robot_entries is not None else robot_files(results.theta_max_per_joint()))
         write_manifest(tmp, manifest)
         # STEP and 3MF time stamps (the build time is in the manifest's volatile section), of the files

@@ -321,11 +321,12 @@ def test_the_standby_head_start_is_used_only_for_the_bytes_it_was_built_from(tmp
     pipeline._prepare_analyses(str(params))
     first = params_sha256(params)
     prepared = pipeline._PREPARED[str(params.resolve()), first]
-    assert pipeline._analyses_process(str(params), first) is prepared  # used, and taken (used once)
+    used, drawn = pipeline._analyses_process(str(params), first)
+    assert used is prepared and not drawn  # used, and taken (used once); no pictures asked for
     assert pipeline._PREPARED == {}
     pipeline._prepare_analyses(str(params))
     params.write_text(params.read_text().replace('name = "bvsr"', 'name = "edited"', 1))
-    built = pipeline._analyses_process(str(params), params_sha256(params))
+    built, _drawn = pipeline._analyses_process(str(params), params_sha256(params))
     assert built.spec.name == "edited" and built is not pipeline._PREPARED[str(params.resolve()), first]
 
 

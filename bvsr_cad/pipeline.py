@@ -137,7 +137,7 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
             work = [str(params.resolve()), params_sha256(params),
                     str(geometry_hit / GEOMETRY_FILE) if geometry_hit is not None else "",
                     str(BESIDE_BUILD_THREADS if geometry_hit is None else BESIDE_IDLE_BUILD_THREADS),
-                    str(tmp), spec.name]
+                    str(tmp.resolve()), spec.name]  # absolute: the process works in another folder
             analyses = (standby if standby is not None and standby.begin(work, tmp)
                         else SecondProcess.start("bvsr_cad.analyses_process", work, tmp, say))
             if analyses is not None:

@@ -330,6 +330,35 @@ def test_the_standby_head_start_is_used_only_for_the_bytes_it_was_built_from(tmp
     assert built.spec.name == "edited" and built is not pipeline._PREPARED[str(params.resolve()), first]
 
 
+def test_the_analyses_process_is_told_where_to_draw_as_an_absolute_folder(tmp_path, monkeypatch):
+    """The analyses' process draws their pictures into the build's temporary folder, working in another
+    folder than the build's: a build into a relative output folder (``make exports``: ``-o exports/bvsr``)
+    names it by its absolute path (a relative one made the process fail: the folder was not found)."""
+    from bvsr_cad import pipeline, worker
+
+    class Reached(Exception):
+        pass
+
+    given: list[list[str]] = []
+
+    def start(cls, module, args, *_rest, **_kw):
+        given.append([module, *args])
+        return None
+
+    def first_stage(*_args, **_kw):
+        raise Reached
+
+    monkeypatch.setattr(worker.SecondProcess, "start", classmethod(start))
+    monkeypatch.setattr(pipeline, "build_assembly", first_stage)
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(Reached):
+        pipeline.build_export(PARAMS / "bvsr.toml", Path("exports") / "bvsr", use_cache=False)
+    (module, *_rest, pictures, name), = given
+    assert module == "bvsr_cad.analyses_process" and name == "bvsr"
+    assert Path(pictures).is_absolute() and Path(pictures).parent == tmp_path / "exports"
+    assert Path(pictures).name.startswith(".bvsr.tmp-")
+
+
 @pytest.mark.parametrize("during", ["a command", "a C extension's import"])
 def test_ctrl_c_exits_130_with_one_line_not_a_traceback(monkeypatch, capsys, during):
     """Ctrl-C during OCP's import reaches Python as ``ImportError: initialization failed`` raised from the

@@ -185,3 +185,29 @@ def test_kernel_threads_run_the_kernel_on_one_thread_for_the_same_solids(bvsr_sp
         assert _kernel.kernel_threads(0) == 1 and pool.NbThreads() == 1  # at least the calling thread
     finally:
         _kernel.kernel_threads(before)
+
+
+def test_ruled_loft_gives_its_flat_bands_planes_for_the_same_solid(bvsr_spec):
+    """A ruled loft of squares is a stack of square frusta, V = h (a^2 + a b + b^2) / 3 each, every band
+    flat: all of them planes. Of the rounded squares only the corners' bands are curved: every face
+    left a B-spline is one (not flat), and the outer surface is the loft's own (volume to 1e-9)."""
+    import build123d as bd
+    from OCP.BRep import BRep_Tool
+    from OCP.GeomLib import GeomLib_IsPlanarSurface
+
+    from bvsr_cad.parts._kernel import ruled_loft
+    from bvsr_cad.parts.soa import rounded_square
+
+    sides, zs = (20.0, 8.0, 14.0), (0.0, 5.0, 12.0)
+    solid = ruled_loft([rounded_square(s, 0.0, z) for s, z in zip(sides, zs)], "test loft")
+    frusta = sum((z1 - z0) * (a * a + a * b + b * b) / 3
+                 for a, b, z0, z1 in zip(sides, sides[1:], zs, zs[1:]))
+    assert solid.is_valid and solid.volume == pytest.approx(frusta, rel=1e-9)
+    assert {f.geom_type for f in solid.faces()} == {bd.GeomType.PLANE} and len(solid.faces()) == 2 + 4 * 2
+    p = bellows_profile(bvsr_spec.soa, bvsr_spec.joint.base_diameter_mm)
+    sections = [rounded_square(s, p.corner_radius_mm, z) for s, z in zip(p.outer_side_mm, p.z_mm)]
+    made, plain = ruled_loft(sections, "outer"), bd.loft(sections, ruled=True)
+    assert made.is_valid and made.volume == pytest.approx(plain.volume, rel=1e-9)
+    bands = [f for f in made.faces() if f.geom_type == bd.GeomType.BSPLINE]
+    assert not any(GeomLib_IsPlanarSurface(BRep_Tool.Surface_s(f.wrapped), 1e-7).IsPlanar() for f in bands)
+    assert len(bands) == 4 * (len(sections) - 1)  # the four corners of each band

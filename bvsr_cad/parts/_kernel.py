@@ -154,8 +154,8 @@ def _boolean(base: bd.Shape, tools: list[bd.Shape], operation) -> bd.Shape:
     (``SetUseOBB``): the kernel then rejects the pairs of sub-shapes whose oriented boxes do not
     meet before it intersects them, for the same solid. Measured on the default tail, alternated (4
     each, one core): the mold set 2.2-2.9 -> 0.8-1.4 CPU s, the assembly and the rigid twin within
-    the machine's noise; the exports byte-identical (the test of the part generators' volumes and
-    ``tests/test_cache.py`` compare them)."""
+    the machine's noise; the default export byte-identical with it and without (compared file by
+    file, the manifest's volatile section apart)."""
     operation.SetUseOBB(True)
     return base._bool_op((base,), tools, operation)  # build123d 0.12's one boolean path (pinned)
 
@@ -206,7 +206,10 @@ def ruled_loft(sections: Sequence[bd.Face], what: str) -> bd.Solid:
         if BRepAdaptor_Surface(face).GetType() == GeomAbs_BSplineSurface:
             planar = GeomLib_IsPlanarSurface(BRep_Tool.Surface_s(face), PLANAR_TOLERANCE_MM)
             if planar.IsPlanar():
-                face = BRepBuilderAPI_MakeFace(planar.Plan(), BRepTools.OuterWire_s(face), True).Face()
+                flat = BRepBuilderAPI_MakeFace(planar.Plan(), BRepTools.OuterWire_s(face), True).Face()
+                if bd.Face(flat).normal_at().dot(f.normal_at()) < 0:  # facing the way the loft's face did
+                    flat.Reverse()
+                face = flat
         builder.Add(shell, face)
     solid = TopoDS_Solid()
     builder.MakeSolid(solid)

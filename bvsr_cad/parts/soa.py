@@ -62,7 +62,8 @@ def soa_envelope(soa: SoaTable, flange_diameter_mm: float) -> bd.Solid:
     rigid twin's columns all start from it.
     """
     p = bellows_profile(soa, flange_diameter_mm)
-    outer = ruled_loft([rounded_square(s, p.corner_radius_mm, z) for s, z in zip(p.outer_side_mm, p.z_mm)], "SOA outer loft")
+    outer = ruled_loft([rounded_square(s, p.corner_radius_mm, z) for s, z in zip(p.outer_side_mm, p.z_mm)],
+                       "SOA outer loft")
     r = flange_diameter_mm / 2.0
     lower = bd.Solid.make_cylinder(r, p.flange_thickness_mm)
     upper = bd.Solid.make_cylinder(r, p.flange_thickness_mm, bd.Plane.XY.offset(p.height_mm - p.flange_thickness_mm))

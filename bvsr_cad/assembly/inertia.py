@@ -11,7 +11,6 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-import build123d as bd
 import numpy as np
 
 from .. import units
@@ -84,8 +83,17 @@ class SolidProperties:
 
     @classmethod
     def of(cls, solid) -> "SolidProperties":
-        return cls(solid.volume, np.array(tuple(solid.center(bd.CenterOf.MASS))),
-                   np.asarray(solid.matrix_of_inertia, float))
+        """One integration of the B-rep (OCCT's ``BRepGProp::VolumeProperties``) for all three: build123d's
+        ``volume``, ``center(CenterOf.MASS)`` and ``matrix_of_inertia`` each run that same call, so the
+        values are theirs to the bit, in a third of the time."""
+        from OCP.BRepGProp import BRepGProp
+        from OCP.GProp import GProp_GProps
+
+        props = GProp_GProps()
+        BRepGProp.VolumeProperties_s(solid.wrapped, props)
+        com, inertia = props.CentreOfMass(), props.MatrixOfInertia()
+        return cls(props.Mass(), np.array((com.X(), com.Y(), com.Z())),
+                   np.array([[inertia.Value(i + 1, j + 1) for j in range(3)] for i in range(3)], float))
 
 
 def from_solid(solid, density_g_cm3: float, T_frame_part_mm: np.ndarray | None = None,

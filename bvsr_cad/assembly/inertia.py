@@ -85,7 +85,7 @@ class SolidProperties:
     def of(cls, solid) -> "SolidProperties":
         """One integration of the B-rep (OCCT's ``BRepGProp::VolumeProperties``) for all three: build123d's
         ``volume``, ``center(CenterOf.MASS)`` and ``matrix_of_inertia`` each run that same call, so the
-        values are theirs to the bit, in a third of the time."""
+        values are theirs to the bit, from one integration instead of three."""
         from OCP.BRepGProp import BRepGProp
         from OCP.GProp import GProp_GProps
 

@@ -14,9 +14,9 @@ from .plots import plot_clearance_map, plot_measurements, plot_workspace
 
 def write_analysis_pictures(res: AnalysisResults, root: Path, name: str) -> None:
     """The analyses' pictures under ``root/analysis`` (the workspace, the clearance map and, with
-    measured rows, the model against them), as :func:`write_analyses` draws them. Most of its time:
-    the build's analyses' process draws them once its analyses are done, beside the build's own
-    stages (:mod:`bvsr_cad.analyses_process`)."""
+    measured rows, the model against them), as :func:`write_analyses` draws them. They are most of
+    that function's time, so the build's analyses' process draws them once its analyses are done,
+    beside the build's own stages (:mod:`bvsr_cad.analyses_process`)."""
     out = root / "analysis"
     out.mkdir(exist_ok=True)
     ws = res.workspace

@@ -12,7 +12,7 @@ from __future__ import annotations
 import pickle
 from pathlib import Path
 
-from .analysis.run import BESIDE_BUILD_THREADS
+from .analysis.run import BESIDE_BUILD_THREADS, write_geometry_ahead
 from .parameters.load import load_spec, params_sha256
 from .parts._kernel import kernel_threads
 from .sim import protocol_radius_mm
@@ -38,13 +38,15 @@ def _prepare_analyses(params: str) -> None:
 def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str = "", pictures: str = "",
                       name: str = ""):
     """The analyses' second process (``python -m bvsr_cad.worker bvsr_cad.analyses_process - PARAMS SHA256
-    [GEOMETRY [THREADS [PICTURES NAME]]]``): ``(results, drawn)``. ``GEOMETRY``: the cached geometry
+    [GEOMETRY [THREADS [FOLDER NAME]]]``): ``(results, drawn)``. ``GEOMETRY``: the cached geometry
     analyses' pickle (computed here when it is gone); ``THREADS``: those that predict the measured rows
-    (default :data:`bvsr_cad.analysis.run.BESIDE_BUILD_THREADS`); ``PICTURES``: the build's folder, into
-    which the analyses' pictures of the tail ``NAME`` are drawn once they are done
-    (:func:`bvsr_cad.exporters.analysis_files.write_analysis_pictures`; ``drawn`` says so): this process
-    ends its work before the build's own stages end theirs (measured on the default tail, 2 cores: 2.9 s
-    before), and the pictures were 1.1 s of the build's last stages, where one core worked alone."""
+    (default :data:`bvsr_cad.analysis.run.BESIDE_BUILD_THREADS`); ``FOLDER``: the build's temporary
+    folder. Into it go the geometry analyses as soon as they are computed here
+    (:func:`bvsr_cad.analysis.run.write_geometry_ahead`: the build writes and checks the robot files,
+    which need the joint limits alone, while the other analyses go on; they took the build's last
+    seconds, on one core, when they waited for the whole result), and once the analyses are done their
+    pictures of the tail ``NAME`` (:func:`bvsr_cad.exporters.analysis_files.write_analysis_pictures`;
+    ``drawn`` says so): they were 1.1 s of the build's last stages too."""
     from .analysis.run import from_params
 
     kernel_threads(1)  # beside the build, which keeps the other core busy
@@ -54,7 +56,8 @@ def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str
         given = None
     results = from_params(params, sha256, protocol_radius_mm, given,
                           _PREPARED.pop((str(Path(params).resolve()), sha256), None),
-                          int(threads) if threads else BESIDE_BUILD_THREADS)
+                          int(threads) if threads else BESIDE_BUILD_THREADS,
+                          (lambda geo: write_geometry_ahead(Path(pictures), geo)) if pictures else None)
     if not pictures:
         return results, False
     from .exporters.analysis_files import write_analysis_pictures  # matplotlib: after the analyses

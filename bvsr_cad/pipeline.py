@@ -19,7 +19,8 @@ import trimesh
 
 from .analysis.poses import mold_scene, twin_scene, viewer_scenes
 from .analysis.limits import per_joint_rad
-from .analysis.run import BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS, run_analyses
+from .analysis.run import (BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS, drop_geometry_ahead, run_analyses,
+                           take_geometry_ahead)
 from .assembly.build import build_assembly
 from .assembly.inertia import SolidProperties
 from .assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs, rigid_robot_model
@@ -260,11 +261,13 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
             say("robot model (B-rep inertials)")
             return write_robot(robot_model(asm, theta_max_rad, shapes=shapes), tmp, say, spec.cart)
 
-        # Joint limits from the cache (an edit that moves no solid): the robot's files need nothing of
-        # the analyses still running, so they are written before the wait too (entered in the manifest
-        # after the analyses' files, as in every build).
-        robot_entries = (robot_files(per_joint_rad(geometry.limits))
-                         if geometry is not None and cached_analyses is None else None)
+        # Joint limits from the cache (an edit that moves no solid) or from the analyses' process, which
+        # leaves them in this folder as soon as it has them (the other analyses take longer): the robot's
+        # files need nothing of the analyses still running, so they are written before the wait too
+        # (entered in the manifest after the analyses' files, as in every build).
+        ahead = geometry if geometry is not None or analyses is None else take_geometry_ahead(tmp)
+        robot_entries = (robot_files(per_joint_rad(ahead.limits))
+                         if ahead is not None and cached_analyses is None else None)
         robot_s = time.perf_counter() - t
         if robot_entries is not None:  # and their checks (the manifest is written again, in its order, below)
             t = time.perf_counter()
@@ -290,6 +293,7 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
             # Their own time (in the second process, beside the stages above); the wait was shorter.
             log.record("analyses", False, results.seconds)
             log.process("analyses", analyses.cpu_s if analyses is not None else None)
+        drop_geometry_ahead(tmp)  # not taken above (made after the robot's stage, or by a process since lost)
         t = time.perf_counter()
         manifest.update(write_analyses(results, tmp, spec.name, pictures=not drawn))
         manifest.update(robot_entries if robot_entries is not None else robot_files(results.theta_max_per_joint()))

@@ -6,16 +6,19 @@ certified clearance, the exact joint limits and the tip joint's clearance map;
 model takes its joint limits from it (nothing reads a file the build wrote).
 
 :func:`from_params` is the build's second process (:mod:`bvsr_cad.worker`,
-started as ``python -m bvsr_cad.worker bvsr_cad.pipeline``, which gives it the simulator): the
-same analyses from the parameter file, the result pickled back to the build.
+started as ``python -m bvsr_cad.worker bvsr_cad.analyses_process``, which gives it the simulator):
+the same analyses from the parameter file, the result pickled back to the build.
 """
 
 from __future__ import annotations
 
+import os
+import pickle
 import time
 from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -78,6 +81,37 @@ class AnalysisResults:
         return per_joint_rad(self.limits)
 
 
+#: In the build's temporary folder: the geometry analyses, pickled by the analyses' second process as soon
+#: as it has them (:func:`write_geometry_ahead`), so that the build writes and checks the robot files (which
+#: need the joint limits alone) while the other analyses go on; the build removes it before it publishes.
+GEOMETRY_AHEAD_FILE = ".analysis-geometry.pkl"
+
+
+def write_geometry_ahead(folder: Path, geo: GeometryAnalyses) -> None:
+    """``geo`` into ``folder``'s :data:`GEOMETRY_AHEAD_FILE`, whole or not at all (written beside, then renamed)."""
+    part = folder / (GEOMETRY_AHEAD_FILE + ".part")
+    part.write_bytes(pickle.dumps(geo))
+    os.replace(part, folder / GEOMETRY_AHEAD_FILE)
+
+
+def take_geometry_ahead(folder: Path) -> GeometryAnalyses | None:
+    """The geometry analyses :func:`write_geometry_ahead` left in ``folder`` (then removed), or None when
+    there are none (yet)."""
+    path = folder / GEOMETRY_AHEAD_FILE
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        return None
+    path.unlink()
+    return pickle.loads(data)
+
+
+def drop_geometry_ahead(folder: Path) -> None:
+    """Remove what :func:`write_geometry_ahead` may have left in ``folder`` (a file or its half-written part)."""
+    for name in (GEOMETRY_AHEAD_FILE, GEOMETRY_AHEAD_FILE + ".part"):
+        (folder / name).unlink(missing_ok=True)
+
+
 def geometry_analyses(asm: Assembly, pt: PosedTail, progress: Callable[[str], None] | None = None
                       ) -> GeometryAnalyses:
     """The exact joint limits and the tip joint's clearance map of ``asm`` (posed as ``pt``)."""
@@ -97,13 +131,15 @@ def geometry_analyses(asm: Assembly, pt: PosedTail, progress: Callable[[str], No
 
 def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
                  params_path: str | None = None, workspace_sim: WorkspaceSim | None = None,
-                 geometry: GeometryAnalyses | None = None, threads: int = COMPARE_THREADS) -> AnalysisResults:
+                 geometry: GeometryAnalyses | None = None, threads: int = COMPARE_THREADS,
+                 on_geometry: Callable[[GeometryAnalyses], None] | None = None) -> AnalysisResults:
     """``params_path``: the parameter file ``asm`` was built from (its calibration's data file is
     resolved relative to it); ``workspace_sim``: what predicts a measured tip workspace (see
     :func:`bvsr_cad.analysis.measured.compare_measurements`); ``geometry``: :func:`geometry_analyses`
     of this geometry when the caller has them (from the build's cache), else they are computed;
     ``threads``: those that predict the measured rows, at most (see
-    :func:`bvsr_cad.analysis.calibrate.compare_rows`)."""
+    :func:`bvsr_cad.analysis.calibrate.compare_rows`); ``on_geometry``: called with the geometry
+    analyses once they are computed here (not when given), before the other analyses go on."""
     say = progress or (lambda _m: None)
     spec = asm.spec
     cfg = spec.analysis
@@ -118,6 +154,8 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
             pt = posed_tail(asm, say)
             geo = geometry if geometry is not None else geometry_analyses(asm, pt, say)
             limits.set_result(per_joint_rad(geo.limits))
+            if geometry is None and on_geometry is not None:
+                on_geometry(geo)
         except BaseException as exc:
             limits.set_exception(exc)
             raise
@@ -150,11 +188,13 @@ BESIDE_IDLE_BUILD_THREADS = 3
 
 def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = None,
                 geometry: GeometryAnalyses | None = None, asm: Assembly | None = None,
-                threads: int = BESIDE_BUILD_THREADS) -> AnalysisResults:
+                threads: int = BESIDE_BUILD_THREADS,
+                on_geometry: Callable[[GeometryAnalyses], None] | None = None) -> AnalysisResults:
     """The second process's work: the analyses of the parameter file the build read (``sha256``),
-    progress on stderr (the parent relays it). Its entry point is the pipeline's (which gives
-    ``workspace_sim``, from its cache ``geometry``, ``asm`` when it built the assembly of this very
-    file ahead, and ``threads``: :data:`BESIDE_BUILD_THREADS` or :data:`BESIDE_IDLE_BUILD_THREADS`)."""
+    progress on stderr (the parent relays it). Its entry point is :mod:`bvsr_cad.analyses_process`'s
+    (which gives ``workspace_sim``, from the build's cache ``geometry``, ``asm`` when it built the
+    assembly of this very file ahead, ``threads``: :data:`BESIDE_BUILD_THREADS` or
+    :data:`BESIDE_IDLE_BUILD_THREADS`, and ``on_geometry``: see :func:`run_analyses`)."""
     import sys
 
     from ..assembly.build import build_assembly
@@ -168,4 +208,4 @@ def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = N
 
     if asm is None:
         asm = build_assembly(load_spec(params))
-    return run_analyses(asm, say, params, workspace_sim, geometry, threads)
+    return run_analyses(asm, say, params, workspace_sim, geometry, threads, on_geometry)

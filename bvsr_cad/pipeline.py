@@ -212,15 +212,42 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         manifest.update(molds)
         manifest.update(fabrication)
         log.record("print jobs, BOM", False, time.perf_counter() - t)
-        # What reads only the CAD files goes on while the analyses finish: the checks of the meshes, the
-        # molds and the print files (on the manifest so far), the drawings, the 3D view and the report's
-        # pictures.
+        # The robot's files as soon as the joint limits exist, from the cache (an edit that moves no solid)
+        # or left in this folder by the analyses' process (it has them long before its other analyses):
+        # they need nothing else of the analyses, and their checks then go to the checks' second process
+        # with those of the CAD files. They are entered in the manifest after the analyses' files, as in
+        # every build; the early checks read them from a manifest written for them.
+        # The robot's collision shapes read the geometry alone. Not a cached stage: their fits mesh the
+        # parts' faces at 0.01 mm, the triangulation the robot's meshes then take (OCCT keeps the finest),
+        # whichever stages came from the cache.
         t = time.perf_counter()
-        write_manifest(tmp, manifest)
+        shapes = None
+
+        def robot_files(theta_max_rad: list[float]) -> dict:
+            say("robot model (B-rep inertials)")
+            return write_robot(robot_model(asm, theta_max_rad, shapes=shapes), tmp, say, spec.cart)
+
+        def limits_ahead() -> list[float] | None:
+            """The joint limits, if the cache or the analyses' process has given them by now."""
+            if cached_analyses is not None:
+                return None  # the robot's files after the analyses' pickle is read (no process to wait for)
+            ahead = geometry if geometry is not None or analyses is None else take_geometry_ahead(tmp)
+            return per_joint_rad(ahead.limits) if ahead is not None else None
+
+        robot_entries = None
+        if (early_limits := limits_ahead()) is not None:
+            shapes = collision_shapes(asm)
+            robot_entries = robot_files(early_limits)
+        robot_s = time.perf_counter() - t
+        # What reads only the CAD files (and the robot's) goes on while the analyses finish: the checks of
+        # the meshes, the molds and the print files (and the robot's files), the drawings, the 3D view and
+        # the report's pictures.
+        t = time.perf_counter()
+        write_manifest(tmp, {**manifest, **(robot_entries or {})})
         fixed: set[Path] = set()
         make_reproducible(tmp, fixed)  # the files the early checks hash are the published ones
         say("checks of the CAD files")
-        checks = Checks.start(tmp, say, cache=cache, meshes_beside=True)
+        checks = Checks.start(tmp, say, cache=cache, meshes_beside=True, robot_beside=robot_entries is not None)
         checks_s = time.perf_counter() - t
         # The drawings after the checks' start: the printability and mold checks, the longest chain of
         # the build's end, read none of them (the checks of the drawings run at the finish).
@@ -250,28 +277,21 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         say("report pictures")
         pictures = report_pictures(tmp, manifest, cache)
         pictures_s = time.perf_counter() - t
-        # The robot's collision shapes read the geometry alone: made here, before the wait for the
-        # analyses (whose joint limits the rest of the robot model needs). Not a cached stage: their fits
-        # mesh the parts' faces at 0.01 mm, the triangulation the robot's meshes then take (OCCT keeps
-        # the finest), whichever stages came from the cache.
+        # The joint limits were not in when the checks started: the robot's files now if they are, before
+        # the wait for the analyses; else after it.
         t = time.perf_counter()
-        shapes = collision_shapes(asm)
-
-        def robot_files(theta_max_rad: list[float]) -> dict:
-            say("robot model (B-rep inertials)")
-            return write_robot(robot_model(asm, theta_max_rad, shapes=shapes), tmp, say, spec.cart)
-
-        # Joint limits from the cache (an edit that moves no solid) or from the analyses' process, which
-        # leaves them in this folder as soon as it has them (the other analyses take longer): the robot's
-        # files need nothing of the analyses still running, so they are written before the wait too
-        # (entered in the manifest after the analyses' files, as in every build).
-        ahead = geometry if geometry is not None or analyses is None else take_geometry_ahead(tmp)
-        robot_entries = (robot_files(per_joint_rad(ahead.limits))
-                         if ahead is not None and cached_analyses is None else None)
-        robot_s = time.perf_counter() - t
-        if robot_entries is not None:  # and their checks (the manifest is written again, in its order, below)
+        if shapes is None:
+            shapes = collision_shapes(asm)
+        late_limits = limits_ahead() if robot_entries is None else None
+        if late_limits is not None:
+            robot_entries = robot_files(late_limits)
+        robot_s += time.perf_counter() - t
+        if robot_entries is not None:
             t = time.perf_counter()
-            write_manifest(tmp, {**manifest, **robot_entries})
+            if late_limits is not None:
+                write_manifest(tmp, {**manifest, **robot_entries})  # written again, in its order, below
+            # Their checks here, before the wait, unless the checks' process (given them at its start) has
+            # begun them: whichever is free first.
             checks.robot_ahead()
             checks_s += time.perf_counter() - t
         t = time.perf_counter()

@@ -377,6 +377,22 @@ def test_the_export_holds_the_robot_files_made_with_the_analyses_joint_limits(bv
     assert not list(bvsr_export.rglob(GEOMETRY_AHEAD_FILE + "*"))
 
 
+def test_the_robot_checks_run_once_in_whichever_process_claims_them(bvsr_export, tmp_path):
+    """The build's robot checks go to whichever of its processes is free first (the checks' process, given
+    them at its start, or the build's own, at its wait for the analyses): the first to claim them takes
+    them and no later one does. The export holds each robot check once and not the claim."""
+    from bvsr_cad.checks.run import ROBOT_CLAIM_FILE, claim_robot_checks
+
+    assert claim_robot_checks(tmp_path) and not claim_robot_checks(tmp_path) and not claim_robot_checks(str(tmp_path))
+    manifest = json.loads((bvsr_export / "manifest.json").read_text())
+    names = [c["name"] for c in manifest["checks"]]
+    robot = [n for n in names if n.split(":")[0] in ("urdf_check_urdf", "urdf_yourdfpy", "pybullet_masses",
+                                                     "fk_mujoco_vs_kinematics", "mujoco_no_drift")]
+    assert sorted(robot) == sorted(set(robot)) and len(robot) == 5, robot
+    assert len(names) == len(set(names))
+    assert not (bvsr_export / ROBOT_CLAIM_FILE).exists()
+
+
 def test_the_analyses_process_is_told_where_to_draw_as_an_absolute_folder(tmp_path, monkeypatch):
     """The analyses' process draws their pictures into the build's temporary folder, working in another
     folder than the build's: a build into a relative output folder (``make exports``: ``-o exports/bvsr``)

@@ -37,10 +37,13 @@ def _mesh_checks(exp: Export, memo: CheckMemo) -> dict[str, list[CheckResult]]:
     return {part["name"]: _part_mesh(exp, memo, part) for part in exp.parts}
 
 
-def _printability(root: str, sliced_now: str, cache_root: str = "", meshes: str = "") -> dict[str, Any]:
+def _printability(root: str, sliced_now: str, cache_root: str = "", meshes: str = "", robot: str = ""
+                  ) -> dict[str, Any]:
     """The second process's work: the printability checks and the mold checks of the export at ``root``
     (verdicts of unchanged inputs from the artifact cache at ``cache_root``, when given), by group; with
-    ``meshes`` (``"1"``) the part meshes' and the masses' checks after them (``"part_mesh"``: by part)."""
+    ``meshes`` (``"1"``) the part meshes' and the masses' checks after them (``"part_mesh"``: by part); with
+    ``robot`` (``"1"``) the robot descriptions' checks last, unless the build's own process took them first
+    (:func:`claim_robot_checks`)."""
     exp = Export.open(root)
     memo = CheckMemo(exp, ArtifactCache(Path(cache_root)) if cache_root else None)
     out: dict[str, Any] = {"printability": check_printability(exp, sliced_now=set(json.loads(sliced_now)), memo=memo),
@@ -48,7 +51,26 @@ def _printability(root: str, sliced_now: str, cache_root: str = "", meshes: str 
     if meshes:
         out["part_mesh"] = _mesh_checks(exp, memo)
         out["masses"] = check_masses(exp, memo)
+    if robot and claim_robot_checks(exp.root):
+        out["robot"] = check_robot(exp)
     return out
+
+
+#: In the export's folder while a build checks it: made by whichever of its two processes starts the
+#: robot descriptions' checks first (:func:`claim_robot_checks`); removed by :meth:`Checks.finish`.
+ROBOT_CLAIM_FILE = ".robot-checks.claim"
+
+
+def claim_robot_checks(root: str | Path) -> bool:
+    """Whether this process takes the robot descriptions' checks of the export at ``root``: True for the
+    first to ask (the file :data:`ROBOT_CLAIM_FILE` made, atomically), False for any later."""
+    import os
+
+    try:
+        os.close(os.open(Path(root) / ROBOT_CLAIM_FILE, os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+    except FileExistsError:
+        return False
+    return True
 
 
 class _Printability:
@@ -58,7 +80,7 @@ class _Printability:
     run here."""
 
     def __init__(self, exp: Export, sliced_now: Collection[str], say: Callable[[str], None], parallel: bool,
-                 memo: CheckMemo | None = None, meshes: bool = False):
+                 memo: CheckMemo | None = None, meshes: bool = False, robot: bool = False):
         self.exp, self.sliced_now, self.say = exp, sliced_now, say
         self.memo = memo = memo or CheckMemo(exp)
         self.proc = None
@@ -67,10 +89,13 @@ class _Printability:
             # cwd: MuJoCo may write its log into the working folder, as in the robot checks.
             cache_root = str(memo.cache.root) if memo.cache is not None else ""
             self.proc = SecondProcess.start("bvsr_cad.checks.run", [str(exp.root), json.dumps(sorted(sliced_now)),
-                                                                   cache_root, "1" if meshes else ""], exp.root)
+                                                                   cache_root, "1" if meshes else "",
+                                                                   "1" if robot else ""], exp.root)
             if self.proc is not None:
+                after = [what for what, asked in (("the part meshes and the masses", meshes),
+                                                  ("the robot descriptions", robot)) if asked]
                 say("printability and molds: started in a second process"
-                    + (" (the part meshes and the masses after them)" if meshes else ""))
+                    + (f" ({' and '.join(after)} after them)" if after else ""))
 
     def _from_process(self) -> dict[str, Any]:
         """The second process's verdicts by group; empty without one, or when it was lost (then each
@@ -100,6 +125,10 @@ class _Printability:
         it, or it was lost)."""
         got = self._from_process()
         return (got["part_mesh"], got["masses"]) if "part_mesh" in got else None
+
+    def robot(self) -> list[CheckResult] | None:
+        """The robot descriptions' verdicts from the second process, or None (not asked of it, or it was lost)."""
+        return self._from_process().get("robot")
 
     def close(self) -> None:
         if self.proc is not None:
@@ -164,13 +193,18 @@ class Checks:
     ``meshes_beside``: the part meshes' and the masses' checks go to the second process too, after its
     own groups, for a caller with work of its own until :meth:`finish` (a build: its drawings, views and
     robot files; the second process, started later on the print files, ended ~4 s before the build's
-    process, which then ran alone). :meth:`finish` runs this process's groups before it waits."""
+    process, which then ran alone). ``robot_beside``: the robot descriptions' checks go there too, last,
+    unless :meth:`robot_ahead` takes them here first (:func:`claim_robot_checks`): for a build that wrote
+    its robot files before it started the checks, they go to whichever process is free first (run here
+    after the build's own stages, they took its last seconds on one core while the other processes had
+    ended; run there, the second process was the one left alone). :meth:`finish` runs this process's
+    groups before it waits."""
 
     def __init__(self, root: str | Path, progress: Callable[[str], None] | None = None, *,
                  run_slicer: bool = False, parallel: bool = True, cache: ArtifactCache | None = None,
-                 meshes_beside: bool = False):
+                 meshes_beside: bool = False, robot_beside: bool = False):
         self.root, self.say, self.cache = root, progress or (lambda _m: None), cache
-        self.parallel, self.meshes_beside = parallel, meshes_beside
+        self.parallel, self.meshes_beside, self.robot_beside = parallel, meshes_beside, robot_beside
         self.sliced_now: dict = {}
         self._mesh: dict[str, tuple[tuple, list[CheckResult]]] = {}
         self._masses: tuple[tuple, list[CheckResult]] | None = None  # (its reads then, its results)
@@ -178,6 +212,7 @@ class Checks:
         self._mesh_state: dict[str, tuple] = {}
         self._masses_state: tuple | None = None
         self._robot: tuple[tuple, list[CheckResult]] | None = None  # the same, of :meth:`robot_ahead`
+        self._robot_state: tuple | None = None  # the robot's reads when the second process started on them
         self._molds_state: tuple | None = None  # the molds' reads when the early checks started
         self._printability: _Printability | None = None
         self._printability_reads = ""
@@ -198,7 +233,10 @@ class Checks:
         # What the second process is about to read: its verdicts stand only while these are unchanged.
         run._printability_reads = _printability_reads(exp)
         run._molds_state = _state(exp, molds_reads(exp))
-        run._printability = _Printability(exp, run.sliced_now, say, run.parallel, memo, run.meshes_beside)
+        run._printability = _Printability(exp, run.sliced_now, say, run.parallel, memo, run.meshes_beside,
+                                          run.robot_beside)
+        if run.robot_beside and run._printability.proc is not None:
+            run._robot_state = _state(exp, robot_reads(exp))
         if run.meshes_beside and run._printability.proc is not None:
             run._mesh_state = {part["name"]: _state(exp, part_mesh_reads(part)) for part in exp.parts}
             run._masses_state = _state(exp, masses_reads(exp))
@@ -217,7 +255,10 @@ class Checks:
 
     def robot_ahead(self) -> None:
         """The robot descriptions' checks now, on the export as it is (a build that wrote its robot files
-        before its analyses were in); :meth:`finish` keeps their results while their reads are unchanged."""
+        before its analyses were in); :meth:`finish` keeps their results while their reads are unchanged.
+        Nothing when they went to the second process (``robot_beside``) and it has begun them."""
+        if self._robot_state is not None and not claim_robot_checks(self.root):
+            return
         exp = Export.open(self.root)
         if "robot" in exp.manifest:
             self.say("robot descriptions (URDF, MJCF, MuJoCo, PyBullet)")
@@ -234,9 +275,13 @@ class Checks:
             own = check_layout(exp) + check_paper(exp)
             say("analyses")
             own += check_analyses(exp)
+            printability = started = self._printability
+            if self._robot_state is not None and printability is not None:
+                beside_robot = printability.robot()  # waits for the second process
+                if beside_robot is not None:
+                    self._robot = (self._robot_state, beside_robot)
             own += _kept(self._robot, exp, robot_reads(exp), lambda: check_robot(exp), say,
                          "robot descriptions (URDF, MJCF, MuJoCo, PyBullet)")
-            printability = started = self._printability
             beside = printability.part_meshes() if self._mesh_state and printability is not None else None
             if beside is not None:
                 self._mesh = {name: (self._mesh_state[name], r) for name, r in beside[0].items()
@@ -265,6 +310,7 @@ class Checks:
                 self.cpu_s = started.proc.cpu_s
         finally:
             self.close()
+            (Path(self.root) / ROBOT_CLAIM_FILE).unlink(missing_ok=True)
         if self.cache is not None:
             self.cache.evict()  # once, after the groups' small entries
         return results

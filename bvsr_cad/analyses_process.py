@@ -9,13 +9,45 @@ workspace is predicted in the simulator.
 
 from __future__ import annotations
 
+import os
 import pickle
 from pathlib import Path
 
-from .analysis.run import BESIDE_BUILD_THREADS, write_geometry_ahead
+from .analysis.run import BESIDE_BUILD_THREADS, GeometryAnalyses
 from .parameters.load import load_spec, params_sha256
 from .parts._kernel import kernel_threads
 from .sim import protocol_radius_mm
+
+#: In the build's temporary folder: the geometry analyses, pickled by the analyses' second process as soon
+#: as it has them (:func:`write_geometry_ahead`), so that the build writes and checks the robot files (which
+#: need the joint limits alone) while the other analyses go on; the build removes it before it publishes.
+GEOMETRY_AHEAD_FILE = ".analysis-geometry.pkl"
+
+
+def write_geometry_ahead(folder: Path, geo: GeometryAnalyses) -> None:
+    """``geo`` into ``folder``'s :data:`GEOMETRY_AHEAD_FILE`, whole or not at all (written beside, then renamed)."""
+    part = folder / (GEOMETRY_AHEAD_FILE + ".part")
+    part.write_bytes(pickle.dumps(geo))
+    os.replace(part, folder / GEOMETRY_AHEAD_FILE)
+
+
+def take_geometry_ahead(folder: Path) -> GeometryAnalyses | None:
+    """The geometry analyses :func:`write_geometry_ahead` left in ``folder`` (then removed), or None when
+    there are none (yet)."""
+    path = folder / GEOMETRY_AHEAD_FILE
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        return None
+    path.unlink()
+    return pickle.loads(data)
+
+
+def drop_geometry_ahead(folder: Path) -> None:
+    """Remove what :func:`write_geometry_ahead` may have left in ``folder`` (a file or its half-written part)."""
+    for name in (GEOMETRY_AHEAD_FILE, GEOMETRY_AHEAD_FILE + ".part"):
+        (folder / name).unlink(missing_ok=True)
+
 
 #: The standby analyses process's head start (:func:`_prepare_analyses`): (params path, SHA-256) -> assembly.
 _PREPARED: dict[tuple[str, str], object] = {}
@@ -42,7 +74,7 @@ def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str
     analyses' pickle (computed here when it is gone); ``THREADS``: those that predict the measured rows
     (default :data:`bvsr_cad.analysis.run.BESIDE_BUILD_THREADS`); ``FOLDER``: the build's temporary
     folder. Into it go the geometry analyses as soon as they are computed here
-    (:func:`bvsr_cad.analysis.run.write_geometry_ahead`: the build writes and checks the robot files,
+    (:func:`write_geometry_ahead`: the build writes and checks the robot files,
     which need the joint limits alone, while the other analyses go on; they took the build's last
     seconds, on one core, when they waited for the whole result), and once the analyses are done their
     pictures of the tail ``NAME`` (:func:`bvsr_cad.exporters.analysis_files.write_analysis_pictures`;

@@ -19,8 +19,8 @@ import trimesh
 
 from .analysis.poses import mold_scene, twin_scene, viewer_scenes
 from .analysis.limits import per_joint_rad
-from .analysis.run import (BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS, drop_geometry_ahead, run_analyses,
-                           take_geometry_ahead)
+from .analysis.run import BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS, run_analyses
+from .analyses_process import drop_geometry_ahead, take_geometry_ahead
 from .assembly.build import build_assembly
 from .assembly.inertia import SolidProperties
 from .assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs, rigid_robot_model

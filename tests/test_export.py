@@ -334,7 +334,7 @@ def test_the_analyses_process_leaves_the_joint_limits_before_its_other_analyses(
     """The analyses' process puts its geometry analyses (the joint limits) into the build's folder as soon
     as it has them, whole (never a half-written file under the name the build reads), before its other
     analyses: the build writes and checks the robot files while those go on. The build takes the file
-    once (:func:`~bvsr_cad.analysis.run.take_geometry_ahead` removes it)."""
+    once (:func:`~bvsr_cad.analyses_process.take_geometry_ahead` removes it)."""
     from bvsr_cad import analyses_process
     from bvsr_cad.analysis import run
     from bvsr_cad.analysis.limits import per_joint_rad
@@ -347,7 +347,7 @@ def test_the_analyses_process_leaves_the_joint_limits_before_its_other_analyses(
 
     def workspace(*_args, **_kw):  # the first analysis after the geometry's
         seen.append(sorted(p.name for p in tmp_path.iterdir()))
-        seen.append(run.take_geometry_ahead(tmp_path))
+        seen.append(analyses_process.take_geometry_ahead(tmp_path))
         raise Reached
 
     monkeypatch.setattr(run, "run_workspace", workspace)
@@ -356,18 +356,18 @@ def test_the_analyses_process_leaves_the_joint_limits_before_its_other_analyses(
     with pytest.raises(Reached):
         analyses_process._analyses_process(str(params), params_sha256(params), "", "", str(tmp_path), "bvsr")
     names, geo = seen
-    assert names == [run.GEOMETRY_AHEAD_FILE]  # and no part file left beside it
+    assert names == [analyses_process.GEOMETRY_AHEAD_FILE]  # and no part file left beside it
     assert isinstance(geo, run.GeometryAnalyses) and not any(tmp_path.iterdir())
     limits = per_joint_rad(geo.limits)
     assert len(limits) == load_spec(params).joints and all(0 < t <= run.THETA_SEARCH_MAX_RAD for t in limits)
-    assert run.take_geometry_ahead(tmp_path) is None  # taken once
+    assert analyses_process.take_geometry_ahead(tmp_path) is None  # taken once
 
 
 def test_the_export_holds_the_robot_files_made_with_the_analyses_joint_limits(bvsr_export):
     """The build writes the robot files with the joint limits the analyses' process left ahead; they are
     the limits of the export's analysis (the minimum over each joint's bending planes), and the file they
     came in is not published."""
-    from bvsr_cad.analysis.run import GEOMETRY_AHEAD_FILE
+    from bvsr_cad.analyses_process import GEOMETRY_AHEAD_FILE
 
     manifest = json.loads((bvsr_export / "manifest.json").read_text())
     analysis = json.loads((bvsr_export / "analysis" / "limits.json").read_text())

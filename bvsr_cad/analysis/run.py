@@ -12,13 +12,10 @@ the same analyses from the parameter file, the result pickled back to the build.
 
 from __future__ import annotations
 
-import os
-import pickle
 import time
 from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -79,37 +76,6 @@ class AnalysisResults:
     def theta_max_per_joint(self) -> list[float]:
         """Each joint's limit as one number (:func:`~bvsr_cad.analysis.limits.per_joint_rad`)."""
         return per_joint_rad(self.limits)
-
-
-#: In the build's temporary folder: the geometry analyses, pickled by the analyses' second process as soon
-#: as it has them (:func:`write_geometry_ahead`), so that the build writes and checks the robot files (which
-#: need the joint limits alone) while the other analyses go on; the build removes it before it publishes.
-GEOMETRY_AHEAD_FILE = ".analysis-geometry.pkl"
-
-
-def write_geometry_ahead(folder: Path, geo: GeometryAnalyses) -> None:
-    """``geo`` into ``folder``'s :data:`GEOMETRY_AHEAD_FILE`, whole or not at all (written beside, then renamed)."""
-    part = folder / (GEOMETRY_AHEAD_FILE + ".part")
-    part.write_bytes(pickle.dumps(geo))
-    os.replace(part, folder / GEOMETRY_AHEAD_FILE)
-
-
-def take_geometry_ahead(folder: Path) -> GeometryAnalyses | None:
-    """The geometry analyses :func:`write_geometry_ahead` left in ``folder`` (then removed), or None when
-    there are none (yet)."""
-    path = folder / GEOMETRY_AHEAD_FILE
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        return None
-    path.unlink()
-    return pickle.loads(data)
-
-
-def drop_geometry_ahead(folder: Path) -> None:
-    """Remove what :func:`write_geometry_ahead` may have left in ``folder`` (a file or its half-written part)."""
-    for name in (GEOMETRY_AHEAD_FILE, GEOMETRY_AHEAD_FILE + ".part"):
-        (folder / name).unlink(missing_ok=True)
 
 
 def geometry_analyses(asm: Assembly, pt: PosedTail, progress: Callable[[str], None] | None = None

@@ -80,6 +80,34 @@ def test_structured_hessian_equals_central_differences(bvsr_spec, statics):
     assert np.abs(fast - ref).max() < 1e-6 * scale  # forward differences of the loads: O(h) of a 1e-6 step
 
 
+@pytest.mark.parametrize("tip_force", [None, (0.3, -0.2, 0.1), "per sample"])
+def test_keeping_the_loads_hessian_converges_to_the_same_poses(bvsr_spec, statics, monkeypatch, tip_force):
+    """Newton that keeps a sample's loads' Hessian while its steps are small and shrinking lands on the
+    poses of Newton that recomputes it at every step (never kept: a threshold of 0), to 1e-12 rad,
+    under gravity alone, a tip force and a force per sample; and it does keep it (fewer evaluations)."""
+    from bvsr_cad.models import statics as module
+
+    p = _workspace_pressures(bvsr_spec, 40, 4)
+    force = (np.random.default_rng(5).normal(0.0, 0.3, (40, 3)) if tip_force == "per sample"
+             else None if tip_force is None else np.array(tip_force))
+    counted: list[int] = []
+    real = TailStatics._load_hessian
+
+    def counting(self, w, *args, **kw):
+        counted.append(len(w))
+        return real(self, w, *args, **kw)
+
+    monkeypatch.setattr(TailStatics, "_load_hessian", counting)
+    kept = statics.forward(p, force)
+    kept_evaluations = sum(counted)
+    counted.clear()
+    monkeypatch.setattr(module, "LOAD_HESSIAN_REUSE_BELOW_RAD", 0.0)
+    fresh = statics.forward(p, force)
+    assert np.abs(kept - fresh).max() < 1e-12
+    assert kept_evaluations < sum(counted)
+    assert np.abs(statics.residual(kept, p, force)).max() < 1e-8  # N mm: at equilibrium
+
+
 def test_forward_matches_an_independent_root_finder(bvsr_spec, statics):
     """The converged poses equal scipy's hybrid root finder on the same residual to 1e-9 rad."""
     from scipy.optimize import root

@@ -47,6 +47,37 @@ def _as_dict(spec):
     return dataclasses.asdict(spec)
 
 
+@pytest.mark.parametrize("name", ["bvsr", "bvsr_l"])
+def test_the_web_rule_between_cuts_flags_every_pair_a_pair_by_pair_test_flags(name):
+    """panel_problems tests only the pairs of cuts whose plan-view circles come near (numpy's gaps,
+    :func:`~bvsr_cad.parameters.layout._near_pairs`): on every panel, from no cone to well past the
+    feasible one (where webs break), it flags the same pairs, in the same order, as testing every pair."""
+    import numpy as np
+
+    spec = load_spec(PARAMS / f"{name}.toml")
+    fab = spec.fabrication
+    flagged_somewhere = 0
+    for beta in np.linspace(0.0, math.radians(3.0 * layout.max_feasible_taper_deg(spec)), 25):
+        for k in range(spec.panels):
+            lay = layout.panel_layout(spec, k, beta)
+            cuts = list(lay.cuts)
+            every = []
+            for i, a in enumerate(cuts):
+                for b in cuts[i + 1:]:
+                    if not layout._z_overlap(a, b) or "setscrew" in (a.role, b.role):
+                        continue
+                    gap, nested = layout._circle_gap(a, b)
+                    need = fab.min_pocket_gap_mm if a.role == b.role == "pocket" else fab.min_wall_mm
+                    if not nested and gap < need - 1e-9:
+                        every.append((a.name, b.name))
+            names = {c.name for c in cuts}
+            found = [p.features for p in layout.panel_problems(spec, lay)
+                     if len(p.features) == 2 and set(p.features) <= names]
+            assert found == every, (name, beta, k)
+            flagged_somewhere += len(every)
+    assert flagged_somewhere > 0  # the sweep reaches cones where webs between cuts break
+
+
 def test_soa_fold_residual_is_computed_not_forced(bvsr_spec):
     soa = bvsr_spec.soa
     rise = (soa.long_side_mm - soa.short_side_mm) / 2 / math.tan(math.radians(soa.dihedral_deg / 2))

@@ -388,6 +388,23 @@ def _circle_gap(a: Cyl, b: Cyl) -> tuple[float, bool]:
     return dist - ra - rb, nested
 
 
+def _near_pairs(cuts: list[Cyl], need_mm: float) -> list[list[int]]:
+    """For each cut i, the cuts j > i (in order) whose circles may come within ``need_mm`` of it: every
+    pair but those whose plan-view gap (numpy's, within 1e-12 mm of :func:`_circle_gap`'s) exceeds it by
+    1e-6 mm, which no rule of :func:`panel_problems` on webs between cuts can flag. The pairs a panel has
+    are a few hundred; testing each in Python was most of :func:`max_feasible_taper_deg`'s bisection."""
+    if len(cuts) < 2:
+        return [[] for _ in cuts]
+    xy = np.array([c.xy for c in cuts], float)
+    r = np.array([c.diameter_mm / 2 for c in cuts], float)
+    gap = np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1]) - r[:, None] - r[None, :]
+    ii, jj = np.nonzero(np.triu(gap < need_mm + 1e-6, 1))
+    out: list[list[int]] = [[] for _ in cuts]
+    for i, j in zip(ii.tolist(), jj.tolist()):
+        out[i].append(j)
+    return out
+
+
 def _z_overlap(a: Cyl, b: Cyl) -> bool:
     (a0, a1), (b0, b1) = a.z_range, b.z_range
     return min(a1, b1) - max(a0, b0) > 1e-6
@@ -415,6 +432,7 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
         out.append(LayoutProblem(f"{lay.name}: the SOA ({spec.soa.built_height_mm:.2f} mm) is shorter than the gap "
                                  f"H_a ({spec.joint.gap_mm} mm)", lay.pocket_depth_mm, 0.0, ("pocket_depth",)))
     cuts = list(lay.cuts)
+    near = _near_pairs(cuts, max(fab.min_pocket_gap_mm, fab.min_wall_mm))
     for i, a in enumerate(cuts):
         ra = a.diameter_mm / 2
         rho = math.hypot(*a.xy)
@@ -425,7 +443,8 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
         need = fab.min_rim_lip_mm if a.role == "pocket" else fab.min_wall_mm
         if a.role not in ("setscrew",) and lip < need - 1e-9:
             out.append(LayoutProblem(f"{lay.name}: {a.name} is {lip:.2f} mm from the rim", lip, need, (a.name, "rim")))
-        for b in cuts[i + 1:]:
+        for j in near[i]:
+            b = cuts[j]
             if not _z_overlap(a, b) or "setscrew" in (a.role, b.role):
                 continue
             gap, nested = _circle_gap(a, b)

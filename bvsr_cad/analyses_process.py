@@ -67,7 +67,7 @@ def _prepare_analyses(params: str) -> None:
         _PREPARED[str(Path(params).resolve()), before] = asm
 
 
-def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str = "", pictures: str = "",
+def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str = "", folder: str = "",
                       name: str = ""):
     """The analyses' second process (``python -m bvsr_cad.worker bvsr_cad.analyses_process - PARAMS SHA256
     [GEOMETRY [THREADS [FOLDER NAME]]]``): ``(results, drawn)``. ``GEOMETRY``: the cached geometry
@@ -89,12 +89,12 @@ def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str
     results = from_params(params, sha256, protocol_radius_mm, given,
                           _PREPARED.pop((str(Path(params).resolve()), sha256), None),
                           int(threads) if threads else BESIDE_BUILD_THREADS,
-                          (lambda geo: write_geometry_ahead(Path(pictures), geo)) if pictures else None)
-    if not pictures:
+                          (lambda geo: write_geometry_ahead(Path(folder), geo)) if folder else None)
+    if not folder:
         return results, False
     from .exporters.analysis_files import write_analysis_pictures  # matplotlib: after the analyses
 
-    write_analysis_pictures(results, Path(pictures), name)
+    write_analysis_pictures(results, Path(folder), name)
     return results, True
 
 

@@ -217,15 +217,16 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         # they need nothing else of the analyses, and their checks then go to the checks' second process
         # with those of the CAD files. They are entered in the manifest after the analyses' files, as in
         # every build; the early checks read them from a manifest written for them.
-        # The robot's collision shapes read the geometry alone. Not a cached stage: their fits mesh the
-        # parts' faces at 0.01 mm, the triangulation the robot's meshes then take (OCCT keeps the finest),
-        # whichever stages came from the cache.
+        # The robot's collision shapes read the geometry alone (their fits are kept per part solid:
+        # asked again, they cost nothing). Not a cached stage: their fits mesh the parts' faces at
+        # 0.01 mm, the triangulation the robot's meshes then take (OCCT keeps the finest), whichever
+        # stages came from the cache.
         t = time.perf_counter()
-        shapes = None
 
         def robot_files(theta_max_rad: list[float]) -> dict:
             say("robot model (B-rep inertials)")
-            return write_robot(robot_model(asm, theta_max_rad, shapes=shapes), tmp, say, spec.cart)
+            robot = robot_model(asm, theta_max_rad, shapes=collision_shapes(asm))
+            return write_robot(robot, tmp, say, spec.cart)
 
         def limits_ahead() -> list[float] | None:
             """The joint limits, if the cache or the analyses' process has given them by now."""
@@ -234,10 +235,8 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
             ahead = geometry if geometry is not None or analyses is None else take_geometry_ahead(tmp)
             return per_joint_rad(ahead.limits) if ahead is not None else None
 
-        robot_entries = None
-        if (early_limits := limits_ahead()) is not None:
-            shapes = collision_shapes(asm)
-            robot_entries = robot_files(early_limits)
+        early_limits = limits_ahead()
+        robot_entries = robot_files(early_limits) if early_limits is not None else None
         robot_s = time.perf_counter() - t
         # What reads only the CAD files (and the robot's) goes on while the analyses finish: the checks of
         # the meshes, the molds and the print files (and the robot's files), the drawings, the 3D view and
@@ -278,13 +277,13 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         pictures = report_pictures(tmp, manifest, cache)
         pictures_s = time.perf_counter() - t
         # The joint limits were not in when the checks started: the robot's files now if they are, before
-        # the wait for the analyses; else after it.
+        # the wait for the analyses; else its collision fits now (what needs no limits) and the files after it.
         t = time.perf_counter()
-        if shapes is None:
-            shapes = collision_shapes(asm)
         late_limits = limits_ahead() if robot_entries is None else None
         if late_limits is not None:
             robot_entries = robot_files(late_limits)
+        elif robot_entries is None:
+            collision_shapes(asm)
         robot_s += time.perf_counter() - t
         if robot_entries is not None:
             t = time.perf_counter()

@@ -20,11 +20,12 @@ import trimesh
 from .analysis.poses import mold_scene, twin_scene, viewer_scenes
 from .analysis.limits import per_joint_rad
 from .analysis.run import BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS, run_analyses
-from .analyses_process import drop_geometry_ahead, take_geometry_ahead
+from .analyses_process import drop_geometry_ahead, keep_posed, take_geometry_ahead
 from .assembly.build import build_assembly
 from .assembly.inertia import SolidProperties
 from .assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs, rigid_robot_model
-from .assembly.robot import collision_shapes, robot_model
+from .assembly.collision import part_fits, remember_fits
+from .assembly.robot import RobotModel, collision_shapes, robot_model
 from .cache import OWNER_FILE, copy_tree, object_stage, spec_without, stage_key
 from .checks.run import Checks
 from .exporters.analysis_files import write_analyses
@@ -38,6 +39,7 @@ from .exporters.render import render_previews
 from .exporters.report import report_pictures, write_report
 from .exporters.reproducible import make_reproducible
 from .exporters.robot_files import write_robot
+from .exporters.robot_meshes import write_robot_meshes
 from .exporters.viewer import write_viewer
 from .parameters.load import params_sha256
 from .parts._kernel import kernel_threads
@@ -72,6 +74,16 @@ DRAWINGS_IGNORE = tuple(k for k in PART_FILES_IGNORE if k != "casting") + ("name
 #: for (``fabrication_package``); its pieces are named by joint, not after the tail. (The mold set's
 #: key is its arguments, :func:`bvsr_cad.assembly.products.mold_set_inputs`.)
 TWIN_IGNORE = tuple(k for k in PART_FILES_IGNORE if k != "fabrication_package") + ("name",)
+#: The robot's meshes and its collision shapes' fits are the tail's solids and placements (named by part
+#: and joint, not after the tail) and which collision shapes ``robot.collision_geometry`` asks for
+#: (:func:`robot_geometry_key`); no mass, limit or actuator of the robot table.
+ROBOT_GEOMETRY_IGNORE = PART_FILES_IGNORE + ("name",)
+
+
+def robot_geometry_key(spec) -> str:
+    """The cache key of the robot's meshes and collision fits (:data:`ROBOT_GEOMETRY_IGNORE`)."""
+    return stage_key("robot_geometry", spec=spec_without(spec, *ROBOT_GEOMETRY_IGNORE), rod=spec.vertebra.has_rod,
+                     collision_geometry=spec.robot.collision_geometry)
 
 
 def build_export(params: str | Path, out_dir: str | Path | None = None,
@@ -217,16 +229,30 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         # they need nothing else of the analyses, and their checks then go to the checks' second process
         # with those of the CAD files. They are entered in the manifest after the analyses' files, as in
         # every build; the early checks read them from a manifest written for them.
-        # The robot's collision shapes read the geometry alone (their fits are kept per part solid:
-        # asked again, they cost nothing). Not a cached stage: their fits mesh the parts' faces at
-        # 0.01 mm, the triangulation the robot's meshes then take (OCCT keeps the finest), whichever
-        # stages came from the cache.
+        # The robot's meshes and its collision shapes' fits read the geometry alone (and which shapes:
+        # robot.collision_geometry): one stage, so that an edit that moves no solid (a material, the
+        # robot's limits) neither meshes a part nor fits one. One stage for both: the fits mesh the
+        # panels and SOAs at 0.01 mm, the triangulation their robot meshes then take (OCCT keeps the
+        # finest), so the meshes are made after the fits, as in a build without the cache.
         t = time.perf_counter()
+        robot_key = robot_geometry_key(spec)
 
         def robot_files(theta_max_rad: list[float]) -> dict:
+            t0 = time.perf_counter()
+            made: dict[str, RobotModel] = {}
+
+            def make(folder: Path) -> tuple:
+                say("robot meshes and collision fits")
+                made["robot"] = robot_model(asm, theta_max_rad, shapes=collision_shapes(asm))
+                return part_fits(asm), write_robot_meshes(made["robot"], folder / "robot" / "meshes")
+
+            (fits, mesh_files), reused = object_stage(cache, robot_key, make, tmp)
+            if reused:
+                remember_fits(asm, fits)
+            log.record("robot meshes, collision fits", reused, time.perf_counter() - t0)
             say("robot model (B-rep inertials)")
-            robot = robot_model(asm, theta_max_rad, shapes=collision_shapes(asm))
-            return write_robot(robot, tmp, say, spec.cart)
+            robot = made.get("robot") or robot_model(asm, theta_max_rad, shapes=collision_shapes(asm))
+            return write_robot(robot, tmp, say, spec.cart, mesh_files)
 
         def limits_ahead() -> list[float] | None:
             """The joint limits, if the cache or the analyses' process has given them by now."""
@@ -282,7 +308,7 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         late_limits = limits_ahead() if robot_entries is None else None
         if late_limits is not None:
             robot_entries = robot_files(late_limits)
-        elif robot_entries is None:
+        elif robot_entries is None and (cache is None or cache.get(robot_key) is None):
             collision_shapes(asm)
         robot_s += time.perf_counter() - t
         if robot_entries is not None:
@@ -305,8 +331,11 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
             if geometry is None:
                 log.record("analysis geometry (joint limits, clearance map)", False, results.geometry_seconds)
                 if cache is not None:
-                    cache.put(geometry_key, lambda folder: (folder / GEOMETRY_FILE).write_bytes(
-                        pickle.dumps(results.geometry)))
+                    def keep_geometry(folder: Path) -> None:
+                        (folder / GEOMETRY_FILE).write_bytes(pickle.dumps(results.geometry))
+                        keep_posed(tmp, folder)  # the analyses' process made it: for the next edit
+
+                    cache.put(geometry_key, keep_geometry)
             if cache is not None:
                 cache.put(analyses_key, lambda folder: (folder / "analyses.pkl").write_bytes(pickle.dumps(results)))
             # Their own time (in the second process, beside the stages above); the wait was shorter.

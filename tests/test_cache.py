@@ -87,6 +87,17 @@ def test_keys_follow_exactly_the_declared_inputs(bvsr_spec):
     assert key("analysis_geometry", pvc, GEO) == key("analysis_geometry", bvsr_spec, GEO)
     assert key("analysis_geometry", renamed, GEO) == key("analysis_geometry", bvsr_spec, GEO)
     assert key("analysis_geometry", thin, GEO) != key("analysis_geometry", bvsr_spec, GEO)
+    # The robot's meshes and collision fits: the solids and which collision shapes, not the material,
+    # the name or the robot table's other values.
+    from bvsr_cad.pipeline import robot_geometry_key
+
+    robot = robot_geometry_key(bvsr_spec)
+    assert robot_geometry_key(pvc) == robot_geometry_key(renamed) == robot
+    assert robot_geometry_key(dataclasses.replace(bvsr_spec, robot=dataclasses.replace(
+        bvsr_spec.robot, velocity_margin=2 * bvsr_spec.robot.velocity_margin))) == robot
+    assert robot_geometry_key(thin) != robot
+    assert robot_geometry_key(dataclasses.replace(bvsr_spec, robot=dataclasses.replace(
+        bvsr_spec.robot, collision_geometry="convex"))) != robot
 
 
 def test_keys_follow_the_libraries_the_results_are_computed_with(monkeypatch):
@@ -184,7 +195,9 @@ def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(bvsr_expo
     assert [r.returncode for r in runs] == [0, 0], [o[1][-2000:] for o in outs]
     summaries = [json.loads(o[0]) for o in outs]
     stages = {s["stage"]: s["status"] for s in summaries[0]["stages"]}
-    assert stages["part files"] == stages["previews"] == "reused"  # the rod's material moves no solid
+    # The rod's material moves no solid: nothing is meshed or fitted again, no rest distance measured again.
+    assert stages["part files"] == stages["previews"] == stages["robot meshes, collision fits"] == "reused"
+    assert stages["analysis geometry (joint limits, clearance map)"] == "reused"
     # The CPU seconds each build reports by process (its own since it opened, each second process's
     # own) against the kernel's count of the two commands and everything they started: all of it but
     # their interpreters' start, imports and parameter loading, the tools the checks run, and a standby

@@ -356,11 +356,23 @@ def test_the_analyses_process_leaves_the_joint_limits_before_its_other_analyses(
     with pytest.raises(Reached):
         analyses_process._analyses_process(str(params), params_sha256(params), "", "", str(tmp_path), "bvsr")
     names, geo = seen
-    assert names == [analyses_process.GEOMETRY_AHEAD_FILE]  # and no part file left beside it
-    assert isinstance(geo, run.GeometryAnalyses) and not any(tmp_path.iterdir())
+    # Beside it the posed tail (for the build's cache), and no part file left beside either.
+    assert names == sorted([analyses_process.GEOMETRY_AHEAD_FILE, analyses_process.POSED_AHEAD_FILE])
+    assert isinstance(geo, run.GeometryAnalyses)
+    assert [p.name for p in tmp_path.iterdir()] == [analyses_process.POSED_AHEAD_FILE]
     limits = per_joint_rad(geo.limits)
     assert len(limits) == load_spec(params).joints and all(0 < t <= run.THETA_SEARCH_MAX_RAD for t in limits)
     assert analyses_process.take_geometry_ahead(tmp_path) is None  # taken once
+    # The build moves the posed tail into its cache entry of the geometry analyses; the next build's
+    # analyses read it from there.
+    entry = tmp_path / "entry"
+    entry.mkdir()
+    analyses_process.keep_posed(tmp_path, entry)
+    posed = analyses_process.read_posed(str(entry / "geometry.pkl"))
+    assert [p.name for p in entry.iterdir()] == [analyses_process.POSED_FILE]
+    assert len(posed.pairs) == len(posed.rest_mm) > 0 and posed.rest_bvh == {}
+    analyses_process.drop_geometry_ahead(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["entry"]
 
 
 def test_the_export_holds_the_robot_files_made_with_the_analyses_joint_limits(bvsr_export):

@@ -81,6 +81,14 @@ class PosedTail:
     rest_bvh: dict = field(default_factory=dict, repr=False)  # instance -> BVH of its coarse rest mesh
     instances: list = field(default_factory=list, repr=False)  # the assembly's Instance of each mesh
 
+    def __getstate__(self) -> dict:
+        """Pickled without what it keeps as it goes (FCL's objects do not pickle; the caches refill):
+        the build keeps a geometry's posed tail in its cache, so that an edit that moves no solid skips
+        its meshing and its exact rest distances."""
+        state = dict(self.__dict__)
+        state.update(_aniso={}, _scaled={}, rest_bvh={})
+        return state
+
     def __post_init__(self) -> None:
         # Pairs grouped by the (contiguous) run of joints they span.
         groups: dict[tuple[int, int], list[int]] = {}

@@ -98,14 +98,18 @@ def geometry_analyses(asm: Assembly, pt: PosedTail, progress: Callable[[str], No
 def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
                  params_path: str | None = None, workspace_sim: WorkspaceSim | None = None,
                  geometry: GeometryAnalyses | None = None, threads: int = COMPARE_THREADS,
-                 on_geometry: Callable[[GeometryAnalyses], None] | None = None) -> AnalysisResults:
+                 on_geometry: Callable[[GeometryAnalyses], None] | None = None,
+                 posed: PosedTail | None = None, on_posed: Callable[[PosedTail], None] | None = None
+                 ) -> AnalysisResults:
     """``params_path``: the parameter file ``asm`` was built from (its calibration's data file is
     resolved relative to it); ``workspace_sim``: what predicts a measured tip workspace (see
     :func:`bvsr_cad.analysis.measured.compare_measurements`); ``geometry``: :func:`geometry_analyses`
     of this geometry when the caller has them (from the build's cache), else they are computed;
     ``threads``: those that predict the measured rows, at most (see
     :func:`bvsr_cad.analysis.calibrate.compare_rows`); ``on_geometry``: called with the geometry
-    analyses once they are computed here (not when given), before the other analyses go on."""
+    analyses once they are computed here (not when given), before the other analyses go on; ``posed``:
+    :func:`posed_tail` of this geometry when the caller has it (from the build's cache: it reads the
+    geometry alone), else it is made here and handed to ``on_posed``."""
     say = progress or (lambda _m: None)
     spec = asm.spec
     cfg = spec.analysis
@@ -117,7 +121,9 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
         measuring = pool.submit(compare_measurements, asm, params_path, say, workspace_sim, limits.result, threads)
         try:
             say("analysis: clearance")
-            pt = posed_tail(asm, say)
+            pt = posed if posed is not None else posed_tail(asm, say)
+            if posed is None and on_posed is not None:
+                on_posed(pt)
             geo = geometry if geometry is not None else geometry_analyses(asm, pt, say)
             limits.set_result(per_joint_rad(geo.limits))
             if geometry is None and on_geometry is not None:
@@ -155,12 +161,14 @@ BESIDE_IDLE_BUILD_THREADS = 3
 def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = None,
                 geometry: GeometryAnalyses | None = None, asm: Assembly | None = None,
                 threads: int = BESIDE_BUILD_THREADS,
-                on_geometry: Callable[[GeometryAnalyses], None] | None = None) -> AnalysisResults:
+                on_geometry: Callable[[GeometryAnalyses], None] | None = None,
+                posed: PosedTail | None = None, on_posed: Callable[[PosedTail], None] | None = None
+                ) -> AnalysisResults:
     """The second process's work: the analyses of the parameter file the build read (``sha256``),
     progress on stderr (the parent relays it). Its entry point is :mod:`bvsr_cad.analyses_process`'s
     (which gives ``workspace_sim``, from the build's cache ``geometry``, ``asm`` when it built the
     assembly of this very file ahead, ``threads``: :data:`BESIDE_BUILD_THREADS` or
-    :data:`BESIDE_IDLE_BUILD_THREADS`, and ``on_geometry``: see :func:`run_analyses`)."""
+    :data:`BESIDE_IDLE_BUILD_THREADS`, ``on_geometry``, ``posed`` and ``on_posed``: see :func:`run_analyses`)."""
     import sys
 
     from ..assembly.build import build_assembly
@@ -174,4 +182,4 @@ def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = N
 
     if asm is None:
         asm = build_assembly(load_spec(params))
-    return run_analyses(asm, say, params, workspace_sim, geometry, threads, on_geometry)
+    return run_analyses(asm, say, params, workspace_sim, geometry, threads, on_geometry, posed, on_posed)

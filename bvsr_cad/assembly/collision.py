@@ -99,6 +99,26 @@ def fit_cylinder(piece: bd.Shape, T_axis_mm: np.ndarray) -> CylinderFit:
     return fits[key]
 
 
+#: The parts whose solids :func:`panel_collisions` fits (about their own axis, the identity frame).
+FITTED_KINDS = ("panel", "soa")
+
+
+def part_fits(asm: Assembly) -> dict[str, CylinderFit]:
+    """Part name -> the fit about its own axis that :func:`panel_collisions` made of its solid (those it
+    made: call it first). What a build keeps in its cache beside the robot's meshes."""
+    key = np.eye(4).tobytes()
+    return {name: _FITS[part.solid][key] for name, part in asm.parts.items()
+            if part.kind in FITTED_KINDS and key in _FITS.get(part.solid, {})}
+
+
+def remember_fits(asm: Assembly, fits: dict[str, CylinderFit]) -> None:
+    """Give ``asm``'s part solids the fits :func:`part_fits` took from a build of the same geometry: the
+    collision shapes are then made without meshing a part."""
+    key = np.eye(4).tobytes()
+    for name, fit in fits.items():
+        _FITS.setdefault(asm.parts[name].solid, {})[key] = fit
+
+
 def _fit_cylinder(piece: bd.Shape, T: np.ndarray) -> CylinderFit:
     p, _ = mesh_arrays(piece, FIT_TOLERANCE_MM, _ANGULAR_TOLERANCE)
     local = (p - T[:3, 3]) @ T[:3, :3]

@@ -25,14 +25,17 @@ from .ros2_package import write_ros2_package
 from .urdf import write_urdf
 
 
-def write_robot(robot: RobotModel, root: Path, progress: Callable[[str], None], cart=None) -> dict[str, Any]:
+def write_robot(robot: RobotModel, root: Path, progress: Callable[[str], None], cart=None,
+                mesh_files: dict[str, str] | None = None) -> dict[str, Any]:
     """Write the robot model's URDF, MJCF and scenes (with ``cart``, a
     :class:`~bvsr_cad.parameters.tables.CartPlatform`, also ``scene_cart.xml``); returns the
-    manifest's ``robot`` section."""
+    manifest's ``robot`` section. ``mesh_files``: what :func:`write_robot_meshes` returned where the
+    caller has put the meshes in ``robot/meshes`` already (from a build of the same geometry)."""
     folder = root / "robot"
     folder.mkdir(exist_ok=True)  # the fabrication package may have put the rigid twin there
-    progress("robot meshes")
-    mesh_files = write_robot_meshes(robot, folder / "meshes")
+    if mesh_files is None:
+        progress("robot meshes")
+        mesh_files = write_robot_meshes(robot, folder / "meshes")
     name = robot.name
     write_urdf(robot, folder / f"{name}.urdf", mesh_files)
     progress("ROS 2 description package")

@@ -528,3 +528,37 @@ def test_reduced_couplings_hold_without_a_rod(tmp_path, data):
         with _quiet_cwd(tmp_path):
             _m, _d, warnings, worst_eq, _at, _drift = _step(tmp_path / f"scene_{stem}.xml", gravity=True)
         assert warnings == 0 and worst_eq < EQUALITY_TOLERANCE_REDUCED, (per_segment, worst_eq)
+
+
+def test_collision_fits_and_robot_meshes_take_the_print_stls_triangulation_whatever_ran_before(
+        bvsr_spec, tmp_path):
+    """A panel's collision fit and robot mesh are meshed at the print STL's tolerances with an absolute
+    deflection: with the STL's triangulation on the solid (the build fits right after writing it), after
+    build123d's ``bounding_box`` cleared it, or on a solid never meshed, the fit and the mesh file are the
+    same to the bit (a build from the cache, whose stages skip the STL, equals one without)."""
+    from bvsr_cad.assembly import collision
+    from bvsr_cad.exporters.cad import write_part_stl
+    from bvsr_cad.exporters.robot_meshes import _write_m
+    from bvsr_cad.parts._kernel import fresh_copy
+
+    part = build_assembly(bvsr_spec).parts["panel1"]
+    write_part_stl(part, tmp_path / "print.stl")
+    with_stl = collision._fit_cylinder(part.solid, np.eye(4))
+    _write_m(part.solid, tmp_path / "with_stl.stl")
+    part.solid.bounding_box()  # clears the triangulation
+    cleared = collision._fit_cylinder(part.solid, np.eye(4))
+    _write_m(part.solid, tmp_path / "cleared.stl")
+    never = fresh_copy(part.solid)
+    untouched = collision._fit_cylinder(never, np.eye(4))
+    _write_m(never, tmp_path / "never.stl")
+    for fit in (cleared, untouched):
+        assert (fit.radius_mm, fit.z0_mm, fit.z1_mm, fit.max_radius_mm, fit.hull_volume_mm3) == (
+            with_stl.radius_mm, with_stl.z0_mm, with_stl.z1_mm, with_stl.max_radius_mm, with_stl.hull_volume_mm3)
+    meshes = {(tmp_path / f"{n}.stl").read_bytes() for n in ("with_stl", "cleared", "never")}
+    assert len(meshes) == 1
+    # The robot mesh is the print STL's triangulation, in metres.
+    import trimesh
+
+    robot, printed = (trimesh.load(tmp_path / f"{n}.stl") for n in ("with_stl", "print"))
+    assert len(robot.faces) == len(printed.faces)
+    assert robot.volume == pytest.approx(printed.volume * 1e-9, rel=1e-6)

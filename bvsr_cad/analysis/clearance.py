@@ -47,7 +47,7 @@ import trimesh
 
 from ..assembly.build import Assembly
 from ..models.kinematics import TailKinematics, joint_transform_uv, theta_phi_from_uv
-from ..parts._kernel import mesh_arrays
+from ..parts._kernel import fresh_copy, mesh_arrays
 
 Progress = Callable[[str], None]
 #: Longest mesh edge on bending parts, so that deformed triangles follow the arc (chord error < 0.01 mm).
@@ -228,7 +228,9 @@ class PosedTail:
 
 
 def _mesh(solid) -> trimesh.Trimesh:
-    return trimesh.Trimesh(*mesh_arrays(solid, 0.02, 0.3), process=True)
+    """A copy of ``solid`` meshed (OCCT keeps a finer triangulation than asked: an earlier stage's on
+    ``solid`` itself would change the clearances)."""
+    return trimesh.Trimesh(*mesh_arrays(fresh_copy(solid), 0.02, 0.3), process=True)
 
 
 def _cut_at_z(m: trimesh.Trimesh, levels: np.ndarray) -> trimesh.Trimesh:

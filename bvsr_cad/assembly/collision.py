@@ -120,7 +120,9 @@ def remember_fits(asm: Assembly, fits: dict[str, CylinderFit]) -> None:
 
 
 def _fit_cylinder(piece: bd.Shape, T: np.ndarray) -> CylinderFit:
-    p, _ = mesh_arrays(piece, FIT_TOLERANCE_MM, _ANGULAR_TOLERANCE)
+    # An absolute deflection: the part's print STL triangulation (the same tolerances), whichever stages
+    # ran before (build123d's bounding_box clears a triangulation; OCCT makes the same one again).
+    p, _ = mesh_arrays(piece, FIT_TOLERANCE_MM, _ANGULAR_TOLERANCE, relative=False)
     local = (p - T[:3, 3]) @ T[:3, :3]
     r = float(np.max(np.hypot(local[:, 0], local[:, 1])))
     return CylinderFit(r + FIT_TOLERANCE_MM, float(local[:, 2].min()) - FIT_TOLERANCE_MM,

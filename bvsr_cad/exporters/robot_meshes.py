@@ -44,5 +44,7 @@ def _write_hull_m(shape, path: Path) -> None:
 
 
 def _write_m(shape, path: Path, tolerance_mm: float = MESH_TOLERANCE_MM) -> None:
-    """Tessellate in millimetres with OCCT (fast), then scale the mesh to metres."""
-    write_stl(shape, path, tolerance_mm, 0.1, scale=units.mm_to_m(1.0), relative=True)
+    """Tessellate in millimetres with OCCT (fast), then scale the mesh to metres. An absolute deflection at
+    the print STLs' tolerances: a panel's or an SOA's robot mesh is its print STL's triangulation (and its
+    collision fit's), the same whichever stages ran before."""
+    write_stl(shape, path, tolerance_mm, 0.1, scale=units.mm_to_m(1.0), relative=False)

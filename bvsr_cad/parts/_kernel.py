@@ -49,16 +49,25 @@ def location(t) -> bd.Location:
     return bd.Location(TopLoc_Location(trsf))
 
 
-def mesh_arrays(shape: bd.Shape, tolerance_mm: float, angular_tolerance_rad: float = 0.1
+def mesh_arrays(shape: bd.Shape, tolerance_mm: float, angular_tolerance_rad: float = 0.1, relative: bool = True
                 ) -> tuple[np.ndarray, np.ndarray]:
     """``shape.tessellate(...)`` as arrays: vertices (n, 3) float and triangles (m, 3) int64, equal value for
     value to build123d's (the same triangulation, faces in the same order, a reversed face's triangles
-    flipped), about three times faster (no Vector per vertex, a face at its identity place not moved)."""
+    flipped), about three times faster (no Vector per vertex, a face at its identity place not moved).
+
+    ``relative``: build123d's meshing, ``tolerance_mm`` a fraction of each edge's size where ``shape``
+    has no triangulation within ``tolerance_mm`` yet. False: an absolute deflection, as the STL writer
+    meshes (:func:`bvsr_cad.exporters.cad.write_stl`): at its tolerances, a part's triangulation is the
+    one its print STL left (the same to the bit: OCCT meshes a B-rep alike whether it had a
+    triangulation that build123d's ``bounding_box`` then cleared, or never had one)."""
     from OCP.BRep import BRep_Tool
     from OCP.TopAbs import TopAbs_Orientation
     from OCP.TopLoc import TopLoc_Location
 
-    shape.mesh(tolerance_mm, angular_tolerance_rad)
+    if relative:
+        shape.mesh(tolerance_mm, angular_tolerance_rad)
+    else:
+        mesh_absolute(shape, tolerance_mm, angular_tolerance_rad)
     verts: list[tuple[float, float, float]] = []
     tris: list[np.ndarray] = []
     for face in shape.faces():
@@ -110,6 +119,15 @@ def single_solid(shape: bd.Shape, what: str) -> bd.Solid:
     if not solid.is_valid:
         raise GeometryError(f"{what}: the kernel produced an invalid solid")
     return solid
+
+
+def mesh_absolute(shape: bd.Shape, tolerance_mm: float, angular_tolerance_rad: float) -> None:
+    """Triangulate ``shape`` with an absolute deflection of ``tolerance_mm`` unless it has one within it."""
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+    from OCP.BRepTools import BRepTools
+
+    if not BRepTools.Triangulation_s(shape.wrapped, tolerance_mm):
+        BRepMesh_IncrementalMesh(shape.wrapped, tolerance_mm, False, angular_tolerance_rad, True)
 
 
 def fresh_copy(shape: bd.Shape) -> bd.Shape:

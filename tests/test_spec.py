@@ -4,6 +4,9 @@ exit code 2 and a message naming the file, the key and what is allowed."""
 from __future__ import annotations
 
 import math
+import os
+import subprocess
+import sys
 import tomllib
 from pathlib import Path
 
@@ -220,3 +223,20 @@ def test_a_bad_file_is_refused_before_the_pipeline_is_imported(tmp_path):
                          timeout=120)
     assert run.stdout.split() == ["2", "False", "False"], run.stdout + run.stderr
     assert "soa.pleats = 0" in run.stderr and not (tmp_path / "out").exists()
+
+
+def test_the_command_ends_with_mains_exit_code_and_all_it_printed(tmp_path):
+    """`python -m bvsr_cad.cli` (as the `bvsr` script, :func:`bvsr_cad.cli.console`) ends without the
+    interpreter's teardown: with main's exit code, and every line it printed on either stream."""
+    bad = tmp_path / "bad.toml"
+    bad.write_text((PARAMS / "bvsr.toml").read_text().replace("segments = 2", "segments = 0", 1))
+    done = subprocess.run([sys.executable, "-m", "bvsr_cad.cli", "build", str(bad), "-o", str(tmp_path / "out")],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2 and "segments" in done.stderr and "bvsr: error" in done.stderr, done.stderr
+    assert not (tmp_path / "out").exists()
+    buffered = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}  # a pipe's block buffering
+    helped = subprocess.run([sys.executable, "-m", "bvsr_cad.cli", "build", "--help"], capture_output=True,
+                            text=True, timeout=300, env=buffered)
+    # The whole help, to its last line (what is still buffered when main returns is flushed first).
+    assert helped.returncode == 0 and helped.stdout.startswith("usage: bvsr build")
+    assert helped.stdout.rstrip().endswith("~/.cache/bvsr_cad/artifacts)")

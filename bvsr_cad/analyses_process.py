@@ -11,9 +11,10 @@ from __future__ import annotations
 
 import os
 import pickle
+import sys
 from pathlib import Path
 
-from .analysis.run import BESIDE_BUILD_THREADS, GeometryAnalyses
+from .analysis.run import BESIDE_BUILD_THREADS, GeometryAnalyses, RestGeometry
 from .parameters.load import load_spec, params_sha256
 from .parts._kernel import kernel_threads
 from .sim import protocol_radius_mm
@@ -31,37 +32,38 @@ def write_geometry_ahead(folder: Path, geo: GeometryAnalyses) -> None:
     os.replace(part, folder / GEOMETRY_AHEAD_FILE)
 
 
-#: In the build's temporary folder: the posed tail (:func:`bvsr_cad.analysis.clearance.posed_tail`) the analyses'
-#: process made, pickled (:func:`write_posed_ahead`); the build moves it into its cache entry of the
-#: geometry analyses as :data:`POSED_FILE` (:func:`keep_posed`), beside their pickle, and the next build of
-#: the same geometry hands it back: an edit that moves no solid skips the instances' meshing and their
-#: exact rest distances (1.3-1.8 CPU s of that process's work, most of it before its analyses can start).
-POSED_AHEAD_FILE = ".analysis-posed.pkl"
-#: The posed tail's name in the cache entry of the geometry analyses.
-POSED_FILE = "posed_tail.pkl"
+#: In the build's temporary folder: the rest geometry (:class:`bvsr_cad.analysis.run.RestGeometry`: the posed
+#: tail and the parts' mass properties) the analyses' process made, pickled (:func:`write_rest_ahead`); the
+#: build moves it into its cache entry of the geometry analyses as :data:`REST_FILE` (:func:`keep_rest`),
+#: beside their pickle, and the next build of the same geometry hands it back: an edit that moves no solid
+#: then makes no solid in this process, meshes none and measures no rest distance (its assembly ahead
+#: and the posed tail were 3-4 CPU s of this process's work, most of it before its analyses could start).
+REST_AHEAD_FILE = ".analysis-rest.pkl"
+#: The rest geometry's name in the cache entry of the geometry analyses.
+REST_FILE = "rest_geometry.pkl"
 
 
-def write_posed_ahead(folder: Path, posed) -> None:
-    """``posed`` into ``folder``'s :data:`POSED_AHEAD_FILE`, whole or not at all."""
-    part = folder / (POSED_AHEAD_FILE + ".part")
-    part.write_bytes(pickle.dumps(posed, protocol=pickle.HIGHEST_PROTOCOL))
-    os.replace(part, folder / POSED_AHEAD_FILE)
+def write_rest_ahead(folder: Path, rest: RestGeometry) -> None:
+    """``rest`` into ``folder``'s :data:`REST_AHEAD_FILE`, whole or not at all."""
+    part = folder / (REST_AHEAD_FILE + ".part")
+    part.write_bytes(pickle.dumps(rest, protocol=pickle.HIGHEST_PROTOCOL))
+    os.replace(part, folder / REST_AHEAD_FILE)
 
 
-def keep_posed(folder: Path, entry: Path) -> None:
-    """Move the posed tail the analyses' process left in ``folder`` (if any) into the cache ``entry``
+def keep_rest(folder: Path, entry: Path) -> None:
+    """Move the rest geometry the analyses' process left in ``folder`` (if any) into the cache ``entry``
     being filled with the geometry analyses."""
     try:
-        os.replace(folder / POSED_AHEAD_FILE, entry / POSED_FILE)
+        os.replace(folder / REST_AHEAD_FILE, entry / REST_FILE)
     except FileNotFoundError:
         pass
 
 
-def read_posed(geometry: str):
-    """The posed tail kept beside the cached geometry analyses at ``geometry`` (their pickle's path), or
-    None (an entry without one, or evicted since the build looked)."""
+def read_rest(geometry: str) -> RestGeometry | None:
+    """The rest geometry kept beside the cached geometry analyses at ``geometry`` (their pickle's path),
+    or None (an entry without one, or evicted since the build looked)."""
     try:
-        return pickle.loads((Path(geometry).parent / POSED_FILE).read_bytes())
+        return pickle.loads((Path(geometry).parent / REST_FILE).read_bytes())
     except OSError:
         return None
 
@@ -79,10 +81,10 @@ def take_geometry_ahead(folder: Path) -> GeometryAnalyses | None:
 
 
 def drop_geometry_ahead(folder: Path) -> None:
-    """Remove what :func:`write_geometry_ahead` and :func:`write_posed_ahead` may have left in ``folder`` (a
-    file or its half-written part; the posed tail once the build has moved it into its cache, or where it
-    has none)."""
-    for name in (GEOMETRY_AHEAD_FILE, GEOMETRY_AHEAD_FILE + ".part", POSED_AHEAD_FILE, POSED_AHEAD_FILE + ".part"):
+    """Remove what :func:`write_geometry_ahead` and :func:`write_rest_ahead` may have left in ``folder`` (a
+    file or its half-written part; the rest geometry once the build has moved it into its cache, or where
+    it has none)."""
+    for name in (GEOMETRY_AHEAD_FILE, GEOMETRY_AHEAD_FILE + ".part", REST_AHEAD_FILE, REST_AHEAD_FILE + ".part"):
         (folder / name).unlink(missing_ok=True)
 
 
@@ -92,16 +94,32 @@ _PREPARED: dict[tuple[str, str], object] = {}
 
 def _prepare_analyses(params: str) -> None:
     """A standby analyses process's head start (``python -m bvsr_cad.worker bvsr_cad.analyses_process --standby
-    PARAMS``): the tail's assembly, built from the file while the build imports and reads its cache; used
-    only if the work that comes names the same file with the same SHA-256 (the bytes the assembly was
-    built from)."""
+    PARAMS``): the tail's assembly from the file, its solids made one by one while the build imports and
+    reads its cache, until the work comes (a build whose geometry is cached hands over the rest geometry:
+    it needs none of them; a solid not made by then is made when first read). Used only if the work names
+    the same file with the same SHA-256 (the bytes the assembly was built from)."""
     from .assembly.build import build_assembly
 
     kernel_threads(1)  # beside the build, which keeps the other core busy
     before = params_sha256(params)
-    asm = build_assembly(load_spec(params))
-    if params_sha256(params) == before:
-        _PREPARED[str(Path(params).resolve()), before] = asm
+    asm = build_assembly(load_spec(params), solids=False)
+    if params_sha256(params) != before:
+        return
+    _PREPARED[str(Path(params).resolve()), before] = asm
+    for part in asm.parts.values():
+        if _work_waiting():
+            return
+        part.solid  # noqa: B018 - made now, a head start
+
+
+def _work_waiting() -> bool:
+    """The build has written this standby process's work (or closed its input) on stdin."""
+    import select
+
+    try:
+        return bool(select.select([sys.stdin], [], [], 0)[0])
+    except (OSError, ValueError):  # no pollable stdin (another platform): go on making them
+        return False
 
 
 def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str = "", folder: str = "",
@@ -127,8 +145,8 @@ def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str
                           _PREPARED.pop((str(Path(params).resolve()), sha256), None),
                           int(threads) if threads else BESIDE_BUILD_THREADS,
                           (lambda geo: write_geometry_ahead(Path(folder), geo)) if folder else None,
-                          read_posed(geometry) if given is not None else None,
-                          (lambda pt: write_posed_ahead(Path(folder), pt)) if folder and given is None else None)
+                          read_rest(geometry) if given is not None else None,
+                          (lambda rest: write_rest_ahead(Path(folder), rest)) if folder and given is None else None)
     if not folder:
         return results, False
     from .exporters.analysis_files import write_analysis_pictures  # matplotlib: after the analyses

@@ -20,7 +20,7 @@ import trimesh
 from .analysis.poses import mold_scene, twin_scene, viewer_scenes
 from .analysis.limits import per_joint_rad
 from .analysis.run import BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS, run_analyses
-from .analyses_process import drop_geometry_ahead, keep_posed, take_geometry_ahead
+from .analyses_process import drop_geometry_ahead, keep_rest, take_geometry_ahead
 from .assembly.build import build_assembly
 from .assembly.inertia import SolidProperties
 from .assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs, rigid_robot_model
@@ -340,7 +340,7 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
                 if cache is not None:
                     def keep_geometry(folder: Path) -> None:
                         (folder / GEOMETRY_FILE).write_bytes(pickle.dumps(results.geometry))
-                        keep_posed(tmp, folder)  # the analyses' process made it: for the next edit
+                        keep_rest(tmp, folder)  # the analyses' process made it: for the next edit
 
                     cache.put(geometry_key, keep_geometry)
             if cache is not None:

@@ -356,21 +356,22 @@ def test_the_analyses_process_leaves_the_joint_limits_before_its_other_analyses(
     with pytest.raises(Reached):
         analyses_process._analyses_process(str(params), params_sha256(params), "", "", str(tmp_path), "bvsr")
     names, geo = seen
-    # Beside it the posed tail (for the build's cache), and no part file left beside either.
-    assert names == sorted([analyses_process.GEOMETRY_AHEAD_FILE, analyses_process.POSED_AHEAD_FILE])
+    # Beside it the rest geometry (for the build's cache), and no part file left beside either.
+    assert names == sorted([analyses_process.GEOMETRY_AHEAD_FILE, analyses_process.REST_AHEAD_FILE])
     assert isinstance(geo, run.GeometryAnalyses)
-    assert [p.name for p in tmp_path.iterdir()] == [analyses_process.POSED_AHEAD_FILE]
+    assert [p.name for p in tmp_path.iterdir()] == [analyses_process.REST_AHEAD_FILE]
     limits = per_joint_rad(geo.limits)
     assert len(limits) == load_spec(params).joints and all(0 < t <= run.THETA_SEARCH_MAX_RAD for t in limits)
     assert analyses_process.take_geometry_ahead(tmp_path) is None  # taken once
-    # The build moves the posed tail into its cache entry of the geometry analyses; the next build's
-    # analyses read it from there.
+    # The build moves the rest geometry into its cache entry of the geometry analyses; the next build's
+    # analyses read it from there: the posed tail and every part's mass properties.
     entry = tmp_path / "entry"
     entry.mkdir()
-    analyses_process.keep_posed(tmp_path, entry)
-    posed = analyses_process.read_posed(str(entry / "geometry.pkl"))
-    assert [p.name for p in entry.iterdir()] == [analyses_process.POSED_FILE]
-    assert len(posed.pairs) == len(posed.rest_mm) > 0 and posed.rest_bvh == {}
+    analyses_process.keep_rest(tmp_path, entry)
+    rest = analyses_process.read_rest(str(entry / "geometry.pkl"))
+    assert [p.name for p in entry.iterdir()] == [analyses_process.REST_FILE]
+    assert len(rest.posed.pairs) == len(rest.posed.rest_mm) > 0 and rest.posed.rest_bvh == {}
+    assert sorted(rest.properties) == sorted(build_assembly(load_spec(params), solids=False).parts)
     analyses_process.drop_geometry_ahead(tmp_path)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["entry"]
 

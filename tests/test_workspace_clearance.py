@@ -175,3 +175,32 @@ def test_stage_1b_shares_a_shortened_mesh_between_spans_that_differ_only_above_i
             shortened.append(trimesh.Trimesh(v, pt.cut[int(i)].faces, process=False))
         assert pt.aniso_rest(p, k) == _fcl_distance(*shortened)
     assert len(pt._scaled) < len(asked)
+
+
+def test_analyses_given_the_rest_geometry_make_no_solid_and_give_the_same_results(bvsr_spec, monkeypatch):
+    """An edit that moves no solid (a material): the analyses' process gets the cached geometry analyses
+    and rest geometry (the posed tail, every part's mass properties), read back from their pickles, on an
+    assembly whose solids are made only when read. It makes none, and its workspace, quasi-static table
+    and clearance equal those of analyses that made everything, to the bit."""
+    import dataclasses
+    import pickle
+
+    from bvsr_cad.analysis import run
+    from bvsr_cad.assembly.build import build_assembly
+
+    monkeypatch.setattr(run, "compare_measurements", lambda *_a, **_k: None)  # rows need robot models
+    kept = []
+    full = run.run_analyses(build_assembly(bvsr_spec), on_rest=kept.append)
+    assert len(kept) == 1 and sorted(kept[0].properties) == sorted(build_assembly(bvsr_spec, solids=False).parts)
+    lazy = build_assembly(bvsr_spec, solids=False)
+    again = run.run_analyses(lazy, geometry=pickle.loads(pickle.dumps(full.geometry)),
+                             rest=pickle.loads(pickle.dumps(kept[0])), on_rest=kept.append)
+    assert not any(p.solid_made for p in lazy.parts.values()) and len(kept) == 1
+    for name in ("tip_mm", "w", "line_kpa"):
+        assert np.array_equal(getattr(again.workspace, name), getattr(full.workspace, name))
+    assert again.quasi_static == full.quasi_static
+    fields = lambda r: {k: v for k, v in dataclasses.asdict(r).items() if k != "seconds"}  # noqa: E731
+    assert fields(again.clearance) == fields(full.clearance)
+    # Read, a solid is made then: the same one an eager assembly has.
+    assert lazy.parts["panel1"].solid.volume == build_assembly(bvsr_spec).parts["panel1"].solid.volume
+    assert lazy.parts["panel1"].solid_made

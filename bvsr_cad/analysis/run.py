@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..assembly.build import Assembly
+from ..assembly.inertia import SolidProperties
 from .calibrate import COMPARE_THREADS
 from .measured import MeasuredComparison, compare_measurements
 from .predict import WorkspaceSim
@@ -53,6 +54,21 @@ class GeometryAnalyses:
     fold_stack_lambda: float
     clearance_map: ClearanceMap
     seconds: float  # what computing them took (reused: when they were computed)
+
+
+@dataclass(frozen=True)
+class RestGeometry:
+    """What the analyses read of the tail's solids: the posed tail (every instance's mesh, the pairs
+    that must not touch, their exact rest distances) and each part's mass properties. Geometry alone:
+    the build keeps it beside the cached geometry analyses and hands it back to an edit that moves no
+    solid, whose analyses then make no solid, mesh none and measure no rest distance."""
+
+    posed: PosedTail
+    properties: dict[str, SolidProperties]
+
+    @classmethod
+    def of(cls, asm: Assembly, posed: PosedTail) -> "RestGeometry":
+        return cls(posed, {name: asm.solid_properties(name) for name in asm.parts})
 
 
 @dataclass(frozen=True)
@@ -99,7 +115,7 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
                  params_path: str | None = None, workspace_sim: WorkspaceSim | None = None,
                  geometry: GeometryAnalyses | None = None, threads: int = COMPARE_THREADS,
                  on_geometry: Callable[[GeometryAnalyses], None] | None = None,
-                 posed: PosedTail | None = None, on_posed: Callable[[PosedTail], None] | None = None
+                 rest: RestGeometry | None = None, on_rest: Callable[[RestGeometry], None] | None = None
                  ) -> AnalysisResults:
     """``params_path``: the parameter file ``asm`` was built from (its calibration's data file is
     resolved relative to it); ``workspace_sim``: what predicts a measured tip workspace (see
@@ -107,13 +123,15 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
     of this geometry when the caller has them (from the build's cache), else they are computed;
     ``threads``: those that predict the measured rows, at most (see
     :func:`bvsr_cad.analysis.calibrate.compare_rows`); ``on_geometry``: called with the geometry
-    analyses once they are computed here (not when given), before the other analyses go on; ``posed``:
-    :func:`posed_tail` of this geometry when the caller has it (from the build's cache: it reads the
-    geometry alone), else it is made here and handed to ``on_posed``."""
+    analyses once they are computed here (not when given), before the other analyses go on; ``rest``:
+    the :class:`RestGeometry` of this geometry when the caller has it (from the build's cache), else it
+    is made here and handed to ``on_rest``."""
     say = progress or (lambda _m: None)
     spec = asm.spec
     cfg = spec.analysis
     t0 = time.perf_counter()
+    if rest is not None:
+        asm.remember_properties(rest.properties)  # before anything integrates (or makes) a solid
     # The measurements go on in a thread beside the other analyses (the workspace protocol steps in
     # MuJoCo without Python's lock); only a workspace row of this geometry waits for its joints' limits.
     limits: Future = Future()
@@ -121,9 +139,9 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
         measuring = pool.submit(compare_measurements, asm, params_path, say, workspace_sim, limits.result, threads)
         try:
             say("analysis: clearance")
-            pt = posed if posed is not None else posed_tail(asm, say)
-            if posed is None and on_posed is not None:
-                on_posed(pt)
+            pt = rest.posed if rest is not None else posed_tail(asm, say)
+            if rest is None and on_rest is not None:
+                on_rest(RestGeometry.of(asm, pt))
             geo = geometry if geometry is not None else geometry_analyses(asm, pt, say)
             limits.set_result(per_joint_rad(geo.limits))
             if geometry is None and on_geometry is not None:
@@ -162,13 +180,15 @@ def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = N
                 geometry: GeometryAnalyses | None = None, asm: Assembly | None = None,
                 threads: int = BESIDE_BUILD_THREADS,
                 on_geometry: Callable[[GeometryAnalyses], None] | None = None,
-                posed: PosedTail | None = None, on_posed: Callable[[PosedTail], None] | None = None
+                rest: RestGeometry | None = None, on_rest: Callable[[RestGeometry], None] | None = None
                 ) -> AnalysisResults:
     """The second process's work: the analyses of the parameter file the build read (``sha256``),
     progress on stderr (the parent relays it). Its entry point is :mod:`bvsr_cad.analyses_process`'s
     (which gives ``workspace_sim``, from the build's cache ``geometry``, ``asm`` when it built the
     assembly of this very file ahead, ``threads``: :data:`BESIDE_BUILD_THREADS` or
-    :data:`BESIDE_IDLE_BUILD_THREADS`, ``on_geometry``, ``posed`` and ``on_posed``: see :func:`run_analyses`)."""
+    :data:`BESIDE_IDLE_BUILD_THREADS`, ``on_geometry``, ``rest`` and ``on_rest``: see :func:`run_analyses`; without ``asm`` the
+    assembly's solids are made when first read: none, where ``rest`` and ``geometry`` are given and no
+    measured row needs a robot model)."""
     import sys
 
     from ..assembly.build import build_assembly
@@ -181,5 +201,5 @@ def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = N
         print(f"(second process) {msg}", file=sys.stderr, flush=True)
 
     if asm is None:
-        asm = build_assembly(load_spec(params))
-    return run_analyses(asm, say, params, workspace_sim, geometry, threads, on_geometry, posed, on_posed)
+        asm = build_assembly(load_spec(params), solids=False)
+    return run_analyses(asm, say, params, workspace_sim, geometry, threads, on_geometry, rest, on_rest)

@@ -9,6 +9,7 @@ after its first instance otherwise.
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -40,6 +41,35 @@ class PartDef(PrintPosed):
     solid: bd.Solid
     print_transform: tuple[tuple[float, ...], ...]  # 4x4, part frame -> print frame (mm)
     info: dict = field(default_factory=dict, hash=False, compare=False)
+
+
+class _SolidOnUse(PartDef):
+    """A :class:`PartDef` whose solid is made the first time it is read (:func:`build_assembly` with
+    ``solids=False``): the same solid as an eager build's, by the same function, made at most once."""
+
+    def __init__(self, make: Callable[[], bd.Solid], **fields):
+        object.__setattr__(self, "_make", make)
+        object.__setattr__(self, "_lock", threading.Lock())
+        super().__init__(solid=None, **fields)
+
+    @property
+    def solid(self) -> bd.Solid:
+        made = self.__dict__.get("_solid")
+        if made is None:
+            with self._lock:  # the analyses' threads may ask at once
+                made = self.__dict__.get("_solid")
+                if made is None:
+                    made = self._make()
+                    object.__setattr__(self, "_solid", made)
+        return made
+
+    @solid.setter
+    def solid(self, value: bd.Solid | None) -> None:  # the dataclass's __init__ sets the field
+        object.__setattr__(self, "_solid", value)
+
+    @property
+    def solid_made(self) -> bool:
+        return self.__dict__.get("_solid") is not None
 
 
 @dataclass(frozen=True)
@@ -96,6 +126,13 @@ class Assembly:
         if part not in self._properties:
             self._properties[part] = SolidProperties.of(self.parts[part].solid)
         return self._properties[part]
+
+    def remember_properties(self, properties: dict[str, SolidProperties]) -> None:
+        """Take parts' mass properties computed from the same solids elsewhere (a build's cache): the parts'
+        solids are then not integrated again, nor made (``build_assembly(..., solids=False)``)."""
+        for part, props in properties.items():
+            if part in self.parts:
+                self._properties.setdefault(part, props)
 
     def volume_mm3(self, part: str) -> float:
         return self.solid_properties(part).volume_mm3
@@ -159,14 +196,21 @@ def _print_transform_panel(lay: PanelLayout) -> np.ndarray:
     return translation(z=lay.thickness_mm) @ flip
 
 
-def build_assembly(spec: TailSpec, progress: Progress | None = None) -> Assembly:
+def build_assembly(spec: TailSpec, progress: Progress | None = None, solids: bool = True) -> Assembly:
     """Make every unique part and place every instance of the tail at rest.
 
     Args:
         spec: a validated tail spec.
         progress: called with a short message before each slow step.
+        solids: False makes each part's solid when it is first read, not now (the analyses' process of a
+            build whose geometry analyses, posed tail and parts' mass properties come from the cache reads
+            none: an edit that moves no solid makes none there).
     """
     say = progress or (lambda _msg: None)
+
+    def part(*, solid: Callable[[], bd.Solid], **fields) -> PartDef:
+        return PartDef(solid=solid(), **fields) if solids else _SolidOnUse(solid, **fields)
+
     beta = half_angle_rad(spec)
     j = spec.joint
     parts: dict[str, PartDef] = {}
@@ -182,11 +226,12 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None) -> Assembly
     for lay in layouts:
         key = _panel_key(lay)
         if key not in by_key:
-            say(f"panel {lay.name} ({lay.kind})")
+            if solids:
+                say(f"panel {lay.name} ({lay.kind})")
             by_key[key] = lay.name
-            parts[lay.name] = PartDef(
+            parts[lay.name] = part(
                 name=lay.name, kind="panel", material=spec.use.panel, process="MJF",
-                solid=panel(lay), print_transform=_as_tuple(_print_transform_panel(lay)),
+                solid=lambda lay=lay: panel(lay), print_transform=_as_tuple(_print_transform_panel(lay)),
                 info={"panel_kind": lay.kind, "thickness_mm": lay.thickness_mm,
                       "pocket_depth_mm": lay.pocket_depth_mm,
                       "pocket_faces": [f for f, on in (("lower", lay.lower_pockets),
@@ -203,10 +248,11 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None) -> Assembly
         instances.append(Instance(lay.name, by_key[key], _as_tuple(translation(z=lay.z0_mm)), "panel",
                                   segs[0] if len(segs) == 1 else None, segs, panel=lay.index))
 
-    say("SOA body")
-    parts["soa"] = PartDef(
+    if solids:
+        say("SOA body")
+    parts["soa"] = part(
         name="soa", kind="soa", material=spec.use.soa, process="cast",
-        solid=soa_body(spec.soa, j.base_diameter_mm), print_transform=_as_tuple(np.eye(4)),
+        solid=lambda: soa_body(spec.soa, j.base_diameter_mm), print_transform=_as_tuple(np.eye(4)),
         info={"height_mm": spec.soa.built_height_mm, "fold_residual_mm":
               spec.soa.built_origami_height_mm - spec.soa.origami_height_mm},
     )
@@ -228,9 +274,9 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None) -> Assembly
         if length not in rods:
             name = f"rod_s{s}"
             rods[length] = name
-            parts[name] = PartDef(
+            parts[name] = part(
                 name=name, kind="rod", material=spec.vertebra.material, process="cut",
-                solid=rod(spec.vertebra.diameter_mm, length), print_transform=_as_tuple(np.eye(4)),
+                solid=lambda length=length: rod(spec.vertebra.diameter_mm, length), print_transform=_as_tuple(np.eye(4)),
                 info={"cut_length_mm": length, "diameter_mm": spec.vertebra.diameter_mm},
             )
         instances.append(Instance(f"rod_s{s}", rods[length], _as_tuple(translation(z=z0)), "rod", s, (s,)))

@@ -391,19 +391,27 @@ def test_the_export_holds_the_robot_files_made_with_the_analyses_joint_limits(bv
 
 
 def test_the_robot_checks_run_once_in_whichever_process_claims_them(bvsr_export, tmp_path):
-    """The build's robot checks go to whichever of its processes is free first (the checks' process, given
-    them at its start, or the build's own, at its wait for the analyses): the first to claim them takes
-    them and no later one does. The export holds each robot check once and not the claim."""
-    from bvsr_cad.checks.run import ROBOT_CLAIM_FILE, claim_robot_checks
+    """The build's robot checks come in two parts, each to whichever of its processes is free first (the
+    checks' process, given them at its start, or the build's own, at its wait for the analyses): the
+    first to claim a part takes it and no later one does. The export holds every robot check once, in the
+    order and with the verdicts of the checks run in one go, and no claim."""
+    from bvsr_cad.checks.export import Export
+    from bvsr_cad.checks.robot import ROBOT_PARTS, check_robot
+    from bvsr_cad.checks.run import ROBOT_CLAIM_FILES, claim_robot_checks
 
-    assert claim_robot_checks(tmp_path) and not claim_robot_checks(tmp_path) and not claim_robot_checks(str(tmp_path))
+    assert len(ROBOT_PARTS) == len(ROBOT_CLAIM_FILES) == 2
+    for part in range(len(ROBOT_PARTS)):
+        assert claim_robot_checks(tmp_path, part) and not claim_robot_checks(tmp_path, part)
+        assert not claim_robot_checks(str(tmp_path), part)
     manifest = json.loads((bvsr_export / "manifest.json").read_text())
     names = [c["name"] for c in manifest["checks"]]
-    robot = [n for n in names if n.split(":")[0] in ("urdf_check_urdf", "urdf_yourdfpy", "pybullet_masses",
-                                                     "fk_mujoco_vs_kinematics", "mujoco_no_drift")]
-    assert sorted(robot) == sorted(set(robot)) and len(robot) == 5, robot
     assert len(names) == len(set(names))
-    assert not (bvsr_export / ROBOT_CLAIM_FILE).exists()
+    alone = check_robot(Export.open(bvsr_export))
+    robot = {r.name for r in alone}
+    assert len(alone) > 50 and len(robot) == len(alone)
+    assert [(c["name"], c["passed"]) for c in manifest["checks"] if c["name"] in robot] == \
+        [(r.name, r.passed) for r in alone]
+    assert not any((bvsr_export / claim).exists() for claim in ROBOT_CLAIM_FILES)
 
 
 def test_the_analyses_process_is_told_where_to_draw_as_an_absolute_folder(tmp_path, monkeypatch):

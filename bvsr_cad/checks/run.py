@@ -19,7 +19,7 @@ from .molds import check_molds, molds_reads
 from .paper import check_paper
 from .printability import check_printability, slice_stls
 from .result import CheckResult
-from .robot import check_robot, robot_reads
+from .robot import ROBOT_PARTS, check_robot, robot_reads
 
 
 def _mold_checks(exp: Export, memo: CheckMemo) -> list[CheckResult]:
@@ -51,23 +51,25 @@ def _printability(root: str, sliced_now: str, cache_root: str = "", meshes: str 
     if meshes:
         out["part_mesh"] = _mesh_checks(exp, memo)
         out["masses"] = check_masses(exp, memo)
-    if robot and claim_robot_checks(exp.root):
-        out["robot"] = check_robot(exp)
+    if robot and "robot" in exp.manifest:
+        out["robot"] = {i: part(exp) for i, (part, _what) in enumerate(ROBOT_PARTS) if claim_robot_checks(exp.root, i)}
     return out
 
 
-#: In the export's folder while a build checks it: made by whichever of its two processes starts the
-#: robot descriptions' checks first (:func:`claim_robot_checks`); removed by :meth:`Checks.finish`.
-ROBOT_CLAIM_FILE = ".robot-checks.claim"
+#: In the export's folder while a build checks it, one per part of the robot descriptions' checks
+#: (:data:`~bvsr_cad.checks.robot.ROBOT_PARTS`): made by whichever of its two processes starts that part
+#: first (:func:`claim_robot_checks`); removed by :meth:`Checks.finish`.
+ROBOT_CLAIM_FILES = tuple(f".robot-checks-{i + 1}.claim" for i in range(len(ROBOT_PARTS)))
 
 
-def claim_robot_checks(root: str | Path) -> bool:
-    """Whether this process takes the robot descriptions' checks of the export at ``root``: True for the
-    first to ask (the file :data:`ROBOT_CLAIM_FILE` made, atomically), False for any later."""
+def claim_robot_checks(root: str | Path, part: int) -> bool:
+    """Whether this process takes part ``part`` (0-based) of the robot descriptions' checks of the export at
+    ``root``: True for the first to ask (its file of :data:`ROBOT_CLAIM_FILES` made, atomically), False
+    for any later."""
     import os
 
     try:
-        os.close(os.open(Path(root) / ROBOT_CLAIM_FILE, os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+        os.close(os.open(Path(root) / ROBOT_CLAIM_FILES[part], os.O_CREAT | os.O_EXCL | os.O_WRONLY))
     except FileExistsError:
         return False
     return True
@@ -126,8 +128,9 @@ class _Printability:
         got = self._from_process()
         return (got["part_mesh"], got["masses"]) if "part_mesh" in got else None
 
-    def robot(self) -> list[CheckResult] | None:
-        """The robot descriptions' verdicts from the second process, or None (not asked of it, or it was lost)."""
+    def robot(self) -> dict[int, list[CheckResult]] | None:
+        """The verdicts of the parts of the robot descriptions' checks the second process took, by part, or
+        None (not asked of it, or it was lost)."""
         return self._from_process().get("robot")
 
     def close(self) -> None:
@@ -211,7 +214,9 @@ class Checks:
         # Of groups the second process runs: their reads' state when it started.
         self._mesh_state: dict[str, tuple] = {}
         self._masses_state: tuple | None = None
-        self._robot: tuple[tuple, list[CheckResult]] | None = None  # the same, of :meth:`robot_ahead`
+        self._robot: tuple[tuple, list[CheckResult]] | None = None  # the same, of every part of the robot's
+        self._robot_own: dict[int, list[CheckResult]] = {}  # the parts :meth:`robot_ahead` ran here, by part
+        self._robot_own_state: tuple | None = None  # their reads then
         self._robot_state: tuple | None = None  # the robot's reads when the second process started on them
         self._molds_state: tuple | None = None  # the molds' reads when the early checks started
         self._printability: _Printability | None = None
@@ -256,13 +261,17 @@ class Checks:
     def robot_ahead(self) -> None:
         """The robot descriptions' checks now, on the export as it is (a build that wrote its robot files
         before its analyses were in); :meth:`finish` keeps their results while their reads are unchanged.
-        Nothing when they went to the second process (``robot_beside``) and it has begun them."""
-        if self._robot_state is not None and not claim_robot_checks(self.root):
-            return
+        Where they went to the second process too (``robot_beside``), only the parts it has not begun
+        (:func:`claim_robot_checks`)."""
         exp = Export.open(self.root)
-        if "robot" in exp.manifest:
-            self.say("robot descriptions (URDF, MJCF, MuJoCo, PyBullet)")
-            self._robot = (_state(exp, robot_reads(exp)), check_robot(exp))
+        if "robot" not in exp.manifest:
+            return
+        state = _state(exp, robot_reads(exp))
+        for i, (part, what) in enumerate(ROBOT_PARTS):
+            if self._robot_state is None or claim_robot_checks(self.root, i):
+                self.say(what)
+                self._robot_own[i] = part(exp)
+        self._robot_own_state = state
 
     def finish(self) -> list[CheckResult]:
         """Every result, in the order of :func:`run_checks`."""
@@ -276,10 +285,17 @@ class Checks:
             say("analyses")
             own += check_analyses(exp)
             printability = started = self._printability
+            # The robot's checks: each part from whichever process ran it, all on the files as they were
+            # when the second process started (else, or where a part is missing, all of them run here).
+            parts, state = dict(self._robot_own), self._robot_own_state
             if self._robot_state is not None and printability is not None:
                 beside_robot = printability.robot()  # waits for the second process
-                if beside_robot is not None:
-                    self._robot = (self._robot_state, beside_robot)
+                if beside_robot is not None and (not parts or state == self._robot_state):
+                    parts, state = {**parts, **beside_robot}, self._robot_state
+                elif beside_robot is None:
+                    parts = {}
+            if len(parts) == len(ROBOT_PARTS):
+                self._robot = (state, [r for i in range(len(ROBOT_PARTS)) for r in parts[i]])
             own += _kept(self._robot, exp, robot_reads(exp), lambda: check_robot(exp), say,
                          "robot descriptions (URDF, MJCF, MuJoCo, PyBullet)")
             beside = printability.part_meshes() if self._mesh_state and printability is not None else None
@@ -310,7 +326,8 @@ class Checks:
                 self.cpu_s = started.proc.cpu_s
         finally:
             self.close()
-            (Path(self.root) / ROBOT_CLAIM_FILE).unlink(missing_ok=True)
+            for claim in ROBOT_CLAIM_FILES:
+                (Path(self.root) / claim).unlink(missing_ok=True)
         if self.cache is not None:
             self.cache.evict()  # once, after the groups' small entries
         return results

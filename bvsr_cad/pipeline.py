@@ -238,10 +238,10 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         # with those of the CAD files. They are entered in the manifest after the analyses' files, as in
         # every build; the early checks read them from a manifest written for them.
         # The robot's meshes and its collision shapes' fits read the geometry alone (and which shapes:
-        # robot.collision_geometry): one stage, so that an edit that moves no solid (a material, the
-        # robot's limits) neither meshes a part nor fits one. One stage for both: the fits mesh the
-        # panels and SOAs at 0.01 mm, the triangulation their robot meshes then take (OCCT keeps the
-        # finest), so the meshes are made after the fits, as in a build without the cache.
+        # robot.collision_geometry): one cached stage, so that an edit that moves no solid (a material,
+        # the robot's limits) neither meshes a part nor fits one. Both mesh the panels and the SOA at the
+        # print STLs' tolerances with an absolute deflection: the same triangulation whichever stages
+        # ran before (tests/test_robot.py).
         t = time.perf_counter()
 
         def robot_files(theta_max_rad: list[float]) -> dict:
@@ -258,7 +258,8 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
                 remember_fits(asm, fits)
             log.record("robot meshes, collision fits", reused, fits_s + time.perf_counter() - t0)
             say("robot model (B-rep inertials)")
-            robot = made.get("robot") or robot_model(asm, theta_max_rad, shapes=collision_shapes(asm))
+            robot = made["robot"] if "robot" in made else robot_model(asm, theta_max_rad,
+                                                                      shapes=collision_shapes(asm))
             return write_robot(robot, tmp, say, spec.cart, mesh_files)
 
         def limits_ahead() -> list[float] | None:

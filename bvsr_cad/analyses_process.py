@@ -25,11 +25,16 @@ from .sim import protocol_radius_mm
 GEOMETRY_AHEAD_FILE = ".analysis-geometry.pkl"
 
 
+def _write_whole(path: Path, value) -> None:
+    """``value`` pickled into ``path``, whole or not at all (written beside, then renamed)."""
+    part = path.with_name(path.name + ".part")
+    part.write_bytes(pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL))
+    os.replace(part, path)
+
+
 def write_geometry_ahead(folder: Path, geo: GeometryAnalyses) -> None:
-    """``geo`` into ``folder``'s :data:`GEOMETRY_AHEAD_FILE`, whole or not at all (written beside, then renamed)."""
-    part = folder / (GEOMETRY_AHEAD_FILE + ".part")
-    part.write_bytes(pickle.dumps(geo))
-    os.replace(part, folder / GEOMETRY_AHEAD_FILE)
+    """``geo`` into ``folder``'s :data:`GEOMETRY_AHEAD_FILE`, whole or not at all."""
+    _write_whole(folder / GEOMETRY_AHEAD_FILE, geo)
 
 
 #: In the build's temporary folder: the rest geometry (:class:`bvsr_cad.analysis.run.RestGeometry`: the posed
@@ -45,9 +50,7 @@ REST_FILE = "rest_geometry.pkl"
 
 def write_rest_ahead(folder: Path, rest: RestGeometry) -> None:
     """``rest`` into ``folder``'s :data:`REST_AHEAD_FILE`, whole or not at all."""
-    part = folder / (REST_AHEAD_FILE + ".part")
-    part.write_bytes(pickle.dumps(rest, protocol=pickle.HIGHEST_PROTOCOL))
-    os.replace(part, folder / REST_AHEAD_FILE)
+    _write_whole(folder / REST_AHEAD_FILE, rest)
 
 
 def keep_rest(folder: Path, entry: Path) -> None:

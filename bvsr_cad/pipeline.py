@@ -189,7 +189,8 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         # take it as it is (0.5 CPU s instead of 2). Not when the cache holds them (nor the STLs).
         t = time.perf_counter()
         robot_key = robot_geometry_key(spec)
-        if part_hit is None and (cache is None or cache.get(robot_key) is None):
+        robot_cached = cache is not None and cache.get(robot_key) is not None
+        if part_hit is None and not robot_cached:
             collision_shapes(asm)
         fits_s = time.perf_counter() - t
         shutil.copyfile(params, tmp / "params.toml")
@@ -316,7 +317,7 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         late_limits = limits_ahead() if robot_entries is None else None
         if late_limits is not None:
             robot_entries = robot_files(late_limits)
-        elif robot_entries is None and (cache is None or cache.get(robot_key) is None):
+        elif robot_entries is None and not robot_cached:
             collision_shapes(asm)
         robot_s += time.perf_counter() - t
         if robot_entries is not None:

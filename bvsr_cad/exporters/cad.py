@@ -10,6 +10,7 @@ from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 from ..assembly.build import Assembly, PartDef
 from ..assembly.placed import labelled_compound, placed_instances
 from ..colors import rgb
+from ..parts._kernel import mesh_absolute
 
 #: Tessellation for print STLs, absolute: no facet strays more than 0.01 mm from the surface (ten
 #: times finer than the printers' resolution) nor turns more than 0.1 rad; the mesh volume stays within
@@ -39,7 +40,10 @@ def write_stl(shape: bd.Shape, path: Path, tolerance_mm: float = STL_LINEAR_TOLE
 
     path.parent.mkdir(parents=True, exist_ok=True)
     target = path if scale == 1.0 else path.with_suffix(".mm.stl")
-    BRepMesh_IncrementalMesh(shape.wrapped, tolerance_mm, relative, angular_tolerance_rad, True)
+    if relative:
+        BRepMesh_IncrementalMesh(shape.wrapped, tolerance_mm, True, angular_tolerance_rad, True)
+    else:  # the one absolute meshing, which the robot's collision fits share (parts._kernel.mesh_arrays)
+        mesh_absolute(shape, tolerance_mm, angular_tolerance_rad)
     writer = StlAPI_Writer()
     writer.ASCIIMode = False
     if not writer.Write(shape.wrapped, str(target)):

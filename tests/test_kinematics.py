@@ -55,6 +55,27 @@ def test_eq2_derivatives_match_differences_and_the_shared_path_gives_the_same_nu
                    for a, b in zip((rot, trans) + derivs, alone))
 
 
+def test_one_angle_gives_the_array_path_bits():
+    """The series coefficients of one angle (Python floats, what a joint's dynamics asks ~21,000 times
+    a build) are the bits the array path gives for an array of one, on both sides of the series' switch,
+    at the switch, at zero and for 0-d and (1,) inputs, and the same array types and shapes."""
+    from bvsr_cad.models.kinematics import SERIES_BELOW_RAD, _series_coefficients, _series_coefficients_array
+
+    rng = np.random.default_rng(11)
+    angles = np.r_[0.0, 1e-300, 1e-12, 1e-6, SERIES_BELOW_RAD, np.nextafter(SERIES_BELOW_RAD, 0.0),
+                   rng.uniform(0.0, 2e-2, 3000), rng.uniform(0.0, 1.6, 3000), np.abs(rng.normal(0.0, 1e-3, 1000)),
+                   np.pi, 3.0]
+    for a in angles:
+        for shape in ((), (1,)):
+            t = np.full(shape, a)
+            one, ref = _series_coefficients(t), _series_coefficients_array(t)
+            assert all(x.shape == y.shape == shape and x.dtype == y.dtype and x.tobytes() == y.tobytes()
+                       for x, y in zip(one, ref)), a
+    # Arrays of several take the array path itself.
+    many = angles[:50]
+    assert all(x.tobytes() == y.tobytes() for x, y in zip(_series_coefficients(many), _series_coefficients_array(many)))
+
+
 def test_soa_lengths_and_jacobian(bvsr_spec):
     kin = TailKinematics.from_spec(bvsr_spec)
     g = kin.joints[-1]

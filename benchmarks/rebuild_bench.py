@@ -103,8 +103,9 @@ def main() -> None:
     os.environ["BVSR_CACHE"] = str(work / "cache")
     from bvsr_cad.cache import process_start
     from bvsr_cad.pipeline import build_export
-    from bvsr_cad.worker import SecondProcess
+    from bvsr_cad.worker import SecondProcess, tune_allocator
 
+    tune_allocator()  # as the `bvsr` command does
     base = Path(args.params).resolve()
     text = base.read_text()
     for stale in base.parent.glob(".bench-*.toml"):  # left by a benchmark that was killed

@@ -14,7 +14,7 @@ import threading
 import time
 from pathlib import Path
 
-from .worker import SecondProcess, interrupts_held
+from .worker import SecondProcess, interrupts_held, tune_allocator
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -506,7 +506,9 @@ def console() -> None:
     the interpreter's teardown, which frees every object of the CAD kernel, MuJoCo and the rest one by
     one: 0.8 s after a build's "wrote" line, measured, with its work published, its second processes
     stopped and nothing left to write (what it printed is flushed first). A bug's traceback ends it
-    the usual way. Called in-process (tests, scripts), :func:`main` returns its exit code instead."""
+    the usual way. Called in-process (tests, scripts), :func:`main` returns its exit code instead. The
+    process keeps freed memory for reuse (:func:`bvsr_cad.worker.tune_allocator`)."""
+    tune_allocator()
     code = main()
     sys.stdout.flush()
     sys.stderr.flush()

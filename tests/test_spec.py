@@ -240,3 +240,27 @@ def test_the_command_ends_with_mains_exit_code_and_all_it_printed(tmp_path):
     # The whole help, to its last line (what is still buffered when main returns is flushed first).
     assert helped.returncode == 0 and helped.stdout.startswith("usage: bvsr build")
     assert helped.stdout.rstrip().endswith("~/.cache/bvsr_cad/artifacts)")
+
+
+ALLOCATIONS = r"""
+import resource, sys
+import numpy as np
+if sys.argv[1] == "tuned":
+    from bvsr_cad.worker import tune_allocator
+    assert tune_allocator()
+f0 = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+for i in range(20):
+    a = np.ones((1 << 20) * (2 + i % 3))  # 16, 24 and 32 MB, written, freed: a build's large temporaries
+    del a
+print(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - f0)
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt")
+def test_a_bvsr_process_reuses_freed_memory():
+    """:func:`bvsr_cad.worker.tune_allocator` (the command and its second processes): large arrays freed
+    and allocated again come from memory the process kept, not fresh pages the kernel must zero; with
+    glibc's defaults each one faults its pages in again (measured 5,216 minor faults against 2,030)."""
+    faults = {mode: int(subprocess.run([sys.executable, "-c", ALLOCATIONS, mode], capture_output=True, text=True,
+                                       check=True, timeout=120).stdout) for mode in ("default", "tuned")}
+    assert faults["tuned"] * 2 < faults["default"], faults

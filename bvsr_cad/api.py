@@ -39,6 +39,7 @@ from .exporters.reproducible import fix_step
 from .models.kinematics import uv_from_theta_phi
 from .parameters.load import ParamError, load_spec
 from .parameters.tables import TailSpec
+from .parts._kernel import bounds as _bounds
 from .parts._kernel import location as _location
 
 if TYPE_CHECKING:  # CadQuery is needed only by Tail.cadquery_assembly
@@ -310,7 +311,7 @@ def _slices(part_name: str, solid: bd.Solid, T: np.ndarray, cuts_mm: np.ndarray,
 
 
 def _z_extent(solid: bd.Solid, T: np.ndarray) -> tuple[float, float]:
-    bb = solid.moved(_location(T)).bounding_box()
+    bb = _bounds(solid.moved(_location(T)))
     return bb.min.Z, bb.max.Z
 
 
@@ -318,7 +319,7 @@ def _split(solid: bd.Solid, normal: np.ndarray, offsets: np.ndarray) -> list[tup
     """The solid cut by the planes normal . x = offset, pieces with their centres (part frame)."""
     if len(offsets) == 0:
         return [(solid, np.array(tuple(solid.center())))]
-    size = 10.0 * max(solid.bounding_box().diagonal, 1.0)
+    size = 10.0 * max(_bounds(solid).diagonal, 1.0)
     args, tools = TopTools_ListOfShape(), TopTools_ListOfShape()
     args.Append(solid.wrapped)
     for d in offsets:

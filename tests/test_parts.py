@@ -230,3 +230,26 @@ def test_solid_properties_are_build123d_s_three_properties_to_the_bit(bvsr_spec)
         assert props.volume_mm3 == solid.volume
         assert np.array_equal(props.com_mm, np.array(tuple(solid.center(bd.CenterOf.MASS))))
         assert np.array_equal(props.inertia_mm5, np.asarray(solid.matrix_of_inertia, float))
+
+
+def test_bounds_is_bounding_box_and_keeps_the_triangulation(bvsr_spec):
+    """parts._kernel.bounds gives build123d's ``bounding_box`` to the bit on every part, every face of
+    a part and the placed tail, and leaves a meshed shape's triangulation in place (``bounding_box``
+    clears it: a robot mesh or a fit after it meshed again)."""
+    import build123d as bd
+    from OCP.BRepTools import BRepTools
+
+    from bvsr_cad.assembly.build import instance_solid
+    from bvsr_cad.parts._kernel import bounds, mesh_absolute
+
+    asm = build_assembly(bvsr_spec)
+    shapes = [bd.Compound([instance_solid(asm, i) for i in asm.instances])]
+    for p in asm.parts.values():
+        shapes += [p.solid, *p.solid.faces()]
+    for s in shapes:
+        mesh_absolute(s, 0.01, 0.1)
+        box = bounds(s)
+        assert BRepTools.Triangulation_s(s.wrapped, 0.01), type(s).__name__
+        ref = s.bounding_box()
+        assert not BRepTools.Triangulation_s(s.wrapped, 0.01)  # what bounds avoids
+        assert (tuple(box.min), tuple(box.max)) == (tuple(ref.min), tuple(ref.max)), type(s).__name__

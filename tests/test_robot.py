@@ -562,3 +562,33 @@ def test_collision_fits_and_robot_meshes_take_the_print_stls_triangulation_whate
     robot, printed = (trimesh.load(tmp_path / f"{n}.stl") for n in ("with_stl", "print"))
     assert len(robot.faces) == len(printed.faces)
     assert robot.volume == pytest.approx(printed.volume * 1e-9, rel=1e-6)
+
+
+def test_a_joints_soas_robot_mesh_is_the_same_with_or_without_the_print_stl_written(bvsr_spec, tmp_path):
+    """A joint's five SOAs are one robot mesh (a compound of the placed SOA). Written after the SOA's
+    print STL (a build without the cache) or on an SOA never meshed (the print STL came from the cache),
+    it is the same file, and its triangles are the print STL's placed five times: OCCT meshing the
+    compound itself evaluates the placed surfaces and split some faces differently (10 of 11,880
+    triangles; this test fails so)."""
+    import build123d as bd
+    import trimesh
+
+    from bvsr_cad.assembly.build import instance_solid
+    from bvsr_cad.exporters.cad import write_part_stl
+    from bvsr_cad.exporters.robot_meshes import _write_m
+
+    def joint_soas(asm):
+        return bd.Compound([instance_solid(asm, i) for i in asm.instances if i.part == "soa" and i.joint == 1])
+
+    asm = build_assembly(bvsr_spec)
+    write_part_stl(asm.parts["soa"], tmp_path / "soa.stl")
+    _write_m(joint_soas(asm), tmp_path / "after_stl.stl")
+    _write_m(joint_soas(build_assembly(bvsr_spec)), tmp_path / "never_meshed.stl")  # a fresh copy of the SOA
+    assert (tmp_path / "after_stl.stl").read_bytes() == (tmp_path / "never_meshed.stl").read_bytes()
+    robot = trimesh.load(tmp_path / "after_stl.stl", process=False)
+    printed = trimesh.load(tmp_path / "soa.stl", process=False)
+    placed = [np.asarray(i.transform) for i in asm.instances if i.part == "soa" and i.joint == 1]
+    expected = np.concatenate([printed.triangles @ t[:3, :3].T + t[:3, 3] for t in placed]) * 1e-3
+    assert robot.triangles.shape == expected.shape
+    np.testing.assert_allclose(np.sort(robot.triangles.reshape(-1, 9), axis=0),
+                               np.sort(expected.reshape(-1, 9), axis=0), atol=1e-9)

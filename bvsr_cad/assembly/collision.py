@@ -36,7 +36,7 @@ import numpy as np
 from scipy.spatial import ConvexHull
 
 from .. import units
-from ..parts._kernel import location
+from ..parts._kernel import bounds, location
 from ..parts._kernel import mesh_arrays
 from ..parts.vertebra import rod
 from .build import Assembly
@@ -140,7 +140,7 @@ def cylinder_solid(c: Collision) -> bd.Shape:
 
 def slab(solid: bd.Shape, z0_mm: float, z1_mm: float) -> bd.Shape:
     """The part of ``solid`` between two planes z = z0 and z = z1 of its frame (exact boolean)."""
-    bb = solid.bounding_box()
+    bb = bounds(solid)
     w = 2.0 * max(abs(bb.min.X), abs(bb.max.X), abs(bb.min.Y), abs(bb.max.Y)) + 2.0
     box = bd.Solid.make_box(w, w, z1_mm - z0_mm).moved(bd.Location((-w / 2, -w / 2, z0_mm)))
     parts = solid.intersect(box)

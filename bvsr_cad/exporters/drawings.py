@@ -34,6 +34,7 @@ from ..assembly.build import Assembly
 from ..assembly.fabrication import made_items
 from ..parameters.layout import Cyl
 from ..parameters.standard_parts import size_for_clearance_hole
+from ..parts._kernel import bounds
 from ..parts.mold import MoldSet
 
 SVG_NS = "http://www.w3.org/2000/svg"
@@ -134,7 +135,7 @@ class _PlaneFace:
         from OCP.BRep import BRep_Tool
         from OCP.BRepTopAdaptor import BRepTopAdaptor_FClass2d
 
-        box = face.bounding_box()
+        box = bounds(face)
         self.origin, self.normal = _np(face.center()), _np(face.normal_at())
         self.lo, self.hi = _np(box.min), _np(box.max)
         self._plane = BRep_Tool.Surface_s(face.wrapped).Pln()

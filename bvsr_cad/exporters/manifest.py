@@ -10,11 +10,12 @@ from .. import __version__
 from ..assembly.build import Assembly, instance_solid, segment_masses_g
 from ..parameters.layout import binding_constraint, max_feasible_taper_deg
 from ..parameters.tables import AUTO
+from ..parts._kernel import bounds
 
 
 def tail_length_mm(asm: Assembly) -> float:
     """Measured on the placed solids: the z extent of the whole tail."""
-    box = bd.Compound([instance_solid(asm, i) for i in asm.instances]).bounding_box()
+    box = bounds(bd.Compound([instance_solid(asm, i) for i in asm.instances]))
     return float(box.max.Z - box.min.Z)
 
 

@@ -130,6 +130,23 @@ def mesh_absolute(shape: bd.Shape, tolerance_mm: float, angular_tolerance_rad: f
         BRepMesh_IncrementalMesh(shape.wrapped, tolerance_mm, False, angular_tolerance_rad, True)
 
 
+def bounds(shape: bd.Shape) -> bd.BoundBox:
+    """``shape.bounding_box()``'s box (OCCT's optimal box of the exact geometry), leaving its
+    triangulation in place. build123d's ``bounding_box`` first calls ``BRepTools.Clean`` on the shape,
+    which deletes the triangulation of every face it shares with other shapes: the manifest's tail
+    length (a compound of the placed parts) and the drawings' hole tables (the parts' faces) wiped
+    what the print STLs had meshed, and the robot's meshes (the same solids at the same tolerances)
+    were meshed again (1.6 CPU s in a cold default build). Here the box reads the geometry only
+    (``useTriangulation`` off), which is what the optimal box reads after a clean: the same numbers
+    (tests/test_parts.py compares them on every part, face and placed assembly)."""
+    from OCP.Bnd import Bnd_Box
+    from OCP.BRepBndLib import BRepBndLib
+
+    box = Bnd_Box()
+    BRepBndLib.AddOptimal_s(shape.wrapped, box, False, False)
+    return bd.BoundBox(box)
+
+
 def fresh_copy(shape: bd.Shape) -> bd.Shape:
     """A copy of ``shape`` with its own geometry and no triangulation (``BRepBuilderAPI_Copy``): whatever a
     caller does to it (mesh it, label it) leaves the original as it was."""

@@ -47,7 +47,7 @@ import numpy as np
 from ..parameters.layout import Cyl
 from ..parameters.molds import PIN_ROOT_MM, SOCKET_EXTRA_DEPTH_MM, mold_dimensions, mold_problems
 from ..parameters.tables import Casting, SoaTable
-from ._kernel import PrintPosed, GeometryError, cut_all, cylinder_between, fuse_all, location, single_solid
+from ._kernel import PrintPosed, GeometryError, bounds, cut_all, cylinder_between, fuse_all, location, single_solid
 from .soa import bellows_profile, soa_body, soa_envelope, soa_interior
 
 #: Pull direction of half_a (the side x - y > 0); half_b is pulled the other way.
@@ -112,7 +112,7 @@ def _print_transform(x_dir: np.ndarray, z_dir: np.ndarray, solid: bd.Solid) -> n
     y = np.cross(z, x)
     m = np.eye(4)
     m[0, :3], m[1, :3], m[2, :3] = x, y, z
-    box = solid.moved(location(_as_matrix(m))).bounding_box()
+    box = bounds(solid.moved(location(_as_matrix(m))))
     m[:3, 3] = (-(box.min.X + box.max.X) / 2.0, -(box.min.Y + box.max.Y) / 2.0, -box.min.Z)
     return m
 

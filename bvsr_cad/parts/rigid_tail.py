@@ -43,7 +43,7 @@ from ..parameters.tables import TailSpec
 from ..parameters.twin import (NUT_POCKET_CLEARANCE_MM, fits_printer, nut_pocket_depth_mm, pin_depths_mm,
                                pin_hole_mm, tie_rod_hole_mm, twin_problems)
 from .soa import soa_envelope
-from ._kernel import GeometryError, cut_all, cylinder_between, fuse_all, location, single_solid
+from ._kernel import GeometryError, bounds, cut_all, cylinder_between, fuse_all, location, single_solid
 
 #: Panel features kept in the twin (they show from outside or carry the robot and payload).
 KEPT_ROLES = ("lightening", "tube", "insert")
@@ -168,7 +168,7 @@ def rigid_tail_pieces(spec: TailSpec, layouts: list[PanelLayout],
             tools.append(_hex_prism(nut_af, h - nut_depth, h + 1e-3))
         name = f"rigid_j{k}" if k < n else "rigid_tip"
         solid = single_solid(cut_all(body, tools), f"rigid tail piece {name}")
-        box = solid.bounding_box()
+        box = bounds(solid)
         size = (box.size.X, box.size.Y, box.size.Z)
         # Either way round on the bed.
         if not fits_printer(size, fp):

@@ -185,8 +185,9 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
             copy_tree(part_hit if part_hit is not None else cache.put(part_key, write_parts), tmp)
         log.record("part files", part_hit is not None, time.perf_counter() - t)
         # The robot's collision fits mesh the panels and the SOA at the print STLs' tolerances: made now,
-        # while the STLs' triangulation is on the solids (the later stages' bounding boxes clear it), they
-        # take it as it is (0.5 CPU s instead of 2). Not when the cache holds them (nor the STLs).
+        # with the STLs' triangulation on the solids, they take it as it is (0.5 CPU s instead of 2; the
+        # robot's meshes later take it too: bounding boxes here keep it, parts._kernel.bounds). Not when
+        # the cache holds them (nor the STLs).
         t = time.perf_counter()
         robot_key = robot_geometry_key(spec)
         robot_cached = cache is not None and cache.get(robot_key) is not None

@@ -80,7 +80,7 @@ def tune_allocator() -> bool:
     kernel (glibc's ``mallopt``; elsewhere nothing changes, False). With the defaults, the many large
     numpy temporaries of a build (meshes, pose batches) are each mapped fresh and unmapped when freed,
     and the kernel zeroes every page again on first touch: a cold default build took 690,000-725,000
-    minor page faults and 2.9-3.1 s of system CPU in its three processes, 512,000-524,000 and 2.3-2.6 s
+    minor page faults and 2.9-3.1 s of system CPU in its three processes, 503,000-524,000 and 2.3-2.6 s
     with these (three alternated runs each; peak memory of the largest process 1.24-1.25 -> 1.28-1.33 GB).
     Called by the entry points only (the ``bvsr`` command, a second process), never by a library call
     in someone else's process."""

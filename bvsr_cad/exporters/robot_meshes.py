@@ -8,7 +8,7 @@ import trimesh
 
 from .. import units
 from ..assembly.robot import RobotModel
-from ..parts._kernel import mesh_absolute, mesh_arrays
+from ..parts._kernel import mesh_arrays
 from .cad import write_stl
 from .mjcf import collision_mesh_name
 
@@ -46,15 +46,6 @@ def _write_hull_m(shape, path: Path) -> None:
 def _write_m(shape, path: Path, tolerance_mm: float = MESH_TOLERANCE_MM) -> None:
     """Tessellate in millimetres with OCCT (fast), then scale the mesh to metres. An absolute deflection at
     the print STLs' tolerances: a panel's or an SOA's robot mesh is its print STL's triangulation (and its
-    collision fit's), the same whichever stages ran before.
-
-    Each solid of ``shape`` is meshed first in its own frame, as the part's print STL meshes it (a no-op
-    where that triangulation is there): OCCT meshing a compound of placed copies (a joint's five SOAs)
-    evaluates the surfaces where they are placed and may split a face differently (10 of 11,880
-    triangles, measured), so the robot mesh would depend on whether the print STL had been written in
-    this build or came from the cache."""
-    from OCP.TopLoc import TopLoc_Location
-
-    for solid in shape.solids():
-        mesh_absolute(type(solid)(solid.wrapped.Located(TopLoc_Location())), tolerance_mm, 0.1)
+    collision fit's), the same whichever stages ran before (a compound of placed parts included:
+    :func:`bvsr_cad.parts._kernel.mesh_absolute` meshes each solid in its own frame)."""
     write_stl(shape, path, tolerance_mm, 0.1, scale=units.mm_to_m(1.0), relative=False)

@@ -122,11 +122,20 @@ def single_solid(shape: bd.Shape, what: str) -> bd.Solid:
 
 
 def mesh_absolute(shape: bd.Shape, tolerance_mm: float, angular_tolerance_rad: float) -> None:
-    """Triangulate ``shape`` with an absolute deflection of ``tolerance_mm`` unless it has one within it."""
+    """Triangulate ``shape`` with an absolute deflection of ``tolerance_mm`` unless it has one within it,
+    each of its solids in the solid's own frame: OCCT meshing placed copies (a compound of a joint's five
+    SOAs) evaluates the surfaces where they are placed and may split a face differently (10 of 11,880
+    triangles, measured), so a mesh would depend on whether the solid had been meshed before (a print
+    STL written in this build, or taken from the cache)."""
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
     from OCP.BRepTools import BRepTools
+    from OCP.TopLoc import TopLoc_Location
 
-    if not BRepTools.Triangulation_s(shape.wrapped, tolerance_mm):
+    for solid in shape.solids():
+        own = solid.wrapped.Located(TopLoc_Location())
+        if not BRepTools.Triangulation_s(own, tolerance_mm):
+            BRepMesh_IncrementalMesh(own, tolerance_mm, False, angular_tolerance_rad, True)
+    if not BRepTools.Triangulation_s(shape.wrapped, tolerance_mm):  # what is not a solid (a face, a shell)
         BRepMesh_IncrementalMesh(shape.wrapped, tolerance_mm, False, angular_tolerance_rad, True)
 
 

@@ -14,7 +14,7 @@ import threading
 import time
 from pathlib import Path
 
-from .worker import SecondProcess, interrupts_held, tune_allocator
+from .worker import SecondProcess, library_imports, tune_allocator, tune_collector
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -71,7 +71,7 @@ def cmd_build(args) -> int:
         opened = open_build(args.params, args.output, say, use_cache=not args.no_cache)
         res = reuse_whole(opened)
         if res is None:
-            with interrupts_held():  # a Ctrl-C in the pipeline's imports stops the build (worker.interrupts_held)
+            with library_imports():  # a Ctrl-C in the pipeline's imports stops the build (worker.library_imports)
                 from .pipeline import build_opened
 
             res = build_opened(opened, standby)
@@ -96,7 +96,7 @@ def cmd_build(args) -> int:
 
 
 def cmd_watch(args) -> int:
-    with interrupts_held():
+    with library_imports():
         from .watch import watch
 
     def say(msg: str) -> None:
@@ -106,7 +106,7 @@ def cmd_watch(args) -> int:
 
 
 def cmd_check(args) -> int:
-    with interrupts_held():
+    with library_imports():
         from .checks.run import run_checks
 
     results = run_checks(args.export, _progress(args.quiet or args.json), run_slicer=args.slice)
@@ -117,7 +117,7 @@ def cmd_simulate(args) -> int:
     from .parameters.load import load_spec
 
     spec = load_spec(args.params)  # a bad file is refused before the simulator's imports (seconds)
-    with interrupts_held():
+    with library_imports():
         from .exporters.plots import plot_simulation
         from .parameters import paper
         from .sim import check_inputs, joint_limits_rad, simulate
@@ -176,7 +176,7 @@ def _simulate_impact(args, spec, limits, say) -> int:
 
 
 def _simulate_cart(args, spec, limits, say) -> int:
-    with interrupts_held():
+    with library_imports():
         from .exporters.plots import plot_cart
         from .sim import cart_comparison, simulate_cart
 
@@ -206,7 +206,7 @@ def cmd_calibrate(args) -> int:
 
     spec = load_spec(args.params)  # bad files are refused before the models' imports (seconds)
     rows = load_measurements(args.data)
-    with interrupts_held():
+    with library_imports():
         from .analysis.calibrate import calibrate
         from .analysis.predict import Predictor
         from .exporters.calibration_file import write_calibrated_params
@@ -255,7 +255,7 @@ def _number(minimum: float, inclusive: bool, kind: type = float):
 
 
 def cmd_workspace(args) -> int:
-    with interrupts_held():
+    with library_imports():
         from .analysis.workspace import run_workspace
         from .assembly.build import build_assembly
         from .parameters.load import load_spec
@@ -271,7 +271,7 @@ def cmd_workspace(args) -> int:
 
 
 def cmd_clearance(args) -> int:
-    with interrupts_held():
+    with library_imports():
         from .analysis.clearance import clearance_over, posed_tail
         from .analysis.workspace import run_workspace
         from .assembly.build import build_assembly
@@ -298,7 +298,7 @@ def cmd_sweep(args) -> int:
     from .parameters.study import load_study
 
     study = load_study(args.study)  # a bad study file is refused before the sweep's imports (seconds)
-    with interrupts_held():
+    with library_imports():
         from .sweep import run_study
 
     say = _progress(args.quiet or args.json)
@@ -509,6 +509,7 @@ def console() -> None:
     the usual way. Called in-process (tests, scripts), :func:`main` returns its exit code instead. The
     process keeps freed memory for reuse (:func:`bvsr_cad.worker.tune_allocator`)."""
     tune_allocator()
+    tune_collector()
     code = main()
     sys.stdout.flush()
     sys.stderr.flush()

@@ -278,3 +278,37 @@ def test_a_bvsr_process_reuses_freed_memory():
     (mapped_default, _), (mapped_tuned, kept_tuned) = out["default"], out["tuned"]
     array_bytes = 16 << 20
     assert mapped_default >= array_bytes and mapped_tuned < array_bytes and kept_tuned >= array_bytes, out
+
+
+COLLECTIONS = r"""
+import gc, sys
+from bvsr_cad import worker
+if sys.argv[1] == "entry":
+    worker.tune_collector()
+def collections():
+    return sum(s["collections"] for s in gc.get_stats())
+before = collections()
+if sys.argv[1] == "plain":
+    import bvsr_cad.analysis.run
+    during = collections() - before
+else:
+    with worker.library_imports():
+        assert not gc.isenabled()
+        import bvsr_cad.analysis.run
+        during = collections() - before
+print(during, gc.isenabled(), gc.get_freeze_count())
+"""
+
+
+def test_library_imports_pause_the_garbage_collector():
+    """:func:`bvsr_cad.worker.library_imports`: the libraries' imports (the CAD kernel, scipy, trimesh, ...)
+    run without Python's cyclic collector, which ran hundreds of times over them otherwise (0.4-0.5 CPU s
+    a process); it runs again after, and only an entry point's process (:func:`~bvsr_cad.worker.tune_collector`)
+    freezes what was imported (a library call in someone else's process leaves its collector as it was)."""
+    out = {mode: subprocess.run([sys.executable, "-c", COLLECTIONS, mode], capture_output=True, text=True,
+                                check=True, timeout=300).stdout.split()
+           for mode in ("plain", "library", "entry")}
+    plain, library, entry = ((int(n), on == "True", int(frozen)) for n, on, frozen in out.values())
+    assert plain[0] > 100 and plain[1] and plain[2] == 0, out
+    assert library == (0, True, 0), out
+    assert entry[0] == 0 and entry[1] and entry[2] > 100_000, out

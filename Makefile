@@ -12,6 +12,7 @@ $(STAMP): pyproject.toml
 		{ echo "needs Python 3.11 (found $(PYTHON)); run: make PYTHON=/path/to/python3.11"; exit 2; }
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet -e '.[test,gpu,cad]'
+	$(BIN)/python -m compileall -q bvsr_cad  # as pip does for a regular install (this one is editable)
 	touch $(STAMP)
 
 exports: $(STAMP)

@@ -312,3 +312,30 @@ def test_library_imports_pause_the_garbage_collector():
     assert plain[0] > 100 and plain[1] and plain[2] == 0, out
     assert library == (0, True, 0), out
     assert entry[0] == 0 and entry[1] and entry[2] > 100_000, out
+
+
+MUJOCO_IMPORT = r"""
+import os, sys
+from bvsr_cad import worker
+if sys.argv[1] == "entry":
+    worker.no_mujoco_rendering()
+import mujoco
+print("glfw" in sys.modules, os.environ.get("MUJOCO_GL", "-"))
+"""
+
+
+@pytest.mark.parametrize("users", [None, "glfw"])
+def test_a_bvsr_process_loads_no_opengl_for_mujoco(users):
+    """:func:`bvsr_cad.worker.no_mujoco_rendering` (the command and its second processes): ``import mujoco``
+    loads no GLFW, whose binding starts a Python interpreter at import (0.1 s a process); an environment
+    that names MuJoCo's OpenGL keeps it."""
+    env = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
+    if users:
+        env["MUJOCO_GL"] = users
+    out = {mode: subprocess.run([sys.executable, "-c", MUJOCO_IMPORT, mode], capture_output=True, text=True,
+                                check=True, timeout=120, env=env).stdout.split()
+           for mode in ("plain", "entry")}
+    if users is None:
+        assert out == {"plain": ["True", "-"], "entry": ["False", "disable"]}, out
+    else:
+        assert out == {"plain": ["True", users], "entry": ["True", users]}, out

@@ -103,11 +103,13 @@ def main() -> None:
     users_cache = os.environ.get("BVSR_CACHE")
     os.environ["BVSR_CACHE"] = str(work / "cache")
     from bvsr_cad.cache import process_start
-    from bvsr_cad.worker import SecondProcess, library_imports, no_mujoco_rendering, tune_allocator, tune_collector
+    from bvsr_cad.worker import (SecondProcess, library_imports, no_mujoco_rendering, one_blas_thread,
+                                 tune_allocator, tune_collector)
 
     tune_allocator()  # as the `bvsr` command does, and its imports
     tune_collector()
     no_mujoco_rendering()
+    one_blas_thread()
     with library_imports():
         from bvsr_cad.pipeline import build_export
     base = Path(args.params).resolve()

@@ -14,7 +14,8 @@ import threading
 import time
 from pathlib import Path
 
-from .worker import SecondProcess, library_imports, no_mujoco_rendering, tune_allocator, tune_collector
+from .worker import (SecondProcess, library_imports, no_mujoco_rendering, one_blas_thread, tune_allocator,
+                     tune_collector)
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -508,11 +509,13 @@ def console() -> None:
     stopped and nothing left to write (what it printed is flushed first). A bug's traceback ends it
     the usual way. Called in-process (tests, scripts), :func:`main` returns its exit code instead. The
     process keeps freed memory for reuse (:func:`bvsr_cad.worker.tune_allocator`), freezes its libraries
-    out of the garbage collector (:func:`~bvsr_cad.worker.tune_collector`) and loads no OpenGL for MuJoCo
-    (:func:`~bvsr_cad.worker.no_mujoco_rendering`)."""
+    out of the garbage collector (:func:`~bvsr_cad.worker.tune_collector`), loads no OpenGL for MuJoCo
+    (:func:`~bvsr_cad.worker.no_mujoco_rendering`) and runs OpenBLAS on one thread
+    (:func:`~bvsr_cad.worker.one_blas_thread`)."""
     tune_allocator()
     tune_collector()
     no_mujoco_rendering()
+    one_blas_thread()
     code = main()
     sys.stdout.flush()
     sys.stderr.flush()

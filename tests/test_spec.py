@@ -3,6 +3,7 @@ exit code 2 and a message naming the file, the key and what is allowed."""
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import subprocess
@@ -339,3 +340,31 @@ def test_a_bvsr_process_loads_no_opengl_for_mujoco(users):
         assert out == {"plain": ["True", "-"], "entry": ["False", "disable"]}, out
     else:
         assert out == {"plain": ["True", users], "entry": ["True", users]}, out
+
+
+BLAS_THREADS = r"""
+import sys
+from bvsr_cad import worker
+if sys.argv[1] == "entry":
+    worker.one_blas_thread()
+import numpy, scipy.linalg
+from threadpoolctl import threadpool_info
+print(sorted({i["num_threads"] for i in threadpool_info() if i["internal_api"] == "openblas"}))
+"""
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="OpenBLAS runs one thread on one core anyway")
+def test_a_bvsr_process_runs_openblas_on_one_thread():
+    """:func:`bvsr_cad.worker.one_blas_thread` (the command and its second processes): numpy's and scipy's
+    OpenBLAS on one thread, where they would take one per core; a number the environment sets is kept."""
+    pytest.importorskip("threadpoolctl")
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+
+    def threads(mode: str, **extra: str) -> list[int]:
+        done = subprocess.run([sys.executable, "-c", BLAS_THREADS, mode], capture_output=True, text=True,
+                              check=True, timeout=120, env={**env, **extra})
+        return json.loads(done.stdout)
+
+    assert threads("entry") == [1]
+    assert threads("plain")[0] > 1  # OpenBLAS's default: a thread per core
+    assert threads("entry", OPENBLAS_NUM_THREADS="2") == [2]

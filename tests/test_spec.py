@@ -358,7 +358,9 @@ def test_a_bvsr_process_runs_openblas_on_one_thread():
     """:func:`bvsr_cad.worker.one_blas_thread` (the command and its second processes): numpy's and scipy's
     OpenBLAS on one thread, where they would take one per core; a number the environment sets is kept."""
     pytest.importorskip("threadpoolctl")
-    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    from bvsr_cad.worker import BLAS_THREAD_VARIABLES
+
+    env = {k: v for k, v in os.environ.items() if k not in BLAS_THREAD_VARIABLES}
 
     def threads(mode: str, **extra: str) -> list[int]:
         done = subprocess.run([sys.executable, "-c", BLAS_THREADS, mode], capture_output=True, text=True,
@@ -368,3 +370,4 @@ def test_a_bvsr_process_runs_openblas_on_one_thread():
     assert threads("entry") == [1]
     assert threads("plain")[0] > 1  # OpenBLAS's default: a thread per core
     assert threads("entry", OPENBLAS_NUM_THREADS="2") == [2]
+    assert threads("entry", OMP_NUM_THREADS="2") == [2]

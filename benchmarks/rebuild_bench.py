@@ -103,13 +103,9 @@ def main() -> None:
     users_cache = os.environ.get("BVSR_CACHE")
     os.environ["BVSR_CACHE"] = str(work / "cache")
     from bvsr_cad.cache import process_start
-    from bvsr_cad.worker import (SecondProcess, library_imports, no_mujoco_rendering, one_blas_thread,
-                                 tune_allocator, tune_collector)
+    from bvsr_cad.worker import SecondProcess, library_imports, tune_process
 
-    tune_allocator()  # as the `bvsr` command does, and its imports
-    tune_collector()
-    no_mujoco_rendering()
-    one_blas_thread()
+    tune_process()  # as the `bvsr` command does, and its imports
     with library_imports():
         from bvsr_cad.pipeline import build_export
     base = Path(args.params).resolve()

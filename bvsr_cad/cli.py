@@ -14,8 +14,7 @@ import threading
 import time
 from pathlib import Path
 
-from .worker import (SecondProcess, library_imports, no_mujoco_rendering, one_blas_thread, tune_allocator,
-                     tune_collector)
+from .worker import SecondProcess, library_imports, tune_process
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -508,14 +507,10 @@ def console() -> None:
     one: 0.8 s after a build's "wrote" line, measured, with its work published, its second processes
     stopped and nothing left to write (what it printed is flushed first). A bug's traceback ends it
     the usual way. Called in-process (tests, scripts), :func:`main` returns its exit code instead. The
-    process keeps freed memory for reuse (:func:`bvsr_cad.worker.tune_allocator`), freezes its libraries
-    out of the garbage collector (:func:`~bvsr_cad.worker.tune_collector`), loads no OpenGL for MuJoCo
-    (:func:`~bvsr_cad.worker.no_mujoco_rendering`) and runs OpenBLAS on one thread
-    (:func:`~bvsr_cad.worker.one_blas_thread`)."""
-    tune_allocator()
-    tune_collector()
-    no_mujoco_rendering()
-    one_blas_thread()
+    process is tuned as every ``bvsr`` process (:func:`bvsr_cad.worker.tune_process`: freed memory kept
+    for reuse, its libraries frozen out of the garbage collector, no OpenGL for MuJoCo, OpenBLAS on one
+    thread)."""
+    tune_process()
     code = main()
     sys.stdout.flush()
     sys.stderr.flush()

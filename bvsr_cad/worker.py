@@ -104,6 +104,10 @@ def no_mujoco_rendering() -> None:
     os.environ.setdefault("MUJOCO_GL", "disable")
 
 
+#: The variables OpenBLAS reads its number of threads from.
+BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")
+
+
 def one_blas_thread() -> None:
     """numpy's and scipy's OpenBLAS on one thread (``OPENBLAS_NUM_THREADS=1``) unless the environment
     sets a number OpenBLAS reads (:data:`BLAS_THREAD_VARIABLES`); before they are imported. A build
@@ -114,10 +118,6 @@ def one_blas_thread() -> None:
     process, which inherits it), as :func:`tune_allocator`."""
     if not any(os.environ.get(name) for name in BLAS_THREAD_VARIABLES):
         os.environ["OPENBLAS_NUM_THREADS"] = "1"
-
-
-#: The variables OpenBLAS reads its number of threads from.
-BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")
 
 
 #: The first argument of a child started by :meth:`SecondProcess.standby`: its work comes on stdin.
@@ -182,16 +182,24 @@ def library_imports() -> Iterator[None]:
             gc.enable()
 
 
+def tune_process() -> None:
+    """What a ``bvsr`` process sets at its start, before its imports: :func:`tune_allocator`,
+    :func:`tune_collector`, :func:`no_mujoco_rendering` and :func:`one_blas_thread`. Called by the entry
+    points only (the command, a second process, the rebuild benchmark's own process), in one place so
+    that they stay alike."""
+    tune_allocator()
+    tune_collector()
+    no_mujoco_rendering()
+    one_blas_thread()
+
+
 def child_main(argv: list[str]) -> int:
     """A child's entry, ``python -m bvsr_cad.worker MODULE OUT ARGS...``: it dies with its parent from the
     start, imports MODULE in :func:`library_imports` (Ctrl-C held: an interrupt during the imports ends it
     quietly with 130, its parent reports it; the collector paused, then what was imported frozen) and
     serves the module's ``SECOND_PROCESS``, ``(fn, prepare)`` (see :func:`serve`)."""
     _die_with_parent()
-    tune_allocator()
-    tune_collector()
-    no_mujoco_rendering()
-    one_blas_thread()
+    tune_process()
     module, out, *args = argv
     try:
         with library_imports():

@@ -285,7 +285,7 @@ COLLECTIONS = r"""
 import gc, sys
 from bvsr_cad import worker
 if sys.argv[1] == "entry":
-    worker.tune_collector()
+    worker.tune_process()  # what the entry points call
 def collections():
     return sum(s["collections"] for s in gc.get_stats())
 before = collections()
@@ -319,7 +319,7 @@ MUJOCO_IMPORT = r"""
 import os, sys
 from bvsr_cad import worker
 if sys.argv[1] == "entry":
-    worker.no_mujoco_rendering()
+    worker.tune_process()  # what the entry points call
 import mujoco
 print("glfw" in sys.modules, os.environ.get("MUJOCO_GL", "-"))
 """
@@ -346,7 +346,7 @@ BLAS_THREADS = r"""
 import sys
 from bvsr_cad import worker
 if sys.argv[1] == "entry":
-    worker.one_blas_thread()
+    worker.tune_process()  # what the entry points call
 import numpy, scipy.linalg
 from threadpoolctl import threadpool_info
 print(sorted({i["num_threads"] for i in threadpool_info() if i["internal_api"] == "openblas"}))

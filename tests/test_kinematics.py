@@ -55,6 +55,35 @@ def test_eq2_derivatives_match_differences_and_the_shared_path_gives_the_same_nu
                    for a, b in zip((rot, trans) + derivs, alone))
 
 
+def test_one_bending_vector_gives_the_array_paths_lengths_and_jacobian():
+    """:func:`socket_lengths_and_jacobian` at one bending vector (0-d u and v: Eq 2 written out entry by
+    entry, one product for every socket) against the array path at the same vector (the twist's products
+    and einsums), on both sides of the series' switch, at zero, for one joint's sockets and a segment's,
+    and its Jacobian against central differences of its own lengths."""
+    from bvsr_cad.models.kinematics import SERIES_BELOW_RAD, joint_geometries, socket_lengths_and_jacobian
+    from bvsr_cad.parameters.load import load_spec
+
+    geoms = joint_geometries(load_spec("params/bvsr.toml"))
+    base, moving = np.stack([g.base_mm for g in geoms]), np.stack([g.moving_mm for g in geoms])
+    rng = np.random.default_rng(21)
+    vectors = [(0.0, 0.0), (1e-12, -3e-13), (3e-3, -4e-3), (SERIES_BELOW_RAD, 0.0), (0.0, -1.2)]
+    vectors += [tuple(rng.uniform(-1.2, 1.2, 2)) for _ in range(100)]
+    for u, v in vectors:
+        for b, m in ((base[0], moving[0]), (base[:3], moving[:3]), (base, moving)):
+            length, jac = socket_lengths_and_jacobian(b, m, np.array(u), np.array(v), L)
+            lead = b.shape[:-2] or (1,)  # the same vector for every joint, as an array
+            ref_len, ref_jac = socket_lengths_and_jacobian(b, m, np.full(lead, u), np.full(lead, v), L)
+            assert length.shape == b.shape[:-1] and jac.shape == b.shape[:-1] + (2,)
+            np.testing.assert_allclose(length, ref_len.reshape(length.shape), rtol=1e-14)
+            np.testing.assert_allclose(jac, ref_jac.reshape(jac.shape), rtol=0, atol=1e-13 * np.abs(ref_jac).max())
+    h, (u, v) = 1e-6, (0.41, -0.27)
+    _, jac = socket_lengths_and_jacobian(base, moving, u, v, L)
+    for k, (du, dv) in enumerate(((h, 0.0), (0.0, h))):
+        ahead = socket_lengths_and_jacobian(base, moving, u + du, v + dv, L)[0]
+        behind = socket_lengths_and_jacobian(base, moving, u - du, v - dv, L)[0]
+        np.testing.assert_allclose(jac[..., k], (ahead - behind) / (2 * h), atol=1e-7)
+
+
 def test_one_angle_gives_the_array_path_bits():
     """The series coefficients of one angle (Python floats, what a joint's dynamics asks ~21,000 times
     a build) are the bits the array path gives for an array of one, on both sides of the series' switch,

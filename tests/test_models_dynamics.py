@@ -78,6 +78,57 @@ def test_iso6358_flow_by_hand():
     assert pn.iso6358_mass_flow_kg_s(1e5, 7e5, c, b) == pytest.approx(-q)  # reverses
 
 
+def test_one_valve_on_floats_is_the_array_law_to_the_bit():
+    """A line's filling takes the valve's flow on floats (``_mass_flow_one_kg_s``, every step of an
+    integration): the bits of :func:`iso6358_mass_flow_kg_s` for the same pressures, choked, subsonic, in
+    the laminar end, at equal pressures and flowing back, at two temperatures."""
+    c, b = 0.08 * pn.M3_S_PA_PER_L_S_BAR, 0.4
+    rng = np.random.default_rng(5)
+    down = np.r_[1e5, 2.8e5, 6.99e5, 6.9999e5, 7e5, 7.0001e5, 9e5, rng.uniform(0.5e5, 9e5, 400),
+                 7e5 * (1 - rng.uniform(0, 2e-3, 100))]
+    for temperature in (pn.T_0_K, 310.0):
+        ref = pn.iso6358_mass_flow_kg_s(7e5, down, c, b, temperature)
+        one = [pn._mass_flow_one_kg_s(7e5, float(p), c, b, temperature) for p in down]
+        assert np.array(one).tobytes() == ref.tobytes()
+    assert {np.sign(x) for x in ref} == {-1.0, 0.0, 1.0}
+
+
+def test_the_joint_models_right_hand_side_is_eq6_from_the_public_terms(bvsr_spec):
+    """:meth:`JointModel.rhs` (its terms on floats, the sockets' lengths and Jacobian from one twist)
+    against Eq 6 put together from the public functions: ``mass_matrix``, ``coriolis``,
+    ``gravity_force`` (gravity with two components) and ``generalized_forces`` on the array path of
+    :func:`socket_lengths_and_jacobian`, for a segment of three joints, at the straight pose too."""
+    from bvsr_cad.models.kinematics import socket_lengths_and_jacobian
+
+    spec = bvsr_spec
+    geom = joint_geometries(spec)[:3]
+    law = soa_force_law(spec)
+    rod = rod_section(spec).bending_stiffness_nm_per_rad(spec.joint.gap_mm)
+    g = np.array([0.0, -6.0, -7.6])
+    model = dyn.JointModel(geom, law, rod, dyn.RigidBody(0.05, 3e-5, 4e-5, 3 * spec.joint.gap_mm / 1e3), g)
+    rng = np.random.default_rng(9)
+    states = [(0.3, 0.0, 0.0, 0.0)] + [tuple(rng.uniform([-3, -0.4, -20, -20], [3, 0.4, 20, 20])) for _ in range(60)]
+    worst = 0.0
+    for phi, theta, dphi, dtheta in states:
+        p = rng.uniform(-9e4, 5e5, 5)
+        u, v = theta * math.cos(phi), theta * math.sin(phi)
+        length, jac_uv = socket_lengths_and_jacobian(model._base_m, model._moving_m, np.full(3, u), np.full(3, v),
+                                                     model._arc_m)
+        duv = np.array([[-v, math.cos(phi)], [u, math.sin(phi)]])
+        terms = (length - model._rest_m, jac_uv @ duv)
+        n = model.n
+        m = dyn.mass_matrix(model.body, n * theta)
+        m_q = np.array([m[0, 0], m[1, 1] * n * n])
+        cor = dyn.coriolis(model.body, n * theta, dphi, n * dtheta) * np.array([1.0, n])
+        grav = dyn.gravity_force(model.body, phi, n * theta, g) * np.array([1.0, n])
+        want = (model.generalized_forces(phi, theta, dphi, dtheta, p, terms) - cor - grav) / m_q
+        if theta == 0.0:
+            want[0] = 0.0
+        got = model.rhs(phi, theta, dphi, dtheta, p)
+        worst = max(worst, float(np.max(np.abs(got - want) / np.maximum(np.abs(want), 1.0))))
+    assert worst < 1e-9
+
+
 def test_isothermal_choked_filling_rises_linearly():
     """n = 1, closed rigid volume, choked inflow: dp/dt = R T C rho_0 p_s / V (constant)."""
     c = 0.2 * pn.M3_S_PA_PER_L_S_BAR

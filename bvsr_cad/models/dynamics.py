@@ -98,25 +98,39 @@ def _m_theta_factor(theta: float) -> float:
     return (theta ** 2 - 2 * theta * math.sin(theta) - 2 * math.cos(theta) + 2) / (4 * theta ** 4)
 
 
-def mass_matrix(body: RigidBody, theta: float) -> np.ndarray:
-    """Eq 7 (diagonal)."""
+def _mass_diagonal(body: RigidBody, theta: float) -> tuple[float, float]:
+    """Eq 7's diagonal (M_phi, M_theta) as floats (the integrators' right-hand sides ask for it
+    thousands of times a run: no array per call)."""
     L, m = body.arc_length_m, body.mass_kg
     m_phi = body.inertia_phi_kg_m2 + m * (L * _chord_factor(theta)) ** 2
     m_theta = body.inertia_theta_kg_m2 / 4.0 + m * L ** 2 * _m_theta_factor(theta)
-    return np.diag([m_phi, m_theta])
+    return m_phi, m_theta
+
+
+def mass_matrix(body: RigidBody, theta: float) -> np.ndarray:
+    """Eq 7 (diagonal)."""
+    return np.diag(_mass_diagonal(body, theta))
+
+
+def _mass_diagonal_derivative(body: RigidBody, theta: float, h: float = 1e-6) -> tuple[float, float]:
+    (a_phi, a_theta), (b_phi, b_theta) = _mass_diagonal(body, theta + h), _mass_diagonal(body, theta - h)
+    return (a_phi - b_phi) / (2 * h), (a_theta - b_theta) / (2 * h)
 
 
 def mass_matrix_derivative(body: RigidBody, theta: float, h: float = 1e-6) -> np.ndarray:
     """dM/dtheta by central differences of Eq 7 (M is smooth and even in theta)."""
-    return (mass_matrix(body, theta + h) - mass_matrix(body, theta - h)) / (2 * h)
+    return np.diag(_mass_diagonal_derivative(body, theta, h))
+
+
+def _coriolis_terms(body: RigidBody, theta: float, phi_dot: float, theta_dot: float) -> tuple[float, float]:
+    dm_phi, dm_theta = _mass_diagonal_derivative(body, theta)
+    return dm_phi * phi_dot * theta_dot, 0.5 * dm_theta * theta_dot ** 2 - 0.5 * dm_phi * phi_dot ** 2
 
 
 def coriolis(body: RigidBody, theta: float, phi_dot: float, theta_dot: float) -> np.ndarray:
     """c(q, q') of Eq 6 as the Christoffel terms of Eq 7's M (so energy is conserved without
     damping and forcing)."""
-    dm = mass_matrix_derivative(body, theta)
-    return np.array([dm[0, 0] * phi_dot * theta_dot,
-                     0.5 * dm[1, 1] * theta_dot ** 2 - 0.5 * dm[0, 0] * phi_dot ** 2])
+    return np.array(_coriolis_terms(body, theta, phi_dot, theta_dot))
 
 
 def paper_coriolis(body: RigidBody, theta: float, phi_dot: float, theta_dot: float) -> np.ndarray:
@@ -137,12 +151,24 @@ def com_position_m(body: RigidBody, phi: float, theta: float) -> np.ndarray:
 
 def gravity_force(body: RigidBody, phi: float, theta: float, gravity_m_s2: np.ndarray) -> np.ndarray:
     """G(q) = dU/dq with U = -m g . p_com (central differences of the exact potential)."""
-    def potential(p_, t_):
-        return -body.mass_kg * float(np.dot(gravity_m_s2, com_position_m(body, p_, t_)))
+    return np.array(_gravity_terms(body, phi, theta, tuple(float(g) for g in gravity_m_s2)))
+
+
+def _gravity_terms(body: RigidBody, phi: float, theta: float, gravity_m_s2: tuple[float, float, float]
+                   ) -> tuple[float, float]:
+    """:func:`gravity_force` as floats, the potential of :func:`com_position_m` written out."""
+    gx, gy, gz = gravity_m_s2
+    if gx == gy == gz == 0.0:
+        return 0.0, 0.0
+
+    def potential(p_: float, t_: float) -> float:
+        d = body.arc_length_m * _chord_factor(t_)
+        s, c = math.sin(t_ / 2), math.cos(t_ / 2)
+        return -body.mass_kg * (gx * (d * (s * math.cos(p_))) + gy * (d * (s * math.sin(p_))) + gz * (d * c))
 
     h = 1e-7
-    return np.array([(potential(phi + h, theta) - potential(phi - h, theta)) / (2 * h),
-                     (potential(phi, theta + h) - potential(phi, theta - h)) / (2 * h)])
+    return ((potential(phi + h, theta) - potential(phi - h, theta)) / (2 * h),
+            (potential(phi, theta + h) - potential(phi, theta - h)) / (2 * h))
 
 
 @dataclass(frozen=True)
@@ -173,12 +199,12 @@ class JointModel:
         if len(lengths) != 1:
             raise ValueError(f"joints that bend together need one arc length; got {sorted(lengths)} mm")
         object.__setattr__(self, "_arc_m", units.mm_to_m(lengths.pop()))
+        object.__setattr__(self, "_gravity", tuple(float(g) for g in self.gravity_m_s2))
 
     def soa_terms(self, phi: float, theta: float) -> tuple[np.ndarray, np.ndarray]:
         """Per joint: stretch dl (n, 5) in m and dl/dq (n, 5, 2) in m/rad, q = (phi, theta) (Eq 1)."""
         u, v = theta * math.cos(phi), theta * math.sin(phi)
-        length, jac_uv = socket_lengths_and_jacobian(self._base_m, self._moving_m, np.array(u), np.array(v),
-                                                     self._arc_m)
+        length, jac_uv = socket_lengths_and_jacobian(self._base_m, self._moving_m, u, v, self._arc_m)
         duv = np.array([[-v, math.cos(phi)], [u, math.sin(phi)]])  # d(u, v)/d(phi, theta)
         return length - self._rest_m, jac_uv @ duv
 
@@ -207,14 +233,14 @@ class JointModel:
         """
         n = self.n
         big = n * theta
-        m = mass_matrix(self.body, big)
-        m_q = np.diag([m[0, 0], m[1, 1] * n * n])
-        cor = coriolis(self.body, big, phi_dot, n * theta_dot) * np.array([1.0, n])
-        grav = gravity_force(self.body, phi, big, self.gravity_m_s2) * np.array([1.0, n])
-        rhs = self.generalized_forces(phi, theta, phi_dot, theta_dot, soa_pa, terms) - cor - grav
+        m_phi, m_theta = _mass_diagonal(self.body, big)
+        cor_phi, cor_theta = _coriolis_terms(self.body, big, phi_dot, n * theta_dot)
+        grav_phi, grav_theta = _gravity_terms(self.body, phi, big, self._gravity)
+        q_phi, q_theta = self.generalized_forces(phi, theta, phi_dot, theta_dot, soa_pa, terms).tolist()
+        theta_acc = (q_theta - cor_theta * n - grav_theta * n) / (m_theta * n * n)
         if abs(theta) < 1e-9:  # phi is undefined at the straight pose: hold it
-            return np.array([0.0, rhs[1] / m_q[1, 1]])
-        return rhs / np.diag(m_q)
+            return np.array([0.0, theta_acc])
+        return np.array([(q_phi - cor_phi - grav_phi) / m_phi, theta_acc])
 
 
 @dataclass
@@ -284,7 +310,7 @@ def simulate_joint(model: JointModel, pressure: PressureInput | None = None, sec
         return supply.soa_gauge_pa(y[4:])
 
     def f(t, y):
-        phi, theta, dphi, dtheta = y[:4]
+        phi, theta, dphi, dtheta = y[:4].tolist()
         p = soa_pressures(t, y)
         terms = model.soa_terms(phi, theta)
         acc = model.rhs(phi, theta, dphi, dtheta, p, terms)

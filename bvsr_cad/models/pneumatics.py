@@ -65,6 +65,27 @@ def iso6358_mass_flow_kg_s(p_up_pa: np.ndarray | float, p_down_pa: np.ndarray | 
     return sign * conductance_m3_s_pa * RHO_0_KG_M3 * hi * math.sqrt(T_0_K / temperature_k) * phi
 
 
+def _mass_flow_one_kg_s(p_up_pa: float, p_down_pa: float, conductance_m3_s_pa: float, critical_ratio: float,
+                        temperature_k: float) -> float:
+    """:func:`iso6358_mass_flow_kg_s` of one valve on floats, the same operations in the same order (a
+    line's filling asks for it at every step of its integration: no arrays per call)."""
+    sign = 1.0 if p_up_pa >= p_down_pa else -1.0
+    hi, lo = max(p_up_pa, p_down_pa), min(p_up_pa, p_down_pa)
+    r = lo / max(hi, 1e-9)
+
+    def subsonic(x: float) -> float:
+        return math.sqrt(min(max(1.0 - ((x - critical_ratio) / (1.0 - critical_ratio)) ** 2, 0.0), 1.0))
+
+    r_lam = 0.999
+    if r <= critical_ratio:
+        phi = 1.0
+    elif r < r_lam:
+        phi = subsonic(r)
+    else:
+        phi = subsonic(r_lam) * (1.0 - r) / (1.0 - r_lam)
+    return sign * conductance_m3_s_pa * RHO_0_KG_M3 * hi * math.sqrt(T_0_K / temperature_k) * phi
+
+
 @dataclass(frozen=True)
 class Valve:
     """A valve's ISO 6358 flow rating."""
@@ -120,10 +141,15 @@ class LineSupply:
         stretch alike, so the line's SOAs are ``soas_per_line`` copies of the
         mean stretch over the given joints.
         """
-        v = np.array(self.tube_volume_m3, float)
-        dv = np.zeros(self.n_states)
-        mean_dl = np.mean(np.atleast_2d(dl_m), 0)
-        mean_rate = np.mean(np.atleast_2d(dl_rate_m_s), 0)
+        v, dv = self._volumes(dl_m, dl_rate_m_s)
+        return np.array(v), np.array(dv)
+
+    def _volumes(self, dl_m: np.ndarray, dl_rate_m_s: np.ndarray) -> tuple[list[float], list[float]]:
+        v = [float(x) for x in self.tube_volume_m3]
+        dv = [0.0] * self.n_states
+        dl_m, dl_rate_m_s = np.atleast_2d(dl_m), np.atleast_2d(dl_rate_m_s)
+        mean_dl = (dl_m.sum(0) / dl_m.shape[0]).tolist()  # np.mean's sum and division, without its checks
+        mean_rate = (dl_rate_m_s.sum(0) / dl_rate_m_s.shape[0]).tolist()
         for place, line in enumerate(self.lines):
             if line >= 0:
                 v[line] += self.soas_per_line * (self.soa_volume_m3 + self.soa_area_m2 * mean_dl[place])
@@ -132,11 +158,14 @@ class LineSupply:
 
     def state_rates(self, t_s: float, state: np.ndarray, dl_m: np.ndarray, dl_rate_m_s: np.ndarray) -> np.ndarray:
         """dp/dt of every line (the valve opens at t = 0)."""
-        v, dv = self.volumes_m3(dl_m, dl_rate_m_s)
-        p = np.asarray(state, float)
-        q = iso6358_mass_flow_kg_s(self.source_pa_abs, p, self.valve.conductance_m3_s_pa, self.valve.critical_ratio,
-                                   self.temperature_k) if t_s >= 0 else np.zeros_like(p)
-        return self.polytropic_index / v * (R_AIR_J_KG_K * self.temperature_k * q - p * dv)
+        v, dv = self._volumes(dl_m, dl_rate_m_s)
+        rt = R_AIR_J_KG_K * self.temperature_k
+        out = []
+        for line, p in enumerate(np.asarray(state, float).tolist()):
+            q = _mass_flow_one_kg_s(self.source_pa_abs, p, self.valve.conductance_m3_s_pa, self.valve.critical_ratio,
+                                    self.temperature_k) if t_s >= 0 else 0.0
+            out.append(self.polytropic_index / v[line] * (rt * q - p * dv[line]))
+        return np.array(out)
 
 
 def fill_curve(supply: LineSupply, seconds: float, samples: int = 2000) -> tuple[np.ndarray, np.ndarray]:

@@ -159,7 +159,7 @@ def test_stage_1b_shares_a_shortened_mesh_between_spans_that_differ_only_above_i
     built than (instance, grid value, span) combinations asked for."""
     import trimesh
 
-    from bvsr_cad.analysis.clearance import LAMBDA_GRID, _fcl_distance, posed_tail
+    from bvsr_cad.analysis.clearance import LAMBDA_GRID, _fcl_distance, attained_gap_mm, posed_tail
 
     pt = posed_tail(asm)
     asked = set()
@@ -173,8 +173,50 @@ def test_stage_1b_shares_a_shortened_mesh_between_spans_that_differ_only_above_i
             v = pt.cut[int(i)].vertices.copy()
             v[:, 2] = pt.shorten_z(v[:, 2], float(LAMBDA_GRID[k]), pt.span[p])
             shortened.append(trimesh.Trimesh(v, pt.cut[int(i)].faces, process=False))
-        assert pt.aniso_rest(p, k) == _fcl_distance(*shortened)
+        gap, fcl_mm = attained_gap_mm(*shortened), _fcl_distance(*shortened)
+        assert pt.aniso_rest(p, k) == (fcl_mm if gap is None else gap)
+        assert gap is None or abs(fcl_mm - gap) < 1e-12
     assert len(pt._scaled) < len(asked)
+
+
+def test_a_gap_between_parallel_faces_is_taken_from_the_boxes_where_attained(asm):
+    """Meshes apart along one axis: the boxes' gap is their distance when a point of one face of the gap
+    lies over a triangle of the other (exactly: one subtraction), None where it does not (an L whose
+    notch faces the other mesh, boxes apart along two axes, overlapping boxes); on the default tail every
+    rest distance it gives equals FCL's to 1e-12 mm, and it gives the panels' (parallel faces: FCL's
+    slowest queries) and no others than those FCL puts at the boxes' gap."""
+    import trimesh
+
+    from bvsr_cad.analysis.clearance import _fcl_distance, attained_gap_mm, posed_tail
+
+    lower = trimesh.creation.box((10.0, 10.0, 2.0))  # top face at z = 1
+    upper = trimesh.creation.box((4.0, 4.0, 2.0))
+    upper.apply_translation((2.0, 1.0, 1.0 + 2.75 + 1.0))  # bottom face at z = 3.75
+    assert attained_gap_mm(lower, upper) == attained_gap_mm(upper, lower) == 2.75
+    assert _fcl_distance(lower, upper) == pytest.approx(2.75, abs=1e-12)
+    # An L: its top face covers x < 0 only at z = 1 (the x > 0 half is lower); the upper box sits over the notch.
+    ell = trimesh.util.concatenate([trimesh.creation.box((5.0, 10.0, 2.0)).apply_translation((-2.5, 0, 0)),
+                                    trimesh.creation.box((5.0, 10.0, 1.0)).apply_translation((2.5, 0, -0.5))])
+    over_notch = trimesh.creation.box((2.0, 2.0, 2.0)).apply_translation((3.0, 0.0, 3.0))  # bottom at z = 2
+    assert attained_gap_mm(ell, over_notch) is None
+    assert _fcl_distance(ell, over_notch) > 1.0 + 1e-9
+    diagonal = trimesh.creation.box((4.0, 4.0, 2.0)).apply_translation((20.0, 0.0, 10.0))
+    touching = trimesh.creation.box((4.0, 4.0, 2.0)).apply_translation((0.0, 0.0, 1.5))
+    assert attained_gap_mm(lower, diagonal) is None and attained_gap_mm(lower, touching) is None
+    pt = posed_tail(asm)
+    given = 0
+    for (a, b), rest in zip(pt.pairs, pt.rest_mm):
+        gap, fcl_mm = attained_gap_mm(pt.coarse[a], pt.coarse[b]), _fcl_distance(pt.coarse[a], pt.coarse[b])
+        boxes = np.maximum(np.maximum(pt.coarse[a].bounds[0], pt.coarse[b].bounds[0])
+                           - np.minimum(pt.coarse[a].bounds[1], pt.coarse[b].bounds[1]), 0.0)
+        at_boxes = abs(fcl_mm - np.linalg.norm(boxes)) < 1e-9
+        assert (gap is not None) == at_boxes, (pt.names[a], pt.names[b])
+        assert rest == (fcl_mm if gap is None else gap) and (gap is None or abs(gap - fcl_mm) < 1e-12)
+        given += gap is not None
+    panels = {(f"panel{k}", f"panel{k + 1}") for k in range(asm.spec.joints)}
+    assert panels <= {(pt.names[a], pt.names[b]) for (a, b), r in zip(pt.pairs, pt.rest_mm)
+                      if attained_gap_mm(pt.coarse[a], pt.coarse[b]) is not None}
+    assert given >= len(panels)
 
 
 def test_analyses_given_the_rest_geometry_make_no_solid_and_give_the_same_results(bvsr_spec, monkeypatch):

@@ -154,9 +154,11 @@ def test_plane_sections_is_the_posed_tails_map_without_its_meshes(asm):
 
 
 def test_stage_1b_shares_a_shortened_mesh_between_spans_that_differ_only_above_it(asm):
-    """A gap that starts above a mesh moves none of its vertices: d_lambda from the shared BVHs equals
-    (bit for bit) the distance of both meshes shortened by the pair's whole span, and fewer meshes are
-    built than (instance, grid value, span) combinations asked for."""
+    """A gap that starts above a mesh moves none of its vertices, and an SOA is a turned copy of its
+    joint's first: d_lambda from the shared (turned) BVHs, or the pair's turned copy's, equals the distance
+    of both meshes shortened by the pair's whole span (to 1e-12 mm: the placements are turns of each other
+    to 4e-15), and fewer meshes are built than (instance, grid value, span) combinations asked for, the
+    SOAs' shortened meshes only for each joint's first."""
     import trimesh
 
     from bvsr_cad.analysis.clearance import LAMBDA_GRID, _fcl_distance, attained_gap_mm, posed_tail
@@ -174,9 +176,50 @@ def test_stage_1b_shares_a_shortened_mesh_between_spans_that_differ_only_above_i
             v[:, 2] = pt.shorten_z(v[:, 2], float(LAMBDA_GRID[k]), pt.span[p])
             shortened.append(trimesh.Trimesh(v, pt.cut[int(i)].faces, process=False))
         gap, fcl_mm = attained_gap_mm(*shortened), _fcl_distance(*shortened)
-        assert pt.aniso_rest(p, k) == (fcl_mm if gap is None else gap)
+        assert pt.aniso_rest(p, k) == pytest.approx(fcl_mm if gap is None else gap, abs=1e-12)
         assert gap is None or abs(fcl_mm - gap) < 1e-12
     assert len(pt._scaled) < len(asked)
+    soas = {pt.names[i] for i, _k, _s in pt._scaled if pt.instances[i].role == "soa"}
+    assert soas and all(name.endswith("_soa1") for name in soas)
+
+
+def test_the_soas_of_a_joint_are_turned_copies_and_turned_pairs_share_d_lambda(asm):
+    """Each joint's SOAs 2-5 are its SOA 1 turned about the tail's axis by a multiple of 72 deg (and no
+    other instance is a turned copy of another); pairs that are turned copies of an earlier pair (two
+    neighbouring SOAs of a joint: one orbit of five) take its d_lambda, which equals their own direct
+    distance to 1e-12 mm, for every such pair."""
+    import math
+
+    import trimesh
+
+    from bvsr_cad.analysis.clearance import LAMBDA_GRID, _fcl_distance, posed_tail
+
+    pt = posed_tail(asm)
+    for i, (ref, rot) in enumerate(pt._turn):
+        inst = pt.instances[i]
+        if inst.role == "soa":
+            assert pt.names[ref] == f"j{inst.joint}_soa1"
+            turn = math.degrees(math.atan2(rot[1, 0], rot[0, 0])) % 72.0
+            assert min(turn, 72.0 - turn) < 1e-9
+        else:
+            assert ref == i and np.array_equal(rot, np.eye(3))
+    orbits: dict[int, list[int]] = {}
+    for p, rep in enumerate(pt._orbit):
+        orbits.setdefault(rep, []).append(p)
+    neighbours = [ps for ps in orbits.values() if {pt.names[i].split("_")[0] for p in ps for i in pt.pairs[p]} == {"j2"}
+                  and len(ps) == 5]
+    assert neighbours, "the five neighbouring SOA pairs of joint 2 form one orbit"
+    k = int(np.searchsorted(LAMBDA_GRID, 0.6))
+    shared = [p for ps in orbits.values() if len(ps) > 1 for p in ps if pt.span[p].any()]
+    assert set(neighbours[0]) <= set(shared)
+    for p in shared:
+        span = pt.span[p]
+        shortened = []
+        for i in pt.pairs[p]:
+            v = pt.cut[int(i)].vertices.copy()
+            v[:, 2] = pt.shorten_z(v[:, 2], float(LAMBDA_GRID[k]), span & pt._gaps_under[int(i)])
+            shortened.append(trimesh.Trimesh(v, pt.cut[int(i)].faces, process=False))
+        assert pt.aniso_rest(p, k) == pytest.approx(_fcl_distance(*shortened), abs=1e-12)
 
 
 def test_a_gap_between_parallel_faces_is_taken_from_the_boxes_where_attained(asm):

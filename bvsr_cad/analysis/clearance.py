@@ -37,6 +37,7 @@ lowest bounds confirm the minimum; it is certified when no unconfirmed
 from __future__ import annotations
 
 import itertools
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -78,7 +79,7 @@ class PosedTail:
     cut: list[trimesh.Trimesh]  # the coarse surfaces cut at every gap face (piecewise-affine maps in z)
     _aniso: dict = field(default_factory=dict, repr=False)  # (pair, grid index) -> d_lambda
     _scaled: dict = field(default_factory=dict, repr=False)  # (instance, grid index, span) -> shortened mesh
-    _scaled_fcl: dict = field(default_factory=dict, repr=False)  # the same key -> its fcl object, when needed
+    _scaled_fcl: dict = field(default_factory=dict, repr=False)  # the same key -> its BVH, when FCL needs it
     rest_bvh: dict = field(default_factory=dict, repr=False)  # instance -> BVH of its coarse rest mesh
     instances: list = field(default_factory=list, repr=False)  # the assembly's Instance of each mesh
 
@@ -102,6 +103,13 @@ class PosedTail:
         self._gap_lo_mm = np.arange(self.kin.n_joints) * self.joint_height_mm + self.kin.panel_thickness_mm
         # Per cut mesh, the gaps that start below its top: shortening any other moves none of its vertices.
         self._gaps_under = [self._gap_lo_mm < m.vertices[:, 2].max() for m in self.cut]
+        # Stage 1b's shortened meshes: an instance that is a turned copy of an earlier one about the tail's
+        # axis (the SOAs of a joint) shortens to the earlier one's turned (shortening acts along z, which
+        # the turn keeps), and pairs that are turned copies of an earlier pair share its d_lambda.
+        n = len(self.cut)
+        self._turn = _axis_turns(self.instances) if len(self.instances) == n else [(i, None) for i in range(n)]
+        first: dict[tuple, int] = {}
+        self._orbit = [first.setdefault(self._orbit_key(p), p) for p in range(len(self.pairs))]
         # Instances that lie inside one panel's thickness move with that panel as a rigid body:
         # their posed mesh is the rest BVH under a transform (no rebuild).
         hj, t = self.joint_height_mm, self.kin.panel_thickness_mm
@@ -164,31 +172,57 @@ class PosedTail:
             out -= (1.0 - lam) * np.clip(z - lo, 0.0, hi - lo)
         return out
 
+    def _orbit_key(self, pair: int) -> tuple:
+        """What makes two pairs turned copies of each other (their d_lambda equal): the instances they are
+        turned copies of, the turn between their two instances (degrees, to 1e-6), the joints they span and
+        the gaps under each mesh; a pair with an instance of no known turn is its own."""
+        a, b = (int(i) for i in self.pairs[pair])
+        (ra, rot_a), (rb, rot_b) = self._turn[a], self._turn[b]
+        if rot_a is None or rot_b is None:
+            return ("pair", pair)
+        rel = rot_a.T @ rot_b
+        turn = round(math.degrees(math.atan2(rel[1, 0], rel[0, 0])) % 360.0, 6) % 360.0
+        ends = ((ra, self._gaps_under[a].tobytes()), (rb, self._gaps_under[b].tobytes()))
+        key = min((ends, turn), (ends[::-1], round(-turn % 360.0, 6) % 360.0))
+        return (key, self.span[pair].tobytes())
+
+    def _shortened(self, i: int, k: int, span: np.ndarray) -> tuple[tuple, np.ndarray | None]:
+        """The key of the shortened mesh that instance ``i``'s is a turned copy of, and the turn (None:
+        none); the mesh is made on first use (its BVH when FCL first needs it)."""
+        ref, rot = self._turn[i]
+        ck = (ref, k, span.tobytes())
+        if ck not in self._scaled:
+            m = self.cut[ref]
+            v = m.vertices.copy()
+            v[:, 2] = self.shorten_z(v[:, 2], float(LAMBDA_GRID[k]), span)
+            self._scaled[ck] = trimesh.Trimesh(v, m.faces, process=False)
+        return ck, None if ref == i else rot
+
     def aniso_rest(self, pair: int, k: int) -> float:
-        """d_lambda of ``pair`` at LAMBDA_GRID[k] (cached)."""
+        """d_lambda of ``pair`` at LAMBDA_GRID[k] (cached; a pair that is a turned copy of an earlier
+        one takes that one's)."""
         key = (pair, k)
         if key not in self._aniso:
             if LAMBDA_GRID[k] == 1.0 or not self.span[pair].any():
                 self._aniso[key] = float(self.rest_mm[pair])
+            elif self._orbit[pair] != pair:
+                self._aniso[key] = self.aniso_rest(self._orbit[pair], k)
             else:
-                keys = []
-                for i in self.pairs[pair]:
-                    m = self.cut[int(i)]
-                    # A gap that starts above the mesh moves none of its vertices (z - 0.0, the same
-                    # bits): left out of the key, meshes shortened by different spans share one BVH.
-                    span = self.span[pair] & self._gaps_under[int(i)]
-                    ck = (int(i), k, span.tobytes())
-                    if ck not in self._scaled:
-                        v = m.vertices.copy()
-                        v[:, 2] = self.shorten_z(v[:, 2], float(LAMBDA_GRID[k]), span)
-                        self._scaled[ck] = trimesh.Trimesh(v, m.faces, process=False)
-                    keys.append(ck)
-                gap = attained_gap_mm(*(self._scaled[ck] for ck in keys))
+                # A gap that starts above the mesh moves none of its vertices (z - 0.0, the same
+                # bits): left out of the key, meshes shortened by different spans share one BVH.
+                made = [self._shortened(int(i), k, self.span[pair] & self._gaps_under[int(i)])
+                        for i in self.pairs[pair]]
+                gap = attained_gap_mm(*(self._scaled[ck] if rot is None else
+                                        trimesh.Trimesh(self._scaled[ck].vertices @ rot.T, self._scaled[ck].faces,
+                                                        process=False) for ck, rot in made))
                 if gap is None:
-                    for ck in keys:
+                    objs = []
+                    for ck, rot in made:
                         if ck not in self._scaled_fcl:
-                            self._scaled_fcl[ck] = _fcl_object(self._scaled[ck])
-                    gap = _fcl_distance(*(self._scaled_fcl[ck] for ck in keys))
+                            self._scaled_fcl[ck] = _bvh(self._scaled[ck])
+                        objs.append(fcl.CollisionObject(self._scaled_fcl[ck], fcl.Transform() if rot is None
+                                                        else fcl.Transform(rot, np.zeros(3))))
+                    gap = _fcl_distance(*objs)
                 self._aniso[key] = gap
         return self._aniso[key]
 
@@ -294,6 +328,33 @@ def _bvh(m: trimesh.Trimesh) -> fcl.BVHModel:
 def _fcl_distance(a: trimesh.Trimesh | fcl.CollisionObject, b: trimesh.Trimesh | fcl.CollisionObject) -> float:
     objs = [m if isinstance(m, fcl.CollisionObject) else _fcl_object(m) for m in (a, b)]
     return fcl.distance(objs[0], objs[1], fcl.DistanceRequest(), fcl.DistanceResult())
+
+
+#: Two instances of one part whose placements differ by a turn about the tail's axis within this (mm,
+#: and the rotation's entries) are turned copies of each other for stage 1b (the SOAs of a joint: 4e-15).
+TURN_TOLERANCE = 1e-9
+
+
+def _axis_turns(instances: list) -> list[tuple[int, np.ndarray]]:
+    """For each instance, ``(r, R)``: the first instance ``r`` of the same part whose placement, turned by
+    ``R`` (3 x 3) about the tail's axis, is this one's within :data:`TURN_TOLERANCE`; itself and the
+    identity where there is none."""
+    out: list[tuple[int, np.ndarray]] = []
+    firsts: dict[str, list[int]] = {}
+    for i, inst in enumerate(instances):
+        t = np.asarray(inst.transform, float)
+        found = (i, np.eye(3))
+        for r in firsts.get(inst.part, []):
+            m = t @ np.linalg.inv(np.asarray(instances[r].transform, float))
+            c, s = math.cos(a := math.atan2(m[1, 0], m[0, 0])), math.sin(a)
+            turn = np.array([[c, -s, 0.0, 0.0], [s, c, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+            if np.abs(m - turn).max() <= TURN_TOLERANCE:
+                found = (r, turn[:3, :3])
+                break
+        else:
+            firsts.setdefault(inst.part, []).append(i)
+        out.append(found)
+    return out
 
 
 #: Candidate points :func:`attained_gap_mm` tries (per side, in batches) before it leaves a pair to FCL.

@@ -20,7 +20,8 @@ import trimesh
 from .analysis.poses import mold_scene, twin_scene, viewer_scenes
 from .analysis.limits import per_joint_rad
 from .analysis.run import BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS, run_analyses
-from .analyses_process import drop_geometry_ahead, keep_rest, take_geometry_ahead
+from .analyses_process import (SHARED_SOLIDS_FOLDER, SharedSolids, drop_geometry_ahead, keep_rest,
+                               take_geometry_ahead)
 from .assembly.build import build_assembly
 from .assembly.inertia import SolidProperties
 from .assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs, rigid_robot_model
@@ -158,7 +159,9 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
                 # Both cores are busy from here to the end: OCCT's own threads would only contend.
                 kernel_before = kernel_threads(1)
         t = time.perf_counter()
-        asm = build_assembly(spec, say)
+        # Both processes need every solid where the geometry analyses are not cached: made once, shared.
+        asm = build_assembly(spec, say, shared=SharedSolids(tmp / SHARED_SOLIDS_FOLDER)
+                             if analyses is not None and geometry_hit is None else None)
         log.record("assembly", False, time.perf_counter() - t)
         t = time.perf_counter()
         files: dict[str, dict[str, str]] = {name: {"step": f"step/{name}.step", "stl": f"stl/{name}.stl"}

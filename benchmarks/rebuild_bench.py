@@ -1,6 +1,6 @@
 """Cold, no-op and one-edit rebuild times of `bvsr build` with the artifact cache.
 
-    python benchmarks/rebuild_bench.py [PARAMS] [--edits a,b,...]
+    python benchmarks/rebuild_bench.py [PARAMS] [--edits a,b,...] [--cold N]
 
 Runs in a private cache (a temporary ``BVSR_CACHE``) and a temporary output
 folder: first a cold build (empty cache), then the same file again (no-op),
@@ -28,6 +28,7 @@ import os
 import resource
 import re
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -98,7 +99,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("params", nargs="?", default=str(ROOT / "params" / "bvsr.toml"))
     ap.add_argument("--edits", default=",".join(EDITS), help="comma-separated edit names (default: all)")
+    ap.add_argument("--cold", type=int, default=1, metavar="N",
+                    help="cold builds, each from an empty cache (default 1); the ratios are to their median: "
+                         "a shared machine's speed drifts between minutes")
     args = ap.parse_args()
+    if args.cold < 1:
+        ap.error(f"--cold must be at least 1, not {args.cold}")
     work = Path(tempfile.mkdtemp(prefix="bvsr-rebuild-bench-"))
     users_cache = os.environ.get("BVSR_CACHE")
     os.environ["BVSR_CACHE"] = str(work / "cache")
@@ -142,7 +148,12 @@ def main() -> None:
     before = reference_loop_s()
     print(f"reference loop {before:.2f} s, {os.cpu_count()} cores", flush=True)
     try:
-        cold = run("cold", base)
+        colds = []
+        for i in range(args.cold):
+            if i:
+                shutil.rmtree(work / "cache", ignore_errors=True)  # empty again: each one cold
+            colds.append(run("cold" if args.cold == 1 else f"cold {i + 1}", base))
+        cold = statistics.median(colds)
         run("no-op", base)
         row("no-op, command", *command_seconds(base, work / "out"))
         for name in (n.strip() for n in args.edits.split(",") if n.strip()):
@@ -161,6 +172,8 @@ def main() -> None:
         print(f"{'build':18} {'seconds':>8} {'/ cold':>7} {'CPU s':>7}  CPU s by process")
         for label, seconds, cpu, split in rows:
             print(f"{label:18} {seconds:8.1f} {seconds / cold:7.2f} {cpu:7.1f}  {split}")
+        if args.cold > 1:
+            print(f"cold, median of {args.cold}: {cold:.1f} s (the ratios' base)")
         print(f"reference loop {before:.2f} s before, {reference_loop_s():.2f} s after")
     finally:
         shutil.rmtree(work, ignore_errors=True)

@@ -98,6 +98,41 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, 
     assert "    CPU s by process, as the build reports them: build 0.6 + analyses 0.2" in out.splitlines()
 
 
+def test_rebuild_bench_runs_several_cold_builds_each_from_an_empty_cache(tmp_path, monkeypatch, capsys):
+    """``--cold 3``: three cold builds, each finding the benchmark's cache empty (what the one before it
+    put there removed), then the no-op from the last one's cache; the table lists each and the ratios'
+    base is their median; ``--cold 0`` is refused."""
+    import bvsr_cad.pipeline
+    import bvsr_cad.worker
+
+    bench = _script("rebuild_bench")
+    found: list[list[str]] = []
+
+    def fake_build(path, out, standby=None):
+        cache = Path(os.environ["BVSR_CACHE"])
+        found.append(sorted(p.name for p in cache.iterdir()) if cache.exists() else [])
+        cache.mkdir(parents=True, exist_ok=True)
+        (cache / f"entry{len(found)}").write_text("")
+        return BuildResult(Path(out), [], 1.0, [{"stage": "export", "status": "built", "seconds": 1.0}], {"build": 0.5})
+
+    monkeypatch.setattr(bvsr_cad.pipeline, "build_export", fake_build)
+    monkeypatch.setattr(bench, "command_seconds", lambda path, out: (0.5, 0.4, [], {"build": 0.3}))
+    monkeypatch.setattr(bench, "reference_loop_s", lambda: 0.9)
+    monkeypatch.setattr(bvsr_cad.worker.SecondProcess, "standby", classmethod(lambda cls, *a, **k: None))
+    monkeypatch.setenv("BVSR_CACHE", str(tmp_path / "users-cache"))
+    monkeypatch.setattr(sys, "argv", ["rebuild_bench.py", str(ROOT / "params" / "bvsr.toml"), "--edits", "", "--cold", "3"])
+    bench.main()
+    out = capsys.readouterr().out.splitlines()
+    assert found == [[], [], [], ["entry3"]]  # three cold builds from an empty cache, the no-op from the third's
+    table = out[-7:-2]
+    assert [line[:18].strip() for line in table] == ["cold 1", "cold 2", "cold 3", "no-op", "no-op, command"]
+    assert out[-2].startswith("cold, median of 3: ") and out[-2].endswith("s (the ratios' base)")
+    monkeypatch.setattr(sys, "argv", ["rebuild_bench.py", "--cold", "0"])
+    with pytest.raises(SystemExit) as exc:
+        bench.main()
+    assert exc.value.code == 2
+
+
 def test_rebuild_bench_edit_names_a_missing_key():
     bench = _script("rebuild_bench")
     with pytest.raises(KeyError, match="vertebra.no_such_key"):

@@ -177,14 +177,10 @@ class PosedTail:
         turned copies of, the turn between their two instances (degrees, to 1e-6), the joints they span and
         the gaps under each mesh; a pair with an instance of no known turn is its own."""
         a, b = (int(i) for i in self.pairs[pair])
-        (ra, rot_a), (rb, rot_b) = self._turn[a], self._turn[b]
-        if rot_a is None or rot_b is None:
+        if self._turn[a][1] is None or self._turn[b][1] is None:
             return ("pair", pair)
-        rel = rot_a.T @ rot_b
-        turn = round(math.degrees(math.atan2(rel[1, 0], rel[0, 0])) % 360.0, 6) % 360.0
-        ends = ((ra, self._gaps_under[a].tobytes()), (rb, self._gaps_under[b].tobytes()))
-        key = min((ends, turn), (ends[::-1], round(-turn % 360.0, 6) % 360.0))
-        return (key, self.span[pair].tobytes())
+        return (_turned_pair(self._turn, a, b, self._gaps_under[a].tobytes(), self._gaps_under[b].tobytes()),
+                self.span[pair].tobytes())
 
     def _shortened(self, i: int, k: int, span: np.ndarray) -> tuple[tuple, np.ndarray | None]:
         """The key of the shortened mesh that instance ``i``'s is a turned copy of, and the turn (None:
@@ -357,6 +353,18 @@ def _axis_turns(instances: list) -> list[tuple[int, np.ndarray]]:
     return out
 
 
+def _turned_pair(turns: list[tuple[int, np.ndarray]], a: int, b: int, tag_a: object = None, tag_b: object = None
+                 ) -> tuple:
+    """What two pairs that are turned copies of each other share (see :func:`_axis_turns`): the instances
+    their two are turned copies of, each with its ``tag``, and the turn between them (degrees, to 1e-6),
+    the same whichever instance comes first."""
+    (ra, rot_a), (rb, rot_b) = turns[a], turns[b]
+    rel = rot_a.T @ rot_b
+    turn = round(math.degrees(math.atan2(rel[1, 0], rel[0, 0])) % 360.0, 6) % 360.0
+    ends = ((ra, tag_a), (rb, tag_b))
+    return min((ends, turn), (ends[::-1], round(-turn % 360.0, 6) % 360.0))
+
+
 #: Candidate points :func:`attained_gap_mm` tries (per side, in batches) before it leaves a pair to FCL.
 GAP_WITNESSES = 256
 
@@ -478,6 +486,10 @@ def posed_tail(asm: Assembly, progress: Progress | None = None, cutoff_mm: float
     dirs = np.c_[np.cos(edges), np.sin(edges)]
     h_edge = {i: (m.vertices[:, :2] @ dirs.T).max(axis=0) for i, m in enumerate(meshes)}
     rest_bvh: dict[int, fcl.BVHModel] = {}
+    # An SOA is a turned copy of its joint's first (see _axis_turns): its rest BVH is that one's under the
+    # turn, and a pair that is a turned copy of an earlier pair is at that one's distance.
+    turns = _axis_turns(list(asm.instances))
+    turned_rest: dict[tuple, float] = {}
     say("clearance: exact rest distances of the candidate pairs")
     for a, b in must_not_touch(asm):
         ma, mb = meshes[index[a]], meshes[index[b]]
@@ -490,10 +502,17 @@ def posed_tail(asm: Assembly, progress: Progress | None = None, cutoff_mm: float
         pairs.append((index[a], index[b]))
         gap = attained_gap_mm(coarse[index[a]], coarse[index[b]])
         if gap is None:
-            for i in (index[a], index[b]):
-                if i not in rest_bvh:
-                    rest_bvh[i] = _bvh(coarse[i])
-            gap = _fcl_distance(*(fcl.CollisionObject(rest_bvh[i], fcl.Transform()) for i in (index[a], index[b])))
+            key = _turned_pair(turns, index[a], index[b])
+            if key not in turned_rest:
+                objs = []
+                for i in (index[a], index[b]):
+                    ref, rot = turns[i]
+                    if ref not in rest_bvh:
+                        rest_bvh[ref] = _bvh(coarse[ref])
+                    objs.append(fcl.CollisionObject(rest_bvh[ref], fcl.Transform() if ref == i
+                                                    else fcl.Transform(rot, np.zeros(3))))
+                turned_rest[key] = _fcl_distance(*objs)
+            gap = turned_rest[key]
         rest.append(gap)
         span.append((gaps[:, 1] > zlo) & (gaps[:, 0] < zhi))
         h = np.maximum(h_edge[index[a]], h_edge[index[b]])

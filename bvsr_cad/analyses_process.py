@@ -36,7 +36,7 @@ class SharedSolids:
 
     def __init__(self, folder: Path):
         self.folder = Path(folder)
-        self.folder.mkdir(parents=True, exist_ok=True)
+        self.folder.mkdir(exist_ok=True)  # not its parent: a build's folder that is gone stays gone
 
     def _path(self, name: str) -> Path:
         return self.folder / f"{name}.brep"

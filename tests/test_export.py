@@ -352,6 +352,7 @@ def test_the_build_and_its_analyses_process_make_each_part_solid_once(tmp_path, 
     made: list[str] = []
     real_panel = build_mod.panel
     monkeypatch.setattr(build_mod, "panel", lambda lay: made.append(lay.name) or real_panel(lay))
+    (tmp_path / "build").mkdir()  # the build's temporary folder
     folder = tmp_path / "build" / analyses_process.SHARED_SOLIDS_FOLDER
     # The build has made the first three panels when the analyses' work comes.
     first = build_assembly(spec, solids=False, shared=SharedSolids(folder))

@@ -149,10 +149,11 @@ def _equality_residual(m, d) -> float:
     return float(worst)
 
 
-def _step(path: Path, gravity: bool, seconds: float = 1.0, self_contacts: bool = True):
+def _step(path: Path, gravity: bool, seconds: float = 1.0, self_contacts: bool = True, compiled=None):
+    """``path`` (or ``compiled``, its model compiled already: changed here) stepped for ``seconds``."""
     import mujoco
 
-    m = mujoco.MjModel.from_xml_path(str(path))
+    m = compiled if compiled is not None else mujoco.MjModel.from_xml_path(str(path))
     if not self_contacts:
         m.geom_conaffinity[:] = 0  # every geom keeps its contype: the MJCF's rule, the world's geoms excepted
     if not gravity:
@@ -211,13 +212,18 @@ def check_mujoco(exp: Export, keys: tuple[str, ...] = MUJOCO_FILES) -> list[Chec
             # limits: it is stepped without gravity and must not move at all.
             gravity = key != "urdf"
             try:
-                if key == "urdf":
-                    out.append(_urdf_self_contacts(path, rel))
+                compiled = None
+                if key == "urdf":  # compiled once: its contacts at rest, then stepped (which changes it)
+                    import mujoco
+
+                    compiled = mujoco.MjModel.from_xml_path(str(path))
+                    out.append(_urdf_self_contacts(compiled, rel))
                 # MuJoCo's URDF import collides every two links but a parent and its child: the exact chain
                 # puts four links between neighbouring panels, whose SOA and rod halves meet (and overlap by
                 # their tilt) at mid-gap in every pose. The MJCF turns the tail's self-contacts off
                 # (conaffinity 0); the URDF cannot say so to MuJoCo, so it is stepped with the same rule.
-                m, d, warn, eq, at_limit, drift = _step(path, gravity=gravity, self_contacts=key != "urdf")
+                m, d, warn, eq, at_limit, drift = _step(path, gravity=gravity, self_contacts=key != "urdf",
+                                                        compiled=compiled)
             except Exception as exc:  # noqa: BLE001 - the compiler's message is the result
                 out.append(CheckResult(f"mujoco_compile:{key}", False, 0, 1, "", rel, str(exc)))
                 continue
@@ -240,12 +246,12 @@ def check_mujoco(exp: Export, keys: tuple[str, ...] = MUJOCO_FILES) -> list[Chec
     return out
 
 
-def _urdf_self_contacts(path: Path, rel: str) -> CheckResult:
-    """MuJoCo's import of the URDF at rest: its links touch only where neighbouring panels' halves of a
-    column meet (the contacts :func:`check_mujoco` turns off); any other pair would be shapes that overlap."""
+def _urdf_self_contacts(m, rel: str) -> CheckResult:
+    """MuJoCo's import of the URDF (``m``, compiled) at rest: its links touch only where neighbouring panels'
+    halves of a column meet (the contacts :func:`check_mujoco` turns off); any other pair would be shapes
+    that overlap."""
     import mujoco
 
-    m = mujoco.MjModel.from_xml_path(str(path))
     d = mujoco.MjData(m)
     mujoco.mj_forward(m, d)
     bodies = m.geom_bodyid[d.contact.geom[:d.ncon]]

@@ -146,18 +146,29 @@ def _prepare_analyses(params: str) -> None:
     reads its cache, until the work comes (a build whose geometry is cached hands over the rest geometry:
     it needs none of them; a solid not made by then is made when first read). Used only if the work names
     the same file with the same SHA-256 (the bytes the assembly was built from)."""
-    from .assembly.build import build_assembly
-
     kernel_threads(1)  # beside the build, which keeps the other core busy
-    before = params_sha256(params)
-    asm = build_assembly(load_spec(params), solids=False)
-    if params_sha256(params) != before:
+    read = _assembly_read(params)
+    if read is None:
         return
-    _PREPARED[str(Path(params).resolve()), before] = asm
+    asm, sha256 = read
+    _PREPARED[str(Path(params).resolve()), sha256] = asm
     for part in reversed(list(asm.parts.values())):  # the build makes its parts from the first
         if _work_waiting():
             return
         part.solid  # noqa: B018 - made now, a head start
+
+
+def _assembly_read(params: str, sha256: str | None = None):
+    """``(assembly, SHA-256)``: the tail's assembly from the file (its solids made when first read) and the
+    SHA-256 of the bytes it was built from; None where the file changed while it was read, or its bytes
+    are not ``sha256``."""
+    from .assembly.build import build_assembly
+
+    before = params_sha256(params)
+    if sha256 is not None and before != sha256:
+        return None
+    asm = build_assembly(load_spec(params), solids=False)
+    return (asm, before) if params_sha256(params) == before else None
 
 
 def _work_waiting() -> bool:
@@ -190,12 +201,9 @@ def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str
     except OSError:  # evicted since the build looked: computed here
         given = None
     asm = _PREPARED.pop((str(Path(params).resolve()), sha256), None)
-    if asm is None and folder and given is None and params_sha256(params) == sha256:
-        from .assembly.build import build_assembly
-
-        asm = build_assembly(load_spec(params), solids=False)
-        if params_sha256(params) != sha256:  # changed while read: from_params says so
-            asm = None
+    if asm is None and folder and given is None:
+        read = _assembly_read(params, sha256)  # None: changed since the build read it (from_params says so)
+        asm = read[0] if read is not None else None
     if asm is not None and folder and given is None:
         # Every solid is needed (the clearance meshes them all): the ones the build has not made yet,
         # from the last (it makes them from the first), each read where the build made it already.

@@ -144,9 +144,13 @@ def paper_coriolis(body: RigidBody, theta: float, phi_dot: float, theta_dot: flo
 
 def com_position_m(body: RigidBody, phi: float, theta: float) -> np.ndarray:
     """The body's centre of mass in the base frame: on the chord, d from the base (Eq 6's premise)."""
+    return np.array(_com_position(body, phi, theta))
+
+
+def _com_position(body: RigidBody, phi: float, theta: float) -> tuple[float, float, float]:
     d = body.arc_length_m * _chord_factor(theta)
     s, c = math.sin(theta / 2), math.cos(theta / 2)
-    return d * np.array([s * math.cos(phi), s * math.sin(phi), c])
+    return d * (s * math.cos(phi)), d * (s * math.sin(phi)), d * c
 
 
 def gravity_force(body: RigidBody, phi: float, theta: float, gravity_m_s2: np.ndarray) -> np.ndarray:
@@ -156,15 +160,14 @@ def gravity_force(body: RigidBody, phi: float, theta: float, gravity_m_s2: np.nd
 
 def _gravity_terms(body: RigidBody, phi: float, theta: float, gravity_m_s2: tuple[float, float, float]
                    ) -> tuple[float, float]:
-    """:func:`gravity_force` as floats, the potential of :func:`com_position_m` written out."""
+    """:func:`gravity_force` as floats."""
     gx, gy, gz = gravity_m_s2
     if gx == gy == gz == 0.0:
         return 0.0, 0.0
 
     def potential(p_: float, t_: float) -> float:
-        d = body.arc_length_m * _chord_factor(t_)
-        s, c = math.sin(t_ / 2), math.cos(t_ / 2)
-        return -body.mass_kg * (gx * (d * (s * math.cos(p_))) + gy * (d * (s * math.sin(p_))) + gz * (d * c))
+        x, y, z = _com_position(body, p_, t_)
+        return -body.mass_kg * (gx * x + gy * y + gz * z)
 
     h = 1e-7
     return ((potential(phi + h, theta) - potential(phi - h, theta)) / (2 * h),

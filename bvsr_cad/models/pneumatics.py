@@ -48,27 +48,18 @@ M3_S_PA_PER_L_S_BAR = 1e-3 / 1e5
 
 def iso6358_mass_flow_kg_s(p_up_pa: np.ndarray | float, p_down_pa: np.ndarray | float, conductance_m3_s_pa: float,
                            critical_ratio: float, temperature_k: float = T_0_K) -> np.ndarray:
-    """Mass flow through a valve from p_up to p_down (absolute Pa); negative when it flows back."""
-    p_up = np.asarray(p_up_pa, float)
-    p_down = np.asarray(p_down_pa, float)
-    sign = np.where(p_up >= p_down, 1.0, -1.0)
-    hi, lo = np.maximum(p_up, p_down), np.minimum(p_up, p_down)
-    r = lo / np.maximum(hi, 1e-9)
-    def subsonic(x):
-        return np.sqrt(np.clip(1.0 - ((x - critical_ratio) / (1.0 - critical_ratio)) ** 2, 0.0, 1.0))
-
-    # Near r = 1 the ellipse's slope is infinite (no flow law has that): below a 0.1 % drop the flow
-    # falls linearly to zero, the laminar end of ISO 6358-3, which keeps the integrators' steps sane.
-    r_lam = 0.999
-    phi = np.where(r <= critical_ratio, 1.0,
-                   np.where(r < r_lam, subsonic(r), subsonic(r_lam) * (1.0 - r) / (1.0 - r_lam)))
-    return sign * conductance_m3_s_pa * RHO_0_KG_M3 * hi * math.sqrt(T_0_K / temperature_k) * phi
+    """Mass flow through a valve from p_up to p_down (absolute Pa, broadcast); negative when it flows
+    back: :func:`_mass_flow_one_kg_s`, the law's one home, at every pair of pressures."""
+    up, down = np.broadcast_arrays(np.asarray(p_up_pa, float), np.asarray(p_down_pa, float))
+    flows = [_mass_flow_one_kg_s(u, d, conductance_m3_s_pa, critical_ratio, temperature_k)
+             for u, d in zip(up.ravel().tolist(), down.ravel().tolist())]
+    return np.array(flows, float).reshape(up.shape)[()]
 
 
 def _mass_flow_one_kg_s(p_up_pa: float, p_down_pa: float, conductance_m3_s_pa: float, critical_ratio: float,
                         temperature_k: float) -> float:
-    """:func:`iso6358_mass_flow_kg_s` of one valve on floats, the same operations in the same order (a
-    line's filling asks for it at every step of its integration: no arrays per call)."""
+    """The ISO 6358 mass flow of one valve on floats (a line's filling asks for it at every step of its
+    integration: no arrays per call)."""
     sign = 1.0 if p_up_pa >= p_down_pa else -1.0
     hi, lo = max(p_up_pa, p_down_pa), min(p_up_pa, p_down_pa)
     r = lo / max(hi, 1e-9)
@@ -76,6 +67,8 @@ def _mass_flow_one_kg_s(p_up_pa: float, p_down_pa: float, conductance_m3_s_pa: f
     def subsonic(x: float) -> float:
         return math.sqrt(min(max(1.0 - ((x - critical_ratio) / (1.0 - critical_ratio)) ** 2, 0.0), 1.0))
 
+    # Near r = 1 the ellipse's slope is infinite (no flow law has that): below a 0.1 % drop the flow
+    # falls linearly to zero, the laminar end of ISO 6358-3, which keeps the integrators' steps sane.
     r_lam = 0.999
     if r <= critical_ratio:
         phi = 1.0

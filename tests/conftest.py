@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import copy
+import importlib.util
 import tomllib
 from pathlib import Path
 
@@ -84,6 +85,14 @@ def bvsr_export(tmp_path_factory, request) -> Path:
             build_export(PARAMS / "bvsr.toml", out)
             (shared / ".built").touch()
     return out
+
+
+def benchmark_script(name: str):
+    """``benchmarks/<name>.py`` loaded as a module (the benchmarks are scripts, not a package)."""
+    spec = importlib.util.spec_from_file_location(f"bench_{name}", ROOT / "benchmarks" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def write_toml(path: Path, data: dict) -> Path:

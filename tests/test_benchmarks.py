@@ -3,7 +3,6 @@ imported and nothing noticed until the benchmark was next run): each runs here w
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import shutil
 import sys
@@ -15,14 +14,9 @@ from bvsr_cad.parameters.layout import key_value
 from bvsr_cad.parameters.load import load_spec
 from bvsr_cad.publish import BuildResult
 
+from .conftest import benchmark_script
+
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _script(name: str):
-    spec = importlib.util.spec_from_file_location(f"bench_{name}", ROOT / "benchmarks" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def _value(spec, table: str, key: str):
@@ -37,7 +31,7 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, 
     import bvsr_cad.pipeline
     import bvsr_cad.worker
 
-    bench = _script("rebuild_bench")
+    bench = benchmark_script("rebuild_bench")
     (tmp_path / "params").mkdir()
     base = tmp_path / "params" / "bvsr.toml"
     shutil.copyfile(ROOT / "params" / "bvsr.toml", base)
@@ -105,7 +99,7 @@ def test_rebuild_bench_runs_several_cold_builds_each_from_an_empty_cache(tmp_pat
     import bvsr_cad.pipeline
     import bvsr_cad.worker
 
-    bench = _script("rebuild_bench")
+    bench = benchmark_script("rebuild_bench")
     found: list[list[str]] = []
 
     def fake_build(path, out, standby=None):
@@ -134,7 +128,7 @@ def test_rebuild_bench_runs_several_cold_builds_each_from_an_empty_cache(tmp_pat
 
 
 def test_rebuild_bench_edit_names_a_missing_key():
-    bench = _script("rebuild_bench")
+    bench = benchmark_script("rebuild_bench")
     with pytest.raises(KeyError, match="vertebra.no_such_key"):
         bench.edited((ROOT / "params" / "bvsr.toml").read_text(), "vertebra", "no_such_key", "1")
 
@@ -142,7 +136,7 @@ def test_rebuild_bench_edit_names_a_missing_key():
 @pytest.mark.parametrize("name", ["clearance_bench", "dynamics_crosscheck", "rebuild_bench", "sim_bench"])
 def test_every_benchmark_answers_help(name, monkeypatch, capsys):
     """Each script parses its arguments before any work, so ``--help`` says how to run it."""
-    module = _script(name)
+    module = benchmark_script(name)
     monkeypatch.setattr(sys, "argv", [f"{name}.py", "--help"])
     with pytest.raises(SystemExit) as done:
         module.main()
@@ -154,7 +148,7 @@ def test_every_benchmark_answers_help(name, monkeypatch, capsys):
                                         ("--cpu-batches", "two"), ("--gpu-batches", "-4")])
 def test_sim_bench_refuses_bad_batch_sizes_before_any_work(flag, value, capsys):
     """A bad size is exit 2 naming the flag's value, before the export is even read."""
-    bench = _script("sim_bench")
+    bench = benchmark_script("sim_bench")
     with pytest.raises(SystemExit) as done:
         bench.main(["/nonexistent-export", flag, value])
     assert done.value.code == 2
@@ -162,7 +156,7 @@ def test_sim_bench_refuses_bad_batch_sizes_before_any_work(flag, value, capsys):
 
 
 def test_sim_bench_refuses_a_profile_of_no_rows(capsys):
-    bench = _script("sim_bench")
+    bench = benchmark_script("sim_bench")
     with pytest.raises(SystemExit) as done:
         bench.main(["/nonexistent-export", "--profile-rows", "0"])
     assert done.value.code == 2
@@ -178,7 +172,7 @@ def test_sim_bench_runs_on_the_cpu_and_says_profile_needs_cuda(bvsr_export, caps
 
     from bvsr_cad import sim_gpu
 
-    bench = _script("sim_bench")
+    bench = benchmark_script("sim_bench")
     monkeypatch.setattr(bench, "cuda_present", lambda: None)
     assert bench.main([str(bvsr_export), "--no-mjx", "--cpu-batches", "2", "--steps", "3",
                        "--cpu-seconds", "0.2", "--profile"]) == 0

@@ -17,7 +17,7 @@ import pytest
 
 from bvsr_cad.cache import ArtifactCache, spec_without, stage_key
 
-from .conftest import PARAMS, write_toml
+from .conftest import PARAMS, benchmark_script, write_toml
 
 
 def test_put_get_and_concurrent_puts_of_one_key(tmp_path):
@@ -236,7 +236,7 @@ def test_every_benchmark_edit_built_from_the_cache_equals_a_fresh_build(tmp_path
     CI-sized tail (:data:`SMALL_TAIL`) in a cache of its own."""
     from bvsr_cad.pipeline import build_export
 
-    bench = _bench_script()
+    bench = benchmark_script("rebuild_bench")  # its edits and its editor of parameter text: one source
     monkeypatch.setenv("BVSR_CACHE", str(tmp_path / "cache"))
     (tmp_path / "params").mkdir()
     (tmp_path / "data").mkdir()
@@ -257,16 +257,6 @@ def test_every_benchmark_edit_built_from_the_cache_equals_a_fresh_build(tmp_path
         assert statuses == {"built", "reused"}, (name, cached.stages)
         assert {s["status"] for s in fresh.stages} == {"built"}, name
         assert _differences(tmp_path / "cached", tmp_path / "fresh") == [], name
-
-
-def _bench_script():
-    """benchmarks/rebuild_bench.py as a module: its edits and its editor of parameter text, one source."""
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("rebuild_bench", PARAMS.parent / "benchmarks" / "rebuild_bench.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def _edit_beside_its_data(tmp_path: Path, data: dict) -> Path:

@@ -54,11 +54,8 @@ class SharedSolids:
         """Write part ``name``'s BRep bytes unless the folder has them (a part both processes made at once is
         written twice, the same bytes: the rename makes either whole)."""
         path = self._path(name)
-        if path.exists():
-            return
-        part = path.with_name(f".{name}.{os.getpid()}.{threading.get_ident()}.part")
-        part.write_bytes(data)
-        os.replace(part, path)
+        if not path.exists():
+            _replace_whole(path, data, path.with_name(f".{name}.{os.getpid()}.{threading.get_ident()}.part"))
 
 
 #: In the build's temporary folder: the geometry analyses, pickled by the analyses' second process as soon
@@ -67,11 +64,17 @@ class SharedSolids:
 GEOMETRY_AHEAD_FILE = ".analysis-geometry.pkl"
 
 
-def _write_whole(path: Path, value) -> None:
-    """``value`` pickled into ``path``, whole or not at all (written beside, then renamed)."""
-    part = path.with_name(path.name + ".part")
-    part.write_bytes(pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL))
+def _replace_whole(path: Path, data: bytes, part: Path | None = None) -> None:
+    """``data`` into ``path``, whole or not at all: written beside (``part``, by default ``path`` with
+    ``.part`` added; a name of its own where two writers may race), then renamed."""
+    part = part or path.with_name(path.name + ".part")
+    part.write_bytes(data)
     os.replace(part, path)
+
+
+def _write_whole(path: Path, value) -> None:
+    """``value`` pickled into ``path``, whole or not at all."""
+    _replace_whole(path, pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL))
 
 
 def write_geometry_ahead(folder: Path, geo: GeometryAnalyses) -> None:

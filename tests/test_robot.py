@@ -109,7 +109,7 @@ def test_at_limit_check_sees_the_bend_limit_tendons(robot_export, tmp_path):
     for text, on_limit in ((src, False), (narrowed, True)):
         path = tmp_path / "bvsr.xml"
         path.write_text(text)
-        *_, at_limit, _ = _step(path, gravity=True)
+        *_, at_limit, _ = _step(mujoco.MjModel.from_xml_path(str(path)), gravity=True)
         if on_limit:
             assert any(n.startswith("j1_bend_limit_") for n in at_limit), at_limit
         else:
@@ -526,7 +526,8 @@ def test_reduced_couplings_hold_without_a_rod(tmp_path, data):
         write_mjcf(tmp_path / f"{stem}.xml", mjcf_tree(robot, mesh_files, per_segment)[0])
         write_mjcf(tmp_path / f"scene_{stem}.xml", scene_tree(f"{stem}.xml", stem))
         with _quiet_cwd(tmp_path):
-            _m, _d, warnings, worst_eq, _at, _drift = _step(tmp_path / f"scene_{stem}.xml", gravity=True)
+            scene = mujoco.MjModel.from_xml_path(str(tmp_path / f"scene_{stem}.xml"))
+            _m, _d, warnings, worst_eq, _at, _drift = _step(scene, gravity=True)
         assert warnings == 0 and worst_eq < EQUALITY_TOLERANCE_REDUCED, (per_segment, worst_eq)
 
 

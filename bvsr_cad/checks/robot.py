@@ -149,11 +149,10 @@ def _equality_residual(m, d) -> float:
     return float(worst)
 
 
-def _step(path: Path, gravity: bool, seconds: float = 1.0, self_contacts: bool = True, compiled=None):
-    """``path`` (or ``compiled``, its model compiled already: changed here) stepped for ``seconds``."""
+def _step(m, gravity: bool, seconds: float = 1.0, self_contacts: bool = True):
+    """The compiled model ``m`` (changed here) stepped for ``seconds``."""
     import mujoco
 
-    m = compiled if compiled is not None else mujoco.MjModel.from_xml_path(str(path))
     if not self_contacts:
         m.geom_conaffinity[:] = 0  # every geom keeps its contype: the MJCF's rule, the world's geoms excepted
     if not gravity:
@@ -212,18 +211,16 @@ def check_mujoco(exp: Export, keys: tuple[str, ...] = MUJOCO_FILES) -> list[Chec
             # limits: it is stepped without gravity and must not move at all.
             gravity = key != "urdf"
             try:
-                compiled = None
-                if key == "urdf":  # compiled once: its contacts at rest, then stepped (which changes it)
-                    import mujoco
+                import mujoco
 
-                    compiled = mujoco.MjModel.from_xml_path(str(path))
+                compiled = mujoco.MjModel.from_xml_path(str(path))
+                if key == "urdf":  # its contacts at rest, before it is stepped (which changes the model)
                     out.append(_urdf_self_contacts(compiled, rel))
                 # MuJoCo's URDF import collides every two links but a parent and its child: the exact chain
                 # puts four links between neighbouring panels, whose SOA and rod halves meet (and overlap by
                 # their tilt) at mid-gap in every pose. The MJCF turns the tail's self-contacts off
                 # (conaffinity 0); the URDF cannot say so to MuJoCo, so it is stepped with the same rule.
-                m, d, warn, eq, at_limit, drift = _step(path, gravity=gravity, self_contacts=key != "urdf",
-                                                        compiled=compiled)
+                m, d, warn, eq, at_limit, drift = _step(compiled, gravity=gravity, self_contacts=key != "urdf")
             except Exception as exc:  # noqa: BLE001 - the compiler's message is the result
                 out.append(CheckResult(f"mujoco_compile:{key}", False, 0, 1, "", rel, str(exc)))
                 continue

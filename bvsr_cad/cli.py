@@ -39,8 +39,8 @@ def _progress(quiet: bool):
     return say
 
 
-def _print_results(results, as_json: bool, extra: dict | None = None) -> int:
-    from .checks.result import overall
+def _print_results(results, as_json: bool, extra: dict | None = None, verbose: bool = False) -> int:
+    from .checks.result import overall, summary_lines
 
     ok = overall(results)
     if as_json:
@@ -48,12 +48,15 @@ def _print_results(results, as_json: bool, extra: dict | None = None) -> int:
         payload.update(extra or {})
         print(json.dumps(payload))
     else:
-        for r in results:
-            print(r.line())
-        failed = [r for r in results if r.passed is False]
-        print(f"{len(results) - len(failed)} passed, {len(failed)} failed"
-              if failed else f"all {len(results)} checks passed ({sum(r.passed is None for r in results)} "
-              "informational)")
+        for line in ([r.line() for r in results] if verbose else summary_lines(results)):
+            print(line)
+        failed = sum(r.passed is False for r in results)
+        skipped = sum(r.skipped for r in results)
+        info = sum(r.passed is None for r in results) - skipped
+        tail = f"{info} informational, {skipped} skipped"
+        print(f"{len(results) - failed - info - skipped} passed, {failed} failed ({tail})" if failed
+              else f"all {len(results) - info - skipped} checks passed ({tail})"
+              + ("" if verbose else "; --verbose lists every check"))
     return EXIT_OK if ok else EXIT_FAILED
 
 
@@ -110,7 +113,7 @@ def cmd_check(args) -> int:
         from .checks.run import run_checks
 
     results = run_checks(args.export, _progress(args.quiet or args.json), run_slicer=args.slice)
-    return _print_results(results, args.json)
+    return _print_results(results, args.json, verbose=args.verbose)
 
 
 def cmd_simulate(args) -> int:
@@ -348,6 +351,8 @@ def make_parser() -> argparse.ArgumentParser:
     c.add_argument("--slice", action="store_true",
                    help="first slice every printed STL the slice cache does not hold yet with PrusaSlicer "
                         "(prusa-slicer, 2 at a time); `bvsr build` and `bvsr check` never slice otherwise")
+    c.add_argument("-v", "--verbose", action="store_true",
+                   help="print every check (by default: one line per check group, failures in full)")
     c.set_defaults(func=cmd_check)
     sm = sub.add_parser("simulate", parents=[common], help="drive the MJCF with a pressure pulse; peak velocity and root torque")
     simulate_args = {

@@ -28,13 +28,63 @@ class CheckResult:
     def to_json(self) -> dict[str, Any]:
         return asdict(self)
 
+    @property
+    def skipped(self) -> bool:
+        """True for a check that could not run (its tool or extra is missing): no value, no verdict."""
+        return self.passed is None and self.value is None
+
+    @property
+    def group(self) -> str:
+        """The check's family, the part of its name before the first ``:`` or ``_`` (``stl``, ``print``)."""
+        return self.name.split(":", 1)[0].split("_", 1)[0]
+
     def line(self) -> str:
+        """One line: verdict, name, value against limit, where, and the note."""
+        if self.skipped:
+            return f"SKIP  {self.name} [{self.where}]" + (f"  {self.note}" if self.note else "")
         mark = {True: "PASS", False: "FAIL", None: "INFO"}[self.passed]
         val = f"{self.value:.4g}" if isinstance(self.value, float) else str(self.value)
-        lim = f"{self.limit:.4g}" if isinstance(self.limit, float) else str(self.limit)
-        text = f"{mark}  {self.name}: {val} {self.unit} (limit {lim} {self.unit}) [{self.where}]"
-        return text + (f"  {self.note}" if self.note else "")
+        text = f"{mark}  {self.name}: {val} {self.unit}".rstrip()
+        if self.limit not in (None, "-", ""):
+            lim = f"{self.limit:.4g}" if isinstance(self.limit, float) else str(self.limit)
+            text += f" (limit {lim} {self.unit})".replace(" )", ")")
+        return text + f" [{self.where}]" + (f"  {self.note}" if self.note else "")
 
 
 def overall(results: list[CheckResult]) -> bool:
+    """True when no check failed (informational and skipped checks do not fail a run)."""
     return all(r.passed is not False for r in results)
+
+
+#: Informational groups printed row by row in the short summary: the comparisons with the paper's figures
+#: (mass, length, angles, forces), which a designer reads on every build. Other informational rows are counted.
+SHOWN_INFO_GROUPS = ("paper",)
+
+
+def summary_lines(results: list[CheckResult]) -> list[str]:
+    """A passing export at a glance: one line per check group, then every failure in full, the paper
+    comparisons, and each reason for skipped checks once (a missing tool is named once, not per file)."""
+    groups: dict[str, list[CheckResult]] = {}
+    for r in results:
+        groups.setdefault(r.group, []).append(r)
+    width = max((len(g) for g in groups), default=0)
+    lines = []
+    for name, rows in groups.items():
+        passed = sum(r.passed is True for r in rows)
+        failed = sum(r.passed is False for r in rows)
+        skipped = sum(r.skipped for r in rows)
+        info = len(rows) - passed - failed - skipped
+        counts = [f"{n} {word}" for n, word in ((passed, "passed"), (failed, "failed"),
+                                                (info, "informational"), (skipped, "skipped")) if n]
+        mark = "FAIL" if failed else ("PASS" if passed else ("SKIP" if skipped == len(rows) else "INFO"))
+        lines.append(f"{mark}  {name:<{width}}  {', '.join(counts)}")
+    failures = [r.line() for r in results if r.passed is False]
+    if failures:
+        lines += ["", "failed:"] + failures
+    shown = [r.line() for r in results if r.passed is None and not r.skipped and r.group in SHOWN_INFO_GROUPS]
+    if shown:
+        lines += ["", "compared with the paper:"] + shown
+    reasons = list(dict.fromkeys(f"{r.group}: {r.note}" for r in results if r.skipped))
+    if reasons:
+        lines += ["", "skipped:"] + reasons
+    return lines

@@ -32,8 +32,39 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..parameters.load import ParamError
 from ..parameters.tables import TailSpec
 from .clearance import SUPPORT_BINS, PosedTail
+
+
+class UselessResultError(ParamError):
+    """An analysis of the build stopped as soon as its result was known to be useless (every problem names
+    the key that asked for it, its value and what the tail allows)."""
+
+    what = "the analyses"
+
+
+def rest_problems(pt: PosedTail, need_mm: float) -> list[str]:
+    """The joints whose limits are 0 before any search: a pair that feels the joint stands closer than
+    ``need_mm`` in the straight tail, where every search starts (``analysis.min_clearance_mm`` the
+    file asks for: :mod:`bvsr_cad.parameters.feasibility` refuses it at load where the layout decides)."""
+    low = np.flatnonzero(pt.rest_mm < need_mm)
+    if len(low) == 0:
+        return []
+    worst = int(low[np.argmin(pt.rest_mm[low])])
+    joints = sorted({int(k) + 1 for p in low for k in np.flatnonzero(pt.span[p])})
+    a, b = pt.pairs[worst]
+    most = np.floor(float(pt.rest_mm.min()) * 1000.0) / 1000.0
+    return [f"analysis.min_clearance_mm = {need_mm!r}: {pt.names[a]} and {pt.names[b]} stand "
+            f"{pt.rest_mm[worst]:.3f} mm apart in the straight tail ({len(low)} pair(s) closer than required), "
+            f"so joint(s) {', '.join(str(j) for j in joints)} would get a limit of 0 in every bending plane; "
+            f"allowed: <= {most:g} mm with the other keys as they are"]
+
+
+def _check_rest(pt: PosedTail, spec: TailSpec) -> None:
+    problems = rest_problems(pt, spec.analysis.min_clearance_mm)
+    if problems:
+        raise UselessResultError(f"tail {spec.name!r}", problems)
 
 
 def fold_stack(spec: TailSpec) -> tuple[float, float]:
@@ -259,7 +290,12 @@ LIMIT_RESOLUTION_RAD = 1e-3
 def build_joint_limits(pt: PosedTail, spec: TailSpec, progress: Callable[[str], None] | None = None
                        ) -> list[JointLimits]:
     """The build's exact joint limits of a posed tail: :func:`joint_limits` with the build's planes,
-    search range and resolution, the spec's required clearance and fold stack."""
+    search range and resolution, the spec's required clearance and fold stack.
+
+    Raises:
+        UselessResultError: the straight tail already breaks the required clearance (:func:`rest_problems`),
+            before any search."""
+    _check_rest(pt, spec)
     return joint_limits(pt, spec.analysis.min_clearance_mm, BUILD_LIMIT_PHIS, THETA_SEARCH_MAX_RAD,
                         LIMIT_RESOLUTION_RAD, exact=True, stack=fold_stack(spec), progress=progress)
 
@@ -276,5 +312,7 @@ def theta_max_per_joint_rad(asm, progress: Callable[[str], None] | None = None) 
     from .clearance import posed_tail
 
     spec = asm.spec
-    return lowest_limits_rad(posed_tail(asm, progress), spec.analysis.min_clearance_mm, BUILD_LIMIT_PHIS,
+    pt = posed_tail(asm, progress)
+    _check_rest(pt, spec)
+    return lowest_limits_rad(pt, spec.analysis.min_clearance_mm, BUILD_LIMIT_PHIS,
                              THETA_SEARCH_MAX_RAD, LIMIT_RESOLUTION_RAD, fold_stack(spec), progress)

@@ -25,9 +25,9 @@ from .calibrate import COMPARE_THREADS
 from .measured import MeasuredComparison, compare_measurements
 from .predict import WorkspaceSim
 from .clearance import ClearanceResult, PosedTail, clearance_map, clearance_over, posed_tail
-from .limits import (THETA_SEARCH_MAX_RAD, JointLimits, build_joint_limits, fold_stack, per_joint_rad,
-                     stack_limit_rad)
-from .workspace import Workspace, quasi_static_table, run_workspace
+from .limits import (THETA_SEARCH_MAX_RAD, JointLimits, UselessResultError, build_joint_limits, fold_stack,
+                     per_joint_rad, stack_limit_rad)
+from .workspace import Workspace, empty_problems, quasi_static_table, run_workspace
 
 
 @dataclass(frozen=True)
@@ -151,6 +151,8 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
             raise
         say("analysis: workspace")
         ws = run_workspace(asm, cfg.build_workspace_samples, cfg.seed, say)
+        if empty := empty_problems(ws, spec):
+            raise UselessResultError(f"tail {spec.name!r}", empty)
         quasi = quasi_static_table(asm, (1.0, 2.0))
         rng = np.random.default_rng(cfg.seed)
         idx = rng.integers(0, ws.samples, cfg.build_clearance_poses)

@@ -62,6 +62,20 @@ class Workspace:
         return float(np.max(np.hypot(self.w[..., 0], self.w[..., 1])))
 
 
+def empty_problems(ws: Workspace, spec: TailSpec) -> list[str]:
+    """A workspace in which no sample bends any joint (every line at atmospheric, or forces that cannot
+    bend the tail): what the protocol keys that drew it allow (``bvsr_cad.parameters.load`` refuses the
+    protocol that draws no pressure at load)."""
+    if ws.samples == 0 or ws.max_theta_rad > 0.0:
+        return []
+    a = spec.actuation
+    return [f"actuation.workspace_pressurised_max_kpa_abs = {a.workspace_pressurised_max_kpa_abs!r}, "
+            f"actuation.workspace_depressurised_min_kpa_abs = {a.workspace_depressurised_min_kpa_abs!r}: none of "
+            f"the {ws.samples} workspace samples bends a joint (the workspace is the straight tail's tip alone); "
+            f"allowed: a protocol that draws pressures other than actuation.atmospheric_kpa = {a.atmospheric_kpa!r} "
+            "and an SOA force that bends the tail"]
+
+
 def tail_statics(asm: Assembly, gravity: bool = True, spec: TailSpec | None = None) -> TailStatics:
     """The statics of the assembled tail; ``spec`` (default the assembly's, same geometry) may carry
     fitted values or another workspace protocol."""

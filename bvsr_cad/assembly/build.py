@@ -23,8 +23,8 @@ from ..parts.panel import panel
 from ..parts.soa import soa_body
 from ..parts.vertebra import rod
 from ..parameters.standard_parts import metric
-from ..parameters.layout import (PanelLayout, half_angle_rad, panel_layout, polar, rod_bore_mm,
-                           soa_angles_deg)
+from ..parameters.layout import (PanelLayout, half_angle_rad, panel_layout, rod_bore_mm, soa_angles_deg,
+                                 soa_frame)
 from ..parameters.tables import TailSpec
 from .inertia import SolidProperties
 
@@ -152,19 +152,6 @@ class Assembly:
 
 def _as_tuple(m: np.ndarray) -> tuple[tuple[float, ...], ...]:
     return tuple(tuple(float(v) for v in row) for row in m)
-
-
-def frame(origin, x_dir, z_dir) -> np.ndarray:
-    """4x4 transform whose columns are the unit axes and the origin."""
-    z = np.asarray(z_dir, float)
-    z /= np.linalg.norm(z)
-    x = np.asarray(x_dir, float)
-    x = x - np.dot(x, z) * z
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    m = np.eye(4)
-    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x, y, z, origin
-    return m
 
 
 def translation(x: float = 0.0, y: float = 0.0, z: float = 0.0) -> np.ndarray:
@@ -311,10 +298,7 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None, solids: boo
         lo, hi = layouts[k - 1], layouts[k]
         s = (k - 1) // J + 1
         for i, a in enumerate(soa_angles_deg(), start=1):
-            b = np.array([*polar(lo.pitch_radius_upper_mm, a), lo.z0_mm + lo.thickness_mm - lo.pocket_depth_mm])
-            m = np.array([*polar(hi.pitch_radius_lower_mm, a), hi.z0_mm + hi.pocket_depth_mm])
-            x_dir = np.array([math.cos(math.radians(a + rot)), math.sin(math.radians(a + rot)), 0.0])
-            instances.append(Instance(f"j{k}_soa{i}", "soa", _as_tuple(frame(b, x_dir, m - b)), "soa", s, (s,),
+            instances.append(Instance(f"j{k}_soa{i}", "soa", _as_tuple(soa_frame(lo, hi, a, rot)), "soa", s, (s,),
                                       joint=k, soa_index=i, pressure_line=i))
 
     rods: dict[float, str] = {}

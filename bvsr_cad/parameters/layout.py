@@ -354,6 +354,24 @@ def panel_layout(spec: TailSpec, k: int, half_angle: float | None = None) -> Pan
     )
 
 
+def soa_frame(lower: PanelLayout, upper: PanelLayout, angle_deg: float, rotation_deg: float) -> np.ndarray:
+    """Placement (4 x 4, tail frame) of the SOA at ``angle_deg`` between two neighbouring panels: its lower
+    flange face centred on the lower panel's upper pocket floor, its axis to the upper panel's lower pocket
+    floor, its square turned by ``rotation_deg`` from the radial line (columns: the unit axes, the origin)."""
+    b = np.array([*polar(lower.pitch_radius_upper_mm, angle_deg),
+                  lower.z0_mm + lower.thickness_mm - lower.pocket_depth_mm])
+    m = np.array([*polar(upper.pitch_radius_lower_mm, angle_deg), upper.z0_mm + upper.pocket_depth_mm])
+    z = m - b
+    z /= np.linalg.norm(z)
+    x = np.array([math.cos(math.radians(angle_deg + rotation_deg)), math.sin(math.radians(angle_deg + rotation_deg)),
+                  0.0])
+    x = x - np.dot(x, z) * z
+    x /= np.linalg.norm(x)
+    out = np.eye(4)
+    out[:3, 0], out[:3, 1], out[:3, 2], out[:3, 3] = x, np.cross(z, x), z, b
+    return out
+
+
 def rounded_square_support(side_mm: float, radius_mm: float, psi: np.ndarray) -> np.ndarray:
     """Support function of a square (corners rounded at R) at angle psi from a side normal."""
     return (side_mm / 2 - radius_mm) * (np.abs(np.cos(psi)) + np.abs(np.sin(psi))) + radius_mm

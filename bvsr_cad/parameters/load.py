@@ -7,7 +7,9 @@ panels (pockets that overlap, a taper beyond the feasible one, ...) by
 :func:`bvsr_cad.parameters.layout.validate_layout`, the casting mold set by
 :func:`bvsr_cad.parameters.molds.mold_problems` and the rigid twin (its
 pins, tie rod and the printer it must fit) by
-:func:`bvsr_cad.parameters.twin.twin_problems`. A file that loads builds.
+:func:`bvsr_cad.parameters.twin.twin_problems`, and what the analyses are asked for (a clearance the
+straight tail already breaks, a workspace protocol that draws no pressure) by
+:mod:`bvsr_cad.parameters.feasibility`. A file that loads builds.
 """
 
 from __future__ import annotations
@@ -160,6 +162,7 @@ def spec_from_dict(data: dict[str, Any], source: str | Path = "<dict>") -> TailS
     Raises:
         ParamError: naming every bad key, its value and what is allowed.
     """
+    from .feasibility import clearance_problems
     from .layout import soa_is_sound, validate_layout  # layout depends on tables only
     from .molds import mold_problems
     from .twin import twin_problems
@@ -177,7 +180,8 @@ def spec_from_dict(data: dict[str, Any], source: str | Path = "<dict>") -> TailS
     problems = validate_layout(spec)
     problems += mold_problems(spec.soa, spec.joint.base_diameter_mm, spec.casting) if soa_is_sound(spec) else []
     if not problems:
-        problems = twin_problems(spec)
+        # What the analyses are asked for, against what the layout gives them (parameters/feasibility.py).
+        problems = twin_problems(spec) + clearance_problems(spec)
     if problems:
         raise ParamError(source, problems)
     return spec
@@ -208,7 +212,8 @@ def material_problems(spec: TailSpec) -> list[str]:
 
 def actuation_problems(spec: TailSpec) -> list[str]:
     """The workspace protocol draws a pressurised line from atmospheric up to its maximum and a
-    depressurised one from its minimum up to atmospheric: each range must run upwards."""
+    depressurised one from its minimum up to atmospheric: each range must run upwards, and one must be
+    wider than a point (else the workspace is empty)."""
     a = spec.actuation
     out = []
     if a.workspace_pressurised_max_kpa_abs < a.atmospheric_kpa:
@@ -219,6 +224,12 @@ def actuation_problems(spec: TailSpec) -> list[str]:
         out.append(f"actuation.workspace_depressurised_min_kpa_abs = {a.workspace_depressurised_min_kpa_abs!r}: above "
                    f"actuation.atmospheric_kpa = {a.atmospheric_kpa!r} (a depressurised line draws from it up to "
                    f"atmospheric); allowed: 0 to {a.atmospheric_kpa:g} kPa (absolute)")
+    if a.workspace_pressurised_max_kpa_abs == a.atmospheric_kpa == a.workspace_depressurised_min_kpa_abs:
+        out.append(f"actuation.workspace_pressurised_max_kpa_abs = {a.workspace_pressurised_max_kpa_abs!r} and "
+                   f"actuation.workspace_depressurised_min_kpa_abs = {a.workspace_depressurised_min_kpa_abs!r}: both "
+                   f"at actuation.atmospheric_kpa = {a.atmospheric_kpa!r}, so the workspace protocol draws no pressure "
+                   "and its workspace is the straight tail's tip alone; allowed: a pressurised maximum above it or a "
+                   "depressurised minimum below it")
     return out
 
 

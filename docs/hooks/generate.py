@@ -5,8 +5,13 @@ A page asks for a table with a marker line, ``<!-- generated: NAME -->``, which 
 - ``parameters``: every key of the parameter schema (``bvsr_cad/parameters/data/schema.toml`` through
   the dataclasses of ``bvsr_cad.parameters.tables``) with its unit, default, allowed values and the
   cached build stages (so the outputs) that read it;
-- ``paper-table``: the paper's figures against the model's, from ``docs/data/measurements.json``
-  (an export's ``analysis/measurements.json``; ``tests/test_docs.py`` compares it with a fresh build).
+- ``export-files``, ``manifest-keys``: every file of an export and every key of its manifest;
+- ``paper-checks``, ``paper-table``: the paper's figures against the model's (the export's ``paper:``
+  checks and its ``analysis/measurements.json``).
+
+The export is the one named by ``$BVSR_DOCS_EXPORT``, else the committed summary of the default build,
+``docs/data/export_summary.json`` (``python docs/hooks/generate.py EXPORT`` writes it;
+``tests/test_docs.py`` compares its structure with a fresh build).
 
 Nothing in these tables is typed by hand, so they cannot drift from the code.
 """
@@ -15,6 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 import re
 import typing
 from pathlib import Path
@@ -287,6 +293,11 @@ def export_summary(export: Path) -> dict[str, Any]:
 
 
 def _summary() -> dict[str, Any]:
+    """The export the pages describe: ``$BVSR_DOCS_EXPORT`` (an export folder, read as it is) if set,
+    else the committed summary of the default build."""
+    export = os.environ.get("BVSR_DOCS_EXPORT")
+    if export:
+        return json.loads(json.dumps(export_summary(Path(export))))
     return json.loads(EXPORT_SUMMARY.read_text(encoding="utf-8"))
 
 

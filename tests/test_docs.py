@@ -1,0 +1,174 @@
+"""The documentation: its generated references hold every key, and the README stays a README."""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.util
+import json
+import re
+import shutil
+import subprocess
+import sys
+import tomllib
+import typing
+from pathlib import Path
+
+import pytest
+
+from bvsr_cad.parameters.tables import TailSpec
+
+ROOT = Path(__file__).resolve().parents[1]
+SCHEMA = ROOT / "bvsr_cad" / "parameters" / "data" / "schema.toml"
+
+
+def _generator():
+    spec = importlib.util.spec_from_file_location("docs_generate", ROOT / "docs" / "hooks" / "generate.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def schema_keys() -> set[str]:
+    """Every dotted key a parameter file may hold, read from schema.toml itself (the tables' names from
+    TailSpec's field types: which table of the schema each key of a file opens)."""
+    schema = tomllib.loads(SCHEMA.read_text(encoding="utf-8"))
+    hints = typing.get_type_hints(TailSpec)
+    keys = set()
+    for name, rule in schema["TailSpec"].items():
+        typ = hints[name]
+        if dataclasses.is_dataclass(typ):
+            for sub, subrule in schema[typ.__name__].items():
+                if "keys" in subrule:  # a table of named values, each with its own rule
+                    keys |= {f"{name}.{sub}.{k}" for k in schema[subrule["keys"]]}
+                else:
+                    keys.add(f"{name}.{sub}")
+        elif typing.get_origin(typ) is dict:  # the material table, one entry per material name
+            keys |= {f"{name}.<name>.{k}" for k in schema[typing.get_args(typ)[1].__name__]}
+        else:
+            keys.add(name)
+    return keys
+
+
+def test_schema_keys_are_many():
+    # The walk above must see the nested tables: the shipped schema has well over a hundred keys.
+    assert len(schema_keys()) > 100
+    assert {"joint.gap_mm", "materials.<name>.density_g_cm3", "calibration.fitted.effective_area_mm2"} <= schema_keys()
+
+
+def test_parameter_reference_lists_every_schema_key():
+    page = _generator().parameters_markdown()
+    listed = set(re.findall(r"^\| `([^`]+)` \|", page, re.MULTILINE))
+    assert schema_keys() - listed == set(), "schema keys missing from the parameter reference"
+    assert listed - schema_keys() == set(), "keys in the parameter reference that the schema does not hold"
+
+
+def test_parameter_reference_rows_carry_the_rules():
+    """Each row shows the schema's own bounds, choices and defaults (read here from the TOML text)."""
+    schema = tomllib.loads(SCHEMA.read_text(encoding="utf-8"))
+    rows = {r["key"]: r for r in _generator().parameter_rows()}
+    gap = rows["joint.gap_mm"]
+    assert (gap["unit"], gap["allowed"]) == ("mm", "> 0 and ≤ 200")
+    assert "36.51" in gap["default"]  # required: the shipped file's value beside it
+    assert rows["vertebra.socket"]["allowed"] == "one of `'threaded'`, `'set_screw'`"
+    assert rows["pneumatics.model"]["default"] == "`'valve'`"
+    assert rows["actuation.pressure_min_kpa"]["allowed"] == "≥ -101.325 and < 0"
+    for key, row in rows.items():
+        rule = schema[_table_of(key)][key.rsplit(".", 1)[-1]]
+        for bound, sym in (("gt", ">"), ("ge", "≥"), ("lt", "<"), ("le", "≤")):
+            if bound in rule:
+                value = rule[bound]
+                text = str(int(value)) if float(value).is_integer() else format(value, "g")
+                assert f"{sym} {text}" in row["allowed"], (key, bound, row["allowed"])
+        for choice in rule.get("choices", []):
+            assert repr(choice) in row["allowed"], (key, choice)
+
+
+def _table_of(key: str) -> str:
+    """The schema table that holds a dotted key's rule."""
+    if "." not in key:
+        return "TailSpec"
+    if key.startswith("calibration.fitted."):
+        return "calibratable"
+    typ = typing.get_type_hints(TailSpec)[key.split(".")[0]]
+    return typing.get_args(typ)[1].__name__ if typing.get_origin(typ) is dict else typ.__name__
+
+
+#: Float keys that are ratios or exponents: no unit in their name, on purpose.
+DIMENSIONLESS = {"robot.velocity_margin", "fabrication_package.tube_bend_allowance",
+                 "pneumatics.valve_critical_pressure_ratio", "pneumatics.polytropic_index",
+                 "calibration.rms_rel_fit", "calibration.rms_rel_holdout", "calibration.rms_rel_holdout_uncalibrated"}
+
+
+def test_every_float_key_has_a_unit():
+    """A new float key must carry its unit in its name (or be a declared ratio): the reference reads it there."""
+    hints = typing.get_type_hints(TailSpec)
+    floats = set()
+    for name, typ in hints.items():
+        if dataclasses.is_dataclass(typ):
+            floats |= {f"{name}.{f}" for f, t in typing.get_type_hints(typ).items() if t is float}
+    rows = {r["key"]: r for r in _generator().parameter_rows()}
+    unitless = {k for k in floats if rows[k]["unit"] == "—"}
+    assert unitless == DIMENSIONLESS
+
+
+def test_moves_column_follows_the_stage_keys():
+    """The outputs a key moves come from the build's own ignore lists: a casting allowance moves the mold
+    set and its drawings only, a material's modulus the analyses but no geometry, a robot setting no
+    cached stage."""
+    gen = _generator()
+    assert gen.stage_readers("casting.shrinkage_percent") == ["`drawings/`", "mold set"]
+    assert "`step/`, `stl/`, part previews" not in gen.stage_readers("materials.<name>.youngs_modulus_mpa")
+    assert "`analysis/`, joint limits of `robot/`" in gen.stage_readers("materials.<name>.youngs_modulus_mpa")
+    assert gen.stage_readers("robot.timestep_s") == []
+    assert "`robot/` meshes and collision shapes" in gen.stage_readers("robot.collision_geometry")
+
+
+def test_sphinx_roles_render_as_code():
+    spec = importlib.util.spec_from_file_location("docs_roles", ROOT / "docs" / "hooks" / "sphinx_roles.py")
+    roles = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(roles)
+    text = "Uses :func:`~bvsr_cad.api.load`, :data:`bvsr_cad.pipeline.X` and ``a``. Example::\n\n    x = 1"
+    assert roles.markdown(text) == "Uses `load`, `bvsr_cad.pipeline.X` and `a`. Example:\n\n    x = 1"
+
+
+@pytest.mark.skipif(shutil.which("mkdocs", path=str(Path(sys.executable).parent)) is None,
+                    reason="mkdocs not installed (the docs extra)")
+def test_docs_build_strict_with_every_parameter(tmp_path):
+    """`mkdocs build --strict` passes (a broken link or reference fails it) and the built parameter page
+    holds every schema key."""
+    mkdocs = Path(sys.executable).parent / "mkdocs"
+    run = subprocess.run([str(mkdocs), "build", "--strict", "-q", "-d", str(tmp_path / "site")], cwd=ROOT,
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    html = (tmp_path / "site" / "reference" / "parameters" / "index.html").read_text(encoding="utf-8")
+    missing = {k for k in schema_keys() if f"<code>{k.replace('<', '&lt;').replace('>', '&gt;')}</code>" not in html}
+    assert missing == set()
+
+
+@pytest.mark.slow
+def test_export_summary_matches_the_default_build(bvsr_export):
+    """The docs' export reference and paper tables read docs/data/export_summary.json: its files, manifest
+    keys (type and unit), paper checks and measurement rows must be those the default file builds now
+    (refresh: python docs/hooks/generate.py EXPORT). Figures may move with the models; names may not."""
+    gen = _generator()
+    fresh = json.loads(json.dumps(gen.export_summary(bvsr_export)))
+    committed = json.loads(gen.EXPORT_SUMMARY.read_text(encoding="utf-8"))
+    hint = "run: python docs/hooks/generate.py EXPORT on a fresh default export"
+    assert fresh["files"] == committed["files"], hint
+    shape = {k: (v["type"], v["unit"]) for k, v in fresh["manifest_keys"].items()}
+    assert shape == {k: (v["type"], v["unit"]) for k, v in committed["manifest_keys"].items()}, hint
+    assert [c["name"] for c in fresh["paper_checks"]] == [c["name"] for c in committed["paper_checks"]], hint
+    rows = [(r["row"], r["label"], r["role"]) for r in fresh["measurements"]["rows"]]
+    assert rows == [(r["row"], r["label"], r["role"]) for r in committed["measurements"]["rows"]], hint
+    assert [k for k, (t, u) in shape.items() if t.endswith("number") and u == "?"] == [], "manifest numbers without a unit"
+
+
+def test_readme_is_short_and_undated():
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert len(text.splitlines()) <= 150
+    assert "make exports" in text and "make test" in text
+    assert not re.search(r"\b20\d\d-\d\d-\d\d\b", text), "a date in the README"
+    assert not re.search(r"\bat [0-9a-f]{7}\b", text), "a commit hash in the README"
+    for link in re.findall(r"\]\(([^)#]+)", text):
+        if not link.startswith("http"):
+            assert (ROOT / link).exists(), link

@@ -1,5 +1,5 @@
-"""The benchmark scripts run against the package as it is (79aa18c moved a helper the rebuild benchmark
-imported and nothing noticed until the benchmark was next run): each runs here with its builds stood in."""
+"""The benchmark scripts run against the package as it is: a helper moved or renamed breaks a benchmark
+here, not when it is next run by hand. Each runs with its builds stood in."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Drawings (issue 14 item 3): a sheet per panel and per mold part, whose hole table equals the bores
+"""Drawings: a sheet per panel and per mold part, whose hole table equals the bores
 found independently on the part's B-rep (its cylindrical faces), with the params SHA-256 in the title block."""
 
 from __future__ import annotations

@@ -495,8 +495,8 @@ def test_the_analyses_process_is_told_where_to_draw_as_an_absolute_folder(tmp_pa
 @pytest.mark.parametrize("during", ["a command", "a C extension's import"])
 def test_ctrl_c_exits_130_with_one_line_not_a_traceback(monkeypatch, capsys, during):
     """Ctrl-C during OCP's import reaches Python as ``ImportError: initialization failed`` raised from the
-    KeyboardInterrupt (pybind11); it used to end in exit code 1 and a second ImportError's traceback
-    (the error classes import OCP again). Both forms are an interrupt."""
+    KeyboardInterrupt (pybind11); unless treated as an interrupt it would end in exit code 1 and a second
+    ImportError's traceback (the error classes import OCP again). Both forms are an interrupt."""
     def interrupted(args):
         if during == "a command":
             raise KeyboardInterrupt
@@ -546,10 +546,10 @@ def _sigint_reaches_children():
 
 
 def test_ctrl_c_leaves_a_waiting_standby_process_quietly(tmp_path):
-    """Ctrl-C reaches the standby analyses process too (same process group): it used to print a
-    KeyboardInterrupt traceback (from its wait on stdin) among the build's lines; it leaves with 130.
-    It failed when CI ran as a background job: the child inherited an ignored SIGINT (now given the
-    default: :func:`_sigint_reaches_children`). It waits until the child is blocked on its stdin, not
+    """Ctrl-C reaches the standby analyses process too (same process group): it leaves with 130 and
+    no KeyboardInterrupt traceback (from its wait on stdin) among the build's lines. Under a background
+    job the child would inherit an ignored SIGINT, so it is given the default
+    (:func:`_sigint_reaches_children`). It waits until the child is blocked on its stdin, not
     until its CPU time stands still for a second (which a process waiting for a core shows too)."""
     import signal
     import time
@@ -627,9 +627,9 @@ def test_an_interrupt_is_held_through_imports_that_catch_base_exception():
 @pytest.mark.parametrize("after_s", [0.3, 0.7, 1.2])
 def test_ctrl_c_while_the_build_imports_stops_it_quietly(tmp_path, after_s):
     """Ctrl-C (SIGINT to the command's process group, as a terminal sends it) early in ``bvsr build``,
-    while the command and its second process import their libraries. Measured before the fix: at 0.6
-    and 0.8 s the build ran on to the end; at 1.0-2.0 s the second process's traceback was printed among
-    the build's lines. Now each ends with 130, one line, nothing published and no process left."""
+    while the command and its second process import their libraries (trimesh's optional imports catch
+    ``BaseException``, so an interrupt there would be swallowed, or print the second process's traceback).
+    Each ends with 130, one line, nothing published and no process left."""
     import os
     import signal
     import subprocess

@@ -1,4 +1,4 @@
-"""Property-based tests over the parameter space (issue 10: validation once, at load).
+"""Property-based tests over the parameter space (validation once, at load).
 
 The property: every parameter file either is refused when it is read (``ParamError``, every problem naming
 a key) or loads and then builds with every generator, each solid valid with a positive volume and every

@@ -151,7 +151,7 @@ def test_every_error_is_collected(tmp_path, data):
 
 
 def test_thin_mold_wall_names_the_rule_and_the_smallest_wall(data):
-    """casting.cavity_wall_mm = 3.0 used to crash `bvsr build` after 28 s; now load says why and what is allowed.
+    """casting.cavity_wall_mm = 3.0 is refused at load, with why and what is allowed (not mid-build).
 
     Hand calculation: the pins sit mid-wall, so the wall needs a pin socket (3.0 + 0.2 mm) and
     casting.min_print_wall_mm = 1.2 mm on both sides: 3.2 + 2 x 1.2 = 5.6 mm. The bolts in the block corners

@@ -87,15 +87,15 @@ PHI_REST_RAD = 1.5707963267948966
 #: 0.3 s of a held pressure pattern from rest, its tip stays within 2 mm of the same model stepped at
 #: 0.05 ms (tests/test_robot.py measures it; at 4 ms it stays within 5 mm). The exact chain keeps
 #: ``robot.timestep_s``: its chord slide and 0.1 mg virtual links need 0.2 ms (at 1 ms its tip ends
-#: 41 mm off, at 2 ms it explodes: issue 17). The per-segment model's couplings between the joints
+#: 41 mm off, at 2 ms it explodes). The per-segment model's couplings between the joints
 #: of a segment are soft too: it meets the 2 mm at 1 ms (1.5 mm; 3.3 mm at 2 ms).
 REDUCED_CHAIN_TIMESTEP_S = 2e-3
 REDUCED_PER_SEGMENT_TIMESTEP_S = 1e-3
-#: The equalities' impedance (MuJoCo's solimp): its dmax 0.95 -> 0.96, the share of the coupling force
-#: the two-step time constant (the least MuJoCo allows) leaves unregularised. 0.97 moves the 4 ms tip
-#: 5.4 mm off the 0.05 ms one (issue 17's 5 mm; 0.99: 2.8 mm at 2 ms). With the shear and spread tendons
-#: it holds a tail with a soft rod or none (largest residual under gravity, no rod: 10.3 -> 7.1 mrad per
-#: joint, 11.9 -> 5.7 per segment; checks/robot.py's limit is 10).
+#: The equalities' impedance (MuJoCo's solimp): its dmax 0.96 is the share of the coupling force the
+#: two-step time constant (the least MuJoCo allows) leaves unregularised. 0.97 moves the 4 ms tip
+#: 5.4 mm off the 0.05 ms one (over 5 mm; 0.99: 2.8 mm at 2 ms). With the shear and spread tendons
+#: it holds a tail with a soft rod or none (largest residual under gravity, no rod: 7.1 mrad per joint
+#: against 10.3 at dmax 0.95, 5.7 per segment against 11.9; checks/robot.py's limit is 10).
 EQUALITY_SOLIMP = (0.9, 0.96, 0.001, 0.5, 2.0)
 #: The reduced chain's bend limit: fixed tendons along this many directions per joint (twice as many
 #: faces), a polygon circumscribing the exact limit theta <= theta_max (:func:`_bend_limit_tendons`).
@@ -516,7 +516,7 @@ def cart_scene_tree(robot: RobotModel, mesh_files: dict[str, str], cart, mesh_di
     from the cart, high enough that no panel touches the floor at rest.
     """
     # The exact chain: on the reduced one the waggle turns the cart 12.8 deg, not 16.1, against Eq 20-22's
-    # 20.3 deg (issue 17 item 1 leaves the paper comparisons on the chain they were validated with).
+    # 20.3 deg: the paper comparisons stay on the chain they were validated with.
     tree, _ = mjcf_tree(robot, mesh_files, per_segment=True, mesh_dir=mesh_dir, chain="exact")
     root = tree.getroot()
     root.set("model", f"{robot.name}_cart")

@@ -23,10 +23,10 @@ class GeometryError(RuntimeError):
 def kernel_threads(n: int) -> int:
     """Run OCCT's parallel algorithms (the booleans and the meshing build123d and the exporters ask to
     run in parallel) on ``n`` threads, the calling one included (1: on it alone); the number before is
-    returned, to give back. A build whose second process keeps the other core busy asks for 1: measured
-    on the default tail, its booleans then take 0.65 CPU s less (the assembly 1.77 -> 1.48, the rigid
-    twin 2.86 -> 2.67, the mold set 1.55 -> 1.41) for the same solids, and the meshing as much as
-    before for the same STL bytes. OCCT refuses while its threads are at work: the pool is then left
+    returned, to give back. A build whose second process keeps the other core busy asks for 1: on the
+    default tail its booleans then take 0.65 CPU s less than on two threads (the assembly 1.48 against
+    1.77, the rigid twin 2.67 against 2.86, the mold set 1.41 against 1.55) for the same solids, and the
+    meshing as much for the same STL bytes. OCCT refuses while its threads are at work: the pool is then left
     as it was."""
     from OCP.OSD import OSD_ThreadPool
 
@@ -143,9 +143,9 @@ def bounds(shape: bd.Shape) -> bd.BoundBox:
     """``shape.bounding_box()``'s box (OCCT's optimal box of the exact geometry), leaving its
     triangulation in place. build123d's ``bounding_box`` first calls ``BRepTools.Clean`` on the shape,
     which deletes the triangulation of every face it shares with other shapes: the manifest's tail
-    length (a compound of the placed parts) and the drawings' hole tables (the parts' faces) wiped
-    what the print STLs had meshed, and the robot's meshes (the same solids at the same tolerances)
-    were meshed again (1.6 CPU s in a cold default build). Here the box reads the geometry only
+    length (a compound of the placed parts) and the drawings' hole tables (the parts' faces) would wipe
+    what the print STLs meshed, and the robot's meshes (the same solids at the same tolerances) would
+    be meshed again (1.6 CPU s in a cold default build). Here the box reads the geometry only
     (``useTriangulation`` off), which is what the optimal box reads after a clean: the same numbers
     (tests/test_parts.py compares them on every part, face and placed assembly)."""
     from OCP.Bnd import Bnd_Box
@@ -220,9 +220,9 @@ def _boolean(base: bd.Shape, tools: list[bd.Shape], operation) -> bd.Shape:
     """build123d's boolean of ``base`` and ``tools`` (its clean and history included: what
     ``Shape.cut`` and ``Shape.fuse`` run) with OCCT's oriented bounding boxes on
     (``SetUseOBB``): the kernel then rejects the pairs of sub-shapes whose oriented boxes do not
-    meet before it intersects them, for the same solid. Measured on the default tail, alternated (4
-    each, one core): the mold set 2.2-2.9 -> 0.8-1.4 CPU s, the assembly and the rigid twin within
-    the machine's noise; the default export byte-identical with it and without (compared file by
+    meet before it intersects them, for the same solid. On the default tail (alternated, 4 runs each,
+    one core) the mold set takes 0.8-1.4 CPU s with it against 2.2-2.9 without, the assembly and the
+    rigid twin the same within the machine's noise; the default export byte-identical with it and without (compared file by
     file, the manifest's volatile section apart)."""
     operation.SetUseOBB(True)
     return base._bool_op((base,), tools, operation)  # build123d 0.12's one boolean path (pinned)

@@ -87,7 +87,7 @@ def write_geometry_ahead(folder: Path, geo: GeometryAnalyses) -> None:
 #: build moves it into its cache entry of the geometry analyses as :data:`REST_FILE` (:func:`keep_rest`),
 #: beside their pickle, and the next build of the same geometry hands it back: an edit that moves no solid
 #: then makes no solid in this process, meshes none and measures no rest distance (its assembly ahead
-#: and the posed tail were 3-4 CPU s of this process's work, most of it before its analyses could start).
+#: and the posed tail are 3-4 CPU s of this process's work, most of it before its analyses could start).
 REST_AHEAD_FILE = ".analysis-rest.pkl"
 #: The rest geometry's name in the cache entry of the geometry analyses.
 REST_FILE = "rest_geometry.pkl"

@@ -98,8 +98,8 @@ def no_mujoco_rendering() -> None:
     """MuJoCo's OpenGL contexts off (``MUJOCO_GL=disable``) unless the environment names one: nothing of
     bvsr_cad draws through MuJoCo (its pictures are pyvista's), and ``import mujoco`` otherwise loads
     GLFW, whose Python binding starts a Python interpreter to read the library's version (0.1 s and 0.1
-    CPU s in each process that imports MuJoCo, three in a build: ``import mujoco`` 0.38 -> 0.29 s,
-    measured). Called by the entry points only (the ``bvsr`` command, a second process, which inherits
+    CPU s in each process that imports MuJoCo, three in a build: ``import mujoco`` takes 0.29 s
+    instead of 0.38). Called by the entry points only (the ``bvsr`` command, a second process, which inherits
     it), as :func:`tune_allocator`."""
     os.environ.setdefault("MUJOCO_GL", "disable")
 
@@ -111,7 +111,7 @@ BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_TH
 def one_blas_thread() -> None:
     """numpy's and scipy's OpenBLAS on one thread (``OPENBLAS_NUM_THREADS=1``) unless the environment
     sets a number OpenBLAS reads (:data:`BLAS_THREAD_VARIABLES`); before they are imported. A build
-    keeps both cores busy with its own processes: OpenBLAS's second thread only took CPU from them
+    keeps both cores busy with its own processes: OpenBLAS's second thread only takes CPU from them
     (cold default builds run two at a time, same machine phase: 71.3 and 80.1 CPU s against 73.0 and
     81.0 with OpenBLAS's default of one thread per core) and the export is the same (every file, the
     manifest's volatile section aside). Called by the entry points only (the ``bvsr`` command, a second
@@ -154,7 +154,7 @@ def tune_collector() -> None:
     """This process's libraries, once :func:`library_imports` has imported them, are frozen out of
     Python's cyclic garbage collector (``gc.freeze``: a full collection no longer walks their million
     objects). The collector's CPU in a cold default build, by process (build, analyses, checks): 0.99,
-    0.56, 0.10 s before, 0.19, 0.07, 0.01 s with the imports paused and frozen. Called by the entry points
+    0.56, 0.10 s without, 0.19, 0.07, 0.01 s with the imports paused and frozen. Called by the entry points
     only (the ``bvsr`` command, a second process), as :func:`tune_allocator`: frozen objects are never
     freed (what the imports left in cycles stays until the process ends), which a library call in
     someone else's process must not decide."""
@@ -166,7 +166,7 @@ def tune_collector() -> None:
 def library_imports() -> Iterator[None]:
     """The block that imports the libraries (the CAD kernel, MuJoCo, scipy, trimesh, ...): Ctrl-C held
     back (:func:`interrupts_held`) and Python's cyclic garbage collector paused. Imports make about a
-    million objects and almost no garbage, yet the collector ran some 640 times over them in each
+    million objects and almost no garbage, yet the collector would run some 640 times over them in each
     process, 0.4-0.5 CPU s (measured on the pipeline's and the analyses' imports). It resumes when the
     block ends, if it ran before; in an entry point's process (:func:`tune_collector`) what the block
     imported is frozen first."""

@@ -435,8 +435,8 @@ def _in_features(points: np.ndarray, features: list[dict[str, Any]], margin_mm: 
 class _SurfaceIndex:
     """Closest points on a triangle mesh (the distances ``trimesh.proximity.closest_point`` finds, to
     rounding: the tests compare the two) from libigl's AABB tree, built once per mesh in C++. On the twin
-    and the BVSR at rest (380 000 and 630 000 triangles) the envelope check took 2.4 CPU s with it, 3.8
-    with the k-d tree bound and R-tree search built here before. A point equally near two triangles (an
+    and the BVSR at rest (380 000 and 630 000 triangles) the envelope check takes 2.4 CPU s with it, 3.8
+    with a k-d tree bound and an R-tree search. A point equally near two triangles (an
     edge, a corner) gets either: :meth:`signed_distance` takes the sign from a triangle's normal only
     where the point lies over that triangle, which is right for either, and from ``contains`` elsewhere."""
 

@@ -78,9 +78,9 @@ def test_sigkill_leaves_no_second_process_and_the_next_build_cleans_up(tmp_path)
 
 
 def test_cache_entries_a_dead_build_was_writing_are_removed_live_ones_kept(tmp_path):
-    """A build SIGKILLed while it filled a cache entry left ``.<key>.tmp-*`` in the cache for good (the
-    helper of 2026-11-25: 6.4 MB of STEP and STL); the next build removes such folders, never a live
-    writer's, and a finished entry carries no owner file."""
+    """A build SIGKILLed while it fills a cache entry leaves ``.<key>.tmp-*`` in the cache (megabytes of
+    STEP and STL); the next build removes such folders, never a live writer's, and a finished entry
+    carries no owner file."""
     cache = ArtifactCache(tmp_path / "artifacts")
     key = "ab" + "0" * 62
     entry = cache.put(key, lambda folder: (folder / "x.txt").write_text("x"))

@@ -1,8 +1,8 @@
 """Every one-key edit of the default file either loads or is refused naming the key the user edited.
 
-Each number of the geometry tables times 0.3 and times 3 (106 edits): a fuzz of both tails on
-2026-11-25 found 13 messages that named only derived geometry (the port depth for a new joint height,
-the SOA's valley interior for a new fold, the mold gate for a new flange, ...) and none that crashed.
+Each number of the geometry tables times 0.3 and times 3 (106 edits). A refusal must name the edited
+key, not only derived geometry (the port depth for a new joint height, the SOA's valley interior for a
+new fold, the mold gate for a new flange, ...), and no edit may crash.
 """
 
 from __future__ import annotations

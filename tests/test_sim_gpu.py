@@ -162,7 +162,7 @@ def test_mjx_steps_the_exported_scene_like_cpu(scenes, jax_x64):
 
 
 def test_kernel_label_strips_warp_decorations():
-    """Names as Warp 1.19 timed them on an H200 (2026-11-26): the module hash and the closure suffix
+    """Names as Warp 1.19 times them: the module hash and the closure suffix
     go, so one kernel is one row however many builds of it ran."""
     assert sim_gpu.kernel_label("forward kernel _qderiv_tendon_damping_2a52f8da") == "_qderiv_tendon_damping"
     assert sim_gpu.kernel_label("forward kernel _spring_damper_tendon_passive__locals__kernel_1c3d22e2") \

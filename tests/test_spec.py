@@ -211,8 +211,8 @@ def test_a_value_error_outside_the_generators_keeps_its_traceback(monkeypatch):
 
 
 def test_a_bad_file_is_refused_before_the_pipeline_is_imported(tmp_path):
-    """`bvsr build` refuses a bad parameter file without importing the pipeline (4-9 s of imports: the
-    helper of 2026-11-25 waited 8-14 s for a one-key range error), and classifies it without importing it."""
+    """`bvsr build` refuses a bad parameter file without importing the pipeline (4-9 s of imports
+    a user would wait for a one-key range error), and classifies it without importing it."""
     import subprocess
     import sys
 

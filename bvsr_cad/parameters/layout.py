@@ -584,7 +584,7 @@ def soa_is_sound(spec: TailSpec) -> bool:
 #: (found by the property tests: 1e-5 to 0.01 deg fail, 0.02 deg builds, for channels of 2 to 16 mm).
 MIN_BUILDABLE_TAPER_DEG = 0.05
 #: The longest chain whose exported MJCF passes its MuJoCo checks (couplings held within 0.01 rad, settled
-#: within 1 s): measured 2026-11-25, 6 (1 x 6, 2 x 3), 8 (2 x 4) and 9 (3 x 3) joints pass; 10 (2 x 5)
+#: within 1 s): 6 (1 x 6, 2 x 3), 8 (2 x 4) and 9 (3 x 3) joints pass; 10 (2 x 5)
 #: and 12 (2 x 6, 3 x 4) fail.
 MAX_JOINTS = 9
 #: The [fabrication] minimums a panel rule can require (the message names the one that binds).

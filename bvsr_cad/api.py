@@ -106,6 +106,7 @@ class Tail:
 
     @property
     def name(self) -> str:
+        """The tail's name (``name`` of its parameter file): the export's folder and file names."""
         return self._spec.name
 
     @cached_property
@@ -147,6 +148,9 @@ class Tail:
         Each child is labelled with its instance name, coloured from
         :mod:`bvsr_cad.colors` and located by its instance transform (the
         geometry is its part's, shared, in the part frame).
+
+        Returns:
+            A Compound with one child per instance, in :attr:`instance_names` order, mm.
 
         Example::
 
@@ -199,6 +203,9 @@ class Tail:
         Args:
             posed: a compound from :meth:`posed`; None for the tail at rest.
 
+        Returns:
+            A ``cadquery.Assembly`` named after the tail, one child per instance.
+
         Raises:
             ImportError: CadQuery is not installed (it is optional: ``pip install -e ".[cad]"``).
 
@@ -228,6 +235,13 @@ class Tail:
         CadQuery and other OCCT-based readers show the instance names. The file is
         reproducible: the same tail gives the same bytes (a fixed time stamp, the
         colour entities in an order that follows the content).
+
+        Args:
+            path: the STEP file to write (replaced if it exists).
+            posed: a compound from :meth:`posed`; None for the tail at rest.
+
+        Returns:
+            ``path``, as a Path.
 
         Example::
 

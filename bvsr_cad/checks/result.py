@@ -8,7 +8,18 @@ from typing import Any
 
 @dataclass(frozen=True)
 class CheckResult:
-    """One check: ``passed`` is True/False, or None for an informational comparison."""
+    """One check's outcome, as the command line, the report, the manifest and the tests read it.
+
+    Attributes:
+        name: ``group:where`` or ``group_what`` (``stl_watertight:panel0``, ``paper:tail_mass``).
+        passed: True or False for a check; None for an informational comparison, or for a check
+            that could not run (then ``value`` is None too: :attr:`skipped`).
+        value: what was measured, in ``unit`` (a number, a list, or text).
+        limit: what it was compared with, in ``unit``; None or ``"-"`` where there is none.
+        unit: the unit of ``value`` and ``limit`` (``""`` for counts and flags).
+        where: the file, part or paper section it concerns, relative to the export.
+        note: a sentence for a human: why it failed, or what the comparison means.
+    """
 
     name: str
     passed: bool | None
@@ -26,6 +37,11 @@ class CheckResult:
                 object.__setattr__(self, key, v.item())
 
     def to_json(self) -> dict[str, Any]:
+        """The result as plain JSON values (``bvsr check --json`` and the manifest's ``checks``).
+
+        Returns:
+            ``{name, passed, value, limit, unit, where, note}``.
+        """
         return asdict(self)
 
     @property

@@ -344,6 +344,16 @@ def run_checks(root: str | Path, progress: Callable[[str], None] | None = None, 
                ) -> list[CheckResult]:
     """Run every check on the export at ``root``; the results come in the same order either way.
 
+    Args:
+        root: the export folder.
+        progress: called with one line per step (None: silent).
+        run_slicer: slice the printed STLs the slice cache does not hold first.
+        parallel: run the printability checks in a second process (used on two cores or more).
+        cache: the artifact cache of check verdicts (None: every check runs).
+
+    Returns:
+        Every check's result; the export passes when none has ``passed`` False.
+
     The checks never start the slicer: the ``slice:*`` results come from the slice cache. With
     ``run_slicer`` (``bvsr check --slice``), every printed STL the cache does not hold is sliced
     first (:func:`~bvsr_cad.checks.printability.slice_stls`). With ``parallel`` (and two cores)

@@ -141,7 +141,16 @@ def _plain(value: Any) -> Any:
 
 
 def stage_key(stage: str, **inputs: Any) -> str:
-    """The key of ``stage`` for ``inputs`` (dataclasses, dicts, numbers, strings, bytes), with the code."""
+    """The cache key of ``stage`` for exactly what it reads.
+
+    Args:
+        stage: the stage's name.
+        **inputs: everything the stage reads (dataclasses, dicts, numbers, strings, bytes).
+
+    Returns:
+        A SHA-256 hex digest over the stage, its inputs and :func:`code_fingerprint` (the package's code
+        and the libraries' versions), so an edited model never serves a stale entry.
+    """
     text = json.dumps({"stage": stage, "code": code_fingerprint(), "inputs": _plain(inputs)}, sort_keys=True,
                       allow_nan=True, default=repr)
     return hashlib.sha256(text.encode()).hexdigest()

@@ -98,6 +98,16 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
     as the command line does before it imports this module, so that the two import side by side), given
     its work here if the analyses are to be run, else stopped.
 
+    Args:
+        params: the parameter file.
+        out_dir: the export folder (None: ``exports/<name>``), replaced only when the build succeeds.
+        progress: called with one progress line at a time (None: silent).
+        use_cache: take unchanged stages from the artifact cache (False: build everything).
+        standby: the analyses' second process started ahead, or None.
+
+    Returns:
+        The published export: its folder, the checks' results and the stages' timings.
+
     Raises:
         ParamError: the parameter file is unreadable or describes an impossible tail.
         OutputError: ``out_dir`` cannot be replaced.

@@ -112,7 +112,12 @@ def clean_leftovers(out_dir: Path) -> list[Path]:
 
 
 def publish(tmp: Path, out_dir: Path) -> None:
-    """Move the finished ``tmp`` into place as ``out_dir``, replacing an earlier export (kept on failure)."""
+    """Move the finished ``tmp`` into place as ``out_dir``, replacing an earlier export (kept on failure).
+
+    Args:
+        tmp: the build's temporary folder, beside ``out_dir`` (one rename away, on the same file system).
+        out_dir: the export folder; an earlier export there is replaced only once ``tmp`` is in place.
+    """
     (tmp / OWNER_FILE).unlink(missing_ok=True)
     old = None
     if out_dir.exists():
@@ -159,6 +164,15 @@ class OpenedBuild:
 def open_build(params: str | Path, out_dir: str | Path | None, say: Progress, use_cache: bool) -> OpenedBuild:
     """Load ``params`` and prepare ``out_dir`` (default ``exports/<name>``) for a build.
 
+    Args:
+        params: the parameter file.
+        out_dir: the export folder (None: ``exports/<name>``).
+        say: called with one progress line at a time.
+        use_cache: use the artifact cache (False: ``--no-cache``).
+
+    Returns:
+        The loaded parameters, the output folder, the cache, the calibration data and the export's key.
+
     Raises:
         ParamError: the parameter file is unreadable or describes an impossible tail.
         OutputError: ``out_dir`` cannot be replaced.
@@ -184,8 +198,14 @@ def open_build(params: str | Path, out_dir: str | Path | None, say: Progress, us
 
 
 def reuse_whole(build: OpenedBuild) -> BuildResult | None:
-    """Publish the cache's whole export for ``build`` (its manifest's volatile section rewritten), or None
-    when the cache does not hold it."""
+    """Publish the cache's whole export for ``build`` (its manifest's volatile section rewritten).
+
+    Args:
+        build: what :func:`open_build` prepared.
+
+    Returns:
+        The published build, or None when the cache does not hold this export.
+    """
     hit = build.cache.get(build.export_key) if build.cache is not None else None
     if hit is None:
         return None

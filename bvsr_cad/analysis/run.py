@@ -96,7 +96,16 @@ class AnalysisResults:
 
 def geometry_analyses(asm: Assembly, pt: PosedTail, progress: Callable[[str], None] | None = None
                       ) -> GeometryAnalyses:
-    """The exact joint limits and the tip joint's clearance map of ``asm`` (posed as ``pt``)."""
+    """The exact joint limits and the tip joint's clearance map of ``asm``.
+
+    Args:
+        asm: the tail's assembly.
+        pt: its plane-section deformation (:func:`bvsr_cad.analysis.clearance.plane_sections`).
+        progress: called with one line per step (None: silent).
+
+    Returns:
+        The joint limits of every joint, the fold-stack limit and the tip joint's clearance map.
+    """
     say = progress or (lambda _m: None)
     t0 = time.perf_counter()
     spec = asm.spec
@@ -117,15 +126,28 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
                  on_geometry: Callable[[GeometryAnalyses], None] | None = None,
                  rest: RestGeometry | None = None, on_rest: Callable[[RestGeometry], None] | None = None
                  ) -> AnalysisResults:
-    """``params_path``: the parameter file ``asm`` was built from (its calibration's data file is
-    resolved relative to it); ``workspace_sim``: what predicts a measured tip workspace (see
-    :func:`bvsr_cad.analysis.measured.compare_measurements`); ``geometry``: :func:`geometry_analyses`
-    of this geometry when the caller has them (from the build's cache), else they are computed;
-    ``threads``: those that predict the measured rows, at most (see
-    :func:`bvsr_cad.analysis.calibrate.compare_rows`); ``on_geometry``: called with the geometry
-    analyses once they are computed here (not when given), before the other analyses go on; ``rest``:
-    the :class:`RestGeometry` of this geometry when the caller has it (from the build's cache), else it
-    is made here and handed to ``on_rest``."""
+    """Every analysis of the tail: workspace, clearance, joint limits, the model against measurements.
+
+    Args:
+        asm: the tail's assembly.
+        progress: called with one line per step (None: silent).
+        params_path: the parameter file ``asm`` was built from (its calibration's data file is
+            resolved relative to it).
+        workspace_sim: what predicts a measured tip workspace (see
+            :func:`bvsr_cad.analysis.measured.compare_measurements`).
+        geometry: :func:`geometry_analyses` of this geometry when the caller has them (from the
+            build's cache), else they are computed.
+        threads: the most threads that predict the measured rows (see
+            :func:`bvsr_cad.analysis.calibrate.compare_rows`).
+        on_geometry: called with the geometry analyses once they are computed here (not when
+            given), before the other analyses go on.
+        rest: the :class:`RestGeometry` of this geometry when the caller has it (from the build's
+            cache), else it is made here.
+        on_rest: called with the rest geometry made here.
+
+    Returns:
+        The analyses' results, handed to the exporters and the robot model.
+    """
     say = progress or (lambda _m: None)
     spec = asm.spec
     cfg = spec.analysis

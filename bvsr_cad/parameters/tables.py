@@ -31,7 +31,7 @@ CALIBRATABLE: dict[str, dict[str, Any]] = _SCHEMA["calibratable"]
 def table(cls: type) -> Any:
     """Make ``cls`` a frozen dataclass whose fields carry their rules from schema.toml.
 
-    Each field gets ``metadata`` {doc, gt, ge, lt, le, choices} and, where the
+    Each field gets ``metadata`` {doc, gt, ge, lt, le, choices, keys, depends_on} and, where the
     schema gives one, its default (``"table"``: the default instance of the
     field's own table). A field without a rule, or a rule without a field, is a
     programming error caught at import.
@@ -43,7 +43,8 @@ def table(cls: type) -> Any:
     module = vars(sys.modules[cls.__module__])
     for name in declared:
         rule = dict(rules[name])
-        meta = {"doc": rule.pop("doc"), **{k: rule.pop(k, None) for k in _RULE_KEYS}, "keys": rule.pop("keys", None)}
+        meta = {"doc": rule.pop("doc"), **{k: rule.pop(k, None) for k in _RULE_KEYS}, "keys": rule.pop("keys", None),
+                "depends_on": tuple(rule.pop("depends_on", ()))}
         choices = rule.pop("choices", None)
         meta["choices"] = tuple(choices) if choices is not None else None
         default = rule.pop("default", dataclasses.MISSING)

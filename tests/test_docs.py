@@ -81,6 +81,8 @@ def test_parameter_reference_rows_carry_the_rules():
                 assert f"{sym} {text}" in row["allowed"], (key, bound, row["allowed"])
         for choice in rule.get("choices", []):
             assert repr(choice) in row["allowed"], (key, choice)
+        for other in rule.get("depends_on", []):  # the keys that narrow the range further
+            assert f"`{other}`" in row["allowed"].partition("; narrowed by ")[2], (key, other)
 
 
 def _table_of(key: str) -> str:

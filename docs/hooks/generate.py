@@ -142,7 +142,10 @@ def parameter_rows() -> list[dict[str, str]]:
             default_text = (f"required (`bvsr.toml`: `{in_file!r}`)" if in_file is not None else "required")
         else:
             default_text = f"`{default!r}`" if default != "" else "empty"
-        return {"key": key, "unit": unit_of(name), "default": default_text, "allowed": allowed_text(meta),
+        allowed = allowed_text(meta)
+        if meta.get("depends_on"):  # the keys whose values narrow the range further (schema.toml)
+            allowed += "; narrowed by " + ", ".join(f"`{k}`" for k in meta["depends_on"])
+        return {"key": key, "unit": unit_of(name), "default": default_text, "allowed": allowed,
                 "doc": meta.get("doc", ""), "moves": ", ".join(stage_readers(key)) or "written every build only"}
 
     walk(TailSpec, "")

@@ -42,6 +42,7 @@ from .exporters.reproducible import make_reproducible
 from .exporters.robot_files import write_robot
 from .exporters.robot_meshes import write_robot_meshes
 from .exporters.viewer import write_viewer
+from .exporters.gltf import scene_glb, write_scenes
 from .parameters.load import params_sha256
 from .parts._kernel import kernel_threads
 from .publish import BuildResult, OpenedBuild, open_build, publish, reuse_whole, temporary_folder, volatile
@@ -312,7 +313,10 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         log.record("drawings", drawings_hit is not None, time.perf_counter() - t)
         t = time.perf_counter()
         say("interactive 3D view")
-        manifest.update(write_viewer(tmp, viewer_scenes(asm, mold_view, twin_view, progress=say)))
+        scenes = viewer_scenes(asm, mold_view, twin_view, progress=say)
+        glb = {s.name: scene_glb(s) for s in scenes}
+        manifest.update(write_scenes(tmp, scenes, glb))
+        manifest.update(write_viewer(tmp, manifest["scenes"]["files"], glb))
         log.record("interactive 3D view", False, time.perf_counter() - t)
         t = time.perf_counter()
         say("previews (off-screen renders)")

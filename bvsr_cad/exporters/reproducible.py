@@ -206,6 +206,15 @@ def _write_zip(path: Path, entries: list[tuple[zipfile.ZipInfo, bytes]], compres
     tmp.replace(path)
 
 
+def write_reproducible_bytes(path: Path, data: bytes) -> None:
+    """``data`` as the whole of ``path``, written beside it and renamed into place: a reader sees the old
+    file or the new one, never a part. For writers whose bytes follow their input alone (no time stamp,
+    no chance), such as the GLB scenes."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_bytes(data)
+    tmp.replace(path)
+
+
 def fix_zip(path: Path) -> bool:
     with zipfile.ZipFile(path) as zin:
         entries, same = _fixed_entries(path.name, zin)
@@ -238,4 +247,4 @@ def make_reproducible(root: Path, done: set[Path] | None = None) -> dict[str, in
     return out
 
 
-__all__ = ["make_reproducible", "fix_step", "fix_zip", "write_reproducible_3mf", "FIXED_STEP_TIME"]
+__all__ = ["make_reproducible", "fix_step", "fix_zip", "write_reproducible_3mf", "write_reproducible_bytes", "FIXED_STEP_TIME"]

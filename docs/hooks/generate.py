@@ -212,7 +212,7 @@ MANIFEST_UNITS = {
     "robot.joint_limits.<name>.lower": "rad (m for `*_chord`)", "robot.joint_limits.<name>.upper": "rad (m for `*_chord`)",
     "robot.joint_limits.<name>.velocity": "rad/s (m/s for `*_chord`)",
     "robot.joint_limits.<name>.effort": "N m (N for `*_chord`)",
-    "viewer.bytes": "bytes", "viewer.scenes[].bytes": "bytes", "robot.supply_lag_s.<name>": "s",
+    "viewer.bytes": "bytes", "viewer.scenes[].bytes": "bytes", "scenes.files[].bytes": "bytes", "robot.supply_lag_s.<name>": "s",
     "volatile.stages[].seconds": "s", "volatile.cpu_seconds.<name>": "s", "mass_g.<name>": "g",
 }
 #: Leaf names that count things.

@@ -118,11 +118,11 @@ def test_moves_column_follows_the_stage_keys():
     set and its drawings only, a material's modulus the analyses but no geometry, a robot setting no
     cached stage."""
     gen = _generator()
-    assert gen.stage_readers("casting.shrinkage_percent") == ["`drawings/`", "mold set"]
-    assert "`step/`, `stl/`, part previews" not in gen.stage_readers("materials.<name>.youngs_modulus_mpa")
-    assert "`analysis/`, joint limits of `robot/`" in gen.stage_readers("materials.<name>.youngs_modulus_mpa")
+    assert gen.stage_readers("casting.shrinkage_percent") == ["drawings", "mold set"]
+    assert gen.stage_readers("materials.<name>.youngs_modulus_mpa") == ["analyses"]
     assert gen.stage_readers("robot.timestep_s") == []
-    assert "`robot/` meshes and collision shapes" in gen.stage_readers("robot.collision_geometry")
+    assert "robot meshes" in gen.stage_readers("robot.collision_geometry")
+    assert "part files" in gen.stage_readers("vertebra.material")  # "none" removes the rod part
 
 
 def test_sphinx_roles_render_as_code():

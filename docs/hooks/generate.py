@@ -89,10 +89,10 @@ def _reads(stage_ignore: tuple[str, ...], extra: tuple[str, ...], key: str) -> b
 
 
 def stage_readers(key: str) -> list[str]:
-    """The outputs of the cached stages whose inputs include ``key`` (dotted, as in a parameter file)."""
+    """The cached stages whose inputs include ``key`` (dotted, as in a parameter file)."""
     from bvsr_cad import pipeline
 
-    moved = [outputs for _name, ignore, extra, outputs in STAGES if _reads(getattr(pipeline, ignore), extra, key)]
+    moved = [name for name, ignore, extra, _outputs in STAGES if _reads(getattr(pipeline, ignore), extra, key)]
     table = key.split(".")[0]
     if table in MOLD_READS or ".".join(key.split(".")[:2]) in MOLD_READS:
         moved.append("mold set")
@@ -146,7 +146,7 @@ def parameter_rows() -> list[dict[str, str]]:
         if meta.get("depends_on"):  # the keys whose values narrow the range further (schema.toml)
             allowed += "; narrowed by " + ", ".join(f"`{k}`" for k in meta["depends_on"])
         return {"key": key, "unit": unit_of(name), "default": default_text, "allowed": allowed,
-                "doc": meta.get("doc", ""), "moves": ", ".join(stage_readers(key)) or "written every build only"}
+                "doc": meta.get("doc", ""), "moves": ", ".join(stage_readers(key)) or "none"}
 
     walk(TailSpec, "")
     return rows
@@ -165,7 +165,7 @@ def parameters_markdown() -> str:
         if table != current:
             current = table
             heading = table if table == "(top level)" else f"[{table}]"
-            out += ["", f"### {heading}", "", "| key | unit | default | allowed | what it is | cached outputs it moves |",
+            out += ["", f"### {heading}", "", "| key | unit | default | allowed | what it is | cached stages it moves |",
                     "|---|---|---|---|---|---|"]
         out.append("| " + " | ".join(_cell(c) for c in (f"`{r['key']}`", r["unit"], r["default"], r["allowed"],
                                                             r["doc"], r["moves"])) + " |")

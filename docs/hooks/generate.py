@@ -173,7 +173,7 @@ def parameters_markdown() -> str:
 
 
 def _fmt(x: Any) -> str:
-    if x is None:
+    if x is None or (isinstance(x, float) and x != x):  # None or NaN: nothing predicted
         return "—"
     if isinstance(x, float):
         return format(x, ".4g")
@@ -183,13 +183,13 @@ def _fmt(x: Any) -> str:
 def paper_table_markdown(data: dict[str, Any] | None = None) -> str:
     """The paper's figures beside the model's, row by row, from an export's ``measurements.json``."""
     data = data if data is not None else _summary()["measurements"]
-    out = ["| row | quantity | role | paper | model, tables' values | model, fitted | error, fitted | source |",
-           "|---|---|---|---|---|---|---|---|"]
+    out = ["| row | quantity | role | unit | paper | model, tables' values | model, fitted | error, fitted | source |",
+           "|---|---|---|---|---|---|---|---|---|"]
     for r in data["rows"]:
-        unit = r.get("unit", "")
+        unit = "" if r.get("unit") in (None, "1") else r["unit"]
         rel = r.get("rel_calibrated")
-        cells = (r["row"], r["label"], r["role"], f"{_fmt(r['reported'])} {unit}", _fmt(r.get("uncalibrated")),
-                 _fmt(r.get("calibrated")), "—" if rel is None else f"{rel:+.0%}", r.get("source", ""))
+        cells = (r["row"], r["label"], r["role"], unit, _fmt(r["reported"]), _fmt(r.get("uncalibrated")),
+                 _fmt(r.get("calibrated")), "—" if rel is None or rel != rel else f"{rel:+.0%}", r.get("source", ""))
         out.append("| " + " | ".join(_cell(c) for c in cells) + " |")
     summary = {k: v for k, v in data.items() if k not in ("rows", "note", "data_file") and not isinstance(v, (dict, list))}
     out += ["", "| over the rows | value |", "|---|---|"]

@@ -80,9 +80,9 @@ def command_seconds(path: Path, out: Path) -> tuple[float, float, list[dict], di
         summary["cpu_seconds"]
 
 
-#: The reference loop as the notes and the README quote it: ``time python3 -c`` of this, at module level
+#: The reference loop benchmarks/RESULTS.md quotes: ``time python3 -c`` of this, at module level
 #: (global names: about 2.5 times the seconds of the same loop inside a function); timed here without
-#: the interpreter's start, which the notes' figures include (0.1-0.15 s more).
+#: the interpreter's start, which a ``time python3 -c`` figure includes (0.1-0.15 s more).
 REFERENCE_LOOP = "s = 0\nfor i in range(10000000):\n    s += i\n"
 
 

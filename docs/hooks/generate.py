@@ -90,13 +90,29 @@ def _reads(stage_ignore: tuple[str, ...], extra: tuple[str, ...], key: str) -> b
 
 def stage_readers(key: str) -> list[str]:
     """The cached stages whose inputs include ``key`` (dotted, as in a parameter file)."""
-    from bvsr_cad import pipeline
-
+    pipeline = _pipeline()
     moved = [name for name, ignore, extra, _outputs in STAGES if _reads(getattr(pipeline, ignore), extra, key)]
     table = key.split(".")[0]
     if table in MOLD_READS or ".".join(key.split(".")[:2]) in MOLD_READS:
         moved.append("mold set")
     return moved
+
+
+def _pipeline() -> Any:
+    """The module that declares the stages' ignore lists (the build's stage list)."""
+    import importlib
+
+    for name in ("bvsr_cad.build.pipeline", "bvsr_cad.pipeline"):
+        try:
+            module = importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if exc.name not in (name, name.rpartition(".")[0]):
+                raise
+            continue
+        if all(hasattr(module, ignore) for _n, ignore, _e, _o in STAGES):
+            return module
+    raise RuntimeError("docs/hooks/generate.py: no module declares the stages' ignore lists "
+                       f"({', '.join(i for _n, i, _e, _o in STAGES)}); update STAGES to the build's stage list")
 
 
 def _default_file_values() -> dict[str, Any]:

@@ -183,16 +183,26 @@ def _held_tip(path, pattern: dict, timestep_s: float, seconds: float = 0.3):
 
 @pytest.mark.parametrize("pattern", sorted(HELD_PATTERNS))
 def test_default_mjcf_holds_at_legged_robot_steps(robot_export, pattern):
-    """Issue 17: after 0.3 s of a held pressure pattern from rest, the default scene's tip lies within
-    2 mm of the same model stepped at 0.05 ms when stepped at its exported 2 ms, within 5 mm at 4 ms,
-    and MuJoCo warns of nothing (measured worst over these patterns: 1.6 mm and 4.3 mm)."""
+    """Issue 17: after 0.3 s of a held pressure pattern from rest, the default scene's tip, stepped at its
+    exported 2 ms and at a legged robot's coarser 4 ms, lies near the same model stepped at 0.05 ms, and
+    MuJoCo warns of nothing.
+
+    The step's error grows with the motion (the integrator is first order in the step), so it is measured
+    against the tip's travel from its rest (every line at atmospheric, settled the same 0.3 s): within 2 %
+    of it at 2 ms and 5 % at 4 ms. Measured worst over these patterns: 1.0 % and 2.6 % (1.8 mm and 4.9 mm of
+    about 180-200 mm): the limits sit about twice above, so a design change (a 10 % heavier SOA) does not trip
+    them while a step that loses the motion does (an unstable one by metres)."""
     path = robot_export / "robot" / "scene.xml"
     assert mujoco.MjModel.from_xml_path(str(path)).opt.timestep == 0.002
     ref, warn = _held_tip(path, HELD_PATTERNS[pattern], 5e-5)
     assert warn == 0
-    for step_s, limit_m in ((0.002, 0.002), (0.004, 0.005)):
+    rest, warn = _held_tip(path, {}, 5e-5)
+    assert warn == 0
+    travel_m = np.linalg.norm(ref - rest)
+    assert travel_m > 0.01  # every pattern moves the tip by centimetres
+    for step_s, limit in ((0.002, 0.02), (0.004, 0.05)):
         tip, warn = _held_tip(path, HELD_PATTERNS[pattern], step_s)
-        assert warn == 0 and np.linalg.norm(tip - ref) < limit_m, (step_s, np.linalg.norm(tip - ref))
+        assert warn == 0 and np.linalg.norm(tip - ref) < limit * travel_m, (step_s, np.linalg.norm(tip - ref), travel_m)
 
 
 @pytest.mark.parametrize("theta_max", [0.5, 0.92])

@@ -253,6 +253,34 @@ class Tail:
         fix_step(path)
         return path
 
+    def show(self, posed: bd.Compound | None = None, port: int | None = None) -> list[str]:
+        """Show the tail (at rest, or a compound from :meth:`posed`) in a running OCP CAD Viewer.
+
+        Every instance goes as its own object, named and coloured as in :meth:`assembly`, the SOAs
+        translucent. The viewer runs in VS Code (the OCP CAD Viewer extension) or standalone
+        (``python -m ocp_viewer``, then its page in a browser).
+
+        Args:
+            posed: a compound from :meth:`posed`; None for the tail at rest.
+            port: the viewer's port (default ``$OCP_PORT``, else 3939).
+
+        Returns:
+            The instance names sent.
+
+        Raises:
+            ViewerUnavailable: ``ocp_vscode`` is not installed (``pip install 'bvsr_cad[viewer]'``) or no
+                viewer listens on the port; the message says how to start one.
+
+        Example::
+
+            tail.show()
+            tail.show(posed=tail.posed(theta_deg=10, phi_deg=90))
+        """
+        from .exporters.ocp_viewer import show_compound
+
+        kinds = {i.name: self._assembly.part_of(i).kind for i in self._assembly.instances}
+        return show_compound(self.assembly() if posed is None else posed, kinds, port)
+
     # -- posing -----------------------------------------------------------------------------
 
     def _posed_placed(self, theta_deg, phi_deg, slices_per_gap: int) -> list[PlacedShape]:

@@ -119,7 +119,7 @@ def code_fingerprint() -> str:
     pkg = Path(__file__).resolve().parent
     h = hashlib.sha256()
     for p in sorted(pkg.rglob("*")):
-        if p.is_file() and p.suffix in (".py", ".toml", ".json", ".csv") and "__pycache__" not in p.parts:
+        if p.is_file() and p.suffix in (".py", ".toml", ".json", ".csv", ".js", ".mjs") and "__pycache__" not in p.parts:
             h.update(p.relative_to(pkg).as_posix().encode())
             h.update(p.read_bytes())
     h.update(json.dumps(distribution_versions(), sort_keys=True).encode())

@@ -105,7 +105,37 @@ def cmd_watch(args) -> int:
     def say(msg: str) -> None:
         print(msg, flush=True)
 
-    return watch(args.params, args.output, say, _progress(args.quiet))
+    on_assembly = None
+    if args.show:
+        from .exporters.ocp_viewer import assembly_sender, viewer_port
+
+        on_assembly = assembly_sender(viewer_port(args.port), say)  # no viewer: exit 2 before the first build
+    return watch(args.params, args.output, say, _progress(args.quiet), on_assembly=on_assembly)
+
+
+def cmd_show(args) -> int:
+    from .exporters.ocp_viewer import viewer_port
+
+    port = viewer_port(args.port)  # no client or no viewer: exit 2 before the CAD imports (seconds)
+    target = Path(args.target or "params/bvsr.toml")
+    params = target / "params.toml" if target.is_dir() else target
+    if target.is_dir() and not params.is_file():
+        print(f"bvsr: error: EXPORT {target}: no params.toml in it (an export folder holds the parameter file "
+              "it was built from)", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    with library_imports():
+        from .api import load
+
+    tail = load(params)
+    posed = None if args.theta is None else tail.posed(theta_deg=args.theta, phi_deg=args.phi)
+    names = tail.show(posed=posed, port=port)
+    pose = "at rest" if posed is None else f"every joint bent {args.theta:g} deg towards phi = {args.phi:g} deg"
+    if args.json:
+        print(json.dumps({"port": port, "params": str(params), "theta_deg": args.theta, "phi_deg": args.phi,
+                          "instances": names}))
+    else:
+        print(f"sent {tail.name} ({pose}, {len(names)} instances) to OCP CAD Viewer on port {port}")
+    return EXIT_OK
 
 
 def cmd_check(args) -> int:
@@ -345,7 +375,20 @@ def make_parser() -> argparse.ArgumentParser:
             b.add_argument("--no-cache", action="store_true",
                            help="build every stage from scratch (the cache is $BVSR_CACHE/artifacts, default "
                                 "~/.cache/bvsr_cad/artifacts)")
+        if name == "watch":
+            b.add_argument("--show", action="store_true", help="send the tail to a running OCP CAD Viewer on "
+                           "each save, as soon as its assembly is built (needs the viewer extra)")
+            b.add_argument("--port", type=int, help="the viewer's port (default $OCP_PORT, else 3939)")
         b.set_defaults(func=func)
+    sh = sub.add_parser("show", parents=[common], help="send the tail (at rest or posed) to a running OCP CAD "
+                        "Viewer, named and coloured (needs the viewer extra)")
+    sh.add_argument("target", nargs="?", metavar="EXPORT|PARAMS",
+                    help="an export folder or a parameter file (default params/bvsr.toml)")
+    sh.add_argument("--theta", type=float, help="bend every joint by this angle, degrees (default: at rest)")
+    sh.add_argument("--phi", type=float, default=0.0,
+                    help="bending direction from +X towards +Y (dorsal), degrees (default 0)")
+    sh.add_argument("--port", type=int, help="the viewer's port (default $OCP_PORT, else 3939)")
+    sh.set_defaults(func=cmd_show)
     c = sub.add_parser("check", parents=[common], help="run every check on an export folder")
     c.add_argument("export", help="export folder made by `bvsr build`")
     c.add_argument("--slice", action="store_true",
@@ -489,6 +532,7 @@ def _interrupted(exc: BaseException) -> bool:
 _BAD_INPUT = (("analysis.calibrate", "CalibrationError"), ("checks.export", "ExportError"),
               ("checks.printability", "SlicerMissingError"), ("parameters.load", "ParamError"),
               ("parameters.measurements", "MeasurementError"), ("parameters.study", "StudyError"),
+              ("exporters.ocp_viewer", "ViewerUnavailable"),
               ("publish", "OutputError"), ("sim", "SimulationInputError"), ("sweep", "SweepError"))
 
 

@@ -22,7 +22,7 @@ from .analysis.limits import per_joint_rad
 from .analysis.run import BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS, run_analyses
 from .analyses_process import (SHARED_SOLIDS_FOLDER, SharedSolids, drop_geometry_ahead, keep_rest,
                                take_geometry_ahead)
-from .assembly.build import build_assembly
+from .assembly.build import Assembly, build_assembly
 from .assembly.inertia import SolidProperties
 from .assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs, rigid_robot_model
 from .assembly.collision import part_fits, remember_fits
@@ -90,14 +90,17 @@ def robot_geometry_key(spec) -> str:
 
 def build_export(params: str | Path, out_dir: str | Path | None = None,
                  progress: Progress | None = None, use_cache: bool = True,
-                 standby: SecondProcess | None = None) -> BuildResult:
+                 standby: SecondProcess | None = None,
+                 on_assembly: Callable[[Assembly], None] | None = None) -> BuildResult:
     """Build every part of the tail described by ``params`` into ``out_dir``.
 
     With ``use_cache`` the stages whose inputs are unchanged are taken from the artifact cache
     (:mod:`bvsr_cad.cache`): the whole export, the analyses, the parts' files and previews.
     ``standby``: the analyses' second process started ahead (``SecondProcess.standby("bvsr_cad.analyses_process")``,
     as the command line does before it imports this module, so that the two import side by side), given
-    its work here if the analyses are to be run, else stopped.
+    its work here if the analyses are to be run, else stopped. ``on_assembly``: called with the tail's
+    assembly as soon as it is built, before the rest of the export (``bvsr watch --show``); an export the
+    cache holds whole is published first, then its assembly built for it.
 
     Args:
         params: the parameter file.
@@ -116,16 +119,20 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
     """
     try:
         opened = open_build(params, out_dir, progress or (lambda _m: None), use_cache)
-        return reuse_whole(opened) or build_opened(opened, standby)
+        whole = reuse_whole(opened)
+        if whole is not None and on_assembly is not None:
+            on_assembly(build_assembly(opened.spec))
+        return whole or build_opened(opened, standby, on_assembly)
     finally:
         if standby is not None:
             standby.close()  # a no-op once it gave its result; stops one given no work
 
 
-def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> BuildResult:
+def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None,
+                 on_assembly: Callable[[Assembly], None] | None = None) -> BuildResult:
     """Build, stage by stage, the export that :func:`bvsr_cad.publish.open_build` prepared and the cache
-    does not hold whole (:func:`bvsr_cad.publish.reuse_whole`). ``standby``: as in :func:`build_export`;
-    the caller closes it.
+    does not hold whole (:func:`bvsr_cad.publish.reuse_whole`). ``standby``, ``on_assembly``: as in
+    :func:`build_export`; the caller closes ``standby``.
 
     Raises:
         GeometryError: the CAD kernel failed.
@@ -174,6 +181,8 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None) -> B
         asm = build_assembly(spec, say, shared=SharedSolids(tmp / SHARED_SOLIDS_FOLDER)
                              if analyses is not None and geometry_hit is None else None)
         log.record("assembly", False, time.perf_counter() - t)
+        if on_assembly is not None:
+            on_assembly(asm)
         t = time.perf_counter()
         files: dict[str, dict[str, str]] = {name: {"step": f"step/{name}.step", "stl": f"stl/{name}.stl"}
                                              for name in asm.parts}

@@ -14,12 +14,14 @@ its temporary folder removed, as for `bvsr build`.
 
 from __future__ import annotations
 
+import functools
 import threading
 import tomllib
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from .assembly.build import Assembly
 from .parameters.load import ParamError
 from .parts._kernel import GeometryError
 from .pipeline import build_export
@@ -70,12 +72,17 @@ def _bytes(path: Path | None) -> bytes | None:
 
 def watch(params: str | Path, out_dir: str | Path | None, say: Callable[[str], None],
           progress: Callable[[str], None] | None = None, stop: threading.Event | None = None,
-          debounce_ms: int = DEBOUNCE_MS, build: Callable[..., BuildResult] = build_export) -> int:
-    """Build once, then after every save; returns 0 when stopped (Ctrl-C or ``stop`` set)."""
+          debounce_ms: int = DEBOUNCE_MS, build: Callable[..., BuildResult] = build_export,
+          on_assembly: Callable[[Assembly], None] | None = None) -> int:
+    """Build once, then after every save; returns 0 when stopped (Ctrl-C or ``stop`` set).
+    ``on_assembly``: given each build's assembly as soon as it is built, before the rest of the export
+    (``bvsr watch --show``: :func:`bvsr_cad.exporters.ocp_viewer.assembly_sender`)."""
     from watchfiles import watch as watch_files
 
     params = Path(params).resolve()
     last = _read(params) or {}
+    if on_assembly is not None:
+        build = functools.partial(build, on_assembly=on_assembly)
 
     def rebuild() -> None:
         try:

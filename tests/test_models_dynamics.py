@@ -192,3 +192,62 @@ def test_platform_on_the_ground_stays_down_for_a_slow_tail():
     t = np.linspace(0, 2.0, 201)
     res = platform_motion(plat, tail, t, 0.3 * t / 2.0, gravity=True)
     assert res.lift_mm(0.2) == 0.0
+
+
+# -- the tip payload ---------------------------------------------------------------------------------
+def test_a_tip_payload_adds_its_mass_and_its_offset_by_the_parallel_axis_rule():
+    """A point mass on the axis at D from the base: the body's mass grows by it and I_theta about the chord
+    midpoint L / 2 by m_p (D - L / 2)^2 (parallel axis, by hand); I_phi not at all (it sits on the axis)."""
+    m_p, D = 0.1, 0.2
+    body = BODY.with_tip_mass(m_p, D)
+    assert body.mass_kg == pytest.approx(0.1 + 0.1, rel=1e-15)
+    assert body.inertia_theta_kg_m2 == pytest.approx(1.6e-4 + 0.1 * (0.2 - 0.065) ** 2, rel=1e-14)
+    assert body.inertia_phi_kg_m2 == BODY.inertia_phi_kg_m2 and body.arc_length_m == BODY.arc_length_m
+    assert BODY.with_tip_mass(0.0, D) == BODY
+
+
+def _constant_acceleration(n_joints: int, accel_rad_s2: float) -> dyn.Trajectory:
+    """The segment bending from rest at a constant angular acceleration in extension (phi = +90 deg): the
+    segment angle n theta = A t^2 / 2 over 2 ms."""
+    t = np.linspace(0.0, 2e-3, 81)
+    big = 0.5 * accel_rad_s2 * t ** 2
+    return dyn.Trajectory(t, np.full_like(t, math.pi / 2), big / n_joints, np.zeros_like(t),
+                          accel_rad_s2 * t / n_joints, n_joints, np.zeros((t.size, 5)))
+
+
+def test_root_wrench_with_a_tip_payload_under_a_known_angular_acceleration(bvsr_spec, bvsr_data):
+    """The predicted root force and torque of the whole tail with and without a 100 g tip payload, the
+    tail bending from rest at a known angular acceleration A (the segment angle A t^2 / 2).
+
+    By hand, at rest (terms of second order in the angle Theta left out): the body
+    turns by half the angle, A / 2, and its centre of mass, on the chord midpoint L / 2 from the base face
+    (the model's premise, Eq 7), moves across at L A / 4. Force F = (m + m_p) L A / 4; torque about the
+    root panel's proximal face, t below the base face: (L / 2 + t) F + (I_theta + m_p (D - L / 2)^2) A / 2,
+    with the payload's offset from the midpoint by the parallel-axis rule and D = n H_j (the last panel's
+    distal face). np.gradient's central differences are exact on the quadratic (its one-sided ends give
+    less, never the peak). With A = 200 rad/s^2 over 2 ms, Theta <= 4e-4 rad; the left-out terms (the centre
+    of mass drawn in along the axis at (L / 4) A^2 t^2) are of relative order (2 Theta)^2 = 6.4e-7: rel 1e-6.
+
+    The premise carries the payload's translation at the chord midpoint: a point mass at the tip moves
+    across at D A / 2, twice as fast, so a point mass would add twice these increments; MuJoCo's
+    ``bvsr simulate`` carries the payload as a body (``test_simulate_carries_the_payload_as_a_point_mass``)."""
+    from bvsr_cad.analysis.predict import Predictor
+    from bvsr_cad.assembly.bodies import moving_body
+
+    pred = Predictor.from_spec(bvsr_spec)
+    n = bvsr_spec.joints
+    h_j, gap = bvsr_data["joint"]["joint_height_mm"] / 1e3, bvsr_data["joint"]["gap_mm"] / 1e3
+    t_panel, D, A = h_j - gap, n * h_j, 200.0
+    body = moving_body(pred.asm, 1, n)
+    L = body.arc_length_m
+    assert L == pytest.approx(D, rel=1e-12)  # the segment's arc: n H_j
+    for payload_g in (0.0, 100.0):
+        m_p = payload_g / 1e3
+        model = pred.joint_model(1, n, payload_g)
+        tr = _constant_acceleration(n, A)
+        pred.tail_pulse = lambda motion, bar, grams, model=model, tr=tr: (model, tr)
+        force_n, torque_nm = pred.root_wrench("extension", 6.0, payload_g)
+        f = (body.mass_kg + m_p) * L * A / 4
+        torque = (L / 2 + t_panel) * f + (body.inertia_theta_kg_m2 + m_p * (D - L / 2) ** 2) * A / 2
+        assert force_n == pytest.approx(f, rel=1e-6), payload_g
+        assert torque_nm == pytest.approx(torque, rel=1e-6), payload_g

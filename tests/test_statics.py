@@ -137,3 +137,54 @@ def test_a_one_joint_segment_has_a_blocked_force_in_every_motion(bvsr_spec):
     forces = {m: quasi_static_segment(seg, m).blocked_force_n for m in ("extension", "flexion", "waggle")}
     assert all(np.isfinite(f) and f > 0 for f in forces.values()), forces
     assert forces["extension"] == pytest.approx(forces["flexion"], rel=0.05)
+
+
+def test_the_horizontal_tail_sags_towards_minus_y_as_hand_statics_give(bvsr_spec, bvsr_data):
+    """Gravity's sign and lever arms: the tail horizontal, no pressure, the SOAs' springs taken out (n_a =
+    m_a = 0: no force at zero pressure), so that only the rod holds each joint, K = E I / H_a with I = pi d^4 /
+    64 from the parameter file. Small masses (grams) keep every angle below 1e-2 rad, where the linear hand
+    statics hold: a body at height z above the root face, distal of joint k, moves across by v_k (z - c_k)
+    when joint k bends by v_k towards +Y, c_k being the middle of the joint's arc (the arc's end moves
+    L v / 2, then the panel turns by v); joint k's own mass, on its chord's midpoint, moves L v_k / 4.
+    Gravity along -Y then bends joint k by v_k = -g sum(m_b arm_bk) / K, towards -Y, and puts the tip
+    (the last panel's distal face) at y = sum_k v_k (z_tip - c_k) < 0. The hand statics leave out terms of
+    relative order Theta^2 (Theta the tip's angle, sum of the v_k): that is the tolerance."""
+    from dataclasses import replace
+
+    from bvsr_cad.analysis.calibrate import uncalibrated
+
+    j, d_rod = bvsr_data["joint"], bvsr_data["vertebra"]["diameter_mm"]
+    e_mpa = bvsr_data["materials"][bvsr_data["vertebra"]["material"]]["youngs_modulus_mpa"]
+    h_j, gap = j["joint_height_mm"], j["gap_mm"]
+    t = h_j - gap
+    n = bvsr_data["segments"] * bvsr_data["joints_per_segment"]
+    k_nmm = e_mpa * np.pi * d_rod ** 4 / 64 / gap
+    g = 9.80665  # standard gravity, N/kg
+    panel_kg = 1e-3 * (1.0 + 0.1 * np.arange(n + 1))  # distinct, so that a body counted at the wrong joint shows
+    joint_kg = 0.5e-3 * (1.0 + 0.05 * np.arange(n))
+    st = TailStatics.from_spec(uncalibrated(bvsr_spec), LumpedMasses(panel_kg, joint_kg))  # the table's E
+    st = replace(st, act=replace(st.act, law=replace(st.act.law, stiffness_slope_n_per_m_per_pa=0.0,
+                                                     stiffness_offset_n_per_m=0.0)))
+    w = st.forward(np.zeros((bvsr_spec.segments, 5)))
+
+    z_panel = np.arange(n + 1) * h_j + t / 2  # mid-thickness of panel 0..n
+    z_base = np.arange(n) * h_j + t  # joint k's base face (k = 1..n as 0..n-1)
+    c = z_base + gap / 2
+    z_joint = z_base + gap / 2  # the chord's midpoint at rest
+    v = np.empty(n)
+    for k in range(n):
+        moment = (np.sum(panel_kg[k + 1:] * (z_panel[k + 1:] - c[k]))
+                  + np.sum(joint_kg[k + 1:] * (z_joint[k + 1:] - c[k]))
+                  + joint_kg[k] * gap / 4)
+        v[k] = -g * moment / k_nmm
+    theta_tip = abs(v.sum())
+    assert theta_tip < 1e-2
+    rtol = theta_tip ** 2
+    np.testing.assert_allclose(w[:, 0], 0.0, atol=1e-12)  # no lateral (X) bend: gravity is along Y
+    np.testing.assert_allclose(w[:, 1], v, rtol=rtol)
+    assert (w[:, 1] < 0).all()
+    _, panel = st.kin.frames(w)
+    tip = panel[-1, :3, 3] + t * panel[-1, :3, 2]
+    y_tip = np.sum(v * (n * h_j + t - c))
+    assert y_tip < -0.1  # mm: a sag well above the tolerance
+    assert tip[1] == pytest.approx(y_tip, rel=rtol)

@@ -240,7 +240,7 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None, solids: boo
     bits (OCCT normalises them on reading: a STEP entity's 3.4e-21 becomes 5.1e-21), so a part read from
     the build's other process (``shared``) is the one made here to the bit, whichever process made it.
     """
-    say = progress or (lambda _msg: None)
+    say = (progress or (lambda _msg: None)) if solids else (lambda _msg: None)
     source = _SolidSource(shared)
 
     def part(*, solid: Callable[[], bd.Solid], **fields) -> PartDef:
@@ -249,10 +249,21 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None, solids: boo
                 else _SolidOnUse(lambda: source.make(name, solid), **fields))
 
     beta = half_angle_rad(spec)
-    j = spec.joint
+    layouts = [panel_layout(spec, k, beta) for k in range(spec.panels)]
     parts: dict[str, PartDef] = {}
     instances: list[Instance] = []
-    layouts = [panel_layout(spec, k, beta) for k in range(spec.panels)]
+    _add_panels(spec, layouts, part, say, parts, instances)
+    _add_soas(spec, layouts, part, say, parts, instances)
+    _add_rods(spec, part, parts, instances)
+    asm = Assembly(spec=spec, parts=parts, instances=instances, panel_layouts=layouts,
+                   taper_half_angle_deg=math.degrees(beta))
+    asm._source = source
+    return asm
+
+
+def _add_panels(spec: TailSpec, layouts: list[PanelLayout], part: Callable[..., PartDef],
+                say: Progress, parts: dict[str, PartDef], instances: list[Instance]) -> None:
+    """One part per distinct panel (panels alike share it) and every panel's instance."""
     J = spec.joints_per_segment
 
     def segments_of_panel(k: int) -> tuple[int, ...]:
@@ -263,8 +274,7 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None, solids: boo
     for lay in layouts:
         key = _panel_key(lay)
         if key not in by_key:
-            if solids:
-                say(f"panel {lay.name} ({lay.kind})")
+            say(f"panel {lay.name} ({lay.kind})")
             by_key[key] = lay.name
             parts[lay.name] = part(
                 name=lay.name, kind="panel", material=spec.use.panel, process="MJF",
@@ -285,22 +295,29 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None, solids: boo
         instances.append(Instance(lay.name, by_key[key], _as_tuple(translation(z=lay.z0_mm)), "panel",
                                   segs[0] if len(segs) == 1 else None, segs, panel=lay.index))
 
-    if solids:
-        say("SOA body")
+
+def _add_soas(spec: TailSpec, layouts: list[PanelLayout], part: Callable[..., PartDef],
+              say: Progress, parts: dict[str, PartDef], instances: list[Instance]) -> None:
+    """The one SOA part and its five instances in every joint, seated between the joint's panels."""
+    say("SOA body")
     parts["soa"] = part(
         name="soa", kind="soa", material=spec.use.soa, process="cast",
-        solid=lambda: soa_body(spec.soa, j.base_diameter_mm), print_transform=_as_tuple(np.eye(4)),
+        solid=lambda: soa_body(spec.soa, spec.joint.base_diameter_mm), print_transform=_as_tuple(np.eye(4)),
         info={"height_mm": spec.soa.built_height_mm, "fold_residual_mm":
               spec.soa.built_origami_height_mm - spec.soa.origami_height_mm},
     )
     rot = spec.soa.rotation_deg
     for k in range(1, spec.panels):
         lo, hi = layouts[k - 1], layouts[k]
-        s = (k - 1) // J + 1
+        s = (k - 1) // spec.joints_per_segment + 1
         for i, a in enumerate(soa_angles_deg(), start=1):
             instances.append(Instance(f"j{k}_soa{i}", "soa", _as_tuple(soa_frame(lo, hi, a, rot)), "soa", s, (s,),
                                       joint=k, soa_index=i, pressure_line=i))
 
+
+def _add_rods(spec: TailSpec, part: Callable[..., PartDef], parts: dict[str, PartDef],
+              instances: list[Instance]) -> None:
+    """One rod part per distinct cut length and each segment's rod (none where the vertebra has no rod)."""
     rods: dict[float, str] = {}
     for s in range(1, spec.segments + 1 if spec.vertebra.has_rod else 1):  # "none": sockets, no rod
         z0, z1 = rod_span_mm(spec, s)
@@ -314,11 +331,6 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None, solids: boo
                 info={"cut_length_mm": length, "diameter_mm": spec.vertebra.diameter_mm},
             )
         instances.append(Instance(f"rod_s{s}", rods[length], _as_tuple(translation(z=z0)), "rod", s, (s,)))
-
-    asm = Assembly(spec=spec, parts=parts, instances=instances, panel_layouts=layouts,
-                   taper_half_angle_deg=math.degrees(beta))
-    asm._source = source
-    return asm
 
 
 def instance_solid(asm: Assembly, inst: Instance) -> bd.Solid:

@@ -250,29 +250,47 @@ def robot_model(asm: Assembly, theta_max_rad: list[float], collisions: bool = Tr
         raise ValueError(f"theta_max_rad: {len(theta_max_rad)} values for {spec.joints} joints")
     actuation = actuation_si(spec)
     push_n = N_SOA * float(actuation.law.force_n(actuation.pressure_max_pa, 0.0))
-    chord_effort_n = push_n
     effort_limit_nm = push_n * units.mm_to_m(spec.joint.pitch_diameter_mm / 2)
-    velocity_limit_rad_s = velocity_limit(spec.robot.segment_velocity_deg_s, spec.robot.velocity_margin,
-                                          spec.joints_per_segment)
-    t_mm = spec.joint.panel_thickness_mm
-    L_mm = spec.joint.gap_mm
-    L = units.mm_to_m(L_mm)
-    t = units.mm_to_m(t_mm)
-    rod_mat = spec.materials.get(spec.vertebra.material)  # None: no rod (no rod pieces either)
-    panel_mat = spec.material(spec.use.panel)
-    soa_mat = spec.material(spec.use.soa)
+    limits = _JointLimits(effort_limit_nm, push_n, velocity_limit(spec.robot.segment_velocity_deg_s,
+                                                                   spec.robot.velocity_margin,
+                                                                   spec.joints_per_segment))
     in_panel, in_gap = _rod_pieces(asm)
     # Every collision shape rides on a panel (assembly/collision): exact at rest whatever the chain.
     if not collisions:
         shapes = {lay.index: [] for lay in asm.panel_layouts}
     elif shapes is None:
         shapes = panel_collisions(asm, in_gap, spec.robot.collision_geometry)
-    links: dict[str, Link] = {}
+    links = _panel_links(asm, in_panel, shapes)
     joints: list[Joint] = []
     sites: list[Site] = []
     soas: list[SoaActuator] = []
     bending: list[BendingJoint] = []
+    for k in range(1, spec.panels):
+        joint_links, joint_chain, bend = _bending_joint(asm, k, float(theta_max_rad[k - 1]), limits, in_gap[k])
+        links.update(joint_links)
+        joints += joint_chain
+        bending.append(bend)
+        joint_sites, joint_soas = _soa_sockets(asm, k)
+        sites += joint_sites
+        soas += joint_soas
+    return RobotModel(spec.name, links, joints, bending, sites, soas, actuation, supply_lags_s(asm))
 
+
+@dataclass(frozen=True)
+class _JointLimits:
+    """What every bending joint can exert and how fast it may move."""
+
+    effort_nm: float  # the SOAs' torque on the pitch circle
+    chord_effort_n: float  # their force along the chord
+    velocity_rad_s: float
+
+
+def _panel_links(asm: Assembly, in_panel, shapes: dict[int, list[Collision]]) -> dict[str, Link]:
+    """Each panel's link: the panel and the rod's length inside it, with its collision shapes."""
+    spec = asm.spec
+    rod_mat = spec.materials.get(spec.vertebra.material)  # None: no rod (no rod pieces either)
+    panel_mat = spec.material(spec.use.panel)
+    links: dict[str, Link] = {}
     for lay in asm.panel_layouts:
         name = f"panel{lay.index}"
         part = asm.part_of(asm.panel(lay.index))
@@ -284,67 +302,83 @@ def robot_model(asm: Assembly, theta_max_rad: list[float], collisions: bool = Tr
                                   rod_piece))
             inertials.append(from_solid(rod_piece, rod_mat.density_g_cm3))
         links[name] = Link(name, compose(inertials), visuals, shapes[lay.index])
+    return links
 
-    for k in range(1, spec.panels):
-        j = f"j{k}"
-        seg = (k - 1) // spec.joints_per_segment + 1
-        lo, hi = asm.panel_layouts[k - 1], asm.panel_layouts[k]
-        z_start_mm = lo.z0_mm + t_mm
-        T_start_inv = np.eye(4)
-        T_start_inv[2, 3] = -z_start_mm
-        # Deformable body at rest in the arc-start frame: five SOAs and the rod in the gap.
-        soa_solids = []
-        soa_inertials = []
-        for inst in asm.soas_of_joint(k):
-            T = T_start_inv @ np.asarray(inst.transform)
-            soa_solids.append(asm.part_of(inst).solid.moved(_location(T)))
-            soa_inertials.append(from_solid(asm.part_of(inst).solid, soa_mat.density_g_cm3, T,
-                                            asm.solid_properties(inst.part)))
-        rod_gap = _rod_solid(in_gap[k], spec.vertebra.diameter_mm, z_start_mm)
-        parts = list(soa_inertials)
-        visuals = [Visual(f"{j}_soas", spec.use.soa, soa_mat.density_g_cm3, rgba("soa"), bd.Compound(soa_solids))]
-        if rod_gap is not None:
-            parts.append(from_solid(rod_gap, rod_mat.density_g_cm3))
-            visuals.append(Visual(f"{j}_rod", spec.vertebra.material, rod_mat.density_g_cm3, rgba("rod"), rod_gap))
-        soft = compose(parts)
-        half_a, half_b = split_deformable(soft, L)
-        names = (f"{j}_after_phi", f"{j}_after_theta_a", f"{j}_after_chord", f"{j}_after_theta_b")
-        links[names[0]] = Link(names[0], Inertial.point(VIRTUAL_MASS_KG, VIRTUAL_INERTIA_KG_M2), role="virtual")
-        links[names[1]] = Link(names[1], half_a, visuals, role="deformable")
-        links[names[2]] = Link(names[2], half_b, role="deformable")
-        links[names[3]] = Link(names[3], Inertial.point(VIRTUAL_MASS_KG, VIRTUAL_INERTIA_KG_M2), role="virtual")
-        th = float(theta_max_rad[k - 1])
-        half_lim = th / 2.0
-        v_half = velocity_limit_rad_s / 2.0
-        chord_lo = float(chord_joint_value(th, L))
-        joints += [
-            Joint(f"{j}_phi", "continuous", f"panel{k - 1}", names[0], _as_tuple(translation_m(z=t)), (0, 0, 1),
-                  velocity=velocity_limit_rad_s * 4, effort=effort_limit_nm),
-            Joint(f"{j}_theta_a", "revolute", names[0], names[1], _as_tuple(np.eye(4)), (0, 1, 0),
-                  -half_lim, half_lim, v_half, effort_limit_nm),
-            Joint(f"{j}_chord", "prismatic", names[1], names[2], _as_tuple(translation_m(z=L)), (0, 0, 1),
-                  chord_lo - 1e-4, 1e-4, velocity_limit_rad_s * L, chord_effort_n,
-                  mimic=Mimic(f"{j}_theta_a", 0.0, 0.0)),
-            Joint(f"{j}_theta_b", "revolute", names[2], names[3], _as_tuple(np.eye(4)), (0, 1, 0),
-                  -half_lim, half_lim, v_half, effort_limit_nm, mimic=Mimic(f"{j}_theta_a", 1.0)),
-            Joint(f"{j}_phi_b", "continuous", names[3], f"panel{k}", _as_tuple(np.eye(4)), (0, 0, 1),
-                  velocity=velocity_limit_rad_s * 4, effort=effort_limit_nm, mimic=Mimic(f"{j}_phi", -1.0)),
-        ]
-        bending.append(BendingJoint(j, L, tuple(f"{j}_{n}" for n in ("phi", "theta_a", "chord", "theta_b", "phi_b")),
-                                    f"panel{k - 1}", f"panel{k}", th, seg))
-        # SOA sockets: the centres of the pocket floors the flanges sit on.
-        for inst in asm.soas_of_joint(k):
-            T = np.asarray(inst.transform)
-            bottom_mm = T[:3, 3]
-            top_mm = bottom_mm + _top_socket(asm, inst)
-            b_site = Site(f"{inst.name}_bottom", f"panel{k - 1}",
-                          tuple(units.mm_to_m(v) for v in (bottom_mm - [0, 0, lo.z0_mm])))
-            t_site = Site(f"{inst.name}_top", f"panel{k}", tuple(units.mm_to_m(v) for v in (top_mm - [0, 0, hi.z0_mm])))
-            sites += [b_site, t_site]
-            rest = units.mm_to_m(float(np.linalg.norm(top_mm - bottom_mm)))
-            soas.append(SoaActuator(inst.name, k, inst.line_name, inst.pressure_line, b_site.name,
-                                    t_site.name, rest))
-    return RobotModel(spec.name, links, joints, bending, sites, soas, actuation, supply_lags_s(asm))
+
+def _bending_joint(asm: Assembly, k: int, th: float, limits: _JointLimits,
+                   rod_in_gap) -> tuple[dict[str, Link], list[Joint], BendingJoint]:
+    """Joint k between panels k-1 and k: its four links (two virtual, the deformable body's two halves),
+    its five joints (phi, theta_a, chord, theta_b, phi_b) and its record."""
+    spec = asm.spec
+    j = f"j{k}"
+    seg = (k - 1) // spec.joints_per_segment + 1
+    t_mm = spec.joint.panel_thickness_mm
+    L = units.mm_to_m(spec.joint.gap_mm)
+    t = units.mm_to_m(t_mm)
+    rod_mat = spec.materials.get(spec.vertebra.material)
+    soa_mat = spec.material(spec.use.soa)
+    z_start_mm = asm.panel_layouts[k - 1].z0_mm + t_mm
+    T_start_inv = np.eye(4)
+    T_start_inv[2, 3] = -z_start_mm
+    # Deformable body at rest in the arc-start frame: five SOAs and the rod in the gap.
+    soa_solids = []
+    soa_inertials = []
+    for inst in asm.soas_of_joint(k):
+        T = T_start_inv @ np.asarray(inst.transform)
+        soa_solids.append(asm.part_of(inst).solid.moved(_location(T)))
+        soa_inertials.append(from_solid(asm.part_of(inst).solid, soa_mat.density_g_cm3, T,
+                                        asm.solid_properties(inst.part)))
+    rod_gap = _rod_solid(rod_in_gap, spec.vertebra.diameter_mm, z_start_mm)
+    parts = list(soa_inertials)
+    visuals = [Visual(f"{j}_soas", spec.use.soa, soa_mat.density_g_cm3, rgba("soa"), bd.Compound(soa_solids))]
+    if rod_gap is not None:
+        parts.append(from_solid(rod_gap, rod_mat.density_g_cm3))
+        visuals.append(Visual(f"{j}_rod", spec.vertebra.material, rod_mat.density_g_cm3, rgba("rod"), rod_gap))
+    half_a, half_b = split_deformable(compose(parts), L)
+    names = (f"{j}_after_phi", f"{j}_after_theta_a", f"{j}_after_chord", f"{j}_after_theta_b")
+    links = {names[0]: Link(names[0], Inertial.point(VIRTUAL_MASS_KG, VIRTUAL_INERTIA_KG_M2), role="virtual"),
+             names[1]: Link(names[1], half_a, visuals, role="deformable"),
+             names[2]: Link(names[2], half_b, role="deformable"),
+             names[3]: Link(names[3], Inertial.point(VIRTUAL_MASS_KG, VIRTUAL_INERTIA_KG_M2), role="virtual")}
+    half_lim = th / 2.0
+    velocity_limit_rad_s, effort_limit_nm = limits.velocity_rad_s, limits.effort_nm
+    v_half = velocity_limit_rad_s / 2.0
+    chord_lo = float(chord_joint_value(th, L))
+    joints = [
+        Joint(f"{j}_phi", "continuous", f"panel{k - 1}", names[0], _as_tuple(translation_m(z=t)), (0, 0, 1),
+              velocity=velocity_limit_rad_s * 4, effort=effort_limit_nm),
+        Joint(f"{j}_theta_a", "revolute", names[0], names[1], _as_tuple(np.eye(4)), (0, 1, 0),
+              -half_lim, half_lim, v_half, effort_limit_nm),
+        Joint(f"{j}_chord", "prismatic", names[1], names[2], _as_tuple(translation_m(z=L)), (0, 0, 1),
+              chord_lo - 1e-4, 1e-4, velocity_limit_rad_s * L, limits.chord_effort_n,
+              mimic=Mimic(f"{j}_theta_a", 0.0, 0.0)),
+        Joint(f"{j}_theta_b", "revolute", names[2], names[3], _as_tuple(np.eye(4)), (0, 1, 0),
+              -half_lim, half_lim, v_half, effort_limit_nm, mimic=Mimic(f"{j}_theta_a", 1.0)),
+        Joint(f"{j}_phi_b", "continuous", names[3], f"panel{k}", _as_tuple(np.eye(4)), (0, 0, 1),
+              velocity=velocity_limit_rad_s * 4, effort=effort_limit_nm, mimic=Mimic(f"{j}_phi", -1.0)),
+    ]
+    bend = BendingJoint(j, L, tuple(f"{j}_{n}" for n in ("phi", "theta_a", "chord", "theta_b", "phi_b")),
+                        f"panel{k - 1}", f"panel{k}", th, seg)
+    return links, joints, bend
+
+
+def _soa_sockets(asm: Assembly, k: int) -> tuple[list[Site], list[SoaActuator]]:
+    """Joint k's SOA sockets (the centres of the pocket floors the flanges sit on) and its SOAs between them."""
+    lo, hi = asm.panel_layouts[k - 1], asm.panel_layouts[k]
+    sites: list[Site] = []
+    soas: list[SoaActuator] = []
+    for inst in asm.soas_of_joint(k):
+        T = np.asarray(inst.transform)
+        bottom_mm = T[:3, 3]
+        top_mm = bottom_mm + _top_socket(asm, inst)
+        b_site = Site(f"{inst.name}_bottom", f"panel{k - 1}",
+                      tuple(units.mm_to_m(v) for v in (bottom_mm - [0, 0, lo.z0_mm])))
+        t_site = Site(f"{inst.name}_top", f"panel{k}", tuple(units.mm_to_m(v) for v in (top_mm - [0, 0, hi.z0_mm])))
+        sites += [b_site, t_site]
+        rest = units.mm_to_m(float(np.linalg.norm(top_mm - bottom_mm)))
+        soas.append(SoaActuator(inst.name, k, inst.line_name, inst.pressure_line, b_site.name,
+                                t_site.name, rest))
+    return sites, soas
 
 
 def supply_lags_s(asm: Assembly) -> dict[str, float]:

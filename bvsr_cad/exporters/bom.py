@@ -62,8 +62,34 @@ def _mold_bolt_length_mm(mold_set: MoldSet, thread: float) -> tuple[int, float]:
 def bom_rows(asm: Assembly, pieces: Sequence[RigidPiece] = (), mold_set: MoldSet | None = None) -> list[BomRow]:
     """Every BOM row of the three products (parts, rods, fasteners, pneumatics, totals)."""
     spec = asm.spec
-    fp = spec.fabrication_package
     items = made_items(asm, pieces, mold_set)
+    roles: dict[str, int] = {}  # the panels' cuts by role: what the panels are built with
+    for lay in asm.panel_layouts:
+        for c in lay.cuts:
+            roles[c.role] = roles.get(c.role, 0) + 1
+    bvsr, bvsr_mass = _bvsr_part_rows(asm, items)
+    pneumatics, total_tube, lines = _pneumatic_rows(asm, roles)
+    rigid, rigid_mass = _rigid_tail_rows(spec, items, pieces)
+    molds, mold_mass = _mold_rows(spec, items, mold_set)
+    rows = [*bvsr, *_bvsr_fastener_rows(asm, roles), *pneumatics, *rigid, *molds]
+
+    d_tube = spec.tubes.outer_diameter_mm
+    rows.append(BomRow("BVSR", "total", "BVSR modelled mass", "panels + SOAs + rods", 1, "", "", "", bvsr_mass,
+                       bvsr_mass, "fittings, tubes, adhesive and inserts not weighed"))
+    if pieces:
+        rows.append(BomRow("rigid tail", "total", "rigid tail mass", "all pieces, solid PLA", 1, "", RIGID_MATERIAL, "FDM",
+                           rigid_mass, rigid_mass, "infill lowers it"))
+    if mold_set is not None and mold_set.parts:
+        rows.append(BomRow("molds", "total", "mold material", "rigid sets + cores", 1, "", "", "FDM", mold_mass,
+                           mold_mass, ""))
+    rows.append(BomRow("pneumatics", "total", "tube", f"PU tube {d_tube:g} mm, all lines", round(total_tube, 1),
+                       "mm", "PU", "cut", None, None, f"{lines} lines"))
+    return rows
+
+
+def _bvsr_part_rows(asm: Assembly, items) -> tuple[list[BomRow], float]:
+    """The BVSR's parts and rods, and their modelled mass, g."""
+    spec = asm.spec
     rows: list[BomRow] = []
     bvsr_mass = 0.0
     for it in (i for i in items if i.product == "BVSR"):
@@ -83,12 +109,13 @@ def bom_rows(asm: Assembly, pieces: Sequence[RigidPiece] = (), mold_set: MoldSet
                                it.quantity, "pcs", it.material, it.process, it.mass_each_g,
                                it.quantity * it.mass_each_g,
                                ", ".join(names[:3]) + (" ..." if len(names) > 3 else "")))
+    return rows, bvsr_mass
 
-    # Fasteners of the BVSR, counted from the panel layouts (what the panels are built with).
-    roles: dict[str, int] = {}
-    for lay in asm.panel_layouts:
-        for c in lay.cuts:
-            roles[c.role] = roles.get(c.role, 0) + 1
+
+def _bvsr_fastener_rows(asm: Assembly, roles: dict[str, int]) -> list[BomRow]:
+    """The BVSR's inserts and set screws, counted from the panel layouts."""
+    spec = asm.spec
+    rows: list[BomRow] = []
     mount_inserts = sum(1 for lay in asm.panel_layouts for c in lay.cuts if c.name.startswith("mount_insert"))
     payload_inserts = sum(1 for lay in asm.panel_layouts for c in lay.cuts if c.name.startswith("payload_insert"))
     if mount_inserts:
@@ -104,14 +131,19 @@ def bom_rows(asm: Assembly, pieces: Sequence[RigidPiece] = (), mold_set: MoldSet
         rows.append(BomRow("BVSR", "fastener", "rod set screw", f"ISO 4026 M{size:g} x 4 set screw, flat point",
                            roles.get("setscrew", 0), "pcs", "steel", "bought", None, None,
                            "one per panel socket"))
+    return rows
 
-    # Pneumatics.
+
+def _pneumatic_rows(asm: Assembly, roles: dict[str, int]) -> tuple[list[BomRow], float, int]:
+    """The fittings, each line's tube, tees or manifolds and valves; the tubes' total length, mm, and the
+    number of lines."""
+    spec = asm.spec
+    fp = spec.fabrication_package
     lines = spec.segments * 5
-    fittings = roles.get("port", 0)
     d_tube = spec.tubes.outer_diameter_mm
-    rows.append(BomRow("pneumatics", "pneumatic", "root fitting",
-                       f"push-in fitting M5 x tube {d_tube:g} mm, straight", fittings, "pcs", "", "bought", None, None,
-                       "segment 1's five lines, in the root mount's tapped ports"))
+    rows = [BomRow("pneumatics", "pneumatic", "root fitting", f"push-in fitting M5 x tube {d_tube:g} mm, straight",
+                   roles.get("port", 0), "pcs", "", "bought", None, None,
+                   "segment 1's five lines, in the root mount's tapped ports")]
     routes = tube_routes_mm(asm)
     cut = line_tube_lengths_mm(asm)
     total_tube = 0.0
@@ -130,27 +162,37 @@ def bom_rows(asm: Assembly, pieces: Sequence[RigidPiece] = (), mold_set: MoldSet
     rows.append(BomRow("pneumatics", "pneumatic", "solenoid valve", "2/2-way solenoid valve, 24 V DC",
                        lines * fp.valves_per_line, "pcs", "", "bought", None, None,
                        f"{fp.valves_per_line} per line x {lines} lines (paper: 20 valves for 10 channels)"))
+    return rows, total_tube, lines
 
-    # Rigid comparison tail.
+
+def _rigid_tail_rows(spec, items, pieces: Sequence[RigidPiece]) -> tuple[list[BomRow], float]:
+    """The rigid comparison tail's pieces, dowel pins, tie rod and nuts, and its mass, g."""
+    rows: list[BomRow] = []
     rigid_mass = 0.0
-    if pieces:
-        size = {p.name: p.size_mm for p in pieces}
-        for it in (i for i in items if i.product == "rigid tail"):
-            rigid_mass += it.mass_each_g
-            sx, sy, sz = size[it.source]
-            rows.append(BomRow("rigid tail", "part", it.label, f"rigid tail piece {sx:.1f} x {sy:.1f} x {sz:.1f} mm",
-                               it.quantity, "pcs", it.material, it.process, it.mass_each_g, it.mass_each_g,
-                               "mass at solid density; infill lowers it"))
-        j = rigid_joining(spec)
-        rows.append(BomRow("rigid tail", "fastener", "dowel pin", j.pin_designation, j.pin_count,
-                           "pcs", "steel", "bought", None, None, "one per SOA column end"))
-        rows.append(BomRow("rigid tail", "fastener", "tie rod", f"{j.tie_rod_designation} threaded rod, cut to "
-                           f"{j.tie_rod_cut_length_mm:.1f} mm", 1, "pcs", "steel", "cut", None, None,
-                           "through the rod column, clamps every piece"))
-        rows.append(BomRow("rigid tail", "fastener", "tie rod nut", j.nut_designation + " hex nut",
-                           j.nut_count, "pcs", "steel", "bought", None, None, "in the root and tip nut pockets"))
+    if not pieces:
+        return rows, rigid_mass
+    size = {p.name: p.size_mm for p in pieces}
+    for it in (i for i in items if i.product == "rigid tail"):
+        rigid_mass += it.mass_each_g
+        sx, sy, sz = size[it.source]
+        rows.append(BomRow("rigid tail", "part", it.label, f"rigid tail piece {sx:.1f} x {sy:.1f} x {sz:.1f} mm",
+                           it.quantity, "pcs", it.material, it.process, it.mass_each_g, it.mass_each_g,
+                           "mass at solid density; infill lowers it"))
+    j = rigid_joining(spec)
+    rows.append(BomRow("rigid tail", "fastener", "dowel pin", j.pin_designation, j.pin_count,
+                       "pcs", "steel", "bought", None, None, "one per SOA column end"))
+    rows.append(BomRow("rigid tail", "fastener", "tie rod", f"{j.tie_rod_designation} threaded rod, cut to "
+                       f"{j.tie_rod_cut_length_mm:.1f} mm", 1, "pcs", "steel", "cut", None, None,
+                       "through the rod column, clamps every piece"))
+    rows.append(BomRow("rigid tail", "fastener", "tie rod nut", j.nut_designation + " hex nut",
+                       j.nut_count, "pcs", "steel", "bought", None, None, "in the root and tip nut pockets"))
+    return rows, rigid_mass
 
-    # Molds.
+
+def _mold_rows(spec, items, mold_set: MoldSet | None) -> tuple[list[BomRow], float]:
+    """The mold parts and cores, the mold bolts and nuts, and the molds' printed mass, g."""
+    fp = spec.fabrication_package
+    rows: list[BomRow] = []
     mold_mass = 0.0
     for it in (i for i in items if i.product == "molds"):
         sac = it.kind == "mold_core"
@@ -167,19 +209,7 @@ def bom_rows(asm: Assembly, pieces: Sequence[RigidPiece] = (), mold_set: MoldSet
                            f"(grip {grip:.1f} mm)"))
         rows.append(BomRow("molds", "fastener", "mold nut", f"ISO 4032 M{thread:g} hex nut", 4 * fp.mold_sets, "pcs",
                            "steel", "bought", None, None, "four per set"))
-
-    # Totals.
-    rows.append(BomRow("BVSR", "total", "BVSR modelled mass", "panels + SOAs + rods", 1, "", "", "", bvsr_mass,
-                       bvsr_mass, "fittings, tubes, adhesive and inserts not weighed"))
-    if pieces:
-        rows.append(BomRow("rigid tail", "total", "rigid tail mass", "all pieces, solid PLA", 1, "", RIGID_MATERIAL, "FDM",
-                           rigid_mass, rigid_mass, "infill lowers it"))
-    if mold_set is not None and mold_set.parts:
-        rows.append(BomRow("molds", "total", "mold material", "rigid sets + cores", 1, "", "", "FDM", mold_mass,
-                           mold_mass, ""))
-    rows.append(BomRow("pneumatics", "total", "tube", f"PU tube {d_tube:g} mm, all lines", round(total_tube, 1),
-                       "mm", "PU", "cut", None, None, f"{lines} lines"))
-    return rows
+    return rows, mold_mass
 
 
 def _fmt(v: Any) -> str:

@@ -161,6 +161,30 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
     timestep_s = act.timestep_s if chain == "exact" else (REDUCED_PER_SEGMENT_TIMESTEP_S if per_segment
                                                           else REDUCED_CHAIN_TIMESTEP_S)
     ET.SubElement(root, "option", timestep=_f(timestep_s), integrator="implicitfast")
+    _mjcf_defaults(root, model)
+    _mjcf_assets(root, robot, mesh_files)
+    _mjcf_worldbody(root, robot, model, chain)
+    # As stiff as the step allows (MuJoCo needs a time constant of at least two steps).
+    solref = _vec((2.0 * timestep_s, 1.0))
+    chord_err = _mjcf_equalities(root, robot, chain, per_segment, solref)
+    tendon = ET.SubElement(root, "tendon")
+    bend_overshoot = _mjcf_joint_tendons(tendon, robot, per_segment, solref) if chain == "reduced" else None
+    actuators = _mjcf_actuators(root, tendon, robot, per_segment)
+    ET.indent(root)
+    lags = sorted(set(robot.supply_lag_s.values()))
+    facts = {"chord_polynomial_max_error_m": chord_err, "actuators": actuators,
+             "actuator_control": "commanded (supply) gauge pressure, Pa; the chamber pressure is the "
+                                 "actuator's activation, a first-order lag of it" if lags else "gauge pressure, Pa",
+             "supply_lag_s": [lags[0], lags[-1]] if lags else None, "per_segment": per_segment,
+             "chain": chain, "timestep_s": timestep_s, "bend_limit": None if bend_overshoot is None else {
+                 "faces": 2 * BEND_LIMIT_DIRECTIONS, "max_overshoot": bend_overshoot,
+                 "tendons": "jk_bend_limit_<i>: cos(phi_i) (jk_ax + jk_bx) + sin(phi_i) (jk_ay + jk_by), "
+                            f"phi_i = 180 i / {BEND_LIMIT_DIRECTIONS} deg"}}
+    return ET.ElementTree(root), facts
+
+
+def _mjcf_defaults(root: ET.Element, model: str) -> None:
+    """The ``default`` section: the model's class with its visual and collision classes."""
     default = ET.SubElement(root, "default")
     top = ET.SubElement(default, "default", {"class": model})
     ET.SubElement(top, "joint", armature="1e-7")
@@ -170,6 +194,10 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
     # Self-contacts off (conaffinity 0), each shape's contype from CONTACT_TYPE: see collision_geom.
     ET.SubElement(col, "geom", group="3", density="0", rgba="0.5 0.5 0.5 0.3", conaffinity="0")
     ET.SubElement(top, "site", size="0.001", rgba="1 0 0 1", group="4")
+
+
+def _mjcf_assets(root: ET.Element, robot: RobotModel, mesh_files: dict[str, str]) -> None:
+    """The ``asset`` section: each visual and collision mesh once, then one material per colour name."""
     asset = ET.SubElement(root, "asset")
     mats = {}
     for link in robot.links.values():
@@ -183,100 +211,110 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
     for name, rgba in mats.items():
         ET.SubElement(asset, "material", name=name, rgba=_vec(rgba))
 
+
+def _mjcf_worldbody(root: ET.Element, robot: RobotModel, model: str, chain: str) -> None:
+    """The ``worldbody`` section: the mount, then the tail's bodies as the chain nests them."""
     world = ET.SubElement(root, "worldbody")
     mount = ET.SubElement(world, "body", name="bvsr_mount", pos=_vec((0, 0, MOUNT_HEIGHT_M)),
                           quat=_quat(R_WORLD_TAIL), childclass=model)
-    children: dict[str, list] = {}
-    for j in robot.joints:
-        children.setdefault(j.parent, []).append(j)
     sites_by_link: dict[str, list] = {}
     for s in robot.sites:
         sites_by_link.setdefault(s.link, []).append(s)
-    theta_lim = {b.name: b.theta_max_rad / 2 for b in robot.bending}
-    stiff_half = 2.0 * act.rod_bending_stiffness_nm_rad
-
-    def contents(body, link, offset_m=0.0):
-        """A link's inertial, visuals, collisions and sites, ``offset_m`` along the body's Z."""
-        shift = np.array([0.0, 0.0, offset_m])
-        I = link.inertial.inertia
-        ET.SubElement(body, "inertial", pos=_vec(link.inertial.com + shift), mass=_f(link.inertial.mass_kg),
-                      fullinertia=_vec((I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])))
-        for v in link.visuals:
-            ET.SubElement(body, "geom", {"class": "visual", "mesh": v.name, "material": v.material,
-                                         "name": f"{link.name}_{v.name}_visual"})
-        for c in link.collisions:
-            collision_geom(body, c, shift)
-        for s in sites_by_link.get(link.name, []):
-            ET.SubElement(body, "site", name=s.name, pos=_vec(s.pos_m))
-
-    def add_body(parent_el, link_name: str, joint=None):
-        link = robot.links[link_name]
-        attrs = {"name": link_name}
-        if joint is not None:
-            T = np.asarray(joint.T_parent_joint)
-            if np.linalg.norm(T[:3, 3]) > 0:
-                attrs["pos"] = _vec(T[:3, 3])
-            # The rest pose is written at phi = PHI_REST_RAD (see there); `ref` keeps qpos = phi.
-            rest = {"phi": PHI_REST_RAD, "phi_b": -PHI_REST_RAD}.get(joint.name.split("_", 1)[1])
-            if rest is not None:
-                attrs["quat"] = _quat(Rotation.from_euler("z", rest).as_matrix())
-        body = ET.SubElement(parent_el, "body", attrs)
-        if joint is not None:
-            jattrs = {"name": joint.name, "axis": _vec(joint.axis)}
-            bj = joint.name.split("_", 1)
-            kind = bj[1]
-            if joint.type == "prismatic":
-                # The rod's axial stiffness carries the SOAs' thrust; the equality only bends it to the arc.
-                jattrs.update(type="slide", range=_vec((joint.lower, joint.upper)),
-                              stiffness=_f(act.rod_axial_stiffness_n_m), armature=_f(CHORD_ARMATURE_KG))
-            else:
-                jattrs["type"] = "hinge"
-                if kind == "phi":
-                    jattrs.update(ref=_f(PHI_REST_RAD), damping=_f(PHI_DAMPING_NMS))
-                elif kind == "phi_b":
-                    jattrs.update(ref=_f(-PHI_REST_RAD))
-                if kind in ("theta_a", "theta_b"):
-                    lim = theta_lim[bj[0]]
-                    jattrs.update(range=_vec((-lim, lim)), stiffness=_f(stiff_half))
-            ET.SubElement(body, "joint", jattrs)
-        contents(body, link)
-        for j in children.get(link_name, []):
-            add_body(body, j.child, j)
-
-    def add_reduced(parent_el, k: int):
-        """Joint k's middle link (the whole deformable body) and panel k on it, then the rest."""
-        b = robot.bending[k - 1]
-        d = PRB_PIVOT_FRACTION * b.arc_length_m
-        t_m = np.asarray(next(j for j in robot.joints if j.child == f"{b.name}_after_phi").T_parent_joint)[2, 3]
-        half_a, half_b = robot.links[f"{b.name}_after_theta_a"], robot.links[f"{b.name}_after_chord"]
-        soft = dataclasses.replace(half_a, name=f"{b.name}_soft",
-                                   inertial=rest_pair(half_a.inertial, half_b.inertial, b.arc_length_m))
-        body = ET.SubElement(parent_el, "body", name=soft.name, pos=_vec((0, 0, t_m)))
-        for axis in "xy":  # no range: the joint's bend limit is the fixed tendons of _bend_limit_tendons
-            ET.SubElement(body, "joint", name=f"{b.name}_a{axis}", type="hinge", axis=_AXES[axis],
-                          pos=_vec((0, 0, d)), stiffness=_f(stiff_half))
-        contents(body, soft)
-        panel = ET.SubElement(body, "body", name=b.tip_link, pos=_vec((0, 0, b.arc_length_m)))
-        for axis in "yx":
-            ET.SubElement(panel, "joint", name=f"{b.name}_b{axis}", type="hinge", axis=_AXES[axis],
-                          pos=_vec((0, 0, -d)), stiffness=_f(stiff_half))
-        contents(panel, robot.links[b.tip_link])
-        if k < len(robot.bending):
-            add_reduced(panel, k + 1)
-
     if chain == "exact":
-        add_body(mount, robot.root)
+        children: dict[str, list] = {}
+        for j in robot.joints:
+            children.setdefault(j.parent, []).append(j)
+        _exact_body(mount, robot, robot.root, None, children, sites_by_link)
     else:
         root_body = ET.SubElement(mount, "body", name=robot.root)
-        contents(root_body, robot.links[robot.root])
-        add_reduced(root_body, 1)
+        _link_contents(root_body, robot.links[robot.root], sites_by_link)
+        _reduced_bodies(root_body, robot, 1, sites_by_link)
 
+
+def _link_contents(body: ET.Element, link, sites_by_link: dict[str, list], offset_m: float = 0.0) -> None:
+    """A link's inertial, visuals, collisions and sites, ``offset_m`` along the body's Z."""
+    shift = np.array([0.0, 0.0, offset_m])
+    I = link.inertial.inertia
+    ET.SubElement(body, "inertial", pos=_vec(link.inertial.com + shift), mass=_f(link.inertial.mass_kg),
+                  fullinertia=_vec((I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])))
+    for v in link.visuals:
+        ET.SubElement(body, "geom", {"class": "visual", "mesh": v.name, "material": v.material,
+                                     "name": f"{link.name}_{v.name}_visual"})
+    for c in link.collisions:
+        collision_geom(body, c, shift)
+    for s in sites_by_link.get(link.name, []):
+        ET.SubElement(body, "site", name=s.name, pos=_vec(s.pos_m))
+
+
+def _exact_body(parent_el: ET.Element, robot: RobotModel, link_name: str, joint, children: dict[str, list],
+                sites_by_link: dict[str, list]) -> None:
+    """The exact chain: ``link_name``'s body with the joint that moves it, then its children's."""
+    act = robot.actuation
+    link = robot.links[link_name]
+    attrs = {"name": link_name}
+    if joint is not None:
+        T = np.asarray(joint.T_parent_joint)
+        if np.linalg.norm(T[:3, 3]) > 0:
+            attrs["pos"] = _vec(T[:3, 3])
+        # The rest pose is written at phi = PHI_REST_RAD (see there); `ref` keeps qpos = phi.
+        rest = {"phi": PHI_REST_RAD, "phi_b": -PHI_REST_RAD}.get(joint.name.split("_", 1)[1])
+        if rest is not None:
+            attrs["quat"] = _quat(Rotation.from_euler("z", rest).as_matrix())
+    body = ET.SubElement(parent_el, "body", attrs)
+    if joint is not None:
+        jattrs = {"name": joint.name, "axis": _vec(joint.axis)}
+        bj = joint.name.split("_", 1)
+        kind = bj[1]
+        if joint.type == "prismatic":
+            # The rod's axial stiffness carries the SOAs' thrust; the equality only bends it to the arc.
+            jattrs.update(type="slide", range=_vec((joint.lower, joint.upper)),
+                          stiffness=_f(act.rod_axial_stiffness_n_m), armature=_f(CHORD_ARMATURE_KG))
+        else:
+            jattrs["type"] = "hinge"
+            if kind == "phi":
+                jattrs.update(ref=_f(PHI_REST_RAD), damping=_f(PHI_DAMPING_NMS))
+            elif kind == "phi_b":
+                jattrs.update(ref=_f(-PHI_REST_RAD))
+            if kind in ("theta_a", "theta_b"):
+                lim = next(b.theta_max_rad / 2 for b in robot.bending if b.name == bj[0])
+                jattrs.update(range=_vec((-lim, lim)), stiffness=_f(2.0 * act.rod_bending_stiffness_nm_rad))
+        ET.SubElement(body, "joint", jattrs)
+    _link_contents(body, link, sites_by_link)
+    for j in children.get(link_name, []):
+        _exact_body(body, robot, j.child, j, children, sites_by_link)
+
+
+def _reduced_bodies(parent_el: ET.Element, robot: RobotModel, k: int, sites_by_link: dict[str, list]) -> None:
+    """The reduced chain from joint k on: its middle link (the whole deformable body) and panel k on it,
+    then the rest."""
+    stiff_half = 2.0 * robot.actuation.rod_bending_stiffness_nm_rad
+    b = robot.bending[k - 1]
+    d = PRB_PIVOT_FRACTION * b.arc_length_m
+    t_m = np.asarray(next(j for j in robot.joints if j.child == f"{b.name}_after_phi").T_parent_joint)[2, 3]
+    half_a, half_b = robot.links[f"{b.name}_after_theta_a"], robot.links[f"{b.name}_after_chord"]
+    soft = dataclasses.replace(half_a, name=f"{b.name}_soft",
+                               inertial=rest_pair(half_a.inertial, half_b.inertial, b.arc_length_m))
+    body = ET.SubElement(parent_el, "body", name=soft.name, pos=_vec((0, 0, t_m)))
+    for axis in "xy":  # no range: the joint's bend limit is the fixed tendons of _bend_limit_tendons
+        ET.SubElement(body, "joint", name=f"{b.name}_a{axis}", type="hinge", axis=_AXES[axis],
+                      pos=_vec((0, 0, d)), stiffness=_f(stiff_half))
+    _link_contents(body, soft, sites_by_link)
+    panel = ET.SubElement(body, "body", name=b.tip_link, pos=_vec((0, 0, b.arc_length_m)))
+    for axis in "yx":
+        ET.SubElement(panel, "joint", name=f"{b.name}_b{axis}", type="hinge", axis=_AXES[axis],
+                      pos=_vec((0, 0, -d)), stiffness=_f(stiff_half))
+    _link_contents(panel, robot.links[b.tip_link], sites_by_link)
+    if k < len(robot.bending):
+        _reduced_bodies(panel, robot, k + 1, sites_by_link)
+
+
+def _mjcf_equalities(root: ET.Element, robot: RobotModel, chain: str, per_segment: bool, solref: str) -> float:
+    """The ``equality`` section: each joint's couplings (the reduced chain's two halves; the exact chain's
+    theta_b, phi_b and chord), then a segment's joints to its first. Returns the chord polynomial's largest
+    error, m (0 for the reduced chain)."""
     eq = ET.SubElement(root, "equality")
-    # As stiff as the step allows (MuJoCo needs a time constant of at least two steps).
-    solref = _vec((2.0 * timestep_s, 1.0))
     solimp = _vec(EQUALITY_SOLIMP)
     chord_err = 0.0
-    bend_overshoot = None
     for b in robot.bending:
         if chain == "reduced":
             for axis in "xy":
@@ -302,20 +340,29 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
             for kind, tag in zip(*(SEGMENT_COUPLED[chain])):
                 ET.SubElement(eq, "joint", name=f"{b.name}_{tag}_seg", joint1=f"{b.name}_{kind}",
                               joint2=f"{lead}_{kind}", polycoef="0 1 0 0 0", solref=solref, solimp=solimp)
+    return chord_err
 
-    tendon = ET.SubElement(root, "tendon")
-    if chain == "reduced":
-        shear_damping = _f(_soa_bending_damping(robot))
-        shear_stiffness = _f(shear_stiffness_nm_rad(robot))
-        for b in robot.bending:
-            for axis in "xy":
-                fixed = ET.SubElement(tendon, "fixed", name=f"{b.name}_shear_{axis}", damping=shear_damping,
-                                      stiffness=shear_stiffness)
-                ET.SubElement(fixed, "joint", joint=f"{b.name}_a{axis}", coef="1")
-                ET.SubElement(fixed, "joint", joint=f"{b.name}_b{axis}", coef="-1")
-        if per_segment:
-            _segment_spread_tendons(tendon, robot)
-        bend_overshoot = _bend_limit_tendons(tendon, robot, solref)
+
+def _mjcf_joint_tendons(tendon: ET.Element, robot: RobotModel, per_segment: bool, solref: str) -> float:
+    """The reduced chain's fixed tendons: each joint's shear between its halves, a segment's spread and the
+    bend limits. Returns the bend limit polygon's largest overshoot (:func:`_bend_limit_tendons`)."""
+    shear_damping = _f(_soa_bending_damping(robot))
+    shear_stiffness = _f(shear_stiffness_nm_rad(robot))
+    for b in robot.bending:
+        for axis in "xy":
+            fixed = ET.SubElement(tendon, "fixed", name=f"{b.name}_shear_{axis}", damping=shear_damping,
+                                  stiffness=shear_stiffness)
+            ET.SubElement(fixed, "joint", joint=f"{b.name}_a{axis}", coef="1")
+            ET.SubElement(fixed, "joint", joint=f"{b.name}_b{axis}", coef="-1")
+    if per_segment:
+        _segment_spread_tendons(tendon, robot)
+    return _bend_limit_tendons(tendon, robot, solref)
+
+
+def _mjcf_actuators(root: ET.Element, tendon: ET.Element, robot: RobotModel, per_segment: bool) -> int:
+    """The ``actuator`` section: one pressure actuator per SOA (per line with ``per_segment``) on a
+    spatial tendon through its SOAs' sockets. Returns the number of actuators."""
+    act = robot.actuation
     actuator = ET.SubElement(root, "actuator")
     ctrl = _vec((act.pressure_min_pa, act.pressure_max_pa))
     groups: dict[str, list] = {}
@@ -339,17 +386,7 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
         ET.SubElement(actuator, "general", name=name, tendon=f"{name}_tendon", ctrllimited="true", ctrlrange=ctrl,
                       **dyn, gaintype="affine", gainprm=_vec((law.area_m2 + m_a * l0, -m_a, 0.0)),
                       biastype="affine", biasprm=_vec((n_a * l0, -n_a, -c)))
-    ET.indent(root)
-    lags = sorted(set(robot.supply_lag_s.values()))
-    facts = {"chord_polynomial_max_error_m": chord_err, "actuators": len(groups),
-             "actuator_control": "commanded (supply) gauge pressure, Pa; the chamber pressure is the "
-                                 "actuator's activation, a first-order lag of it" if lags else "gauge pressure, Pa",
-             "supply_lag_s": [lags[0], lags[-1]] if lags else None, "per_segment": per_segment,
-             "chain": chain, "timestep_s": timestep_s, "bend_limit": None if bend_overshoot is None else {
-                 "faces": 2 * BEND_LIMIT_DIRECTIONS, "max_overshoot": bend_overshoot,
-                 "tendons": "jk_bend_limit_<i>: cos(phi_i) (jk_ax + jk_bx) + sin(phi_i) (jk_ay + jk_by), "
-                            f"phi_i = 180 i / {BEND_LIMIT_DIRECTIONS} deg"}}
-    return ET.ElementTree(root), facts
+    return len(groups)
 
 
 def collision_mesh_name(c: Collision) -> str:

@@ -226,9 +226,9 @@ def generate_launch_description():
 '''
 
 
-def _rviz(root_link: str) -> str:
-    frame = json.dumps(root_link)  # a JSON string is a YAML double-quoted scalar
-    return f"""Panels:
+#: The RViz 2 configuration: a grid and the robot model from ``/robot_description``, seen from an orbit
+#: ``{distance_m}`` away, in the fixed frame ``{frame}`` (a YAML scalar).
+_RVIZ_CONFIG = """Panels:
   - Class: rviz_common/Displays
     Name: Displays
   - Class: rviz_common/Views
@@ -286,7 +286,7 @@ Visualization Manager:
   Views:
     Current:
       Class: rviz_default_plugins/Orbit
-      Distance: {_VIEW_DISTANCE_M}
+      Distance: {distance_m}
       Enable Stereo Rendering:
         Stereo Eye Separation: 0.06
         Stereo Focal Distance: 1
@@ -310,6 +310,11 @@ Window Geometry:
   Height: 800
   Width: 1200
 """
+
+
+def _rviz(root_link: str) -> str:
+    frame = json.dumps(root_link)  # a JSON string is a YAML double-quoted scalar
+    return _RVIZ_CONFIG.format(frame=frame, distance_m=_VIEW_DISTANCE_M)
 
 
 def _readme(package: str, name: str) -> str:

@@ -307,6 +307,28 @@ def load_study(path: str | Path) -> Study:
     name = raw.get("name", path.stem)
     if not isinstance(name, str) or not name.replace("_", "").replace("-", "").isalnum():
         problems.append(f"name = {name!r}: letters, digits, '_' and '-' only")
+    base_path, base_data = _study_base(raw, path, problems)
+    allowed = known_keys(base_data) if base_data else []
+
+    def check_key(key: str, where: str) -> None:
+        """An unknown key is a problem (not judged when the base file itself could not be read)."""
+        if allowed:
+            _check_key(key, where, allowed, problems)
+
+    options = _study_options(raw, problems)
+    fixed, grid, listed = _study_axes(raw, check_key, problems)
+    search = _study_search(raw, check_key, problems)
+    expect = _study_expectations(raw, problems)
+    if search["kind"] == "grid" and not grid and not listed:
+        problems.append("no axes: give [grid], [[variants]], [random] or [optuna]")
+    if problems:
+        raise StudyError(path, problems)
+    return Study(path=path, name=name, base_path=base_path, base_data=base_data, **options, fixed=dict(fixed),
+                 grid={k: list(v) for k, v in grid.items()}, listed=tuple(listed), **search, expect=tuple(expect))
+
+
+def _study_base(raw: dict[str, Any], path: Path, problems: list[str]) -> tuple[Path, dict[str, Any]]:
+    """The base parameter file's path (relative to the study) and its data, its data file made absolute."""
     base_raw = raw.get("base")
     base_data: dict[str, Any] = {}
     base_path = path.parent / str(base_raw or "")
@@ -318,13 +340,12 @@ def load_study(path: str | Path) -> Study:
         except StudyError as exc:
             problems += [f"base = {base_raw!r} ({base_path}): {p}" for p in exc.problems]
     _absolute_data_file(base_data, base_path)
-    allowed = known_keys(base_data) if base_data else []
+    return base_path, base_data
 
-    def check_key(key: str, where: str) -> None:
-        """An unknown key is a problem (not judged when the base file itself could not be read)."""
-        if allowed:
-            _check_key(key, where, allowed, problems)
 
+def _study_options(raw: dict[str, Any], problems: list[str]) -> dict[str, Any]:
+    """What each variant reports and under which conditions: metrics, checks, time limit, baseline,
+    conditions (as :class:`Study`'s fields)."""
     metrics = raw.get("metrics", [])
     if not isinstance(metrics, list) or not metrics or not all(isinstance(m, str) for m in metrics):
         problems.append(f"metrics = {metrics!r}: a non-empty list of metric groups or metric names")
@@ -349,14 +370,19 @@ def load_study(path: str | Path) -> Study:
         v = conditions.get(k, 0.0)
         if isinstance(v, bool) or not isinstance(v, (int, float)) or v < 0:
             problems.append(f"conditions.{k} = {v!r}: a number >= 0")
+    return {"metrics": tuple(metrics), "checks": bool(checks), "time_limit_s": float(limit),
+            "baseline": bool(baseline), "conditions": dict(conditions)}
 
+
+def _study_axes(raw: dict[str, Any], check_key: collections.abc.Callable[[str, str], None],
+                problems: list[str]) -> tuple[dict, dict, list]:
+    """The values every variant sets (``set``), the grid's axes and the listed variants."""
     fixed = raw.get("set", {})
     if not isinstance(fixed, dict):
         problems.append(f"set = {fixed!r}: a table of 'table.key' = value")
         fixed = {}
     for k in fixed:
         check_key(k, "set")
-
     grid = raw.get("grid", {})
     if not isinstance(grid, dict):
         problems.append(f"grid = {grid!r}: a table of 'table.key' = [values]")
@@ -373,18 +399,22 @@ def load_study(path: str | Path) -> Study:
         for k in v:
             if k != "label":
                 check_key(k, f"variants[{i}]")
+    return fixed, grid, listed
 
-    kind = "grid"
+
+def _study_search(raw: dict[str, Any], check_key: collections.abc.Callable[[str, str], None],
+                  problems: list[str]) -> dict[str, Any]:
+    """The study's kind (grid, random or optuna) and its search: space, samples or trials, seed, and for
+    Optuna its objectives, constraints and sampler (as :class:`Study`'s fields)."""
+    out: dict[str, Any] = {"kind": "grid", "space": (), "samples": 0, "seed": 1, "trials": 0, "sampler": "tpe",
+                           "objectives": (), "constraints": ()}
     space: list[Dimension] = []
-    samples, seed, trials, sampler = 0, 1, 0, "tpe"
-    objectives: list[Objective] = []
-    constraints: list[Constraint] = []
     if "random" in raw and "optuna" in raw:
         problems.append("random and optuna: a study is one of them (grid and listed variants may join either)")
     for section in ("random", "optuna"):
         if section not in raw:
             continue
-        kind = section
+        out["kind"] = section
         sec = raw[section]
         if not isinstance(sec, dict):
             problems.append(f"{section}: a table")
@@ -403,6 +433,7 @@ def load_study(path: str | Path) -> Study:
         if isinstance(seed, bool) or not isinstance(seed, int):
             problems.append(f"{section}.seed = {seed!r}: an integer")
             seed = 1
+        out["seed"] = seed
         dims = sec.get("space", {})
         if not isinstance(dims, dict) or not dims:
             problems.append(f"{section}.space: a non-empty table of 'table.key' = [choices] or {{ low, high }}")
@@ -413,29 +444,43 @@ def load_study(path: str | Path) -> Study:
             if d is not None:
                 space.append(d)
         if section == "random":
-            samples = count
+            out["samples"] = count
         else:
-            trials = count
-            objs = sec.get("objectives", [])
-            if not isinstance(objs, list) or not objs:
-                problems.append("optuna.objectives: a non-empty list of { metric = ..., direction = ... }")
-                objs = []
-            for o in objs:
-                if not isinstance(o, dict) or set(o) != {"metric", "direction"} or o["direction"] not in DIRECTIONS:
-                    problems.append(f"optuna.objectives: {o!r}: expected {{ metric = name, direction = "
-                                    f"'maximize' or 'minimize' }}")
-                    continue
-                objectives.append(Objective(o["metric"], o["direction"]))
-            for c in sec.get("constraints", []):
-                ok = isinstance(c, dict) and "metric" in c and set(c) <= {"metric", "min", "max"} \
-                    and ("min" in c or "max" in c)
-                if not ok:
-                    problems.append(f"optuna.constraints: {c!r}: expected {{ metric = name, min = x and/or max = y }}")
-                    continue
-                constraints.append(Constraint(c["metric"], c.get("min"), c.get("max")))
-            sampler = sec.get("sampler", "tpe")
-            if sampler not in ("tpe", "random"):
-                problems.append(f"optuna.sampler = {sampler!r}: 'tpe' or 'random'")
+            out["trials"] = count
+            out.update(_optuna_goals(sec, problems))
+    out["space"] = tuple(space)
+    return out
+
+
+def _optuna_goals(sec: dict[str, Any], problems: list[str]) -> dict[str, Any]:
+    """An Optuna study's objectives, constraints and sampler."""
+    objectives: list[Objective] = []
+    constraints: list[Constraint] = []
+    objs = sec.get("objectives", [])
+    if not isinstance(objs, list) or not objs:
+        problems.append("optuna.objectives: a non-empty list of { metric = ..., direction = ... }")
+        objs = []
+    for o in objs:
+        if not isinstance(o, dict) or set(o) != {"metric", "direction"} or o["direction"] not in DIRECTIONS:
+            problems.append(f"optuna.objectives: {o!r}: expected {{ metric = name, direction = "
+                            f"'maximize' or 'minimize' }}")
+            continue
+        objectives.append(Objective(o["metric"], o["direction"]))
+    for c in sec.get("constraints", []):
+        ok = isinstance(c, dict) and "metric" in c and set(c) <= {"metric", "min", "max"} \
+            and ("min" in c or "max" in c)
+        if not ok:
+            problems.append(f"optuna.constraints: {c!r}: expected {{ metric = name, min = x and/or max = y }}")
+            continue
+        constraints.append(Constraint(c["metric"], c.get("min"), c.get("max")))
+    sampler = sec.get("sampler", "tpe")
+    if sampler not in ("tpe", "random"):
+        problems.append(f"optuna.sampler = {sampler!r}: 'tpe' or 'random'")
+    return {"objectives": tuple(objectives), "constraints": tuple(constraints), "sampler": sampler}
+
+
+def _study_expectations(raw: dict[str, Any], problems: list[str]) -> list[Expectation]:
+    """The ``[[expect]]`` tables: which metric rises or falls with which axis, and the source saying so."""
     expect: list[Expectation] = []
     raw_expect = raw.get("expect", [])
     if not isinstance(raw_expect, list):
@@ -450,16 +495,7 @@ def load_study(path: str | Path) -> Study:
             continue
         versus = e.get("rises_with", e.get("falls_with"))
         expect.append(Expectation(e["metric"], versus, 1 if "rises_with" in e else -1, str(e.get("source", ""))))
-    if kind == "grid" and not grid and not listed:
-        problems.append("no axes: give [grid], [[variants]], [random] or [optuna]")
-    if problems:
-        raise StudyError(path, problems)
-    return Study(path=path, name=name, base_path=base_path, base_data=base_data, kind=kind,
-                 metrics=tuple(metrics), checks=bool(checks), time_limit_s=float(limit), baseline=bool(baseline),
-                 conditions=dict(conditions), fixed=dict(fixed), grid={k: list(v) for k, v in grid.items()},
-                 listed=tuple(listed), space=tuple(space), samples=samples, seed=seed, trials=trials,
-                 objectives=tuple(objectives), constraints=tuple(constraints), expect=tuple(expect),
-                 sampler=sampler)
+    return expect
 
 
 def _absolute_data_file(data: dict[str, Any], base_path: Path) -> None:

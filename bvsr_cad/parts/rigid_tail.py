@@ -108,74 +108,83 @@ def rigid_tail_pieces(spec: TailSpec, layouts: list[PanelLayout],
     problems = twin_problems(spec)
     if problems:
         raise ValueError("; ".join(problems))
-    fp = spec.fabrication_package
     soa_env = soa_envelope(spec.soa, spec.joint.base_diameter_mm)
+    return [_rigid_piece(spec, layouts, k, soa_env, soa_transforms) for k in range(1, len(layouts) + 1)]
+
+
+def _piece_features(spec: TailSpec, layouts: list[PanelLayout], k: int, top: float) -> list[PrintFeature]:
+    """Piece k's tie rod hole, pin holes and nut pockets, in the tail frame. Pin holes go up from the piece's
+    bed face (into the panel, under the previous joint's columns) and down from its columns' top faces."""
+    n = len(layouts)
+    lay = layouts[k - 1]
+    z0 = lay.z0_mm
     d_pin, d_tie = pin_hole_mm(spec), tie_rod_hole_mm(spec)
     # The pin sits deeper in the column than in the panel so the tip panel keeps a floor over its holes.
     panel_pin_depth, column_pin_depth = pin_depths_mm(spec, layouts[0].thickness_mm)
+    features = [PrintFeature("tie_rod", "tie_rod_hole", (0.0, 0.0, z0 - 1e-3), (0.0, 0.0, top + 1e-3), d_tie)]
+    angles = soa_angles_deg()
+    if k > 1:
+        for i, a in enumerate(angles, start=1):
+            xy = polar(lay.pitch_radius_lower_mm, a)
+            features.append(PrintFeature(f"pin_{k - 1}_{i}_upper", "pin_hole", (*xy, z0 - 1e-3),
+                                         (*xy, z0 + panel_pin_depth), d_pin))
+    if k < n:
+        nxt = layouts[k]
+        for i, a in enumerate(angles, start=1):
+            xy = polar(nxt.pitch_radius_lower_mm, a)
+            features.append(PrintFeature(f"pin_{k}_{i}_lower", "pin_hole", (*xy, top - column_pin_depth),
+                                         (*xy, top + 1e-3), d_pin))
+    return features
+
+
+def _rigid_piece(spec: TailSpec, layouts: list[PanelLayout], k: int, soa_env: bd.Solid,
+                 soa_transforms: dict[int, list[np.ndarray]]) -> RigidPiece:
+    """Piece k: panel k-1 with joint k's SOA columns and rod fused on (the tip piece: the tip panel alone),
+    less the panel's kept cuts, the next panel's flange pockets, its holes and its nut pocket."""
+    fp = spec.fabrication_package
     nut_af = metric(fp.tie_rod_thread).nut_af_mm + NUT_POCKET_CLEARANCE_MM
     nut_depth = nut_pocket_depth_mm(spec)
-    pieces: list[RigidPiece] = []
     n = len(layouts)
-    for k in range(1, n + 1):
-        lay = layouts[k - 1]
-        z0 = lay.z0_mm
-        top = layouts[k].z0_mm if k < n else z0 + lay.thickness_mm
-        down = np.eye(4)
-        down[2, 3] = -z0
-        body = _frustum(lay)
-        body = fuse_all(body, (cylinder_between(b.p0, b.p1, b.diameter_mm) for b in lay.bosses))
-        features: list[PrintFeature] = []
-        if k < n:
-            rod = bd.Solid.make_cylinder(spec.vertebra.diameter_mm / 2.0, top - z0)
-            columns = [soa_env.moved(location(down @ m)) for m in soa_transforms[k]]
-            body = fuse_all(body, [rod, *columns])
-        cuts = [cylinder_between(c.p0, c.p1, c.diameter_mm) for c in lay.cuts if c.role in KEPT_ROLES]
-        h = top - z0
-        # Tie rod along the axis, through the whole piece.
-        features.append(PrintFeature("tie_rod", "tie_rod_hole", (0.0, 0.0, z0 - 1e-3), (0.0, 0.0, top + 1e-3), d_tie))
-        # Pin holes: up from this piece's bed face (into the panel, under the previous joint's columns)
-        # and down from the top faces of this piece's columns.
-        angles = soa_angles_deg()
-        if k > 1:
-            for i, a in enumerate(angles, start=1):
-                xy = polar(lay.pitch_radius_lower_mm, a)
-                features.append(PrintFeature(f"pin_{k - 1}_{i}_upper", "pin_hole", (*xy, z0 - 1e-3),
-                                             (*xy, z0 + panel_pin_depth), d_pin))
-        if k < n:
-            nxt = layouts[k]
-            for i, a in enumerate(angles, start=1):
-                xy = polar(nxt.pitch_radius_lower_mm, a)
-                features.append(PrintFeature(f"pin_{k}_{i}_lower", "pin_hole", (*xy, top - column_pin_depth),
-                                             (*xy, top + 1e-3), d_pin))
-        tools = list(cuts)
-        if k < n:
-            # The SOA flanges reach into the next panel's pockets: that part belongs to the next piece.
-            side = max(400.0, 4.0 * (lay.rim_radius_lower_mm + spec.joint.base_diameter_mm))
-            tools.append(bd.Solid.make_box(side, side, max(20.0, 2.0 * lay.thickness_mm))
-                         .moved(bd.Location((-side / 2.0, -side / 2.0, h))))
-        for f in features:
-            p0 = (f.p0[0], f.p0[1], f.p0[2] - z0)
-            p1 = (f.p1[0], f.p1[1], f.p1[2] - z0)
-            tools.append(cylinder_between(p0, p1, f.diameter_mm))
-        if k == 1:
-            features.append(PrintFeature("nut_root", "nut_pocket", (0.0, 0.0, z0 - 1e-3), (0.0, 0.0, z0 + nut_depth),
-                                         nut_af * 2 / math.sqrt(3.0)))
-            tools.append(_hex_prism(nut_af, -1e-3, nut_depth))
-        if k == n:
-            features.append(PrintFeature("nut_tip", "nut_pocket", (0.0, 0.0, top - nut_depth), (0.0, 0.0, top + 1e-3),
-                                         nut_af * 2 / math.sqrt(3.0)))
-            tools.append(_hex_prism(nut_af, h - nut_depth, h + 1e-3))
-        name = f"rigid_j{k}" if k < n else "rigid_tip"
-        solid = single_solid(cut_all(body, tools), f"rigid tail piece {name}")
-        box = bounds(solid)
-        size = (box.size.X, box.size.Y, box.size.Z)
-        # Either way round on the bed.
-        if not fits_printer(size, fp):
-            raise GeometryError(
-                f"rigid tail piece {name} is {size[0]:.1f} x {size[1]:.1f} x {size[2]:.1f} mm and does not fit the "
-                f"printer (fabrication_package.printer_x_mm/printer_y_mm/printer_z_mm = {fp.printer_x_mm:g} x "
-                f"{fp.printer_y_mm:g} x {fp.printer_z_mm:g} mm); one joint per piece is the smallest split that "
-                "prints without support")
-        pieces.append(RigidPiece(name, k, z0, solid, tuple(features), size, solid.volume))
-    return pieces
+    lay = layouts[k - 1]
+    z0 = lay.z0_mm
+    top = layouts[k].z0_mm if k < n else z0 + lay.thickness_mm
+    h = top - z0
+    down = np.eye(4)
+    down[2, 3] = -z0
+    body = _frustum(lay)
+    body = fuse_all(body, (cylinder_between(b.p0, b.p1, b.diameter_mm) for b in lay.bosses))
+    if k < n:
+        rod = bd.Solid.make_cylinder(spec.vertebra.diameter_mm / 2.0, top - z0)
+        columns = [soa_env.moved(location(down @ m)) for m in soa_transforms[k]]
+        body = fuse_all(body, [rod, *columns])
+    features = _piece_features(spec, layouts, k, top)
+    tools = [cylinder_between(c.p0, c.p1, c.diameter_mm) for c in lay.cuts if c.role in KEPT_ROLES]
+    if k < n:
+        # The SOA flanges reach into the next panel's pockets: that part belongs to the next piece.
+        side = max(400.0, 4.0 * (lay.rim_radius_lower_mm + spec.joint.base_diameter_mm))
+        tools.append(bd.Solid.make_box(side, side, max(20.0, 2.0 * lay.thickness_mm))
+                     .moved(bd.Location((-side / 2.0, -side / 2.0, h))))
+    for f in features:
+        p0 = (f.p0[0], f.p0[1], f.p0[2] - z0)
+        p1 = (f.p1[0], f.p1[1], f.p1[2] - z0)
+        tools.append(cylinder_between(p0, p1, f.diameter_mm))
+    if k == 1:
+        features.append(PrintFeature("nut_root", "nut_pocket", (0.0, 0.0, z0 - 1e-3), (0.0, 0.0, z0 + nut_depth),
+                                     nut_af * 2 / math.sqrt(3.0)))
+        tools.append(_hex_prism(nut_af, -1e-3, nut_depth))
+    if k == n:
+        features.append(PrintFeature("nut_tip", "nut_pocket", (0.0, 0.0, top - nut_depth), (0.0, 0.0, top + 1e-3),
+                                     nut_af * 2 / math.sqrt(3.0)))
+        tools.append(_hex_prism(nut_af, h - nut_depth, h + 1e-3))
+    name = f"rigid_j{k}" if k < n else "rigid_tip"
+    solid = single_solid(cut_all(body, tools), f"rigid tail piece {name}")
+    box = bounds(solid)
+    size = (box.size.X, box.size.Y, box.size.Z)
+    # Either way round on the bed.
+    if not fits_printer(size, fp):
+        raise GeometryError(
+            f"rigid tail piece {name} is {size[0]:.1f} x {size[1]:.1f} x {size[2]:.1f} mm and does not fit the "
+            f"printer (fabrication_package.printer_x_mm/printer_y_mm/printer_z_mm = {fp.printer_x_mm:g} x "
+            f"{fp.printer_y_mm:g} x {fp.printer_z_mm:g} mm); one joint per piece is the smallest split that "
+            "prints without support")
+    return RigidPiece(name, k, z0, solid, tuple(features), size, solid.volume)

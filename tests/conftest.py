@@ -12,9 +12,9 @@ ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / "params"
 
 # Hypothesis profiles (tests/test_feasibility.py's search for the frontier): "ci", loaded unless
-# --hypothesis-profile names another, draws a fixed sequence of a bounded number of examples (about 30 s
+# --hypothesis-profile names another, draws a fixed sequence of a bounded number of examples (about 30 CPU s
 # on 2 cores); "long", by hand, a fresh random search ten times as long.
-settings.register_profile("ci", max_examples=120, derandomize=True, database=None, deadline=None, print_blob=True)
+settings.register_profile("ci", max_examples=100, derandomize=True, database=None, deadline=None, print_blob=True)
 settings.register_profile("long", max_examples=1200, deadline=None, print_blob=True)
 settings.load_profile("ci")
 

@@ -20,6 +20,7 @@ from ..models.rod import rod_section
 from ..parameters.layout import N_SOA
 from ..models.statics import Actuator, LumpedMasses, TailStatics, quasi_static_segment
 from ..parameters.tables import TailSpec
+from .limits import UselessResultError
 
 Progress = Callable[[str], None]
 
@@ -62,6 +63,21 @@ class Workspace:
         return float(np.max(np.hypot(self.w[..., 0], self.w[..., 1])))
 
 
+def unsolved_problems(spec: TailSpec, line_kpa: np.ndarray, why: str) -> list[str]:
+    """The protocol's pressures for which the forward statics find no equilibrium (Newton's steps do not
+    shrink: the SOAs' force law, k = m_a P + n_a, leaves the straight tail no stiffness under vacuum), with
+    the stiffness at the lowest gauge pressure drawn."""
+    a = spec.actuation
+    low = float(np.min(line_kpa))
+    k = a.stiffness_slope_n_per_m_per_kpa * low + a.stiffness_offset_n_per_m
+    return [f"actuation.stiffness_slope_n_per_m_per_kpa = {a.stiffness_slope_n_per_m_per_kpa!r}, "
+            f"actuation.stiffness_offset_n_per_m = {a.stiffness_offset_n_per_m!r}: the forward statics find no "
+            f"equilibrium for the workspace protocol's pressures ({why}); an SOA's k = m_a P + n_a is {k:.0f} N/m "
+            f"at the lowest gauge pressure drawn, {low:.1f} kPa (actuation.workspace_depressurised_min_kpa_abs = "
+            f"{a.workspace_depressurised_min_kpa_abs!r}); allowed: a force law stiff enough at that pressure (the "
+            "paper's fit: m_a = 9.4, n_a = 2918) or a shallower vacuum"]
+
+
 def empty_problems(ws: Workspace, spec: TailSpec) -> list[str]:
     """A workspace in which no sample bends any joint (every line at atmospheric, or forces that cannot
     bend the tail): what the protocol keys that drew it allow (``bvsr_cad.parameters.load`` refuses the
@@ -93,7 +109,10 @@ def run_workspace(asm: Assembly, samples: int, seed: int, progress: Progress | N
     ws = []
     for i in range(0, samples, chunk):
         say(f"workspace: forward statics {i}..{min(samples, i + chunk)} of {samples}")
-        ws.append(st.forward(p[i:i + chunk]))
+        try:
+            ws.append(st.forward(p[i:i + chunk]))
+        except RuntimeError as exc:
+            raise UselessResultError(f"tail {spec.name!r}", unsolved_problems(spec, p[i:i + chunk], str(exc))) from exc
     w = np.concatenate(ws)
     return Workspace(samples, seed, st.kin.tip_point_mm(w), w, p)
 

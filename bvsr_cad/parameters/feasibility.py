@@ -14,8 +14,9 @@ so their distances are known in closed form before any solid is made:
 
 Each :class:`RestGap` is the distance between two points that lie on the two solids as designed, so it
 is never below their true distance at rest: a file refused for it is one whose tail cannot keep the
-clearance even straight. The plane-section map of the analyses moves a joint's cross-section rigidly,
-so the SOA pairs (every section of one pair at one height) keep that distance in every pose, too. The
+clearance even straight, where the joint-limit search starts. The plane-section map of the analyses
+moves a joint's cross-section rigidly, so the SOA pairs (two points at one height, to the SOAs' tilt in
+the cone) keep that distance in every pose, too: no bend can mend them. The
 analyses measure meshes inscribed in the solids (chords of at most 0.02 mm), which read the same
 distances up to a few hundredths of a millimetre long; a refusal is about the solids.
 """

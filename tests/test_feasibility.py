@@ -463,6 +463,7 @@ def test_a_seeded_file_inside_the_ranges_builds_or_is_refused_at_load(tmp_path, 
         return
     assert res.returncode in (0, 1), (changes, res.returncode, res.stderr)
     summary = json.loads(res.stdout.strip().splitlines()[-1])
+    print(f"seed {seed}: failed checks {summary['failed_checks']}")
     assert summary["passed"] is (res.returncode == 0) and bool(summary["failed_checks"]) is (res.returncode == 1)
     limits = json.loads((tmp_path / "out" / "analysis" / "limits.json").read_text())
     assert all(min(j["theta_max_rad"]) > 0.0 for j in limits["joints"]), changes

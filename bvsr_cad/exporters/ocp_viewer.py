@@ -83,9 +83,11 @@ def show_compound(compound: "bd.Compound", kinds: dict[str, str], port: int | No
         ViewerUnavailable: as :func:`viewer_port`.
     """
     port = viewer_port(port)
-    from ocp_vscode import Camera, set_port, show
+    from ocp_vscode import Camera, ignore_camera_warnings, set_port, show
 
     set_port(port)
+    if keep_camera:
+        ignore_camera_warnings()  # its warning that KEEP may leave the objects out of view: the same tail
     children = list(compound.children)
     names = [c.label for c in children]
     quality = COARSE if coarse else {}

@@ -189,9 +189,10 @@ def test_default_mjcf_holds_at_legged_robot_steps(robot_export, pattern):
 
     The step's error grows with the motion (the integrator is first order in the step), so it is measured
     against the tip's travel from its rest (every line at atmospheric, settled the same 0.3 s): within 2 %
-    of it at 2 ms and 5 % at 4 ms. Measured worst over these patterns: 1.0 % and 2.6 % (1.8 mm and 4.9 mm of
-    about 180-200 mm): the limits sit about twice above, so a design change (a 10 % heavier SOA) does not trip
-    them while a step that loses the motion does (an unstable one by metres)."""
+    of it at 2 ms and 5 % at 4 ms. Measured worst over these patterns: 1.0 % (1.8 mm of 176 mm) and 3.4 %
+    (all lines: 0.4 mm of 12 mm; the others at most 2.6 %, 4.9 mm of 199 mm): the limits sit 1.5 to 2 times
+    above, so a design change (a 10 % heavier SOA) does not trip them while a step that loses the motion
+    does (an unstable one by metres)."""
     path = robot_export / "robot" / "scene.xml"
     assert mujoco.MjModel.from_xml_path(str(path)).opt.timestep == 0.002
     ref, warn = _held_tip(path, HELD_PATTERNS[pattern], 5e-5)
@@ -302,7 +303,9 @@ def test_reduced_bend_limit_holds_under_a_large_tip_moment(robot_export):
     """A moment on the tip panel, 1.2 times the one that bends the tail's SOAs and rod to its limits, about
     the tail's X axis (a bend along one hinge axis: a face of the limit polygon), 11.25 deg off it (near a
     vertex) and about the diagonal (both hinges): at the exported 2 ms, with no warning, every joint stops
-    past theta_max by at most 7 % (the limits are soft constraints: measured 2-6 %) along the axis, and
+    past theta_max by at most 10 % along the axis (the limits are soft constraints: measured 2.2 % at the
+    root to 6.2 % at the tip, the give growing with the moment each joint carries; 10 % tells a held limit
+    from the failures below, 39 % and more, with room for a design change), and
     in the other directions at most the polygon's overshoot further than along the axis. Measured before,
     with limits on the hinges (a square per pivot, MuJoCo's default softness): the diagonal bent 39 % past
     theta_max where the limits held and folded the tail (190 %) or went unstable where they did not. The
@@ -316,7 +319,7 @@ def test_reduced_bend_limit_holds_under_a_large_tip_moment(robot_export):
     bends, _ = _bends_under_tip_moment(path, probe_nm, 0.0)
     moment_nm = 1.2 * probe_nm * (theta_max / bends).max()  # linear in the moment well below the limits
     axis, warned = _bends_under_tip_moment(path, moment_nm, 0.0)
-    assert warned == 0 and (axis > theta_max).all() and (axis < 1.07 * theta_max).all(), axis / theta_max - 1
+    assert warned == 0 and (axis > theta_max).all() and (axis < 1.10 * theta_max).all(), axis / theta_max - 1
     for psi in np.radians([11.25, 45.0]):
         bends, warned = _bends_under_tip_moment(path, moment_nm, psi)
         assert warned == 0 and (bends > theta_max).all() and (bends < axis * (1 + overshoot)).all(), (
@@ -448,8 +451,13 @@ def test_simulate_command(tmp_path, capsys):
 
 def test_mjcf_supply_lag_is_the_supply_models(robot_export, bvsr_spec):
     """Every actuator's first-order lag tau is the least-squares fit to its line's ISO 6358 fill curve
-    (measured: RMS 6.8 %, worst 13 % of the supply pressure up to 95 % fill: choked flow fills almost linearly at
-    first), and MuJoCo's activation follows u (1 - exp(-t / tau)) for a step."""
+    (measured: RMS 6.8 %, worst 12.4 % of the supply pressure up to 95 % fill: choked flow fills almost linearly
+    at first), and MuJoCo's activation follows u (1 - exp(-t / tau)) for a step.
+
+    The bounds 7.5 % and 14 % sit within 20 % of those on purpose: the misfit is the fill curve's shape, which
+    the supply's pressure ratio sets and the design does not (a line's volume and tubes only stretch its time:
+    lines of 81 ms and 85 ms lags both measure 6.81 % and 12.37 %). The fit itself is checked by its optimum
+    against 0.97 tau and 1.03 tau."""
     from bvsr_cad.assembly.pneumatic_lines import line_supply
     from bvsr_cad.models.pneumatics import fill_curve
 

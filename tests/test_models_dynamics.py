@@ -251,3 +251,23 @@ def test_root_wrench_with_a_tip_payload_under_a_known_angular_acceleration(bvsr_
         torque = (L / 2 + t_panel) * f + (body.inertia_theta_kg_m2 + m_p * (D - L / 2) ** 2) * A / 2
         assert force_n == pytest.approx(f, rel=1e-6), payload_g
         assert torque_nm == pytest.approx(torque, rel=1e-6), payload_g
+
+
+def test_the_predictions_tail_sags_towards_minus_y_without_pressure(bvsr_spec):
+    """The predictions' Eq 6-12 model of the whole tail is mounted as the paper's experiments mount it:
+    horizontal, dorsal (+Y) up, so gravity is along the tail frame's -Y. From rest, straight, with no
+    pressure, it bends towards -Y (theta sin(phi) < 0, started in the +Y plane) by a visible sag (more than
+    0.1 deg per joint), and gravity alone does it: without gravity it stays straight."""
+    import dataclasses
+
+    from bvsr_cad.analysis.predict import Predictor
+
+    pred = Predictor.from_spec(bvsr_spec)
+    model = pred.joint_model(1, bvsr_spec.joints)
+    np.testing.assert_allclose(model.gravity_m_s2, [0.0, -9.80665, 0.0], rtol=1e-12)  # standard gravity, -Y
+    tr = dyn.simulate_joint(model, lambda t: np.zeros(5), seconds=0.3, phi0_rad=math.pi / 2)
+    v = tr.theta_rad[-1] * math.sin(tr.phi_rad[-1])
+    assert v < -math.radians(0.1), math.degrees(v)
+    still = dyn.simulate_joint(dataclasses.replace(model, gravity_m_s2=np.zeros(3)), lambda t: np.zeros(5),
+                               seconds=0.3, phi0_rad=math.pi / 2)
+    assert np.abs(still.theta_rad).max() < 1e-9

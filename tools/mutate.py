@@ -312,6 +312,13 @@ FAULTS: list[Fault] = [
           catchers=(
               "tests/test_statics.py::test_the_horizontal_tail_sags_towards_minus_y_as_hand_statics_give",
           )),
+    Fault("dynamics_gravity_sign", "bvsr_cad/analysis/predict.py",
+          "GRAVITY_M_S2 = np.array([0.0, -G_M_S2, 0.0])",
+          "GRAVITY_M_S2 = np.array([0.0, G_M_S2, 0.0])",
+          "gravity points along +Y in the predictions' Eq 6-12 model",
+          catchers=(
+              "tests/test_models_dynamics.py::test_the_predictions_tail_sags_towards_minus_y_without_pressure",
+          )),
     Fault("taper_sign", "bvsr_cad/parameters/layout.py",
           "        return math.radians(max_feasible_taper_deg(spec))\n",
           "        return -math.radians(max_feasible_taper_deg(spec))\n",

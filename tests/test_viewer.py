@@ -145,8 +145,13 @@ def test_every_scene_written_as_glb_in_metres(built, export, decoded):
         assert data["asset"].version == "2.0" and data["asset"].extras == {"length_unit": "m"}
         assert data["name"] == f["name"] and data["extras"]["title"] == f["title"] == scene.title
         assert data["extras"]["note"] == scene.note
-        # One node per object, named as it, in its order.
+        # One node per object, named as it, in its order; trimesh (a second reader) finds the same nodes
+        # and the same extent.
         assert [o["name"] for o in data["nodes"]] == f["nodes"] == [o.label for o in scene.objects]
+        back = trimesh.load(export["root"] / f["file"])
+        assert sorted(back.graph.nodes_geometry) == sorted(f["nodes"])
+        every = np.vstack([o["world_vertices"] for o in data["nodes"]])
+        np.testing.assert_allclose(back.bounds, [every.min(0), every.max(0)], atol=1e-9)
         assert sum(len(o["triangles"]) for o in data["nodes"]) == f["triangles"] == scene.triangle_count
         for o, mem in zip(data["nodes"], scene.objects):
             np.testing.assert_array_equal(o["triangles"], mem.triangles)

@@ -14,6 +14,7 @@ import threading
 import time
 from pathlib import Path
 
+from . import __version__
 from .worker import SecondProcess, library_imports, tune_process
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
@@ -60,8 +61,24 @@ def _print_results(results, as_json: bool, extra: dict | None = None, verbose: b
     return EXIT_OK if ok else EXIT_FAILED
 
 
+def _params_or_default(args, say) -> str:
+    """The parameter file a build or watch names, else ``params/bvsr.toml`` of this folder (a copy that
+    ``bvsr init`` wrote), else, for a build, the default tail shipped with the package."""
+    from . import defaults
+
+    if args.params is not None:
+        return args.params
+    if Path(defaults.DEFAULT_PARAMS).is_file() or args.func is cmd_watch:
+        return defaults.DEFAULT_PARAMS
+    packaged = defaults.path(defaults.DEFAULT_PARAMS)
+    say(f"no {defaults.DEFAULT_PARAMS} in this folder: building the default tail of bvsr_cad {__version__} "
+        f"({packaged}); `bvsr init` writes a copy to edit")
+    return str(packaged)
+
+
 def cmd_build(args) -> int:
     say = _progress(args.quiet or args.json)
+    args.params = _params_or_default(args, say)
 
     # The analyses' second process imports its modules beside this process's imports of the pipeline, and
     # builds the tail's assembly from the file while this process decides what the cache holds.
@@ -99,6 +116,7 @@ def cmd_build(args) -> int:
 
 
 def cmd_watch(args) -> int:
+    args.params = _params_or_default(args, _progress(args.quiet))
     with library_imports():
         from .watch import watch
 
@@ -328,9 +346,11 @@ def cmd_clearance(args) -> int:
 
 
 def cmd_sweep(args) -> int:
+    from .extras import require
     from .parameters.study import load_study
 
     study = load_study(args.study)  # a bad study file is refused before the sweep's imports (seconds)
+    require("studies", "bvsr sweep")
     with library_imports():
         from .sweep import run_study
 
@@ -359,8 +379,45 @@ def cmd_sweep(args) -> int:
     return EXIT_FAILED if summary["status"]["error"] else EXIT_OK
 
 
+#: What ``bvsr init`` tells about each file it writes.
+_STARTER_FILES = {
+    "params/bvsr.toml": "the paper's tail (two segments): edit this one",
+    "params/bvsr_l.toml": "the paper's longer BVSR_L tail (three segments)",
+    "data/paper_bvsr.csv": "the paper's measurements: `bvsr calibrate` fits to them, the build compares",
+    "studies/vertebra.toml": "the paper's vertebra study (rod material and diameter)",
+    "studies/optimise.toml": "an Optuna search for the most root torque per gram",
+}
+
+
+def cmd_init(args) -> int:
+    from .exporters.starter_files import StarterExistsError, write_starter
+
+    folder = Path(args.folder)
+    try:
+        written = write_starter(folder, force=args.force)
+    except StarterExistsError as exc:
+        print(f"bvsr: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    rel = [p.relative_to(folder).as_posix() for p in written]
+    if args.json:
+        print(json.dumps({"folder": str(folder), "files": rel, "version": __version__}))
+        return EXIT_OK
+    print(f"wrote the default inputs of bvsr_cad {__version__} into {folder}/:")
+    for name in rel:
+        print(f"  {name:24} {_STARTER_FILES.get(name, '')}".rstrip())
+    cd = [] if folder.resolve() == Path.cwd().resolve() else [f"  cd {args.folder}"]
+    print("\n".join(["next:", *cd,
+                     "  bvsr build                       # params/bvsr.toml -> exports/bvsr/ (STEP, STL, URDF, MJCF, report)",
+                     "  bvsr check exports/bvsr          # every check again on the export",
+                     "  bvsr watch                       # rebuild each time params/bvsr.toml is saved",
+                     "  bvsr simulate params/bvsr.toml   # a 6 bar pulse in MuJoCo",
+                     "  bvsr sweep studies/vertebra.toml # needs pip install 'bvsr_cad[studies]'"]))
+    return EXIT_OK
+
+
 def make_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="bvsr", description="Parametric CAD and fabrication pipeline for the BVSR soft robotic tail.")
+    p.add_argument("--version", action="version", version=f"bvsr_cad {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
     # Every command takes these two.
     common = argparse.ArgumentParser(add_help=False)
@@ -369,7 +426,8 @@ def make_parser() -> argparse.ArgumentParser:
     for name, func, helptext in (("build", cmd_build, "build every part of a tail into an export folder"),
                                  ("watch", cmd_watch, "rebuild the export each time the parameter file is saved")):
         b = sub.add_parser(name, parents=[common], help=helptext)
-        b.add_argument("params", nargs="?", default="params/bvsr.toml", help="parameter file (default params/bvsr.toml)")
+        b.add_argument("params", nargs="?", help="parameter file (default params/bvsr.toml"
+                       + (", else the default tail shipped with the package)" if name == "build" else ")"))
         b.add_argument("-o", "--output", help="export folder (default exports/<name>/)")
         if name == "build":
             b.add_argument("--no-cache", action="store_true",
@@ -389,6 +447,11 @@ def make_parser() -> argparse.ArgumentParser:
                     help="bending direction from +X towards +Y (dorsal), degrees (default 0)")
     sh.add_argument("--port", type=int, help="the viewer's port (default $OCP_PORT, else 3939)")
     sh.set_defaults(func=cmd_show)
+    ini = sub.add_parser("init", parents=[common], help="write editable copies of the default parameter, data "
+                         "and study files into a folder")
+    ini.add_argument("folder", nargs="?", default=".", help="where (default: this folder)")
+    ini.add_argument("--force", action="store_true", help="overwrite files that exist")
+    ini.set_defaults(func=cmd_init)
     c = sub.add_parser("check", parents=[common], help="run every check on an export folder")
     c.add_argument("export", help="export folder made by `bvsr build`")
     c.add_argument("--slice", action="store_true",
@@ -530,7 +593,7 @@ def _interrupted(exc: BaseException) -> bool:
 
 #: The errors that are bad input (exit code 2), by module and class.
 _BAD_INPUT = (("analysis.calibrate", "CalibrationError"), ("checks.export", "ExportError"),
-              ("checks.printability", "SlicerMissingError"), ("parameters.load", "ParamError"),
+              ("checks.printability", "SlicerMissingError"), ("extras", "ExtraMissing"), ("parameters.load", "ParamError"),
               ("parameters.measurements", "MeasurementError"), ("parameters.study", "StudyError"),
               ("exporters.ocp_viewer", "ViewerUnavailable"),
               ("publish", "OutputError"), ("sim", "SimulationInputError"), ("sweep", "SweepError"))

@@ -121,21 +121,22 @@ class LayoutProblem(NamedTuple):
 
 
 #: The parameter keys that size or place a panel feature, by the start of its name (first match).
+_HOLE = "fabrication.hole_compensation_mm"  # every printed hole (hole_d) is this much wider
 _FEATURE_KEYS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("pocket_depth", ("soa.height_mm", "joint.gap_mm", "joint.joint_height_mm", "fabrication.socket_floor_mm")),
     ("pocket_", ("joint.base_diameter_mm", "fabrication.pocket_clearance_mm", "joint.pitch_diameter_mm")),
-    ("channel_", ("joint.channel_diameter_mm", "joint.pitch_diameter_mm")),
-    ("fitting_port_", ("mount.fitting_tap_drill_mm", "joint.pitch_diameter_mm")),
-    ("tube_port_", ("tubes.outer_diameter_mm",)),
-    ("tube_", ("tubes.outer_diameter_mm", "tubes.clearance_mm")),
-    ("feed_", ("tubes.passage_diameter_mm", "joint.pitch_diameter_mm")),
-    ("passage_", ("tubes.passage_diameter_mm",)),
-    ("rod_bore", ("vertebra.diameter_mm", "socket.rod_clearance_mm")),
-    ("set_screw", ("socket.set_screw_tap_drill_mm",)),
-    ("clamp_boss", ("socket.boss_wall_mm", "vertebra.diameter_mm")),
-    ("mount_insert_", ("mount.insert_diameter_mm", "mount.bolt_circle_diameter_mm", "mount.insert_depth_mm")),
+    ("channel_", ("joint.channel_diameter_mm", "joint.pitch_diameter_mm", _HOLE)),
+    ("fitting_port_", ("mount.fitting_tap_drill_mm", "joint.pitch_diameter_mm", _HOLE)),
+    ("tube_port_", ("tubes.outer_diameter_mm", _HOLE)),
+    ("tube_", ("tubes.outer_diameter_mm", "tubes.clearance_mm", _HOLE)),
+    ("feed_", ("tubes.passage_diameter_mm", "joint.pitch_diameter_mm", _HOLE)),
+    ("passage_", ("tubes.passage_diameter_mm", _HOLE)),
+    ("rod_bore", ("vertebra.diameter_mm", "socket.rod_clearance_mm", _HOLE)),
+    ("set_screw", ("socket.set_screw_tap_drill_mm", _HOLE)),
+    ("clamp_boss", ("socket.boss_wall_mm", "vertebra.diameter_mm", _HOLE)),
+    ("mount_insert_", ("mount.insert_diameter_mm", "mount.bolt_circle_diameter_mm", "mount.insert_depth_mm", _HOLE)),
     ("payload_insert_", ("payload.insert_diameter_mm", "payload.insert_circle_diameter_mm", "payload.insert_count",
-                         "payload.insert_depth_mm")),
+                         "payload.insert_depth_mm", _HOLE)),
     ("lightening_", ("lightening.hole_diameter_mm",)),
     ("rim", ("joint.panel_diameter_mm",)),
     ("bellows", ("soa.long_side_mm", "soa.fillet_radius_mm", "soa.rotation_deg", "joint.pitch_diameter_mm")),

@@ -332,8 +332,8 @@ def viewer_section(manifest: dict[str, Any]) -> str:
         "<h2>Interactive 3D view</h2>",
         "<p class=muted>Drag to orbit, wheel to zoom, shift-drag or right-drag to pan, double-click to reset. "
         f"Runs offline: the viewer ({_e(viewer.get('library', ''))}, <code>{_e(viewer['script'])}</code>) and "
-        f"its scenes (the GLB files of <code>scenes/</code>, {mb:.1f} MB with the viewer) are part of this "
-        "export.</p>",
+        "its scenes (the GLB files of <code>scenes/</code>, gzipped into <code>report/viewer_*.js</code>: "
+        f"{mb:.1f} MB in all) are part of this export.</p>",
         f"<div class=viewer-buttons id=bvsr-viewer-buttons>{buttons}</div>",
         "<canvas class=viewer id=bvsr-viewer></canvas><div class=viewer-info id=bvsr-viewer-info>"
         "The 3D view needs JavaScript and WebGL.</div>",

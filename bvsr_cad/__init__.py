@@ -10,11 +10,12 @@ The Python API (:mod:`bvsr_cad.api`) is re-exported here::
 It is imported on first use, so that ``import bvsr_cad.<layer>`` stays light.
 """
 
-__version__ = "0.1.0"
+from importlib import metadata as _metadata
 
-from ._deferred import defer_sklearn_cluster  # noqa: E402 - before any layer imports build123d
-
-defer_sklearn_cluster()
+try:  # one source: pyproject.toml's version, as installed (a wheel or an editable install)
+    __version__ = _metadata.version("bvsr_cad")
+except _metadata.PackageNotFoundError:  # the source tree on sys.path without an install
+    __version__ = "0+unknown"
 
 #: The public names of :mod:`bvsr_cad.api`, importable from the package.
 _API = ("ParamError", "SLICES_PER_GAP", "Tail", "load")

@@ -36,6 +36,7 @@ from .assembly.build import Assembly, build_assembly
 from .assembly.placed import PlacedShape, labelled_compound, placed_instances
 from .exporters.cad import write_labelled_step
 from .exporters.reproducible import fix_step
+from .extras import require
 from .models.kinematics import uv_from_theta_phi
 from .parameters.load import ParamError, load_spec
 from .parameters.tables import TailSpec
@@ -207,7 +208,7 @@ class Tail:
             A ``cadquery.Assembly`` named after the tail, one child per instance.
 
         Raises:
-            ImportError: CadQuery is not installed (it is optional: ``pip install -e ".[cad]"``).
+            ExtraMissing: CadQuery is not installed (it is optional: ``pip install 'bvsr_cad[cad]'``).
 
         Example::
 
@@ -215,11 +216,9 @@ class Tail:
             assy.children[0].name  # 'panel0'
             bent = tail.cadquery_assembly(posed=tail.posed(theta_deg=10))
         """
-        try:
-            import cadquery as cq
-        except ImportError as exc:
-            raise ImportError("Tail.cadquery_assembly needs CadQuery 2.8: pip install -e '.[cad]' "
-                              "(or pip install cadquery==2.8.0 vtk==9.6.2)") from exc
+        require("cad", "Tail.cadquery_assembly")
+        import cadquery as cq
+
         compound = self.assembly() if posed is None else posed
         assy = cq.Assembly(name=compound.label or self.name)
         for child in compound.children:

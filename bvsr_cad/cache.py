@@ -115,11 +115,15 @@ def distribution_versions() -> dict[str, str | None]:
 @lru_cache(maxsize=1)
 def code_fingerprint() -> str:
     """SHA-256 over this package's source and data files (path and bytes, sorted) and the versions of
-    Python and of the libraries it computes with (:func:`distribution_versions`)."""
+    Python and of the libraries it computes with (:func:`distribution_versions`). The default inputs
+    (``defaults/``, the repository's ``params/``) are inputs, keyed by what a stage reads of them: an edit
+    of ``params/bvsr.toml`` must not move every stage's key."""
     pkg = Path(__file__).resolve().parent
     h = hashlib.sha256()
     for p in sorted(pkg.rglob("*")):
-        if p.is_file() and p.suffix in (".py", ".toml", ".json", ".csv", ".js", ".mjs") and "__pycache__" not in p.parts:
+        rel = p.relative_to(pkg).parts
+        if p.is_file() and p.suffix in (".py", ".toml", ".json", ".csv", ".js", ".mjs") and "__pycache__" not in rel and \
+                not (rel[0] == "defaults" and p.suffix != ".py"):
             h.update(p.relative_to(pkg).as_posix().encode())
             h.update(p.read_bytes())
     h.update(json.dumps(distribution_versions(), sort_keys=True).encode())

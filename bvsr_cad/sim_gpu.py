@@ -33,7 +33,9 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-GPU_EXTRA = "the optional extra .[gpu] (pip install -e '.[gpu]')"
+from .extras import install_line, require
+
+GPU_EXTRA = f"the optional extra 'gpu' ({install_line('gpu')})"
 
 #: The model fields :func:`randomised_fields` gives one row per world.
 RANDOMISED_FIELDS = ("jnt_stiffness", "dof_damping", "body_mass", "body_subtreemass")
@@ -41,11 +43,10 @@ RANDOMISED_FIELDS = ("jnt_stiffness", "dof_damping", "body_mass", "body_subtreem
 
 def import_mjx():
     """``(jax, mujoco.mjx)``, or an ImportError naming the extra that installs them."""
-    try:
-        import jax
-        from mujoco import mjx
-    except ImportError as exc:
-        raise ImportError(f"MJX needs {GPU_EXTRA}: {exc}") from exc
+    require("gpu", "MJX")
+    import jax
+    from mujoco import mjx
+
     return jax, mjx
 
 
@@ -74,13 +75,12 @@ def compiler_options(device=None) -> dict:
 
 def import_warp():
     """``(warp, mujoco_warp)`` with Warp's per-kernel messages off, or an ImportError naming the extra."""
-    try:
-        import warp
+    require("gpu", "MuJoCo Warp")
+    import warp
 
-        warp.config.quiet = True  # before mujoco_warp's import initialises Warp
-        import mujoco_warp
-    except ImportError as exc:
-        raise ImportError(f"MuJoCo Warp needs {GPU_EXTRA}: {exc}") from exc
+    warp.config.quiet = True  # before mujoco_warp's import initialises Warp
+    import mujoco_warp
+
     return warp, mujoco_warp
 
 

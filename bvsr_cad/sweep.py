@@ -45,6 +45,7 @@ from typing import Any
 import numpy as np
 
 from .analysis.metrics import METRICS, Conditions, group_of
+from .extras import require
 from .parameters.study import Study, StudyError, Variant, get_path
 from .worker import child_env
 
@@ -311,7 +312,9 @@ def run_study(study: Study, out_dir: str | Path | None = None, scheduler: str | 
     Raises:
         StudyError: a metric the study names does not exist.
         SweepError: the cluster cannot be reached.
+        ExtraMissing: the ``studies`` extra (Dask, Optuna, pandas, ...) is not installed.
     """
+    require("studies", "bvsr sweep")
     from .exporters.study_report import write_outputs
 
     say = say or (lambda _m: None)

@@ -111,7 +111,9 @@ def test_keys_follow_the_libraries_the_results_are_computed_with(monkeypatch):
     from bvsr_cad import cache
 
     project = tomllib.loads((PARAMS.parent / "pyproject.toml").read_text())["project"]
-    declared = {re.split(r"[ ;=<>!~\[]", r, maxsplit=1)[0].lower() for r in project["dependencies"]}
+    computing = project["dependencies"] + [r for extra in ("studies", "crosscheck")  # a study's table, a check
+                                           for r in project["optional-dependencies"][extra]]
+    declared = {re.split(r"[ ;=<>!~\[]", r, maxsplit=1)[0].lower() for r in computing}
     assert declared | {"cadquery", "cadquery-ocp", "cadquery-ocp-novtk"} == set(cache.RESULT_DISTRIBUTIONS)
     base = stage_key("analyses", x=1)
     real = metadata.version

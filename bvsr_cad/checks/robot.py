@@ -19,6 +19,7 @@ import numpy as np
 import trimesh
 
 from .. import units
+from ..extras import missing, skipped_note
 from ..models.kinematics import TailKinematics, chord_length_mm, joint_transform_prb, prb_angles, uv_from_theta_phi
 from ..parameters.load import load_spec
 from .export import Export
@@ -127,6 +128,9 @@ def check_urdf_tools(exp: Export) -> list[CheckResult]:
     else:
         out.append(CheckResult("urdf_check_urdf", None, None, 0, "exit code", rel,
                                "check_urdf not installed (Debian: liburdfdom-tools)"))
+    if missing("crosscheck"):
+        out.append(CheckResult("urdf_yourdfpy", None, None, 1, "", rel, skipped_note("crosscheck")))
+        return out
     import yourdfpy
 
     try:
@@ -278,6 +282,9 @@ def _import_pybullet():
 
 
 def check_pybullet(exp: Export) -> list[CheckResult]:
+    if missing("crosscheck"):
+        return [CheckResult("pybullet_masses", None, None, 1e-6, "relative", exp.manifest["robot"]["urdf"],
+                            skipped_note("crosscheck"))]
     pb = _import_pybullet()
 
     urdf = exp.root / exp.manifest["robot"]["urdf"]

@@ -31,6 +31,8 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
+from .folders import cache_folder
+
 DEFAULT_MAX_MB = 2048.0
 _DONE = ".done"
 #: In the name of an entry's temporary folder, ``.<key[:12]>.tmp-*``, beside the entries.
@@ -86,7 +88,7 @@ def owner_alive(folder: Path) -> bool:
 def cache_root() -> Path:
     """``$BVSR_CACHE/artifacts`` (default ``~/.cache/bvsr_cad/artifacts``), made absolute: a relative
     ``BVSR_CACHE`` is where the user stands, not the folder a second process works in."""
-    return (Path(os.environ.get("BVSR_CACHE", Path.home() / ".cache" / "bvsr_cad")) / "artifacts").absolute()
+    return cache_folder() / "artifacts"
 
 
 #: The installed distributions whose code computes what the stages store: every runtime dependency of

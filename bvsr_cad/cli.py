@@ -158,7 +158,7 @@ def cmd_show(args) -> int:
 
 def cmd_check(args) -> int:
     with library_imports():
-        from .checks.run import run_checks
+        from .build.checks_process import run_checks
 
     results = run_checks(args.export, _progress(args.quiet or args.json), run_slicer=args.slice)
     return _print_results(results, args.json, verbose=args.verbose)

@@ -199,7 +199,7 @@ WORKDIR_PREFIX = "bvsr-variant-"
 
 
 def _export_and_check(task: dict[str, Any]) -> dict[str, Any]:
-    from .checks.run import run_checks
+    from .build.checks_process import run_checks
     from .exporters.study_report import toml_text
     from .pipeline import build_export
 

@@ -366,6 +366,10 @@ class SecondProcess:
             raise payload
         return payload
 
+    def result_or(self, here: Callable[[], Any], say: Callable[[str], None], what: str) -> Any:
+        """Its result, or ``here()`` run in this process where it was lost (:func:`result_or`)."""
+        return result_or(self, here, say, what)
+
     def close(self) -> None:
         if self.proc is not None:
             if self.proc.poll() is None:

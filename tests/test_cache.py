@@ -134,6 +134,7 @@ def test_check_verdicts_follow_the_bytes_of_the_files_they_read(tmp_path):
     """A group's verdicts are reused while its files' bytes and manifest values are unchanged (a file
     rewritten with the same bytes too), and computed again when either changes."""
     from bvsr_cad.checks.export import Export
+    from bvsr_cad.build.stages import verdict_store
     from bvsr_cad.checks.memo import CheckMemo
     from bvsr_cad.checks.result import CheckResult
 
@@ -143,7 +144,7 @@ def test_check_verdicts_follow_the_bytes_of_the_files_they_read(tmp_path):
     runs = []
 
     def verdicts(value):
-        memo = CheckMemo(Export.open(tmp_path), cache)
+        memo = CheckMemo(Export.open(tmp_path), verdict_store(cache))
         return memo("g", (["a.stl"], {"limit": value}),
                     lambda: runs.append(1) or [CheckResult("c", True, (1, 2), value, "mm", "a.stl")])
 

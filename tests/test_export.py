@@ -111,11 +111,11 @@ def test_checks_started_early_see_a_file_changed_before_they_finish(bvsr_export,
     """A build runs the CAD files' checks before its analyses are in (Checks.start) and the rest after
     (Checks.finish): a file changed in between is checked again, so the verdicts are those of the
     final export, the same as one run of every check."""
-    from bvsr_cad.checks.run import Checks, run_checks
+    from bvsr_cad.build.checks_process import run_checks, start_checks
 
     copy = tmp_path / "copy"
     shutil.copytree(bvsr_export, copy)
-    checks = Checks.start(copy, parallel=False)
+    checks = start_checks(copy, parallel=False)
     mesh = trimesh.load(copy / "stl" / "soa.stl")
     mesh.update_faces(np.arange(len(mesh.faces)) % 50 != 0)  # punch holes after the start
     mesh.export(copy / "stl" / "soa.stl")
@@ -130,12 +130,12 @@ def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_change
     STL changed after the start is checked again here, and the results are one run of every check's."""
     import os
 
-    from bvsr_cad.checks.run import Checks, run_checks
+    from bvsr_cad.build.checks_process import run_checks, start_checks
 
     if (os.cpu_count() or 1) < 2:
         pytest.skip("one core: the checks never leave the process")
     said: list[str] = []
-    checks = Checks.start(bvsr_export, said.append, meshes_beside=True)
+    checks = start_checks(bvsr_export, said.append, meshes_beside=True)
     assert checks._printability.proc is not None and not any(m.startswith("mesh ") for m in said)
     kept = checks.finish()
     assert not any(m.startswith("mesh ") or m == "masses" for m in said), said
@@ -143,7 +143,7 @@ def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_change
     copy = tmp_path / "copy"
     shutil.copytree(bvsr_export, copy)
     said.clear()
-    checks = Checks.start(copy, said.append, meshes_beside=True)
+    checks = start_checks(copy, said.append, meshes_beside=True)
     mesh = trimesh.load(copy / "stl" / "soa.stl")
     mesh.update_faces(np.arange(len(mesh.faces)) % 50 != 0)  # punch holes after the start
     mesh.export(copy / "stl" / "soa.stl")
@@ -160,14 +160,14 @@ def test_mold_checks_in_the_second_process_see_a_mold_file_changed_before_they_f
 
     from bvsr_cad.checks.export import Export
     from bvsr_cad.checks.molds import check_molds
-    from bvsr_cad.checks.run import Checks
+    from bvsr_cad.build.checks_process import start_checks
 
     if (os.cpu_count() or 1) < 2:
         pytest.skip("one core: the mold checks never leave the process")
     copy = tmp_path / "copy"
     shutil.copytree(bvsr_export, copy)
     said: list[str] = []
-    checks = Checks.start(copy, said.append)
+    checks = start_checks(copy, said.append)
     assert checks._printability.proc is not None
     half = copy / "molds" / "assembled" / "half_a.stl"
     mesh = trimesh.load(half)
@@ -180,7 +180,7 @@ def test_mold_checks_in_the_second_process_see_a_mold_file_changed_before_they_f
     assert [r.to_json() for r in late if r.name in names] == [r.to_json() for r in molds]
     # Unchanged, the mold verdicts are the second process's.
     said.clear()
-    checks = Checks.start(bvsr_export, said.append)
+    checks = start_checks(bvsr_export, said.append)
     kept = checks.finish()
     assert any(m.startswith("printability and molds: done in the second process") for m in said), said
     assert "molds" not in said

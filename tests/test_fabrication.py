@@ -31,7 +31,7 @@ from bvsr_cad.checks.printability import (
     slice_items,
     slice_stls,
 )
-from bvsr_cad.checks.run import run_checks
+from bvsr_cad.build.checks_process import run_checks
 from bvsr_cad.cli import main
 
 
@@ -256,6 +256,7 @@ def test_a_second_process_in_another_folder_reads_the_slice_cache_the_user_names
 
 def test_printability_runs_here_when_the_second_process_fails(bvsr_export, monkeypatch):
     from bvsr_cad import worker
+    from bvsr_cad.build.checks_process import beside
     from bvsr_cad.checks import run
 
     if (os.cpu_count() or 1) < 2:
@@ -263,7 +264,7 @@ def test_printability_runs_here_when_the_second_process_fails(bvsr_export, monke
     monkeypatch.setattr(worker.sys, "executable", shutil.which("false") or "/bin/false")  # exits, no results
     monkeypatch.setattr(run, "check_printability", lambda exp, sliced_now=(), memo=None: ["ran here"])
     said: list[str] = []
-    group = run._Printability(Export.open(bvsr_export), (), said.append, parallel=True)
+    group = run._Printability(Export.open(bvsr_export), (), said.append, beside(None))
     assert group.proc is not None
     assert group.results() == ["ran here"]
     assert any("without a result; running them here" in m for m in said), said

@@ -1,4 +1,4 @@
-"""The one-way data flow of DESIGN.md: nothing imports upward."""
+"""The one-way data flow of DESIGN.md: every module sits in exactly one layer and nothing imports upward."""
 
 from __future__ import annotations
 
@@ -6,37 +6,88 @@ import ast
 from pathlib import Path
 
 PKG = Path(__file__).resolve().parents[1] / "bvsr_cad"
-LAYER = {"_deferred": 0, "units": 0, "colors": 0, "worker": 0, "parameters": 1, "models": 2, "parts": 3, "assembly": 4, "analysis": 5,
-         "exporters": 6, "checks": 6, "cache": 6, "publish": 7, "pipeline": 7, "analyses_process": 7, "sim": 7, "sim_gpu": 7, "api": 7, "sweep": 7, "watch": 8, "cli": 8}
+
+#: Every top-level module and package of bvsr_cad in exactly one layer, lowest first (DESIGN.md's import
+#: direction). A module imports its own package freely and another package only from a lower layer: two
+#: packages of one layer (the writers and the checks) never import each other, so no layer hides an import.
+#: ``__version__`` is the package root's one value read below it (its ``__init__`` imports nothing at import).
+LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("foundations", ("units", "colors", "folders", "extras", "defaults", "__version__")),
+    ("parameters", ("parameters",)),
+    ("models", ("models",)),
+    ("parts", ("parts",)),
+    ("assembly", ("assembly",)),
+    ("analysis", ("analysis",)),
+    ("writers and checks", ("exporters", "checks")),
+    ("simulation", ("sim", "sim_gpu")),
+    ("build", ("build", "pipeline", "cache", "publish", "watch", "worker", "analyses_process", "_deferred")),
+    ("studies", ("sweep",)),
+    ("Python API", ("api",)),
+    ("command line", ("cli",)),
+    ("python -m bvsr_cad", ("__main__",)),
+)
+LAYER = {name: rank for rank, (_layer, names) in enumerate(LAYERS) for name in names}
+#: Layers whose modules import one another freely, as the modules of one package do.
+ONE_PACKAGE = {"simulation", "build"}
 
 
-def _layer(module: str) -> int:
-    return LAYER[module.split(".")[0]]
+def _top(module: str) -> str:
+    return module.split(".")[0]
+
+
+def _imports(path: Path) -> list[str]:
+    """The bvsr_cad modules ``path`` imports (anywhere in it: inside a function too), as dotted names under
+    the package."""
+    parts = path.relative_to(PKG).with_suffix("").parts
+    out = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = list(parts[:-1])[: len(parts) - node.level]
+                if node.module:
+                    out.append(".".join(base + [node.module]))
+                else:  # from . import x: each name is a module or a value of the package
+                    out += [".".join(base + [n.name]) for n in node.names]
+            elif node.module and node.module.startswith("bvsr_cad."):
+                out.append(node.module.removeprefix("bvsr_cad."))
+            elif node.module == "bvsr_cad":
+                out += [n.name for n in node.names]
+        elif isinstance(node, ast.Import):
+            out += [a.name.removeprefix("bvsr_cad.") for a in node.names if a.name.startswith("bvsr_cad.")]
+    return out
+
+
+def _modules() -> list[Path]:
+    return [p for p in sorted(PKG.rglob("*.py")) if "__pycache__" not in p.parts and p.relative_to(PKG) != Path("__init__.py")]
+
+
+def upward_imports() -> list[str]:
+    bad = []
+    for path in _modules():
+        here = ".".join(path.relative_to(PKG).with_suffix("").parts)
+        for target in _imports(path):
+            there = _top(target)
+            if there == _top(here) or not there or (
+                    there in LAYER and LAYER[there] == LAYER[_top(here)] and LAYERS[LAYER[there]][0] in ONE_PACKAGE):
+                continue
+            if there not in LAYER:
+                bad.append(f"{here} imports {target}, which no layer holds")
+            elif LAYER[there] >= LAYER[_top(here)]:
+                bad.append(f"{here} imports {target}: {LAYERS[LAYER[there]][0]} is not below "
+                           f"{LAYERS[LAYER[_top(here)]][0]}")
+    return bad
+
+
+def test_every_module_sits_in_exactly_one_layer():
+    names = [name for _layer, members in LAYERS for name in members]
+    assert len(names) == len(set(names)), "a name in two layers"
+    tops = {p.relative_to(PKG).parts[0].removesuffix(".py") for p in _modules()}
+    tops |= {p.name for p in PKG.iterdir() if p.is_dir() and p.name != "__pycache__"}
+    assert tops - set(names) == set(), "modules in no layer: put each in LAYERS (and DESIGN.md)"
 
 
 def test_nothing_imports_upward():
-    bad = []
-    for path in PKG.rglob("*.py"):
-        rel = path.relative_to(PKG).with_suffix("")
-        parts = rel.parts
-        if parts[-1] == "__init__" and len(parts) == 1:
-            continue
-        here = ".".join(parts)
-        me = _layer(here)
-        for node in ast.walk(ast.parse(path.read_text())):
-            targets = []
-            if isinstance(node, ast.ImportFrom):
-                if node.level:
-                    base = list(parts[:-1])[: len(parts) - node.level]
-                    mod = ".".join(base + ([node.module] if node.module else []))
-                    targets = [mod] if mod else [n.name for n in node.names]
-                elif node.module and node.module.startswith("bvsr_cad."):
-                    targets = [node.module.removeprefix("bvsr_cad.")]
-            elif isinstance(node, ast.Import):
-                targets = [a.name.removeprefix("bvsr_cad.") for a in node.names if a.name.startswith("bvsr_cad.")]
-            for t in targets:
-                if t and t.split(".")[0] in LAYER and _layer(t) > me:
-                    bad.append(f"{here} imports {t}")
+    bad = upward_imports()
     assert not bad, bad
 
 
@@ -56,7 +107,7 @@ def test_nothing_below_the_exporters_writes_a_file():
     bad = []
     for path in PKG.rglob("*.py"):
         rel = path.relative_to(PKG).with_suffix("")
-        if rel.parts == ("__init__",) or _layer(".".join(rel.parts)) >= LAYER["exporters"]:
+        if rel.parts == ("__init__",) or LAYER[rel.parts[0]] >= LAYER["exporters"]:
             continue
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.Call):

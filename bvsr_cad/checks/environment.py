@@ -2,7 +2,7 @@
 
 The build keys its whole-export cache entry on it (:func:`environment_state`), and a rebuild that
 finds that entry must decide so before importing the CAD kernel and the mesh libraries (seconds):
-this module uses the standard library and the cache only.
+this module uses the standard library only.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-from ..cache import cache_root
+from ..folders import cache_folder
 
 SLICER = "prusa-slicer"
 
@@ -31,8 +31,8 @@ def slicer_identity(exe: str) -> str:
 
 def slice_cache_path() -> Path:
     """The slicing results' cache file: ``slices.json`` beside the artifact cache
-    (:func:`bvsr_cad.cache.cache_root`: in ``$BVSR_CACHE`` or ``~/.cache/bvsr_cad``)."""
-    return cache_root().parent / "slices.json"
+    (:func:`bvsr_cad.folders.cache_folder`: ``$BVSR_CACHE`` or ``~/.cache/bvsr_cad``)."""
+    return cache_folder() / "slices.json"
 
 
 def environment_state() -> dict[str, Any]:

@@ -7,12 +7,10 @@ from collections.abc import Callable, Collection
 from pathlib import Path
 from typing import Any
 
-from ..cache import ArtifactCache
-from ..worker import SecondProcess, result_or
 from .export import Export, clear_cache
 from .layout import check_layout
 from .mass import check_masses, masses_reads
-from .memo import CheckMemo
+from .memo import CheckMemo, VerdictStore
 from .mesh import check_part_mesh, part_mesh_reads
 from .analyses import check_analyses
 from .molds import check_molds, molds_reads
@@ -37,16 +35,20 @@ def _mesh_checks(exp: Export, memo: CheckMemo) -> dict[str, list[CheckResult]]:
     return {part["name"]: _part_mesh(exp, memo, part) for part in exp.parts}
 
 
-def _printability(root: str, sliced_now: str, cache_root: str = "", meshes: str = "", robot: str = ""
-                  ) -> dict[str, Any]:
-    """The second process's work: the printability checks and the mold checks of the export at ``root``
-    (verdicts of unchanged inputs from the artifact cache at ``cache_root``, when given), by group; with
-    ``meshes`` (``"1"``) the part meshes' and the masses' checks after them (``"part_mesh"``: by part); with
-    ``robot`` (``"1"``) the robot descriptions' checks last, unless the build's own process took them first
-    (:func:`claim_robot_checks`)."""
-    exp = Export.open(root)
-    memo = CheckMemo(exp, ArtifactCache(Path(cache_root)) if cache_root else None)
-    out: dict[str, Any] = {"printability": check_printability(exp, sliced_now=set(json.loads(sliced_now)), memo=memo),
+#: Starts the printability checks' second process: ``beside(root, sliced_now, meshes, robot)`` runs
+#: :func:`printability_groups` on the export at ``root`` in another process and returns its handle
+#: (``result_or(here, say, what)``, ``close()``, ``cpu_s``), or None where it could not start. The build
+#: hands one to :class:`Checks` (:mod:`bvsr_cad.build.checks_process`); the checks start no process.
+StartBeside = Callable[[Path, Collection[str], bool, bool], Any]
+
+
+def printability_groups(exp: Export, sliced_now: Collection[str], memo: CheckMemo, meshes: bool = False,
+                        robot: bool = False) -> dict[str, Any]:
+    """The second process's work: the printability checks and the mold checks of ``exp`` (verdicts of
+    unchanged inputs from ``memo``), by group; with ``meshes`` the part meshes' and the masses' checks
+    after them (``"part_mesh"``: by part); with ``robot`` the robot descriptions' checks last, unless the
+    build's own process took them first (:func:`claim_robot_checks`)."""
+    out: dict[str, Any] = {"printability": check_printability(exp, sliced_now=set(sliced_now), memo=memo),
                            "molds": _mold_checks(exp, memo)}
     if meshes:
         out["part_mesh"] = _mesh_checks(exp, memo)
@@ -81,18 +83,15 @@ class _Printability:
     part meshes' and the masses' checks too, after them. On one core, or when the process fails, they
     run here."""
 
-    def __init__(self, exp: Export, sliced_now: Collection[str], say: Callable[[str], None], parallel: bool,
-                 memo: CheckMemo | None = None, meshes: bool = False, robot: bool = False):
+    def __init__(self, exp: Export, sliced_now: Collection[str], say: Callable[[str], None],
+                 beside: StartBeside | None, memo: CheckMemo | None = None, meshes: bool = False,
+                 robot: bool = False):
         self.exp, self.sliced_now, self.say = exp, sliced_now, say
-        self.memo = memo = memo or CheckMemo(exp)
+        self.memo = memo or CheckMemo(exp)
         self.proc = None
         self._got: dict[str, Any] | None = None
-        if parallel:
-            # cwd: MuJoCo may write its log into the working folder, as in the robot checks.
-            cache_root = str(memo.cache.root) if memo.cache is not None else ""
-            self.proc = SecondProcess.start("bvsr_cad.checks.run", [str(exp.root), json.dumps(sorted(sliced_now)),
-                                                                   cache_root, "1" if meshes else "",
-                                                                   "1" if robot else ""], exp.root)
+        if beside is not None:
+            self.proc = beside(exp.root, sliced_now, meshes, robot)
             if self.proc is not None:
                 after = [what for what, asked in (("the part meshes and the masses", meshes),
                                                   ("the robot descriptions", robot)) if asked]
@@ -105,7 +104,7 @@ class _Printability:
         if self.proc is None:
             return {}
         if self._got is None:
-            self._got = result_or(self.proc, dict, self.say, "printability and molds")
+            self._got = self.proc.result_or(dict, self.say, "printability and molds")
         return self._got
 
     def results(self) -> list[CheckResult]:
@@ -204,10 +203,10 @@ class Checks:
     groups before it waits."""
 
     def __init__(self, root: str | Path, progress: Callable[[str], None] | None = None, *,
-                 run_slicer: bool = False, parallel: bool = True, cache: ArtifactCache | None = None,
+                 run_slicer: bool = False, beside: StartBeside | None = None, store: VerdictStore | None = None,
                  meshes_beside: bool = False, robot_beside: bool = False):
-        self.root, self.say, self.cache = root, progress or (lambda _m: None), cache
-        self.parallel, self.meshes_beside, self.robot_beside = parallel, meshes_beside, robot_beside
+        self.root, self.say, self.store = root, progress or (lambda _m: None), store
+        self.beside, self.meshes_beside, self.robot_beside = beside, meshes_beside, robot_beside
         self.sliced_now: dict = {}
         self._mesh: dict[str, tuple[tuple, list[CheckResult]]] = {}
         self._masses: tuple[tuple, list[CheckResult]] | None = None  # (its reads then, its results)
@@ -234,11 +233,11 @@ class Checks:
         meshes' and the masses' here."""
         run = cls(root, progress, **kw)
         exp, say = run._exp, run.say
-        memo = CheckMemo(exp, run.cache)
+        memo = CheckMemo(exp, run.store)
         # What the second process is about to read: its verdicts stand only while these are unchanged.
         run._printability_reads = _printability_reads(exp)
         run._molds_state = _state(exp, molds_reads(exp))
-        run._printability = _Printability(exp, run.sliced_now, say, run.parallel, memo, run.meshes_beside,
+        run._printability = _Printability(exp, run.sliced_now, say, run.beside, memo, run.meshes_beside,
                                           run.robot_beside)
         if run.robot_beside and run._printability.proc is not None:
             run._robot_state = _state(exp, robot_reads(exp))
@@ -277,7 +276,7 @@ class Checks:
         """Every result, in the order of :func:`run_checks`."""
         say = self.say
         exp = Export.open(self.root)  # the export as it is now (the manifest may have grown)
-        memo = CheckMemo(exp, self.cache)
+        memo = CheckMemo(exp, self.store)
         try:
             # This process's own groups first, then what the second process ran (waited for here).
             say("pentagon layout")
@@ -315,7 +314,7 @@ class Checks:
             if not fresh:
                 if printability is not None:
                     printability.close()
-                printability = self._printability = _Printability(exp, self.sliced_now, say, False, memo)
+                printability = self._printability = _Printability(exp, self.sliced_now, say, None, memo)
             results.extend(printability.results())
             if fresh and self._molds_state == _state(exp, molds_reads(exp)):
                 results.extend(printability.molds())
@@ -328,8 +327,6 @@ class Checks:
             self.close()
             for claim in ROBOT_CLAIM_FILES:
                 (Path(self.root) / claim).unlink(missing_ok=True)
-        if self.cache is not None:
-            self.cache.evict()  # once, after the groups' small entries
         return results
 
     def close(self) -> None:
@@ -340,7 +337,7 @@ class Checks:
 
 
 def run_checks(root: str | Path, progress: Callable[[str], None] | None = None, *,
-               run_slicer: bool = False, parallel: bool = True, cache: ArtifactCache | None = None
+               run_slicer: bool = False, beside: StartBeside | None = None, store: VerdictStore | None = None
                ) -> list[CheckResult]:
     """Run every check on the export at ``root``; the results come in the same order either way.
 
@@ -348,26 +345,21 @@ def run_checks(root: str | Path, progress: Callable[[str], None] | None = None, 
         root: the export folder.
         progress: called with one line per step (None: silent).
         run_slicer: slice the printed STLs the slice cache does not hold first.
-        parallel: run the printability checks in a second process (used on two cores or more).
-        cache: the artifact cache of check verdicts (None: every check runs).
+        beside: starts the printability checks' second process (None: every group runs here); the
+            command's :func:`bvsr_cad.build.checks_process.run_checks` gives one on two cores or more.
+        store: where verdicts are kept (:mod:`bvsr_cad.checks.memo`; None: every check runs).
 
     Returns:
         Every check's result; the export passes when none has ``passed`` False.
 
     The checks never start the slicer: the ``slice:*`` results come from the slice cache. With
     ``run_slicer`` (``bvsr check --slice``), every printed STL the cache does not hold is sliced
-    first (:func:`~bvsr_cad.checks.printability.slice_stls`). With ``parallel`` (and two cores)
-    the printability checks run in a second process beside the others. With ``cache`` the groups whose
+    first (:func:`~bvsr_cad.checks.printability.slice_stls`). With ``store`` the groups whose
     files and manifest values are unchanged (the meshes, the molds, the printed STLs, the twin's
-    envelope) take their verdicts from the artifact cache (:mod:`bvsr_cad.checks.memo`).
+    envelope) take their verdicts from it.
 
     Raises:
         ExportError: the folder is not a readable export.
         SlicerMissingError: ``run_slicer`` and PrusaSlicer is not installed.
     """
-    return Checks.start(root, progress, run_slicer=run_slicer, parallel=parallel, cache=cache).finish()
-
-
-#: What the printability checks' second process serves (:func:`bvsr_cad.worker.child_main`).
-SECOND_PROCESS = (_printability, None)
-
+    return Checks.start(root, progress, run_slicer=run_slicer, beside=beside, store=store).finish()

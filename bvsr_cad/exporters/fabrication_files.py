@@ -32,11 +32,11 @@ from ..colors import rgb, rgba
 from ..assembly.build import Assembly, rod_span_mm
 from ..assembly.fabrication import MadeItem, made_items
 from ..assembly.products import RIGID_MATERIAL, RigidRobot, piece_transform_mm
-from ..cache import ArtifactCache, file_sha256, object_stage, stage_key
 from ..parameters.twin import rigid_joining
 from ..parts.mold import MoldSet
 from ..parts._kernel import location, mesh_arrays
 from ..parts.rigid_tail import KEPT_ROLES, RigidPiece
+from ._memo import Memo, now
 from .bom import bom_rows, write_bom
 from .cad import write_step, write_stl
 from .reproducible import write_reproducible_3mf
@@ -203,9 +203,9 @@ def _layout_3mf(items: list[tuple[str, Path]], path: Path) -> list[list[float]]:
 
 
 def _print_jobs(asm: Assembly, root: Path, items: list[MadeItem], stl_of: dict[str, str],
-                cache: ArtifactCache | None = None) -> list[dict]:
+                memo: Memo = now) -> list[dict]:
     """One job per (process, material) of the printed items (MJF and FDM); ``stl_of`` maps an item's
-    label to the STL its writer wrote. A job's 3MF and its items' sizes are a cached stage keyed by the
+    label to the STL its writer wrote. A job's 3MF and its items' sizes are a step of ``memo`` read by the
     job's name and its items' names and STL bytes (a rod-material edit changes none)."""
     spec = asm.spec
     fp = spec.fabrication_package
@@ -232,10 +232,8 @@ def _print_jobs(asm: Assembly, root: Path, items: list[MadeItem], stl_of: dict[s
             (dst / three_mf).parent.mkdir(parents=True, exist_ok=True)
             return _layout_3mf([(it["part"], root / it["stl"]) for it in items], dst / three_mf)
 
-        sha = (lambda rel: file_sha256(root / rel)) if cache is not None else (lambda rel: "")
-        sizes, _ = object_stage(cache, stage_key("print_job_layout", job=job,
-                                                 items=[(it["part"], it["stl"], sha(it["stl"])) for it in items]),
-                                layout, root)
+        sizes = memo("print_job_layout", {"job": job, "items": [(it["part"], it["stl"]) for it in items]}, layout,
+                     root, files=[root / it["stl"] for it in items])
         for it, size in zip(items, sizes):
             it["size_mm"] = size
         with (root / f"print/{job}/quantities.csv").open("w", newline="") as fh:
@@ -255,11 +253,11 @@ def _print_jobs(asm: Assembly, root: Path, items: list[MadeItem], stl_of: dict[s
 def write_fabrication(asm: Assembly, pieces: list[RigidPiece], rigid_robot: RigidRobot,
                       visual: list[trimesh.Trimesh], mold_set: MoldSet | None,
                       part_files: dict[str, dict[str, str]], mold_files: dict[str, dict[str, str]], root: Path,
-                      progress: Callable[[str], None], cache: ArtifactCache | None = None) -> dict[str, Any]:
+                      progress: Callable[[str], None], memo: Memo = now) -> dict[str, Any]:
     """Write the rigid tail's robot description, print files and the BOM under ``root``, beside the
     twin's pieces (built by :mod:`bvsr_cad.assembly.products`) and their files and ``visual`` meshes
     (:func:`write_rigid_files`). ``part_files`` and ``mold_files`` name the files the part and mold
-    writers wrote (by part and mold-part name); ``cache``: the print jobs' layouts (:func:`_print_jobs`). Returns keys to merge into the manifest
+    writers wrote (by part and mold-part name); ``memo``: the print jobs' layouts (:func:`_print_jobs`). Returns keys to merge into the manifest
     (``rigid_parts``: the twin's entries of the manifest's ``parts``)."""
     spec = asm.spec
     fp = spec.fabrication_package
@@ -271,7 +269,7 @@ def write_fabrication(asm: Assembly, pieces: list[RigidPiece], rigid_robot: Rigi
     stl_of = {name: f["stl"] for name, f in part_files.items()}
     stl_of |= {p["name"]: p["files"]["stl"] for p in rigid}
     stl_of |= {f"mold_{name}": f["stl"] for name, f in mold_files.items()}
-    jobs = _print_jobs(asm, root, items, stl_of, cache)
+    jobs = _print_jobs(asm, root, items, stl_of, memo)
     joining = rigid_joining(spec)
     rigid_section = {
         "pieces": [p["name"] for p in rigid],

@@ -27,10 +27,10 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from ..cache import ArtifactCache, file_sha256, object_stage, stage_key
 from ..colors import rgb
 from ..parameters import paper
 from .render import composing, offscreen_pyvista
+from ._memo import Memo, now
 
 
 _MODEL = "the Eq 6-12 model predicts it: see Model against measurements (and `bvsr simulate` in MuJoCo)"
@@ -364,40 +364,39 @@ class ReportPictures:
     problems: list[str]  # what failed to render
 
 
-def report_pictures(root: Path, manifest: dict[str, Any], cache: ArtifactCache | None = None) -> ReportPictures:
+def report_pictures(root: Path, manifest: dict[str, Any], memo: Memo = now) -> ReportPictures:
     """Draw the report's pictures of the print files and the rigid twin under ``root``: they read the
     manifest's parts, print jobs and twin and the STLs, so a build draws them before its analyses are in.
 
-    With ``cache`` the pictures are cached stages keyed by what they draw: the STLs' bytes, the names
-    and kinds (the parts sheet), the pieces' placements (the twin)."""
+    The pictures are steps of ``memo`` (:mod:`bvsr_cad.exporters._memo`) read by what they draw: the STLs'
+    bytes, the names and kinds (the parts sheet), the pieces' placements (the twin)."""
     (root / "report").mkdir(exist_ok=True)
     problems: list[str] = []
     items = [(it["part"], it["stl"], it["kind"]) for job in manifest.get("print_jobs", []) for it in job["items"]]
     items += [(p["name"], p["files"]["stl"], p["kind"]) for p in manifest["parts"]
               if p["process"] not in ("MJF", "FDM")]
-    sha = (lambda rel: file_sha256(root / rel)) if cache is not None else (lambda rel: "")
     try:
-        part_pics, _ = object_stage(cache, stage_key("report_part_pictures", items=[(*i, sha(i[1])) for i in items]),
-                                    lambda dst: _render_parts(root, items, dst), root)
+        part_pics = memo("report_part_pictures", {"items": items}, lambda dst: _render_parts(root, items, dst), root,
+                         files=[root / i[1] for i in items])
     except Exception as exc:  # a missing GL library must not lose the export; the report says what failed
         part_pics, problems = {}, problems + [f"part renders failed: {exc}"]
     rigid_pic = None
     if manifest.get("rigid_tail"):
-        pieces = [(p["files"]["stl"], sha(p["files"]["stl"]), p["tail_transform"]) for p in _rigid_pieces(manifest)]
+        pieces = [(p["files"]["stl"], p["tail_transform"]) for p in _rigid_pieces(manifest)]
         try:
-            rigid_pic, _ = object_stage(cache, stage_key("report_rigid_picture", pieces=pieces),
-                                        lambda dst: _render_rigid(root, manifest, dst), root)
+            rigid_pic = memo("report_rigid_picture", {"pieces": pieces}, lambda dst: _render_rigid(root, manifest, dst),
+                             root, files=[root / stl for stl, _t in pieces])
         except Exception as exc:
             problems.append(f"rigid tail render failed: {exc}")
     return ReportPictures(part_pics, rigid_pic, problems)
 
 
-def write_report(root: Path, manifest: dict[str, Any], cache: ArtifactCache | None = None,
+def write_report(root: Path, manifest: dict[str, Any], memo: Memo = now,
                  pictures: ReportPictures | None = None) -> dict[str, Any]:
     """Write ``report.html`` and its pictures (``report/``; ``pictures``: drawn already by
     :func:`report_pictures`) under ``root``; returns the manifest's ``report``."""
     if pictures is None:
-        pictures = report_pictures(root, manifest, cache)
+        pictures = report_pictures(root, manifest, memo)
     part_pics, rigid_pic, problems = pictures.parts, pictures.rigid, list(pictures.problems)
     checks = manifest.get("checks", [])
     n_fail = sum(1 for c in checks if c["passed"] is False)

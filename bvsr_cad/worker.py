@@ -184,13 +184,17 @@ def library_imports() -> Iterator[None]:
 
 def tune_process() -> None:
     """What a ``bvsr`` process sets at its start, before its imports: :func:`tune_allocator`,
-    :func:`tune_collector`, :func:`no_mujoco_rendering` and :func:`one_blas_thread`. Called by the entry
+    :func:`tune_collector`, :func:`no_mujoco_rendering`, :func:`one_blas_thread` and scikit-learn's
+    clustering loaded when used (:func:`bvsr_cad._deferred.defer_sklearn_cluster`). Called by the entry
     points only (the command, a second process, the rebuild benchmark's own process), in one place so
-    that they stay alike."""
+    that they stay alike: ``import bvsr_cad`` changes nothing in the importing process."""
+    from ._deferred import defer_sklearn_cluster
+
     tune_allocator()
     tune_collector()
     no_mujoco_rendering()
     one_blas_thread()
+    defer_sklearn_cluster()
 
 
 def child_main(argv: list[str]) -> int:

@@ -9,6 +9,8 @@ from .conftest import ROOT
 CHILD = r"""
 import sys, time
 import numpy as np
+from bvsr_cad.worker import tune_process
+tune_process()  # as every bvsr process does at its start
 import bvsr_cad.pipeline  # every layer, build123d with it
 assert "sklearn" not in sys.modules, "scikit-learn was imported with the pipeline"
 assert "sklearn.cluster" not in sys.modules and "build123d" in sys.modules  # the stand-in is gone
@@ -26,6 +28,8 @@ print("ok")
 BEFORE = r"""
 import sys
 import sklearn.cluster  # the user's own, before bvsr_cad: left as it is
+from bvsr_cad.worker import tune_process
+tune_process()
 import bvsr_cad.pipeline
 assert sys.modules["sklearn.cluster"] is sklearn.cluster
 print("ok")
@@ -41,3 +45,24 @@ def test_sklearn_cluster_loads_when_used_and_is_the_real_one():
         out = subprocess.run([sys.executable, "-c", child], cwd=ROOT, capture_output=True, text=True, timeout=300,
                              env={**os.environ, "PYTHONPATH": str(ROOT)})
         assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr[-3000:]
+
+
+LIBRARY = r"""
+import gc, os, sys
+finders, gc_on, env = list(sys.meta_path), gc.isenabled(), dict(os.environ)
+import bvsr_cad, bvsr_cad.api
+assert sys.meta_path == finders, sys.meta_path
+assert gc.isenabled() == gc_on and gc.get_freeze_count() == 0
+ours = ("OPENBLAS_NUM_THREADS", "MUJOCO_GL")  # what tune_process sets (libraries set their own: OpenMP's KMP_*)
+assert [os.environ.get(k) for k in ours] == [env.get(k) for k in ours]
+print("ok")
+"""
+
+
+def test_importing_the_library_changes_nothing_in_the_process():
+    """``import bvsr_cad`` (and its API) installs no import hook, leaves the collector and the environment
+    variables of worker.tune_process as they were: only the ``bvsr`` command and its own processes set
+    process settings."""
+    out = subprocess.run([sys.executable, "-c", LIBRARY], cwd=ROOT, capture_output=True, text=True, timeout=300,
+                         env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr[-3000:]

@@ -18,7 +18,7 @@ from pathlib import Path
 from bvsr_cad.analysis.calibrate import uncalibrated
 from bvsr_cad.analysis.predict import Predictor
 from bvsr_cad.parameters.load import load_spec
-from bvsr_cad.sim import joint_limits_rad, segment_extension
+from bvsr_cad.simulation.sim import joint_limits_rad, segment_extension
 
 ROOT = Path(__file__).resolve().parents[1]
 

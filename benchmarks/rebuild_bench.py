@@ -108,12 +108,12 @@ def main() -> None:
     work = Path(tempfile.mkdtemp(prefix="bvsr-rebuild-bench-"))
     users_cache = os.environ.get("BVSR_CACHE")
     os.environ["BVSR_CACHE"] = str(work / "cache")
-    from bvsr_cad.cache import process_start
-    from bvsr_cad.worker import SecondProcess, library_imports, tune_process
+    from bvsr_cad.build.cache import process_start
+    from bvsr_cad.build._runtime.worker import SecondProcess, library_imports, tune_process
 
     tune_process()  # as the `bvsr` command does, and its imports
     with library_imports():
-        from bvsr_cad.pipeline import build_export
+        from bvsr_cad.build.pipeline import build_export
     base = Path(args.params).resolve()
     text = base.read_text()
     for stale in base.parent.glob(".bench-*.toml"):  # left by a benchmark that was killed
@@ -138,7 +138,7 @@ def main() -> None:
     def run(label: str, path: Path) -> float:
         t0, c0 = time.perf_counter(), cpu_s()
         # As `bvsr build` does: the analyses' process started ahead, building the assembly of the file.
-        res = build_export(path, work / "out", standby=SecondProcess.standby("bvsr_cad.analyses_process", None, [str(path)]))
+        res = build_export(path, work / "out", standby=SecondProcess.standby("bvsr_cad.build._runtime.analyses_process", None, [str(path)]))
         return row(label, time.perf_counter() - t0, cpu_s() - c0, res.stages, res.cpu_s)
 
     # The package's bytecode, as Python writes it on a first run and `make` at install: where the

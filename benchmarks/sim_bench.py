@@ -31,7 +31,7 @@ os.environ.setdefault("XLA_FLAGS", "--xla_cpu_multi_thread_eigen=false")  # poli
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
-from bvsr_cad import sim_gpu  # noqa: E402
+from bvsr_cad.simulation import sim_gpu  # noqa: E402
 
 GPU_BATCHES = (1, 1024, 8192)
 

@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 from . import __version__
-from .worker import SecondProcess, library_imports, tune_process
+from .build._runtime.worker import SecondProcess, library_imports, tune_process
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -82,17 +82,17 @@ def cmd_build(args) -> int:
 
     # The analyses' second process imports its modules beside this process's imports of the pipeline, and
     # builds the tail's assembly from the file while this process decides what the cache holds.
-    standby = SecondProcess.standby("bvsr_cad.analyses_process", say, [str(Path(args.params).resolve())])
+    standby = SecondProcess.standby("bvsr_cad.build._runtime.analyses_process", say, [str(Path(args.params).resolve())])
     try:
         # A bad file is refused, and an export the cache holds whole is published, in a fraction of a
         # second: before the pipeline's imports (seconds).
-        from .publish import open_build, reuse_whole
+        from .build.publish import open_build, reuse_whole
 
         opened = open_build(args.params, args.output, say, use_cache=not args.no_cache)
         res = reuse_whole(opened)
         if res is None:
             with library_imports():  # a Ctrl-C in the pipeline's imports stops the build (worker.library_imports)
-                from .pipeline import build_opened
+                from .build.pipeline import build_opened
 
             res = build_opened(opened, standby)
     finally:
@@ -118,7 +118,7 @@ def cmd_build(args) -> int:
 def cmd_watch(args) -> int:
     args.params = _params_or_default(args, _progress(args.quiet))
     with library_imports():
-        from .watch import watch
+        from .build.watch import watch
 
     def say(msg: str) -> None:
         print(msg, flush=True)
@@ -158,7 +158,7 @@ def cmd_show(args) -> int:
 
 def cmd_check(args) -> int:
     with library_imports():
-        from .build.checks_process import run_checks
+        from .build._runtime.checks_process import run_checks
 
     results = run_checks(args.export, _progress(args.quiet or args.json), run_slicer=args.slice)
     return _print_results(results, args.json, verbose=args.verbose)
@@ -171,7 +171,7 @@ def cmd_simulate(args) -> int:
     with library_imports():
         from .exporters.plots import plot_simulation
         from .parameters import paper
-        from .sim import check_inputs, joint_limits_rad, simulate
+        from .simulation.sim import check_inputs, joint_limits_rad, simulate
 
     say = _progress(args.quiet or args.json)
     check_inputs(spec, args.pressure_bar, args.payload_g)
@@ -211,7 +211,7 @@ def cmd_simulate(args) -> int:
 
 
 def _simulate_impact(args, spec, limits, say) -> int:
-    from .sim import impact_table, simulate_impact
+    from .simulation.sim import impact_table, simulate_impact
 
     rows = impact_table(simulate_impact(spec, limits, progress=say))
     if args.json:
@@ -229,7 +229,7 @@ def _simulate_impact(args, spec, limits, say) -> int:
 def _simulate_cart(args, spec, limits, say) -> int:
     with library_imports():
         from .exporters.plots import plot_cart
-        from .sim import cart_comparison, simulate_cart
+        from .simulation.sim import cart_comparison, simulate_cart
 
     runs = simulate_cart(spec, limits, args.pressure_bar, progress=say, supply=args.supply)
     say("Eq 20-22 on the Eq 6-12 tail model")
@@ -261,7 +261,7 @@ def cmd_calibrate(args) -> int:
         from .analysis.calibrate import calibrate
         from .analysis.predict import Predictor
         from .exporters.calibration_file import write_calibrated_params
-        from .sim import protocol_radius_mm
+        from .simulation.sim import protocol_radius_mm
 
     say = _progress(args.quiet or args.json)
     names = [n.strip() for n in args.fit.split(",") if n.strip()] if args.fit else None
@@ -352,7 +352,7 @@ def cmd_sweep(args) -> int:
     study = load_study(args.study)  # a bad study file is refused before the sweep's imports (seconds)
     require("studies", "bvsr sweep")
     with library_imports():
-        from .sweep import run_study
+        from .studies.sweep import run_study
 
     say = _progress(args.quiet or args.json)
     try:
@@ -619,7 +619,7 @@ def console() -> None:
     one: 0.8 s after a build's "wrote" line, measured, with its work published, its second processes
     stopped and nothing left to write (what it printed is flushed first). A bug's traceback ends it
     the usual way. Called in-process (tests, scripts), :func:`main` returns its exit code instead. The
-    process is tuned as every ``bvsr`` process (:func:`bvsr_cad.worker.tune_process`: freed memory kept
+    process is tuned as every ``bvsr`` process (:func:`bvsr_cad.build._runtime.worker.tune_process`: freed memory kept
     for reuse, its libraries frozen out of the garbage collector, no OpenGL for MuJoCo, OpenBLAS on one
     thread)."""
     tune_process()

@@ -79,7 +79,7 @@ def bvsr_export(tmp_path_factory, request) -> Path:
     it under a lock in the session's common temporary folder, the others wait for that build and read it."""
     import fcntl
 
-    from bvsr_cad.pipeline import build_export
+    from bvsr_cad.build.pipeline import build_export
 
     if not hasattr(request.config, "workerinput"):  # no pytest-xdist workers
         out = tmp_path_factory.mktemp("exp") / "bvsr"

@@ -12,7 +12,7 @@ import pytest
 
 from bvsr_cad.parameters.layout import key_value
 from bvsr_cad.parameters.load import load_spec
-from bvsr_cad.publish import BuildResult
+from bvsr_cad.build.publish import BuildResult
 
 from .conftest import benchmark_script
 
@@ -28,8 +28,8 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, 
     to the default file beside it (its data file resolves as the base's), loads with the new value, and is
     removed afterwards; an edit file left by a dead benchmark is removed, a live one's kept; the table
     lists the cold build, the no-op (in the process and as the command) and each edit with its ratio to cold."""
-    import bvsr_cad.pipeline
-    import bvsr_cad.worker
+    import bvsr_cad.build.pipeline
+    import bvsr_cad.build._runtime.worker
 
     bench = benchmark_script("rebuild_bench")
     (tmp_path / "params").mkdir()
@@ -54,11 +54,11 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(tmp_path, 
         commands.append((Path(path), os.environ["BVSR_CACHE"]))
         return 0.5, 0.4, [{"stage": "export", "status": "reused", "seconds": 0.1}], {"build": 0.31}
 
-    monkeypatch.setattr(bvsr_cad.pipeline, "build_export", fake_build)
+    monkeypatch.setattr(bvsr_cad.build.pipeline, "build_export", fake_build)
     monkeypatch.setattr(bench, "command_seconds", fake_command)
     loops = iter([0.91, 0.97])  # the reference loop, before and after
     monkeypatch.setattr(bench, "reference_loop_s", lambda: next(loops))
-    monkeypatch.setattr(bvsr_cad.worker.SecondProcess, "standby", classmethod(lambda cls, *a, **k: None))
+    monkeypatch.setattr(bvsr_cad.build._runtime.worker.SecondProcess, "standby", classmethod(lambda cls, *a, **k: None))
     monkeypatch.setattr(sys, "argv", ["rebuild_bench.py", str(base)])
     # The benchmark builds in a private cache of its own and then gives the environment back: the later
     # tests of this worker build in the session's cache (a leaked BVSR_CACHE once failed a cached-rebuild
@@ -96,8 +96,8 @@ def test_rebuild_bench_runs_several_cold_builds_each_from_an_empty_cache(tmp_pat
     """``--cold 3``: three cold builds, each finding the benchmark's cache empty (what the one before it
     put there removed), then the no-op from the last one's cache; the table lists each and the ratios'
     base is their median; ``--cold 0`` is refused."""
-    import bvsr_cad.pipeline
-    import bvsr_cad.worker
+    import bvsr_cad.build.pipeline
+    import bvsr_cad.build._runtime.worker
 
     bench = benchmark_script("rebuild_bench")
     found: list[list[str]] = []
@@ -109,10 +109,10 @@ def test_rebuild_bench_runs_several_cold_builds_each_from_an_empty_cache(tmp_pat
         (cache / f"entry{len(found)}").write_text("")
         return BuildResult(Path(out), [], 1.0, [{"stage": "export", "status": "built", "seconds": 1.0}], {"build": 0.5})
 
-    monkeypatch.setattr(bvsr_cad.pipeline, "build_export", fake_build)
+    monkeypatch.setattr(bvsr_cad.build.pipeline, "build_export", fake_build)
     monkeypatch.setattr(bench, "command_seconds", lambda path, out: (0.5, 0.4, [], {"build": 0.3}))
     monkeypatch.setattr(bench, "reference_loop_s", lambda: 0.9)
-    monkeypatch.setattr(bvsr_cad.worker.SecondProcess, "standby", classmethod(lambda cls, *a, **k: None))
+    monkeypatch.setattr(bvsr_cad.build._runtime.worker.SecondProcess, "standby", classmethod(lambda cls, *a, **k: None))
     monkeypatch.setenv("BVSR_CACHE", str(tmp_path / "users-cache"))
     monkeypatch.setattr(sys, "argv", ["rebuild_bench.py", str(ROOT / "params" / "bvsr.toml"), "--edits", "", "--cold", "3"])
     bench.main()
@@ -170,7 +170,7 @@ def test_sim_bench_runs_on_the_cpu_and_says_profile_needs_cuda(bvsr_export, caps
     pytest.importorskip("mujoco_warp", reason="needs the optional extra .[gpu]")
     import mujoco
 
-    from bvsr_cad import sim_gpu
+    from bvsr_cad.simulation import sim_gpu
 
     bench = benchmark_script("sim_bench")
     monkeypatch.setattr(bench, "cuda_present", lambda: None)

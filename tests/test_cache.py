@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from bvsr_cad.cache import ArtifactCache, spec_without, stage_key
+from bvsr_cad.build.cache import ArtifactCache, spec_without, stage_key
 
 from .conftest import PARAMS, benchmark_script, write_toml
 
@@ -68,7 +68,7 @@ def test_keys_follow_exactly_the_declared_inputs(bvsr_spec):
     diameter and the tail's name (the assembly STEP's product) do; the analyses read the material."""
     import dataclasses
 
-    from bvsr_cad.pipeline import ANALYSES_IGNORE, PART_FILES_IGNORE
+    from bvsr_cad.build.pipeline import ANALYSES_IGNORE, PART_FILES_IGNORE
 
     def key(stage, spec, ignore):
         return stage_key(stage, spec=spec_without(spec, *ignore))
@@ -83,14 +83,14 @@ def test_keys_follow_exactly_the_declared_inputs(bvsr_spec):
     assert key("analyses", pvc, ANALYSES_IGNORE) != key("analyses", bvsr_spec, ANALYSES_IGNORE)
     assert key("analyses", renamed, ANALYSES_IGNORE) != key("analyses", bvsr_spec, ANALYSES_IGNORE)
     # The geometry analyses (joint limits, clearance map): the solids, not the material or the name.
-    from bvsr_cad.pipeline import ANALYSIS_GEOMETRY_IGNORE as GEO
+    from bvsr_cad.build.pipeline import ANALYSIS_GEOMETRY_IGNORE as GEO
 
     assert key("analysis_geometry", pvc, GEO) == key("analysis_geometry", bvsr_spec, GEO)
     assert key("analysis_geometry", renamed, GEO) == key("analysis_geometry", bvsr_spec, GEO)
     assert key("analysis_geometry", thin, GEO) != key("analysis_geometry", bvsr_spec, GEO)
     # The robot's meshes and collision fits: the solids and which collision shapes, not the material,
     # the name or the robot table's other values.
-    from bvsr_cad.pipeline import robot_geometry_key
+    from bvsr_cad.build.pipeline import robot_geometry_key
 
     robot = robot_geometry_key(bvsr_spec)
     assert robot_geometry_key(pvc) == robot_geometry_key(renamed) == robot
@@ -108,7 +108,7 @@ def test_keys_follow_the_libraries_the_results_are_computed_with(monkeypatch):
     import tomllib
     from importlib import metadata
 
-    from bvsr_cad import cache
+    from bvsr_cad.build import cache
 
     project = tomllib.loads((PARAMS.parent / "pyproject.toml").read_text())["project"]
     computing = project["dependencies"] + [r for extra in ("studies", "crosscheck")  # a study's table, a check
@@ -181,7 +181,7 @@ def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(bvsr_expo
     """bvsr_export (this session's first build) filled the session's cache. The same file again is one
     reused stage; a rod-material edit built by two builds at once through the shared cache equals,
     file for file, the same edit built with --no-cache (the manifest's volatile section aside)."""
-    from bvsr_cad.pipeline import build_export
+    from bvsr_cad.build.pipeline import build_export
 
     noop = build_export(PARAMS / "bvsr.toml", tmp_path / "noop")
     assert [(s["stage"], s["status"]) for s in noop.stages] == [("export", "reused")]
@@ -237,7 +237,7 @@ def test_every_benchmark_edit_built_from_the_cache_equals_a_fresh_build(tmp_path
     the unedited file's build, equals the same file built with the cache off, file for file (the
     manifest's volatile section aside); each reuses at least one stage and rebuilds at least one. A
     CI-sized tail (:data:`SMALL_TAIL`) in a cache of its own."""
-    from bvsr_cad.pipeline import build_export
+    from bvsr_cad.build.pipeline import build_export
 
     bench = benchmark_script("rebuild_bench")  # its edits and its editor of parameter text: one source
     monkeypatch.setenv("BVSR_CACHE", str(tmp_path / "cache"))
@@ -283,7 +283,8 @@ def test_a_build_whose_analyses_are_cached_stops_its_standby_before_its_stages(b
     them from the cache and stops its standby analyses' process before the assembly, so that its imports
     and head start do not take a core from the build's stages. Without the cache it is given the
     analyses, and runs beside them."""
-    from bvsr_cad import pipeline, worker
+    from bvsr_cad.build import pipeline
+    from bvsr_cad.build._runtime import worker
 
     data["fabrication_package"]["printer_x_mm"] = 220.0
     edit = _edit_beside_its_data(tmp_path, data)
@@ -295,7 +296,7 @@ def test_a_build_whose_analyses_are_cached_stops_its_standby_before_its_stages(b
 
     monkeypatch.setattr(pipeline, "build_assembly", first_stage)
     for use_cache in (True, False):
-        standby = worker.SecondProcess.standby("bvsr_cad.analyses_process", None, [str(edit)])
+        standby = worker.SecondProcess.standby("bvsr_cad.build._runtime.analyses_process", None, [str(edit)])
         if standby is None:
             pytest.skip("one core: the analyses never leave the process")
         with pytest.raises(_StageReached):
@@ -311,7 +312,8 @@ def test_analyses_take_both_cores_when_the_geometry_is_cached(bvsr_export, tmp_p
     to run the protocol's two simulations side by side (BESIDE_IDLE_BUILD_THREADS); without the cache the
     build's own stages share the cores with it (BESIDE_BUILD_THREADS). The table is the same either way
     (compare_rows); measured on the default tail, 2 cores: 22.9-24.4 s with 2 threads, 19.0-20.1 with 3."""
-    from bvsr_cad import pipeline, worker
+    from bvsr_cad.build import pipeline
+    from bvsr_cad.build._runtime import worker
     from bvsr_cad.analysis.run import BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS
 
     data["actuation"]["effective_area_mm2"] = 150.0
@@ -337,7 +339,7 @@ def test_analyses_take_both_cores_when_the_geometry_is_cached(bvsr_export, tmp_p
 
 #: What a rebuild that finds its whole export in the cache must not import (seconds of the command's time).
 HEAVY_MODULES = {"build123d", "OCP", "cadquery", "trimesh", "manifold3d", "scipy", "mujoco", "matplotlib", "pyvista",
-                 "bvsr_cad.pipeline", "bvsr_cad.assembly", "bvsr_cad.checks.printability"}
+                 "bvsr_cad.build.pipeline", "bvsr_cad.assembly", "bvsr_cad.checks.printability"}
 
 
 @pytest.mark.slow
@@ -353,7 +355,7 @@ def test_a_noop_build_command_publishes_the_cached_export_before_the_cad_imports
     assert done.returncode == 0, done.stderr[-2000:]
     assert [(s["stage"], s["status"]) for s in json.loads(done.stdout)["stages"]] == [("export", "reused")]
     imported = {line.rsplit("|", 1)[1].strip() for line in done.stderr.splitlines() if line.startswith("import time:")}
-    assert "bvsr_cad.publish" in imported  # the listing is there to read
+    assert "bvsr_cad.build.publish" in imported  # the listing is there to read
     assert not imported & HEAVY_MODULES
     assert _differences(bvsr_export, out) == []
 

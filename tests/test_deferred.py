@@ -1,4 +1,4 @@
-"""scikit-learn's clustering is loaded when used, not when the CAD kernel is imported (bvsr_cad._deferred)."""
+"""scikit-learn's clustering is loaded when used, not when the CAD kernel is imported (bvsr_cad.build._runtime.deferred)."""
 
 import os
 import subprocess
@@ -9,9 +9,9 @@ from .conftest import ROOT
 CHILD = r"""
 import sys, time
 import numpy as np
-from bvsr_cad.worker import tune_process
+from bvsr_cad.build._runtime.worker import tune_process
 tune_process()  # as every bvsr process does at its start
-import bvsr_cad.pipeline  # every layer, build123d with it
+import bvsr_cad.build.pipeline  # every layer, build123d with it
 assert "sklearn" not in sys.modules, "scikit-learn was imported with the pipeline"
 assert "sklearn.cluster" not in sys.modules and "build123d" in sys.modules  # the stand-in is gone
 import build123d.brep_from_stl as b
@@ -28,9 +28,9 @@ print("ok")
 BEFORE = r"""
 import sys
 import sklearn.cluster  # the user's own, before bvsr_cad: left as it is
-from bvsr_cad.worker import tune_process
+from bvsr_cad.build._runtime.worker import tune_process
 tune_process()
-import bvsr_cad.pipeline
+import bvsr_cad.build.pipeline
 assert sys.modules["sklearn.cluster"] is sklearn.cluster
 print("ok")
 """

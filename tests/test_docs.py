@@ -129,8 +129,8 @@ def test_sphinx_roles_render_as_code():
     spec = importlib.util.spec_from_file_location("docs_roles", ROOT / "docs" / "hooks" / "sphinx_roles.py")
     roles = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(roles)
-    text = "Uses :func:`~bvsr_cad.api.load`, :data:`bvsr_cad.pipeline.X` and ``a``. Example::\n\n    x = 1"
-    assert roles.markdown(text) == "Uses `load`, `bvsr_cad.pipeline.X` and `a`. Example:\n\n    x = 1"
+    text = "Uses :func:`~bvsr_cad.api.load`, :data:`bvsr_cad.build.pipeline.X` and ``a``. Example::\n\n    x = 1"
+    assert roles.markdown(text) == "Uses `load`, `bvsr_cad.build.pipeline.X` and `a`. Example:\n\n    x = 1"
 
 
 @pytest.mark.skipif(shutil.which("mkdocs", path=str(Path(sys.executable).parent)) is None,

@@ -111,7 +111,7 @@ def test_checks_started_early_see_a_file_changed_before_they_finish(bvsr_export,
     """A build runs the CAD files' checks before its analyses are in (Checks.start) and the rest after
     (Checks.finish): a file changed in between is checked again, so the verdicts are those of the
     final export, the same as one run of every check."""
-    from bvsr_cad.build.checks_process import run_checks, start_checks
+    from bvsr_cad.build._runtime.checks_process import run_checks, start_checks
 
     copy = tmp_path / "copy"
     shutil.copytree(bvsr_export, copy)
@@ -130,7 +130,7 @@ def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_change
     STL changed after the start is checked again here, and the results are one run of every check's."""
     import os
 
-    from bvsr_cad.build.checks_process import run_checks, start_checks
+    from bvsr_cad.build._runtime.checks_process import run_checks, start_checks
 
     if (os.cpu_count() or 1) < 2:
         pytest.skip("one core: the checks never leave the process")
@@ -160,7 +160,7 @@ def test_mold_checks_in_the_second_process_see_a_mold_file_changed_before_they_f
 
     from bvsr_cad.checks.export import Export
     from bvsr_cad.checks.molds import check_molds
-    from bvsr_cad.build.checks_process import start_checks
+    from bvsr_cad.build._runtime.checks_process import start_checks
 
     if (os.cpu_count() or 1) < 2:
         pytest.skip("one core: the mold checks never leave the process")
@@ -214,7 +214,7 @@ def test_failed_build_leaves_earlier_export_untouched(bvsr_export, tmp_path, dat
     assert main(["build", str(write_toml(tmp_path / "bad.toml", data)), "-o", str(out), "-q"]) == 2
     assert _tree_digest(out) == before
     # A failure half-way through writing: the earlier export survives, no temp folder is left.
-    import bvsr_cad.pipeline as pipeline
+    import bvsr_cad.build.pipeline as pipeline
 
     calls = {"n": 0}
     real = pipeline.write_part_stl
@@ -242,12 +242,12 @@ def test_build_refuses_to_replace_a_foreign_folder(tmp_path, capsys):
 
 
 def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, monkeypatch):
-    from bvsr_cad import worker
+    from bvsr_cad.build._runtime import worker
     from bvsr_cad.parameters.load import ParamError
 
     changed = write_toml(tmp_path / "edited.toml", {"name": "edited"})
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    proc = worker.SecondProcess.start("bvsr_cad.analyses_process", [str(changed), "sha256 of what the build read"],
+    proc = worker.SecondProcess.start("bvsr_cad.build._runtime.analyses_process", [str(changed), "sha256 of what the build read"],
                                       tmp_path)
     if proc is None:
         pytest.skip("one core: the analyses never leave the process")
@@ -263,7 +263,7 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
     assert counted > 0.5 and counted - 0.2 <= proc.cpu_s <= counted, (proc.cpu_s, counted)
     # A process that dies without a result: the work runs here instead.
     monkeypatch.setattr(worker.sys, "executable", shutil.which("false") or "/bin/false")
-    lost = worker.SecondProcess.start("bvsr_cad.analyses_process", [], tmp_path)
+    lost = worker.SecondProcess.start("bvsr_cad.build._runtime.analyses_process", [], tmp_path)
     said: list[str] = []
     assert worker.result_or(lost, lambda: {"analysis": "computed here"}, said.append, "analyses") == {
         "analysis": "computed here"}
@@ -275,7 +275,7 @@ def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path, monkeypatch
     """`bvsr build` starts the analyses' process before it imports the pipeline: given its work it
     answers as a process started with it (even from a working folder that is gone); closed without
     work it exits; once gone it takes none."""
-    from bvsr_cad import worker
+    from bvsr_cad.build._runtime import worker
     from bvsr_cad.parameters.load import ParamError
 
     changed = write_toml(tmp_path / "edited.toml", {"name": "edited"})
@@ -283,7 +283,7 @@ def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path, monkeypatch
     gone.mkdir()
     monkeypatch.chdir(gone)
     gone.rmdir()
-    standby = worker.SecondProcess.standby("bvsr_cad.analyses_process")
+    standby = worker.SecondProcess.standby("bvsr_cad.build._runtime.analyses_process")
     if standby is None:
         pytest.skip("one core: the analyses never leave the process")
     assert standby.begin([str(changed), "sha256 of what the build read"], tmp_path)
@@ -294,11 +294,11 @@ def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path, monkeypatch
     here = tmp_path / "here"
     (here / "exports").mkdir(parents=True)
     monkeypatch.chdir(here)
-    relative = worker.SecondProcess.standby("bvsr_cad.analyses_process")
+    relative = worker.SecondProcess.standby("bvsr_cad.build._runtime.analyses_process")
     assert relative.begin([str(changed), "sha256 of what the build read"], Path("exports"))
     with pytest.raises(ParamError, match=r"edited.toml(.|\n)*changed while the build was running"):
         relative.result()
-    idle = worker.SecondProcess.standby("bvsr_cad.analyses_process")
+    idle = worker.SecondProcess.standby("bvsr_cad.build._runtime.analyses_process")
     idle.proc.stdin.close()  # no work: it imports, reads the end of its input and exits quietly
     assert idle.proc.wait(timeout=300) == 0
     assert not idle.begin([str(changed), "x"], tmp_path)  # gone: the build starts another
@@ -332,14 +332,14 @@ def test_the_standby_head_start_is_used_only_for_the_bytes_it_was_built_from(tmp
 
 def test_the_build_and_its_analyses_process_make_each_part_solid_once(tmp_path, monkeypatch):
     """A cold build's two processes share the parts' solids through a folder of BRep files
-    (:class:`~bvsr_cad.analyses_process.SharedSolids`): the build makes its parts from the first, the analyses'
+    (:class:`~bvsr_cad.build._runtime.analyses_process.SharedSolids`): the build makes its parts from the first, the analyses'
     process from the last, and each reads what the other made instead of making it again. Every solid is
     the one its bytes give back, so a part read from the other process equals, to the byte, the one made
     here, and both equal a plain assembly's; the build removes the folder once the analyses are in."""
-    from bvsr_cad import analyses_process
+    from bvsr_cad.build._runtime import analyses_process
     from bvsr_cad.analysis import run
     from bvsr_cad.assembly import build as build_mod
-    from bvsr_cad.analyses_process import SharedSolids
+    from bvsr_cad.build._runtime.analyses_process import SharedSolids
     from bvsr_cad.assembly.build import build_assembly
     from bvsr_cad.parameters.load import load_spec, params_sha256
     from bvsr_cad.parts._kernel import brep_bytes
@@ -380,8 +380,8 @@ def test_the_analyses_process_leaves_the_joint_limits_before_its_other_analyses(
     """The analyses' process puts its geometry analyses (the joint limits) into the build's folder as soon
     as it has them, whole (never a half-written file under the name the build reads), before its other
     analyses: the build writes and checks the robot files while those go on. The build takes the file
-    once (:func:`~bvsr_cad.analyses_process.take_geometry_ahead` removes it)."""
-    from bvsr_cad import analyses_process
+    once (:func:`~bvsr_cad.build._runtime.analyses_process.take_geometry_ahead` removes it)."""
+    from bvsr_cad.build._runtime import analyses_process
     from bvsr_cad.analysis import run
     from bvsr_cad.analysis.limits import per_joint_rad
     from bvsr_cad.parameters.load import load_spec, params_sha256
@@ -429,7 +429,7 @@ def test_the_export_holds_the_robot_files_made_with_the_analyses_joint_limits(bv
     """The build writes the robot files with the joint limits the analyses' process left ahead; they are
     the limits of the export's analysis (the minimum over each joint's bending planes), and the file they
     came in is not published."""
-    from bvsr_cad.analyses_process import GEOMETRY_AHEAD_FILE
+    from bvsr_cad.build._runtime.analyses_process import GEOMETRY_AHEAD_FILE
 
     manifest = json.loads((bvsr_export / "manifest.json").read_text())
     analysis = json.loads((bvsr_export / "analysis" / "limits.json").read_text())
@@ -467,7 +467,8 @@ def test_the_analyses_process_is_told_where_to_draw_as_an_absolute_folder(tmp_pa
     """The analyses' process draws their pictures into the build's temporary folder, working in another
     folder than the build's: a build into a relative output folder (``make exports``: ``-o exports/bvsr``)
     names it by its absolute path (a relative one made the process fail: the folder was not found)."""
-    from bvsr_cad import pipeline, worker
+    from bvsr_cad.build import pipeline
+    from bvsr_cad.build._runtime import worker
 
     class Reached(Exception):
         pass
@@ -487,7 +488,7 @@ def test_the_analyses_process_is_told_where_to_draw_as_an_absolute_folder(tmp_pa
     with pytest.raises(Reached):
         pipeline.build_export(PARAMS / "bvsr.toml", Path("exports") / "bvsr", use_cache=False)
     (module, *_rest, pictures, name), = given
-    assert module == "bvsr_cad.analyses_process" and name == "bvsr"
+    assert module == "bvsr_cad.build._runtime.analyses_process" and name == "bvsr"
     assert Path(pictures).is_absolute() and Path(pictures).parent == tmp_path / "exports"
     assert Path(pictures).name.startswith(".bvsr.tmp-")
 
@@ -554,11 +555,11 @@ def test_ctrl_c_leaves_a_waiting_standby_process_quietly(tmp_path):
     import signal
     import time
 
-    from bvsr_cad import worker
+    from bvsr_cad.build._runtime import worker
 
     lines: list[str] = []
     with _sigint_reaches_children():
-        standby = worker.SecondProcess.standby("bvsr_cad.analyses_process", progress=lines.append)
+        standby = worker.SecondProcess.standby("bvsr_cad.build._runtime.analyses_process", progress=lines.append)
     if standby is None:
         pytest.skip("one core: the analyses never leave the process")
     pid, last, still = standby.proc.pid, None, 0
@@ -583,12 +584,12 @@ def test_ctrl_c_leaves_a_waiting_standby_process_quietly(tmp_path):
 
 def test_an_interrupt_is_held_through_imports_that_catch_base_exception():
     """trimesh's optional imports catch ``BaseException``: a Ctrl-C landing in one was swallowed and
-    ``bvsr build`` ran on. :func:`~bvsr_cad.worker.interrupts_held` delivers it when the block ends."""
+    ``bvsr build`` ran on. :func:`~bvsr_cad.build._runtime.worker.interrupts_held` delivers it when the block ends."""
     import os
     import signal
     import threading
 
-    from bvsr_cad.worker import interrupts_held
+    from bvsr_cad.build._runtime.worker import interrupts_held
 
     def optional_import() -> bool:  # trimesh's pattern (trimesh/grouping.py): True when it swallowed one
         try:

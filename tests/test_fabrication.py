@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from bvsr_cad.cache import ArtifactCache
+from bvsr_cad.build.cache import ArtifactCache
 from bvsr_cad.checks import printability
 from bvsr_cad.checks.export import Export
 from bvsr_cad.checks.printability import (
@@ -31,7 +31,7 @@ from bvsr_cad.checks.printability import (
     slice_items,
     slice_stls,
 )
-from bvsr_cad.build.checks_process import run_checks
+from bvsr_cad.build._runtime.checks_process import run_checks
 from bvsr_cad.cli import main
 
 
@@ -240,7 +240,7 @@ def test_a_second_process_in_another_folder_reads_the_slice_cache_the_user_names
     """With a relative BVSR_CACHE, a child started in another working folder (as the printability process
     is, in the export's) finds slices.json where the user stands, not under its own folder."""
     from bvsr_cad.checks.environment import slice_cache_path
-    from bvsr_cad.worker import child_env
+    from bvsr_cad.build._runtime.worker import child_env
 
     (tmp_path / "user").mkdir()
     (tmp_path / "elsewhere").mkdir()
@@ -255,8 +255,8 @@ def test_a_second_process_in_another_folder_reads_the_slice_cache_the_user_names
 
 
 def test_printability_runs_here_when_the_second_process_fails(bvsr_export, monkeypatch):
-    from bvsr_cad import worker
-    from bvsr_cad.build.checks_process import beside
+    from bvsr_cad.build._runtime import worker
+    from bvsr_cad.build._runtime.checks_process import beside
     from bvsr_cad.checks import run
 
     if (os.cpu_count() or 1) < 2:

@@ -19,7 +19,7 @@ def asm(bvsr_spec):
 
 @pytest.fixture(scope="module")
 def impact_runs(bvsr_spec, asm):
-    from bvsr_cad.sim import simulate_impact
+    from bvsr_cad.simulation.sim import simulate_impact
 
     # CI size: one ball, a 0.4 m ramp (the closed-form speed is checked against it), a 40 ms window.
     return {r.tail: r for r in simulate_impact(bvsr_spec, [THETA_MAX] * bvsr_spec.joints, balls=("size7",),

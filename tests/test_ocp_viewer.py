@@ -113,7 +113,7 @@ def test_a_build_hands_on_its_assembly_before_it_writes_the_part_files(tmp_path,
     export the cache holds whole is published and its assembly still handed on. A CI-sized tail."""
     import tomllib
 
-    from bvsr_cad.pipeline import build_export
+    from bvsr_cad.build.pipeline import build_export
     from .conftest import benchmark_script
     from .test_cache import SMALL_TAIL
 

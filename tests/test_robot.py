@@ -492,7 +492,7 @@ def test_cart_scene_agrees_with_eq_20_22(robot_export, bvsr_spec):
     waggle turns it; MuJoCo's peak cart angles agree with Eq 20-22 (models/platform on the Eq 6-12
     tail) within 25 %, two independent implementations of the same experiment."""
     from bvsr_cad.analysis.predict import Predictor
-    from bvsr_cad.sim import simulate_cart
+    from bvsr_cad.simulation.sim import simulate_cart
 
     m = mujoco.MjModel.from_xml_path(str(robot_export / "robot" / "scene_cart.xml"))
     d = mujoco.MjData(m)

@@ -1,4 +1,4 @@
-"""Batched simulation (bvsr_cad/sim_gpu.py): MJX and MuJoCo Warp on their CPU backends step the exported
+"""Batched simulation (bvsr_cad/simulation/sim_gpu.py): MJX and MuJoCo Warp on their CPU backends step the exported
 scenes, and every randomised world agrees with CPU MuJoCo stepping the same world's model.
 
 The engines come with the optional extra ``.[gpu]``; without it their tests skip and say so. The
@@ -16,7 +16,7 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from bvsr_cad import sim_gpu  # noqa: E402
+from bvsr_cad.simulation import sim_gpu  # noqa: E402
 from bvsr_cad.exporters.mjcf import BEND_LIMIT_DIRECTIONS  # noqa: E402
 
 SKIP = f"needs {sim_gpu.GPU_EXTRA}"

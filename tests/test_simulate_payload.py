@@ -28,7 +28,7 @@ def test_simulate_carries_the_payload_as_a_point_mass(tmp_path, capsys, monkeypa
     root force and (r - r_root) x F + I alpha e to the root torque (I = 0.4 m (10 mm)^2, a solid sphere),
     expressed in the root site's frame (the tail's). The share is the model's wrench less the same model with
     the payload's mass and inertia set to zero; relative 1e-9: rounding only."""
-    import bvsr_cad.sim as sim
+    import bvsr_cad.simulation.sim as sim
     from bvsr_cad.cli import main
 
     compiled = []

@@ -219,7 +219,7 @@ def test_a_bad_file_is_refused_before_the_pipeline_is_imported(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text((PARAMS / "bvsr.toml").read_text().replace("pleats = 2 ", "pleats = 0 "))
     code = ("import sys; from bvsr_cad.cli import main; rc = main(['build', sys.argv[1], '-o', sys.argv[2], '-q']); "
-            "print(rc, 'bvsr_cad.pipeline' in sys.modules, 'build123d' in sys.modules)")
+            "print(rc, 'bvsr_cad.build.pipeline' in sys.modules, 'build123d' in sys.modules)")
     run = subprocess.run([sys.executable, "-c", code, str(bad), str(tmp_path / "out")], capture_output=True, text=True,
                          timeout=120)
     assert run.stdout.split() == ["2", "False", "False"], run.stdout + run.stderr
@@ -252,7 +252,7 @@ class Info(ctypes.Structure):
 libc = ctypes.CDLL(None)
 libc.mallinfo2.restype = Info
 if sys.argv[1] == "tuned":
-    from bvsr_cad.worker import tune_allocator
+    from bvsr_cad.build._runtime.worker import tune_allocator
     assert tune_allocator()
 a = np.ones(2 << 20)  # 16 MiB, a build's large temporary
 mapped = libc.mallinfo2().hblkhd  # bytes in blocks of their own mapping
@@ -264,7 +264,7 @@ print(mapped, kept)
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt")
 def test_a_bvsr_process_reuses_freed_memory():
-    """:func:`bvsr_cad.worker.tune_allocator` (the command and its second processes): a large array comes
+    """:func:`bvsr_cad.build._runtime.worker.tune_allocator` (the command and its second processes): a large array comes
     from the heap and, freed, stays there for the next one; with glibc's defaults it is a mapping of its
     own, handed back to the kernel when freed, whose pages the kernel zeroes again at the next one (a
     cold build's minor page faults 690,000-725,000 with the defaults, 503,000-524,000 tuned). Read from
@@ -283,7 +283,7 @@ def test_a_bvsr_process_reuses_freed_memory():
 
 COLLECTIONS = r"""
 import gc, sys
-from bvsr_cad import worker
+from bvsr_cad.build._runtime import worker
 if sys.argv[1] == "entry":
     worker.tune_process()  # what the entry points call
 def collections():
@@ -302,9 +302,9 @@ print(during, gc.isenabled(), gc.get_freeze_count())
 
 
 def test_library_imports_pause_the_garbage_collector():
-    """:func:`bvsr_cad.worker.library_imports`: the libraries' imports (the CAD kernel, scipy, trimesh, ...)
+    """:func:`bvsr_cad.build._runtime.worker.library_imports`: the libraries' imports (the CAD kernel, scipy, trimesh, ...)
     run without Python's cyclic collector, which ran hundreds of times over them otherwise (0.4-0.5 CPU s
-    a process); it runs again after, and only an entry point's process (:func:`~bvsr_cad.worker.tune_collector`)
+    a process); it runs again after, and only an entry point's process (:func:`~bvsr_cad.build._runtime.worker.tune_collector`)
     freezes what was imported (a library call in someone else's process leaves its collector as it was)."""
     out = {mode: subprocess.run([sys.executable, "-c", COLLECTIONS, mode], capture_output=True, text=True,
                                 check=True, timeout=300).stdout.split()
@@ -317,7 +317,7 @@ def test_library_imports_pause_the_garbage_collector():
 
 MUJOCO_IMPORT = r"""
 import os, sys
-from bvsr_cad import worker
+from bvsr_cad.build._runtime import worker
 if sys.argv[1] == "entry":
     worker.tune_process()  # what the entry points call
 import mujoco
@@ -327,7 +327,7 @@ print("glfw" in sys.modules, os.environ.get("MUJOCO_GL", "-"))
 
 @pytest.mark.parametrize("users", [None, "glfw"])
 def test_a_bvsr_process_loads_no_opengl_for_mujoco(users):
-    """:func:`bvsr_cad.worker.no_mujoco_rendering` (the command and its second processes): ``import mujoco``
+    """:func:`bvsr_cad.build._runtime.worker.no_mujoco_rendering` (the command and its second processes): ``import mujoco``
     loads no GLFW, whose binding starts a Python interpreter at import (0.1 s a process); an environment
     that names MuJoCo's OpenGL keeps it."""
     env = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
@@ -344,7 +344,7 @@ def test_a_bvsr_process_loads_no_opengl_for_mujoco(users):
 
 BLAS_THREADS = r"""
 import sys
-from bvsr_cad import worker
+from bvsr_cad.build._runtime import worker
 if sys.argv[1] == "entry":
     worker.tune_process()  # what the entry points call
 import numpy, scipy.linalg
@@ -355,10 +355,10 @@ print(sorted({i["num_threads"] for i in threadpool_info() if i["internal_api"] =
 
 @pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="OpenBLAS runs one thread on one core anyway")
 def test_a_bvsr_process_runs_openblas_on_one_thread():
-    """:func:`bvsr_cad.worker.one_blas_thread` (the command and its second processes): numpy's and scipy's
+    """:func:`bvsr_cad.build._runtime.worker.one_blas_thread` (the command and its second processes): numpy's and scipy's
     OpenBLAS on one thread, where they would take one per core; a number the environment sets is kept."""
     pytest.importorskip("threadpoolctl")
-    from bvsr_cad.worker import BLAS_THREAD_VARIABLES
+    from bvsr_cad.build._runtime.worker import BLAS_THREAD_VARIABLES
 
     env = {k: v for k, v in os.environ.items() if k not in BLAS_THREAD_VARIABLES}
 

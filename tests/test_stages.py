@@ -6,8 +6,8 @@ from __future__ import annotations
 import dataclasses
 
 from bvsr_cad.build.stages import Runner, Stage
-from bvsr_cad.cache import ArtifactCache, spec_without, stage_key
-from bvsr_cad.publish import StageLog
+from bvsr_cad.build.cache import ArtifactCache, spec_without, stage_key
+from bvsr_cad.build.publish import StageLog
 
 #: A stage of the kind a new export file adds: the tail's name and rod material, written to one file.
 SUMMARY = Stage("parameter summary", "summary", ignore=None, say="parameter summary",

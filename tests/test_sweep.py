@@ -131,13 +131,13 @@ def test_lateral_stiffness_rises_with_the_rod_and_the_invertebrate_is_softest(bv
 # -- studies on Dask -----------------------------------------------------------------------------------
 
 def _variant_processes(study: str) -> list:
-    """The processes running a variant of ``study`` (python -m bvsr_cad.sweep - STUDY)."""
+    """The processes running a variant of ``study`` (python -m bvsr_cad.studies.sweep - STUDY)."""
     import psutil
 
     out = []
     for p in psutil.process_iter(["cmdline", "ppid"]):
         cmd = p.info["cmdline"] or []
-        if cmd[-3:] == ["bvsr_cad.sweep", "-", study]:
+        if cmd[-3:] == ["bvsr_cad.studies.sweep", "-", study]:
             out.append(p)
     return out
 

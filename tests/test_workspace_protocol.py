@@ -1,4 +1,4 @@
-"""The paper's workspace experiment run in time (bvsr_cad.sim.workspace_protocol): the exported MJCF
+"""The paper's workspace experiment run in time (bvsr_cad.simulation.sim.workspace_protocol): the exported MJCF
 driven by a new random pressure per line every cycle, as Sec. IV-A-5 drives the real tail.
 
 Two independent models meet here: where the tail has settled at the end of each 1 s cycle,
@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bvsr_cad import sim
+from bvsr_cad.simulation import sim
 from bvsr_cad.analysis.predict import NeedsSimulator, Predictor
 from bvsr_cad.analysis.workspace import sample_line_pressures_kpa, tail_statics
 from bvsr_cad.assembly.build import build_assembly

@@ -270,7 +270,7 @@ FAULTS: list[Fault] = [
           "the M3 nut is 5.0 mm across flats (ISO 4032: 5.5 mm): the twin's nut pockets are too small",
           catchers=("tests/test_truth.py::test_rigid_twin_tie_rod_and_nut_pocket",)),
     # -- the directions of the physics: payload, gravity, taper, density -----------------------------
-    Fault("payload_ignored_in_simulate", "bvsr_cad/sim.py",
+    Fault("payload_ignored_in_simulate", "bvsr_cad/simulation/sim.py",
           'tail_xml = _model_xml(spec, theta_max_rad, folder / "tail", payload_g)',
           'tail_xml = _model_xml(spec, theta_max_rad, folder / "tail", 0.0)',
           "bvsr simulate --payload-g runs the tail without its payload",

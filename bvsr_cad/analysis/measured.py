@@ -65,7 +65,7 @@ def compare_measurements(asm: Assembly, params_path: str | Path | None,
     """The comparison for ``asm``'s spec, or None when the file carries no calibration.
 
     ``workspace_sim``: what predicts the measured tip workspace (:class:`Predictor`); the pipeline
-    gives :func:`bvsr_cad.sim.protocol_radius_mm`. ``theta_max_rad``: the joints' limits of ``asm``
+    gives :func:`bvsr_cad.simulation.sim.protocol_radius_mm`. ``theta_max_rad``: the joints' limits of ``asm``
     where the build has them, or what gives them when first needed (they may still be computing).
     ``threads``: as in :func:`bvsr_cad.analysis.calibrate.compare_rows`."""
     spec = asm.spec

@@ -6,7 +6,7 @@ needs: ``mass`` the assembly's B-rep masses, ``statics`` the quasi-static model
 random-pressure protocol, ``dynamics`` the Eq 6-12 pulses with the spec's supply,
 ``clearance`` the certified clearance over the workspace's poses, ``limits`` the
 exact joint limits. The ``checks`` group (a full export and every check) is run by
-the study engine (:mod:`bvsr_cad.sweep`), which sits above the pipeline.
+the study engine (:mod:`bvsr_cad.studies.sweep`), which sits above the pipeline.
 
 Every metric's name carries its unit. :data:`METRICS` lists them by group with a
 line of documentation; :func:`model_metrics` computes the groups asked for.

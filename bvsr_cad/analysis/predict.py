@@ -52,7 +52,7 @@ def pulse_places(motion: str) -> tuple[int, ...]:
 
 #: The workspace protocol run in time: (assembly, spec of the same geometry, the joints' limits in rad)
 #: -> the tip's largest lateral excursion from its rest point, mm. It needs the robot model in a
-#: simulator, so the layers that can build one give it (:func:`bvsr_cad.sim.protocol_radius_mm`).
+#: simulator, so the layers that can build one give it (:func:`bvsr_cad.simulation.sim.protocol_radius_mm`).
 WorkspaceSim = Callable[[Assembly, TailSpec, list[float]], float]
 
 
@@ -189,7 +189,7 @@ class Predictor:
         transients included, as motion capture records them); the largest lateral distance from rest."""
         if self.workspace_sim is None:
             raise NeedsSimulator("tip_workspace_radius needs the workspace protocol simulated in time: make the "
-                                 "Predictor with workspace_sim=bvsr_cad.sim.protocol_radius_mm")
+                                 "Predictor with workspace_sim=bvsr_cad.simulation.sim.protocol_radius_mm")
         spec = dataclasses.replace(
             self.spec, segments=int(segments),
             actuation=dataclasses.replace(self.spec.actuation,

@@ -5,8 +5,8 @@ certified clearance, the exact joint limits and the tip joint's clearance map;
 :mod:`bvsr_cad.exporters.analysis_files` serialises the result and the robot
 model takes its joint limits from it (nothing reads a file the build wrote).
 
-:func:`from_params` is the build's second process (:mod:`bvsr_cad.worker`,
-started as ``python -m bvsr_cad.worker bvsr_cad.analyses_process``, which gives it the simulator):
+:func:`from_params` is the build's second process (:mod:`bvsr_cad.build._runtime.worker`,
+started as ``python -m bvsr_cad.build._runtime.worker bvsr_cad.build._runtime.analyses_process``, which gives it the simulator):
 the same analyses from the parameter file, the result pickled back to the build.
 """
 
@@ -207,7 +207,7 @@ def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = N
                 rest: RestGeometry | None = None, on_rest: Callable[[RestGeometry], None] | None = None
                 ) -> AnalysisResults:
     """The second process's work: the analyses of the parameter file the build read (``sha256``),
-    progress on stderr (the parent relays it). Its entry point is :mod:`bvsr_cad.analyses_process`'s
+    progress on stderr (the parent relays it). Its entry point is :mod:`bvsr_cad.build._runtime.analyses_process`'s
     (which gives ``workspace_sim``, from the build's cache ``geometry``, ``asm`` when it built the
     assembly of this very file ahead, ``threads``: :data:`BESIDE_BUILD_THREADS` or
     :data:`BESIDE_IDLE_BUILD_THREADS`, ``on_geometry``, ``rest`` and ``on_rest``: see :func:`run_analyses`; without ``asm`` the

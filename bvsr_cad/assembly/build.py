@@ -193,7 +193,7 @@ def _print_transform_panel(lay: PanelLayout) -> np.ndarray:
 
 class SolidStore(Protocol):
     """Where a build's part solids may come from instead of being made (see
-    :class:`bvsr_cad.analyses_process.SharedSolids`): part ``name``'s BRep bytes
+    :class:`bvsr_cad.build._runtime.analyses_process.SharedSolids`): part ``name``'s BRep bytes
     (:func:`bvsr_cad.parts._kernel.brep_bytes`), of a solid made by ``make`` where it has none."""
 
     def brep(self, name: str, make: Callable[[], bd.Solid]) -> bytes: ...
@@ -233,7 +233,7 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None, solids: boo
             build whose geometry analyses, posed tail and parts' mass properties come from the cache reads
             none: an edit that moves no solid makes none there).
         shared: where the build's other process leaves the parts it made (and this one leaves its own;
-            :class:`bvsr_cad.analyses_process.SharedSolids`).
+            :class:`bvsr_cad.build._runtime.analyses_process.SharedSolids`).
 
     Every part's solid is the one its BRep bytes give back (:func:`bvsr_cad.parts._kernel.brep_bytes`,
     :func:`~bvsr_cad.parts._kernel.solid_from_brep`): the round trip moves some unit directions in their last

@@ -15,13 +15,13 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from ..analyses_process import (SHARED_SOLIDS_FOLDER, SharedSolids, drop_geometry_ahead, keep_rest,
+from ._runtime.analyses_process import (SHARED_SOLIDS_FOLDER, SharedSolids, drop_geometry_ahead, keep_rest,
                                 take_geometry_ahead)
 from ..analysis.limits import per_joint_rad
 from ..analysis.run import BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS
 from ..parameters.load import params_sha256
 from ..parts._kernel import kernel_threads
-from ..worker import SecondProcess, result_or
+from ._runtime.worker import SecondProcess, result_or
 from .stages import Runner, Stage
 
 #: In the geometry analyses' cache entry: :class:`bvsr_cad.analysis.run.GeometryAnalyses`, pickled.
@@ -63,7 +63,7 @@ class Analyses:
                     str(BESIDE_BUILD_THREADS if self.geometry_hit is None else BESIDE_IDLE_BUILD_THREADS),
                     str(folder.resolve()), run.spec.name]  # absolute: the process works in another folder
             self.process = (standby if standby is not None and standby.begin(work, folder)
-                            else SecondProcess.start("bvsr_cad.analyses_process", work, folder, run.say))
+                            else SecondProcess.start("bvsr_cad.build._runtime.analyses_process", work, folder, run.say))
             if self.process is not None:
                 run.say("analyses: started in a second process")
                 # Both cores are busy from here to the end: OCCT's own threads would only contend.

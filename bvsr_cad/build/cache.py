@@ -31,7 +31,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from .folders import cache_folder
+from ..folders import cache_folder
 
 DEFAULT_MAX_MB = 2048.0
 _DONE = ".done"
@@ -120,7 +120,7 @@ def code_fingerprint() -> str:
     Python and of the libraries it computes with (:func:`distribution_versions`). The default inputs
     (``defaults/``, the repository's ``params/``) are inputs, keyed by what a stage reads of them: an edit
     of ``params/bvsr.toml`` must not move every stage's key."""
-    pkg = Path(__file__).resolve().parent
+    pkg = Path(__file__).resolve().parents[1]  # bvsr_cad
     h = hashlib.sha256()
     for p in sorted(pkg.rglob("*")):
         rel = p.relative_to(pkg).parts

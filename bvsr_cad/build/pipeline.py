@@ -1,7 +1,7 @@
 """`bvsr build`: parameters -> assembly -> files -> checks, published atomically.
 
 Everything is written into a temporary folder beside the output and moved
-into place only when every file was written (:mod:`bvsr_cad.publish`); a
+into place only when every file was written (:mod:`bvsr_cad.build.publish`); a
 failure (bad parameters, a kernel error, a full disk, Ctrl-C) leaves any
 earlier export untouched and no partial one.
 """
@@ -16,37 +16,37 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from .analysis.poses import mold_scene, twin_scene, viewer_scenes
-from .analysis.run import run_analyses
-from .assembly.build import Assembly, build_assembly
-from .assembly.inertia import SolidProperties
-from .assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs, rigid_robot_model
-from .assembly.collision import part_fits, remember_fits
-from .assembly.robot import collision_shapes, robot_model
-from .build.analyses import Analyses
-from .build.stages import Runner, Stage
+from ..analysis.poses import mold_scene, twin_scene, viewer_scenes
+from ..analysis.run import run_analyses
+from ..assembly.build import Assembly, build_assembly
+from ..assembly.inertia import SolidProperties
+from ..assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs, rigid_robot_model
+from ..assembly.collision import part_fits, remember_fits
+from ..assembly.robot import collision_shapes, robot_model
+from .analyses import Analyses
+from .stages import Runner, Stage
 from .cache import OWNER_FILE, copy_tree
-from .build.checks_process import finish_checks, start_checks
-from .checks.run import Checks
-from .exporters.analysis_files import write_analyses
-from .exporters.cad import write_assembly_step, write_part_step, write_part_stl
-from .exporters.drawings import stamp_drawings, write_drawing_sheets
-from .exporters.manifest import manifest_dict
-from .exporters.manifest_file import write_manifest
-from .exporters.mold_files import molds_manifest, write_mold_files
-from .exporters.fabrication_files import write_fabrication, write_rigid_files
-from .exporters.render import render_previews
-from .exporters.report import report_pictures, write_report
-from .exporters.reproducible import make_reproducible
-from .exporters.robot_files import write_robot
-from .exporters.robot_meshes import write_robot_meshes
-from .exporters.viewer import write_viewer
-from .exporters.gltf import scene_glb, write_scenes
-from .parameters.load import params_sha256
+from ._runtime.checks_process import finish_checks, start_checks
+from ..checks.run import Checks
+from ..exporters.analysis_files import write_analyses
+from ..exporters.cad import write_assembly_step, write_part_step, write_part_stl
+from ..exporters.drawings import stamp_drawings, write_drawing_sheets
+from ..exporters.manifest import manifest_dict
+from ..exporters.manifest_file import write_manifest
+from ..exporters.mold_files import molds_manifest, write_mold_files
+from ..exporters.fabrication_files import write_fabrication, write_rigid_files
+from ..exporters.render import render_previews
+from ..exporters.report import report_pictures, write_report
+from ..exporters.reproducible import make_reproducible
+from ..exporters.robot_files import write_robot
+from ..exporters.robot_meshes import write_robot_meshes
+from ..exporters.viewer import write_viewer
+from ..exporters.gltf import scene_glb, write_scenes
+from ..parameters.load import params_sha256
 from .publish import BuildResult, OpenedBuild, open_build, publish, reuse_whole, temporary_folder, volatile
-from .sim import protocol_radius_mm
-from . import units
-from .worker import SecondProcess
+from ..simulation.sim import protocol_radius_mm
+from .. import units
+from ._runtime.worker import SecondProcess
 
 Progress = Callable[[str], None]
 
@@ -117,8 +117,8 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
     """Build every part of the tail described by ``params`` into ``out_dir``.
 
     With ``use_cache`` the stages whose inputs are unchanged are taken from the artifact cache
-    (:mod:`bvsr_cad.cache`): the whole export, the analyses, the parts' files and previews.
-    ``standby``: the analyses' second process started ahead (``SecondProcess.standby("bvsr_cad.analyses_process")``,
+    (:mod:`bvsr_cad.build.cache`): the whole export, the analyses, the parts' files and previews.
+    ``standby``: the analyses' second process started ahead (``SecondProcess.standby("bvsr_cad.build._runtime.analyses_process")``,
     as the command line does before it imports this module, so that the two import side by side), given
     its work here if the analyses are to be run, else stopped. ``on_assembly``: called with the tail's
     assembly as soon as it is built, before the rest of the export (``bvsr watch --show``); an export the
@@ -152,8 +152,8 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
 
 def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None,
                  on_assembly: Callable[[Assembly], None] | None = None) -> BuildResult:
-    """Build, stage by stage, the export that :func:`bvsr_cad.publish.open_build` prepared and the cache
-    does not hold whole (:func:`bvsr_cad.publish.reuse_whole`). ``standby``, ``on_assembly``: as in
+    """Build, stage by stage, the export that :func:`bvsr_cad.build.publish.open_build` prepared and the cache
+    does not hold whole (:func:`bvsr_cad.build.publish.reuse_whole`). ``standby``, ``on_assembly``: as in
     :func:`build_export`; the caller closes ``standby``. The analyses run beside the CAD stages in a
     second process; what reads only the CAD files (the checks of the meshes, the molds and the print
     files, the robot's files once the joint limits exist) starts before they are in.

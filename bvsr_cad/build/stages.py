@@ -19,10 +19,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from ..cache import ArtifactCache, object_stage, spec_without, stage_key, value_stage
+from .cache import ArtifactCache, object_stage, spec_without, stage_key, value_stage
 
 if TYPE_CHECKING:
-    from ..publish import StageLog
+    from .publish import StageLog
 
 T = TypeVar("T")
 
@@ -98,7 +98,7 @@ class Runner:
         """``stage``'s products: ``make(folder)`` writes its files into ``folder`` and returns them
         (picklable). From the cache, the entry's files are copied into the build's folder and its products
         read back; else ``make`` runs (into a new entry, when there is a cache). Products handed on are
-        always the ones read back from their pickle (:func:`bvsr_cad.cache.object_stage`), so a build from
+        always the ones read back from their pickle (:func:`bvsr_cad.build.cache.object_stage`), so a build from
         the cache equals one without, file for file."""
         if stage.say:
             self.say(stage.say)

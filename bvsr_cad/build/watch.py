@@ -21,9 +21,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from .assembly.build import Assembly
-from .parameters.load import ParamError
-from .parts._kernel import GeometryError
+from ..assembly.build import Assembly
+from ..parameters.load import ParamError
+from ..parts._kernel import GeometryError
 from .pipeline import build_export
 from .publish import BuildResult, OutputError
 

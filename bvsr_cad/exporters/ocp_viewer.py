@@ -101,7 +101,7 @@ def show_compound(compound: "bd.Compound", kinds: dict[str, str], port: int | No
 
 def assembly_sender(port: int | None = None, say: Callable[[str], None] | None = None
                     ) -> Callable[["Assembly"], None]:
-    """A callback for :func:`bvsr_cad.pipeline.build_export` (``on_assembly``): sends the tail at rest as
+    """A callback for :func:`bvsr_cad.build.pipeline.build_export` (``on_assembly``): sends the tail at rest as
     soon as its assembly is built. It tessellates copies of the parts, not the build's solids (OCCT keeps
     the finest triangulation a solid was given, and the build's meshes must not depend on what was
     shown); a viewer gone away is said, not raised (the build goes on)."""

@@ -1,6 +1,6 @@
 """A design study's files: the results table (Parquet and CSV), the plots and ``report.html``.
 
-Written from the rows :mod:`bvsr_cad.sweep` collected, one per variant. Every
+Written from the rows :mod:`bvsr_cad.studies.sweep` collected, one per variant. Every
 file is written to a temporary name and renamed, so an interrupted write never
 leaves half a table. The report plots every numeric metric against every axis
 (one line per combination of the other axes), an Optuna study's history and its

@@ -25,14 +25,14 @@ from pathlib import Path
 
 import numpy as np
 
-from . import units
-from .assembly.build import Assembly, build_assembly
-from .assembly.robot import robot_model
-from .models.dynamics import VELOCITY_WINDOW_DEG, ramp_pa
-from .models.platform import front_lift_mm
-from .exporters.mjcf import mjcf_tree, write_mjcf
-from .exporters.robot_meshes import write_robot_meshes
-from .parameters.tables import TailSpec
+from .. import units
+from ..assembly.build import Assembly, build_assembly
+from ..assembly.robot import robot_model
+from ..models.dynamics import VELOCITY_WINDOW_DEG, ramp_pa
+from ..models.platform import front_lift_mm
+from ..exporters.mjcf import mjcf_tree, write_mjcf
+from ..exporters.robot_meshes import write_robot_meshes
+from ..parameters.tables import TailSpec
 
 EXTENSION_LINES = (3, 4)
 SETTLE_S = 0.3  # the two ventral SOAs push: the tail bends dorsally (+Y)
@@ -50,8 +50,8 @@ def pressure_input(spec: TailSpec, p0_pa: float, supply: str, places: tuple[int,
     if supply == "ramp":
         t0 = spec.fitted("ramp_time_s", spec.pneumatics.ramp_time_s)
         return lambda t: float(ramp_pa(t, p0_pa, t0))
-    from .assembly.pneumatic_lines import line_supply
-    from .models.pneumatics import fill_curve
+    from ..assembly.pneumatic_lines import line_supply
+    from ..models.pneumatics import fill_curve
 
     t_s, p_pa = fill_curve(line_supply(asm or build_assembly(spec), 1, places, p0_pa, spec), 1.0, samples=4001)
     return lambda t: float(np.interp(t, t_s, p_pa))
@@ -169,7 +169,7 @@ def joint_limits_rad(spec: TailSpec, progress: Callable[[str], None] | None = No
                      asm: Assembly | None = None) -> list[float]:
     """Collision-free theta_max of every joint (minimum over phi), as the build's limits analysis gives
     (``asm``: the spec's assembly, if already built)."""
-    from .analysis.limits import theta_max_per_joint_rad
+    from ..analysis.limits import theta_max_per_joint_rad
 
     say = progress or (lambda _m: None)
     say("joint limits from the clearance analysis")
@@ -285,7 +285,7 @@ def workspace_protocol(asm: Assembly, spec: TailSpec | None = None, theta_max_ra
     ``keep_geoms``: see :func:`protocol_model`."""
     import mujoco
 
-    from .analysis.workspace import sample_line_pressures_kpa
+    from ..analysis.workspace import sample_line_pressures_kpa
 
     spec = spec or asm.spec
     say = progress or (lambda _m: None)
@@ -395,8 +395,8 @@ def simulate_cart(spec: TailSpec, theta_max_rad: list[float], pressure_bar: floa
     the cart's pitch (front lift) and yaw over time for each motion."""
     import mujoco
 
-    from .analysis.predict import pulse_places
-    from .exporters.mjcf import cart_scene_tree
+    from ..analysis.predict import pulse_places
+    from ..exporters.mjcf import cart_scene_tree
 
     say = progress or (lambda _m: None)
     check_inputs(spec, pressure_bar, 0.0)
@@ -437,8 +437,8 @@ def simulate_cart(spec: TailSpec, theta_max_rad: list[float], pressure_bar: floa
 def cart_comparison(spec: TailSpec, runs: list[CartRun], pressure_bar: float) -> list[dict]:
     """Each run's cart figures from MuJoCo beside Eq 20-22 on the Eq 6-12 tail model, and the
     paper's figure where it reports one at this pressure (Sec. IV-B, V-B: 5 bar)."""
-    from .analysis.predict import Predictor
-    from .parameters import paper
+    from ..analysis.predict import Predictor
+    from ..parameters import paper
 
     pred = Predictor.from_spec(spec)
     reported = {("extension", "angle"): paper.CART_ANGLE_EXTENSION_5BAR, ("waggle", "angle"): paper.CART_ANGLE_WAGGLE_5BAR,
@@ -495,9 +495,9 @@ def simulate_impact(spec: TailSpec, theta_max_rad: list[float], balls: tuple[str
     """The paper's disturbance test (Sec. IV-D): each ball rolls down the ramp into the soft tail and
     into the rigid PLA twin (:mod:`bvsr_cad.exporters.impact_scene`). ``asm``: ``spec``'s assembly
     where the caller has built it already."""
-    from .assembly.products import build_rigid_twin, rigid_robot_model
-    from .exporters.impact_scene import ramp_drop_m, rigid_impact_tree, soft_impact_tree
-    from .models.impact import BALLS, RAMP_LENGTH_M, rolling_speed_m_s
+    from ..assembly.products import build_rigid_twin, rigid_robot_model
+    from ..exporters.impact_scene import ramp_drop_m, rigid_impact_tree, soft_impact_tree
+    from ..models.impact import BALLS, RAMP_LENGTH_M, rolling_speed_m_s
 
     say = progress or (lambda _m: None)
     unknown = [b for b in balls if b not in BALLS]
@@ -593,7 +593,7 @@ def _impact_run(path: Path, tail: str, ball: str, window_s: float, v_roll: float
 def impact_table(runs: list[ImpactRun]) -> list[dict]:
     """One row per run, the paper's tip acceleration beside (Sec. IV-D: rod strikes, not balls; shown,
     never used)."""
-    from .parameters.paper import IMPACT_TIP_ACCELERATION
+    from ..parameters.paper import IMPACT_TIP_ACCELERATION
 
     return [{"tail": r.tail, "ball": r.ball, "peak_root_force_n": r.peak_root_force_n,
              "peak_root_torque_nm": r.peak_root_torque_nm, "peak_tip_acceleration_m_s2": r.peak_tip_acceleration_m_s2,

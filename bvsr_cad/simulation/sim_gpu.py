@@ -33,7 +33,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from .extras import install_line, require
+from ..extras import install_line, require
 
 GPU_EXTRA = f"the optional extra 'gpu' ({install_line('gpu')})"
 

@@ -2,7 +2,7 @@
 
 A study (:mod:`bvsr_cad.parameters.study`) becomes variants; each variant runs as
 one Dask task (:func:`evaluate`), which starts a fresh Python process for it
-(``python -m bvsr_cad.sweep -``: the variant's mapping in, its row out, pickled).
+(``python -m bvsr_cad.studies.sweep -``: the variant's mapping in, its row out, pickled).
 The process computes only the metric groups the study asks for
 (:mod:`bvsr_cad.analysis.metrics`) and, with ``checks = true``, exports the
 variant and runs every check. The child isolates what a variant can do wrong:
@@ -44,10 +44,10 @@ from typing import Any
 
 import numpy as np
 
-from .analysis.metrics import METRICS, Conditions, group_of
-from .extras import require
-from .parameters.study import Study, StudyError, Variant, get_path
-from .worker import child_env
+from ..analysis.metrics import METRICS, Conditions, group_of
+from ..extras import require
+from ..parameters.study import Study, StudyError, Variant, get_path
+from ..build._runtime.worker import child_env
 
 #: Metrics of the ``checks`` group (a full export and every check of it).
 CHECK_METRICS = {
@@ -129,7 +129,7 @@ def _plain(v: Any) -> Any:
 
 def infeasible_reason(variant: Variant) -> str:
     """Why the variant's parameters describe no buildable tail (the loader's problems), or ""."""
-    from .parameters.load import ParamError, spec_from_dict
+    from ..parameters.load import ParamError, spec_from_dict
 
     try:
         spec_from_dict(variant.data, f"variant {variant.label}")
@@ -150,7 +150,7 @@ def evaluate(task: dict[str, Any]) -> dict[str, Any]:
     t0 = time.perf_counter()
     row = _row(task, "error", "", worker=f"{socket.gethostname()}:{os.getpid()}")
     # The study's name on the command line: `ps` shows which study a variant's process belongs to.
-    proc = subprocess.Popen([sys.executable, "-m", "bvsr_cad.sweep", "-", task["study"]], stdin=subprocess.PIPE,
+    proc = subprocess.Popen([sys.executable, "-m", "bvsr_cad.studies.sweep", "-", task["study"]], stdin=subprocess.PIPE,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=child_env())
     try:
         out, err = proc.communicate(json.dumps(task).encode(), timeout=task["time_limit_s"])
@@ -179,8 +179,8 @@ def evaluate(task: dict[str, Any]) -> dict[str, Any]:
 
 def _variant_here(task: dict[str, Any]) -> dict[str, Any]:
     """The child's work: load the variant, compute its metrics (and export and check it)."""
-    from .analysis.metrics import model_metrics
-    from .parameters.load import ParamError, spec_from_dict
+    from ..analysis.metrics import model_metrics
+    from ..parameters.load import ParamError, spec_from_dict
 
     _clean_dead_workdirs()
     try:
@@ -199,9 +199,9 @@ WORKDIR_PREFIX = "bvsr-variant-"
 
 
 def _export_and_check(task: dict[str, Any]) -> dict[str, Any]:
-    from .build.checks_process import run_checks
-    from .exporters.study_report import toml_text
-    from .pipeline import build_export
+    from ..build._runtime.checks_process import run_checks
+    from ..exporters.study_report import toml_text
+    from ..build.pipeline import build_export
 
     with tempfile.TemporaryDirectory(prefix=f"{WORKDIR_PREFIX}{os.getpid()}-") as tmp:
         params = Path(tmp) / f"{task['data']['name']}.toml"
@@ -315,7 +315,7 @@ def run_study(study: Study, out_dir: str | Path | None = None, scheduler: str | 
         ExtraMissing: the ``studies`` extra (Dask, Optuna, pandas, ...) is not installed.
     """
     require("studies", "bvsr sweep")
-    from .exporters.study_report import write_outputs
+    from ..exporters.study_report import write_outputs
 
     say = say or (lambda _m: None)
     t0 = time.perf_counter()
@@ -530,7 +530,7 @@ def _best(study: Study, ost) -> dict[str, Any] | None:
         t = pick(feasible, key=lambda tr: tr.values[0])
         return {"trial": t.number, "variant": t.user_attrs["variant"], "params": t.params,
                 "value": t.values[0], "metric": study.objectives[0].metric}
-    from .exporters.study_report import pareto_mask
+    from ..exporters.study_report import pareto_mask
 
     values = np.array([t.values for t in feasible])
     front = pareto_mask(values, tuple(o.direction == "maximize" for o in study.objectives))
@@ -538,8 +538,8 @@ def _best(study: Study, ost) -> dict[str, Any] | None:
 
 
 def _main() -> int:
-    """``python -m bvsr_cad.sweep -``: one variant (JSON on stdin), its row pickled onto stdout."""
-    from .worker import serve
+    """``python -m bvsr_cad.studies.sweep -``: one variant (JSON on stdin), its row pickled onto stdout."""
+    from ..build._runtime.worker import serve
 
     task = json.loads(sys.stdin.buffer.read())
     return serve("-", _variant_here, task)

@@ -1,6 +1,6 @@
-"""The analyses' second process of `bvsr build` (``python -m bvsr_cad.worker bvsr_cad.analyses_process``).
+"""The analyses' second process of `bvsr build` (``python -m bvsr_cad.build._runtime.worker bvsr_cad.build._runtime.analyses_process``).
 
-Its own module, beside :mod:`bvsr_cad.pipeline` rather than in it, so that the process imports what
+Its own module, beside :mod:`bvsr_cad.build.pipeline` rather than in it, so that the process imports what
 the analyses read (the CAD kernel, the models, the simulator) and not the exporters the build's own
 process writes with (matplotlib, pyvista, the drawings' SVG): measured with ``python -X importtime``,
 about 2.4 CPU s of imports instead of 2.9. Here, not in the analysis layer, because a measured
@@ -16,10 +16,10 @@ import threading
 from collections.abc import Callable
 from pathlib import Path
 
-from .analysis.run import BESIDE_BUILD_THREADS, GeometryAnalyses, RestGeometry
-from .parameters.load import load_spec, params_sha256
-from .parts._kernel import brep_bytes, kernel_threads
-from .sim import protocol_radius_mm
+from ...analysis.run import BESIDE_BUILD_THREADS, GeometryAnalyses, RestGeometry
+from ...parameters.load import load_spec, params_sha256
+from ...parts._kernel import brep_bytes, kernel_threads
+from ...simulation.sim import protocol_radius_mm
 
 #: In the build's temporary folder: the part solids the build and this process share
 #: (:class:`SharedSolids`); the build removes it once the analyses are in.
@@ -144,7 +144,7 @@ _PREPARED: dict[tuple[str, str], object] = {}
 
 
 def _prepare_analyses(params: str) -> None:
-    """A standby analyses process's head start (``python -m bvsr_cad.worker bvsr_cad.analyses_process --standby
+    """A standby analyses process's head start (``python -m bvsr_cad.build._runtime.worker bvsr_cad.build._runtime.analyses_process --standby
     PARAMS``): the tail's assembly from the file, its solids made one by one while the build imports and
     reads its cache, until the work comes (a build whose geometry is cached hands over the rest geometry:
     it needs none of them; a solid not made by then is made when first read). Used only if the work names
@@ -165,7 +165,7 @@ def _assembly_read(params: str, sha256: str | None = None):
     """``(assembly, SHA-256)``: the tail's assembly from the file (its solids made when first read) and the
     SHA-256 of the bytes it was built from; None where the file changed while it was read, or its bytes
     are not ``sha256``."""
-    from .assembly.build import build_assembly
+    from ...assembly.build import build_assembly
 
     before = params_sha256(params)
     if sha256 is not None and before != sha256:
@@ -186,7 +186,7 @@ def _work_waiting() -> bool:
 
 def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str = "", folder: str = "",
                       name: str = ""):
-    """The analyses' second process (``python -m bvsr_cad.worker bvsr_cad.analyses_process - PARAMS SHA256
+    """The analyses' second process (``python -m bvsr_cad.build._runtime.worker bvsr_cad.build._runtime.analyses_process - PARAMS SHA256
     [GEOMETRY [THREADS [FOLDER NAME]]]``): ``(results, drawn)``. ``GEOMETRY``: the cached geometry
     analyses' pickle (computed here when it is gone); ``THREADS``: those that predict the measured rows
     (default :data:`bvsr_cad.analysis.run.BESIDE_BUILD_THREADS`); ``FOLDER``: the build's temporary
@@ -196,7 +196,7 @@ def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str
     seconds, on one core, when they waited for the whole result), and once the analyses are done their
     pictures of the tail ``NAME`` (:func:`bvsr_cad.exporters.analysis_files.write_analysis_pictures`;
     ``drawn`` says so): they were 1.1 s of the build's last stages too."""
-    from .analysis.run import from_params
+    from ...analysis.run import from_params
 
     kernel_threads(1)  # beside the build, which keeps the other core busy
     try:
@@ -220,11 +220,11 @@ def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str
                           (lambda rest: write_rest_ahead(Path(folder), rest)) if folder and given is None else None)
     if not folder:
         return results, False
-    from .exporters.analysis_files import write_analysis_pictures  # matplotlib: after the analyses
+    from ...exporters.analysis_files import write_analysis_pictures  # matplotlib: after the analyses
 
     write_analysis_pictures(results, Path(folder), name)
     return results, True
 
 
-#: What the analyses' second process serves (:func:`bvsr_cad.worker.child_main`): its work and its head start.
+#: What the analyses' second process serves (:func:`bvsr_cad.build._runtime.worker.child_main`): its work and its head start.
 SECOND_PROCESS = (_analyses_process, _prepare_analyses)

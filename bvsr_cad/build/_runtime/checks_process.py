@@ -12,15 +12,15 @@ from pathlib import Path
 from typing import Any
 
 from ..cache import ArtifactCache
-from ..checks.export import Export
-from ..checks.memo import CheckMemo
-from ..checks.result import CheckResult
-from ..checks.run import Checks, StartBeside, printability_groups
-from ..worker import SecondProcess
-from .stages import verdict_store
+from ...checks.export import Export
+from ...checks.memo import CheckMemo
+from ...checks.result import CheckResult
+from ...checks.run import Checks, StartBeside, printability_groups
+from .worker import SecondProcess
+from ..stages import verdict_store
 
 #: The second process's module: it serves :data:`SECOND_PROCESS`.
-MODULE = "bvsr_cad.build.checks_process"
+MODULE = "bvsr_cad.build._runtime.checks_process"
 
 
 def beside(cache: ArtifactCache | None) -> StartBeside:
@@ -61,7 +61,7 @@ def run_checks(root: str | Path, progress: Callable[[str], None] | None = None, 
 
 def _printability(root: str, sliced_now: str, cache_root: str = "", meshes: str = "", robot: str = ""
                   ) -> dict[str, Any]:
-    """The second process's work (``python -m bvsr_cad.worker bvsr_cad.build.checks_process - ROOT SLICED
+    """The second process's work (``python -m bvsr_cad.build._runtime.worker bvsr_cad.build._runtime.checks_process - ROOT SLICED
     CACHE MESHES ROBOT``): :func:`bvsr_cad.checks.run.printability_groups` of the export at ``root``, the
     verdicts kept in the artifact cache at ``cache_root`` (when given)."""
     exp = Export.open(root)
@@ -69,5 +69,5 @@ def _printability(root: str, sliced_now: str, cache_root: str = "", meshes: str 
     return printability_groups(exp, json.loads(sliced_now), CheckMemo(exp, store), bool(meshes), bool(robot))
 
 
-#: What the printability checks' second process serves (:func:`bvsr_cad.worker.child_main`).
+#: What the printability checks' second process serves (:func:`bvsr_cad.build._runtime.worker.child_main`).
 SECOND_PROCESS = (_printability, None)

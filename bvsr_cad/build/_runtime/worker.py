@@ -1,6 +1,6 @@
 """Work in a second Python process, beside the main one (the machine's second core).
 
-The child is a fresh interpreter started as ``python -m bvsr_cad.worker MODULE -
+The child is a fresh interpreter started as ``python -m bvsr_cad.build._runtime.worker MODULE -
 ARGS...`` (:func:`child_main`): it imports MODULE with Ctrl-C held back
 (:func:`library_imports`) and calls :func:`serve` with the module's
 ``SECOND_PROCESS`` (its function and, for a standby child, what prepares it), which
@@ -185,10 +185,10 @@ def library_imports() -> Iterator[None]:
 def tune_process() -> None:
     """What a ``bvsr`` process sets at its start, before its imports: :func:`tune_allocator`,
     :func:`tune_collector`, :func:`no_mujoco_rendering`, :func:`one_blas_thread` and scikit-learn's
-    clustering loaded when used (:func:`bvsr_cad._deferred.defer_sklearn_cluster`). Called by the entry
+    clustering loaded when used (:func:`bvsr_cad.build._runtime.deferred.defer_sklearn_cluster`). Called by the entry
     points only (the command, a second process, the rebuild benchmark's own process), in one place so
     that they stay alike: ``import bvsr_cad`` changes nothing in the importing process."""
-    from ._deferred import defer_sklearn_cluster
+    from .deferred import defer_sklearn_cluster
 
     tune_allocator()
     tune_collector()
@@ -198,7 +198,7 @@ def tune_process() -> None:
 
 
 def child_main(argv: list[str]) -> int:
-    """A child's entry, ``python -m bvsr_cad.worker MODULE OUT ARGS...``: it dies with its parent from the
+    """A child's entry, ``python -m bvsr_cad.build._runtime.worker MODULE OUT ARGS...``: it dies with its parent from the
     start, imports MODULE in :func:`library_imports` (Ctrl-C held: an interrupt during the imports ends it
     quietly with 130, its parent reports it; the collector paused, then what was imported frozen) and
     serves the module's ``SECOND_PROCESS``, ``(fn, prepare)`` (see :func:`serve`)."""
@@ -274,7 +274,7 @@ def child_env() -> dict[str, str]:
     """The environment of a child started as ``python -m bvsr_cad...``: it imports the bvsr_cad this
     process runs, knows its parent's PID (so that it dies with it: :func:`child_main`) and is given the
     folders of :data:`PATH_VARIABLES` as absolute paths (it starts in another working folder)."""
-    package_root = str(Path(__file__).resolve().parents[1])
+    package_root = str(Path(__file__).resolve().parents[3])  # bvsr_cad/build/_runtime/worker.py
     folders = {k: str(Path(os.environ[k]).absolute()) for k in PATH_VARIABLES if os.environ.get(k)}
     return {**os.environ, **folders, PARENT_PID_ENV: str(os.getpid()), "PYTHONPATH": os.pathsep.join(
         [package_root] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])}
@@ -298,12 +298,12 @@ class SecondProcess:
     @classmethod
     def start(cls, module: str, args: list[str], cwd: Path,
               progress: Callable[[str], None] | None = None, standby: bool = False) -> "SecondProcess | None":
-        """``python -m bvsr_cad.worker module - *args`` (:func:`child_main`) in ``cwd``; each line of its
+        """``python -m bvsr_cad.build._runtime.worker module - *args`` (:func:`child_main`) in ``cwd``; each line of its
         stderr goes to ``progress`` (from a reader thread) or, without it, nowhere. ``standby``: see :meth:`standby`."""
         if (os.cpu_count() or 1) < 2:
             return None
         try:
-            cmd = [sys.executable, "-m", "bvsr_cad.worker", module, STANDBY if standby else "-", *args]
+            cmd = [sys.executable, "-m", "bvsr_cad.build._runtime.worker", module, STANDBY if standby else "-", *args]
             proc = subprocess.Popen(cmd, cwd=cwd, env=child_env(),
                                     stdin=subprocess.PIPE if standby else subprocess.DEVNULL, stdout=subprocess.PIPE,
                                     stderr=subprocess.DEVNULL if progress is None else subprocess.PIPE)
@@ -322,7 +322,7 @@ class SecondProcess:
     @classmethod
     def standby(cls, module: str, progress: Callable[[str], None] | None = None,
                 hint: list[str] | None = None) -> "SecondProcess | None":
-        """``python -m bvsr_cad.worker module --standby [HINT...]``: a child that imports its modules now, while this
+        """``python -m bvsr_cad.build._runtime.worker module --standby [HINT...]``: a child that imports its modules now, while this
         process imports its own, prepares what ``hint`` lets it (see :func:`serve`) and waits for its work
         (:meth:`begin`); ``None`` where :meth:`start` would give none. A child never given work exits when
         it is :meth:`close`\\ d."""
@@ -401,6 +401,6 @@ def result_or(proc: SecondProcess | None, here: Callable[[], Any], say: Callable
 
 
 if __name__ == "__main__":
-    from bvsr_cad.worker import child_main as _child_main  # the module by its real name, not __main__
+    from bvsr_cad.build._runtime.worker import child_main as _child_main  # the module by its real name, not __main__
 
     sys.exit(_child_main(sys.argv[1:]))

@@ -39,6 +39,18 @@ def test_one_copy_of_the_default_inputs():
     assert defaults.path("params/bvsr.toml").read_bytes() == (ROOT / "params" / "bvsr.toml").read_bytes()
 
 
+def test_the_wheel_takes_every_data_file_of_the_package():
+    """Each file under bvsr_cad/ that is not Python is package data of its package (pyproject.toml's
+    patterns, globbed as setuptools globs them): the wheel carries it."""
+    pkg = ROOT / "bvsr_cad"
+    patterns = PYPROJECT["tool"]["setuptools"]["package-data"]
+    taken = {f for name, globs in patterns.items() for g in globs
+             for f in (ROOT / name.replace(".", "/")).glob(g) if f.is_file()}
+    data = {f for f in pkg.rglob("*") if f.is_file() and f.suffix not in (".py", ".pyc") and "__pycache__" not in f.parts
+            and not f.name.startswith(".")}
+    assert sorted(p.relative_to(pkg).as_posix() for p in data - taken) == []
+
+
 def test_init_writes_copies_whose_relative_paths_resolve(tmp_path, capsys):
     assert cli.main(["init", str(tmp_path)]) == 0
     out = capsys.readouterr().out

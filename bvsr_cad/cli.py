@@ -423,6 +423,14 @@ def make_parser() -> argparse.ArgumentParser:
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--json", action="store_true", help="print the result as one JSON object on stdout")
     common.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    for add in (_add_build_and_watch, _add_show, _add_init, _add_check, _add_simulate, _add_calibrate,
+                _add_workspace, _add_sweep, _add_clearance):
+        add(sub, common)
+    return p
+
+
+def _add_build_and_watch(sub, common: argparse.ArgumentParser) -> None:
+    """``bvsr build`` and ``bvsr watch``: a parameter file into an export folder, once or at each save."""
     for name, func, helptext in (("build", cmd_build, "build every part of a tail into an export folder"),
                                  ("watch", cmd_watch, "rebuild the export each time the parameter file is saved")):
         b = sub.add_parser(name, parents=[common], help=helptext)
@@ -438,6 +446,10 @@ def make_parser() -> argparse.ArgumentParser:
                            "each save, as soon as its assembly is built (needs the viewer extra)")
             b.add_argument("--port", type=int, help="the viewer's port (default $OCP_PORT, else 3939)")
         b.set_defaults(func=func)
+
+
+def _add_show(sub, common: argparse.ArgumentParser) -> None:
+    """``bvsr show``: the tail to a running OCP CAD Viewer."""
     sh = sub.add_parser("show", parents=[common], help="send the tail (at rest or posed) to a running OCP CAD "
                         "Viewer, named and coloured (needs the viewer extra)")
     sh.add_argument("target", nargs="?", metavar="EXPORT|PARAMS",
@@ -447,11 +459,19 @@ def make_parser() -> argparse.ArgumentParser:
                     help="bending direction from +X towards +Y (dorsal), degrees (default 0)")
     sh.add_argument("--port", type=int, help="the viewer's port (default $OCP_PORT, else 3939)")
     sh.set_defaults(func=cmd_show)
+
+
+def _add_init(sub, common: argparse.ArgumentParser) -> None:
+    """``bvsr init``: editable copies of the default inputs."""
     ini = sub.add_parser("init", parents=[common], help="write editable copies of the default parameter, data "
                          "and study files into a folder")
     ini.add_argument("folder", nargs="?", default=".", help="where (default: this folder)")
     ini.add_argument("--force", action="store_true", help="overwrite files that exist")
     ini.set_defaults(func=cmd_init)
+
+
+def _add_check(sub, common: argparse.ArgumentParser) -> None:
+    """``bvsr check``: every check on an export folder."""
     c = sub.add_parser("check", parents=[common], help="run every check on an export folder")
     c.add_argument("export", help="export folder made by `bvsr build`")
     c.add_argument("--slice", action="store_true",
@@ -460,6 +480,10 @@ def make_parser() -> argparse.ArgumentParser:
     c.add_argument("-v", "--verbose", action="store_true",
                    help="print every check (by default: one line per check group, failures in full)")
     c.set_defaults(func=cmd_check)
+
+
+def _add_simulate(sub, common: argparse.ArgumentParser) -> None:
+    """``bvsr simulate``: a pressure pulse through the MJCF."""
     sm = sub.add_parser("simulate", parents=[common], help="drive the MJCF with a pressure pulse; peak velocity and root torque")
     simulate_args = {
         "params": {"help": "parameter file"},
@@ -479,6 +503,10 @@ def make_parser() -> argparse.ArgumentParser:
     for flag, options in simulate_args.items():
         sm.add_argument(*(("-o", flag) if flag == "--output" else (flag,)), **options)
     sm.set_defaults(func=cmd_simulate)
+
+
+def _add_calibrate(sub, common: argparse.ArgumentParser) -> None:
+    """``bvsr calibrate``: the fit of the unknown quantities to measurements."""
     ca = sub.add_parser("calibrate", parents=[common],
                         help="fit the quantities no table gives to measurements; report fit and holdout errors")
     ca.add_argument("params", help="parameter file")
@@ -486,11 +514,19 @@ def make_parser() -> argparse.ArgumentParser:
     ca.add_argument("-o", "--output", help="write the calibrated parameter file here ([calibration] table added)")
     ca.add_argument("--fit", help="comma-separated quantities to fit (default: what the fit rows identify)")
     ca.set_defaults(func=cmd_calibrate)
+
+
+def _add_workspace(sub, common: argparse.ArgumentParser) -> None:
+    """``bvsr workspace``: the tip workspace by the paper's protocol."""
     wk = sub.add_parser("workspace", parents=[common], help="tip workspace by the paper's random chamber-state protocol")
     wk.add_argument("params", help="parameter file")
     wk.add_argument("--samples", type=_number(1, inclusive=True, kind=int), default=20000)
     wk.add_argument("--seed", type=int, default=1)
     wk.set_defaults(func=cmd_workspace)
+
+
+def _add_sweep(sub, common: argparse.ArgumentParser) -> None:
+    """``bvsr sweep``: a design study on Dask."""
     sw = sub.add_parser("sweep", parents=[common], help="run a design study (grid, random or Optuna) on Dask")
     sw.add_argument("study", help="study file (TOML; see studies/)")
     sw.add_argument("-o", "--output", help="study folder (default exports/studies/<study name>/)")
@@ -501,11 +537,14 @@ def make_parser() -> argparse.ArgumentParser:
     sw.add_argument("--keep-exports", action="store_true",
                     help="with checks: keep each variant's export in <study folder>/variants/<key>/")
     sw.set_defaults(func=cmd_sweep)
+
+
+def _add_clearance(sub, common: argparse.ArgumentParser) -> None:
+    """``bvsr clearance``: the closest approach of the solids over the workspace."""
     cl = sub.add_parser("clearance", parents=[common], help="minimum clearance between solids over the workspace")
     cl.add_argument("params", help="parameter file")
     cl.add_argument("--poses", type=_number(1, inclusive=True, kind=int), default=20000)
     cl.set_defaults(func=cmd_clearance)
-    return p
 
 
 #: Which parameters shape each generator (bvsr_cad/parts/<module>.py), for the advice after a failure.

@@ -68,7 +68,7 @@ def _params_or_default(args, say) -> str:
 
     if args.params is not None:
         return args.params
-    if Path(defaults.DEFAULT_PARAMS).is_file() or args.func is cmd_watch:
+    if Path(defaults.DEFAULT_PARAMS).is_file():
         return defaults.DEFAULT_PARAMS
     packaged = defaults.path(defaults.DEFAULT_PARAMS)
     say(f"no {defaults.DEFAULT_PARAMS} in this folder: building the default tail of bvsr_cad {__version__} "
@@ -116,6 +116,12 @@ def cmd_build(args) -> int:
 
 
 def cmd_watch(args) -> int:
+    from .defaults import DEFAULT_PARAMS
+
+    if args.params is None and not Path(DEFAULT_PARAMS).is_file():  # the packaged tail is not for editing
+        print(f"bvsr: error: no {DEFAULT_PARAMS} in this folder to watch: `bvsr init` writes one to edit, or name "
+              "a parameter file", file=sys.stderr)
+        return EXIT_BAD_INPUT
     args.params = _params_or_default(args, _progress(args.quiet))
     with library_imports():
         from .build.watch import watch

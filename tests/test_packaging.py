@@ -90,6 +90,12 @@ def test_build_without_a_file_takes_this_folders_copy_else_the_packaged_tail(tmp
     assert cli._params_or_default(SimpleNamespace(params="x.toml", func=cli.cmd_build), said.append) == "x.toml"
 
 
+def test_watch_without_a_file_asks_for_bvsr_init(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["watch"]) == 2
+    assert "bvsr init" in capsys.readouterr().err
+
+
 def test_one_version(capsys):
     """pyproject.toml's version, as installed, is the package's, the command's and the manifest's."""
     assert __version__ == metadata.version("bvsr_cad") == PYPROJECT["project"]["version"]

@@ -399,13 +399,32 @@ def write_report(root: Path, manifest: dict[str, Any], memo: Memo = now,
         pictures = report_pictures(root, manifest, memo)
     part_pics, rigid_pic, problems = pictures.parts, pictures.rigid, list(pictures.problems)
     checks = manifest.get("checks", [])
+    h = _report_head(manifest, checks, problems)
+    h.append(viewer_section(manifest))
+    h += _report_views(manifest, part_pics)
+    h += _report_rigid_tail(manifest, checks, rigid_pic)
+    h += _report_molds(manifest)
+    h.append(drawings_section(manifest))
+    h += _report_analyses(root, manifest)
+    h += _report_fabrication(manifest)
+    h.append("<h2>Checks</h2><p class=muted>Failures first, then comparisons, then passes.</p>")
+    h.append(_checks_table(checks))
+    h.append("</body></html>")
+    (root / "report.html").write_text("\n".join(h))
+    return {"report": {"html": "report.html", "pictures": sorted(set(part_pics.values()) | ({rigid_pic} - {None})),
+                       "problems": problems}}
+
+
+def _report_head(manifest: dict[str, Any], checks: list[dict], problems: list[str]) -> list[str]:
+    """The page's head, title and summary line (the checks' counts, the tail's size and taper), and what
+    failed to render."""
     n_fail = sum(1 for c in checks if c["passed"] is False)
     n_pass = sum(1 for c in checks if c["passed"] is True)
     n_info = sum(1 for c in checks if c["passed"] is None)
     badge = ('<span class="badge" style="background:#cf222e">checks FAILED</span>' if n_fail else
              '<span class="badge" style="background:#1a7f37">all checks pass</span>')
-    h: list[str] = [f"<!doctype html><html><head><meta charset='utf-8'><title>{_e(manifest['name'])} report</title>"
-                    f"<style>{CSS}</style></head><body>"]
+    h = [f"<!doctype html><html><head><meta charset='utf-8'><title>{_e(manifest['name'])} report</title>"
+         f"<style>{CSS}</style></head><body>"]
     h.append(f"<h1>{_e(manifest['name'])}: build report</h1>")
     h.append(f"<p>{badge} {n_pass} passed, {n_fail} failed, {n_info} informational. "
              f"{manifest['segments']} segments, {manifest['joints']} joints, {manifest['panels']} panels; "
@@ -414,9 +433,12 @@ def write_report(root: Path, manifest: dict[str, Any], memo: Memo = now,
              f"params sha256 <code>{_e(manifest['params_sha256'][:12])}</code>.</p>")
     for p in problems:
         h.append(f"<p class=fail>{_e(p)} (install the system GL libraries VTK needs, e.g. libgl1 / libosmesa6)</p>")
+    return h
 
-    h.append(viewer_section(manifest))
 
+def _report_views(manifest: dict[str, Any], part_pics: dict[str, str]) -> list[str]:
+    """The assembly at rest and every part in print orientation."""
+    h: list[str] = []
     h.append("<h2>Assembly at rest</h2><div class=grid>")
     prev = manifest.get("previews", {})
     if prev.get("assembly"):
@@ -430,7 +452,12 @@ def write_report(root: Path, manifest: dict[str, Any], memo: Memo = now,
     for name, pic in part_pics.items():
         h.append(_fig(pic, name, 260))
     h.append("</div>")
+    return h
 
+
+def _report_rigid_tail(manifest: dict[str, Any], checks: list[dict], rigid_pic: str | None) -> list[str]:
+    """The rigid PLA comparison tail: its picture, pieces, joining, envelope and robot description."""
+    h: list[str] = []
     rt = manifest.get("rigid_tail")
     if rt:
         j = rt["joining"]
@@ -447,15 +474,23 @@ def write_report(root: Path, manifest: dict[str, Any], memo: Memo = now,
                  f"Simplified: {_e(rt['simplified'])}. Envelope against the BVSR at rest: {_e(env_txt)}. "
                  f"Robot description: <code>{_e(rt['robot']['urdf'])}</code>, <code>{_e(rt['robot']['mjcf'])}</code> "
                  f"(one rigid body, {rt['robot']['mass_kg'] * 1000:.1f} g solid).</p>")
+    return h
 
+
+def _report_molds(manifest: dict[str, Any]) -> list[str]:
+    """The SOA mold set, exploded."""
+    h: list[str] = []
     molds = manifest.get("molds", {})
     if molds.get("exploded_png"):
         h.append("<h2>SOA mold set</h2><div class=grid>")
         h.append(_fig(molds["exploded_png"], "mold set, exploded along the pull directions"))
         h.append("</div>")
+    return h
 
-    h.append(drawings_section(manifest))
 
+def _report_analyses(root: Path, manifest: dict[str, Any]) -> list[str]:
+    """The analyses' table and plots, the paper's figures, the measurements and the mass budget."""
+    h: list[str] = []
     pngs = [p for p in _pngs(manifest.get("analysis", {})) if p != manifest.get("analysis", {}).get("measurements_png")]
     h.append("<h2>Analyses</h2>")
     h.append(_analysis_table(root, manifest))
@@ -470,7 +505,12 @@ def write_report(root: Path, manifest: dict[str, Any], memo: Memo = now,
     h.append(_measurements_section(root, manifest))
     h.append("<h2>Mass budget</h2>")
     h.append(_mass_table(manifest))
+    return h
 
+
+def _report_fabrication(manifest: dict[str, Any]) -> list[str]:
+    """The print jobs and the bill of materials."""
+    h: list[str] = []
     jobs = manifest.get("print_jobs", [])
     if jobs:
         h.append("<h2>Print jobs</h2><table><tr><th>job</th><th>material</th><th>build volume (mm)</th><th>parts</th>"
@@ -486,10 +526,4 @@ def write_report(root: Path, manifest: dict[str, Any], memo: Memo = now,
         h.append(f"<p>Bill of materials: <a href='{_e(bom['md'])}'>{_e(bom['md'])}</a>, "
                  f"<a href='{_e(bom['csv'])}'>{_e(bom['csv'])}</a> ({bom['rows']} rows; "
                  + ", ".join(f"{_e(k.replace('_', ' '))} {_num(v)}" for k, v in bom["counts"].items()) + ").</p>")
-
-    h.append("<h2>Checks</h2><p class=muted>Failures first, then comparisons, then passes.</p>")
-    h.append(_checks_table(checks))
-    h.append("</body></html>")
-    (root / "report.html").write_text("\n".join(h))
-    return {"report": {"html": "report.html", "pictures": sorted(set(part_pics.values()) | ({rigid_pic} - {None})),
-                       "problems": problems}}
+    return h

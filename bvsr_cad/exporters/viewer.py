@@ -86,9 +86,17 @@ def viewer_js() -> str:
 GZIP_LEVEL = 1
 
 
+#: The gzip header's operating-system byte: 255 ("unknown"), as Python 3.13 writes it; 3.11 and 3.12 write 3
+#: (Unix), so the same scene would give another file on another Python.
+GZIP_OS = 255
+
+
 def scene_script(name: str, glb: bytes) -> str:
-    """A scene file: the GLB gzipped (no time stamp: the same bytes give the same file) and base64."""
-    data = base64.b64encode(gzip.compress(glb, compresslevel=GZIP_LEVEL, mtime=0)).decode("ascii")
+    """A scene file: the GLB gzipped (no time stamp, one OS byte: the same bytes give the same file on every
+    Python) and base64."""
+    packed = bytearray(gzip.compress(glb, compresslevel=GZIP_LEVEL, mtime=0))
+    packed[9] = GZIP_OS  # outside the CRC, which covers the data only
+    data = base64.b64encode(bytes(packed)).decode("ascii")
     return f"{CALL}{json.dumps(name)}, \"{data}\");\n"
 
 

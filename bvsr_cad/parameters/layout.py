@@ -265,16 +265,31 @@ def panel_layout(spec: TailSpec, k: int, half_angle: float | None = None) -> Pan
     lower = kind != "root"
     upper = kind != "tip"
     d_pocket = pocket_diameter_mm(spec)
+    cuts = _soa_cuts(spec, kind, t, depth, r_pitch_lo, r_pitch_hi, d_pocket)
+    tube_cuts, passages = _tube_cuts(spec, k, t, r_pitch_lo, r_pitch_hi)
+    socket_cuts, bosses = _rod_socket(spec, kind, t)
+    cuts += tube_cuts + socket_cuts + _insert_and_lightening_cuts(spec, kind, t, r_pitch_hi, r_rim_hi, d_pocket)
+    return PanelLayout(
+        index=k, kind=kind, z0_mm=z0, thickness_mm=t,
+        rim_radius_lower_mm=r_rim_lo, rim_radius_upper_mm=r_rim_hi,
+        pitch_radius_lower_mm=r_pitch_lo, pitch_radius_upper_mm=r_pitch_hi,
+        pocket_depth_mm=depth, lower_pockets=lower, upper_pockets=upper,
+        cuts=tuple(cuts), bosses=tuple(bosses), passages=tuple(passages),
+    )
+
+
+def _soa_cuts(spec: TailSpec, kind: str, t: float, depth: float, r_pitch_lo: float, r_pitch_hi: float,
+              d_pocket: float) -> list[Cyl]:
+    """Each SOA's pockets on the faces it meets, and the channel through the panel (the root: the fitting
+    port) that feeds it."""
+    j = spec.joint
     cuts: list[Cyl] = []
-    bosses: list[Cyl] = []
-    passages: list[Cyl] = []
-    angles = soa_angles_deg()
-    for i, a in enumerate(angles, start=1):
+    for i, a in enumerate(soa_angles_deg(), start=1):
         lo_xy = polar(r_pitch_lo, a)
         hi_xy = polar(r_pitch_hi, a)
-        if lower:
+        if kind != "root":
             cuts.append(Cyl(f"pocket_lower_{i}", "pocket", (*lo_xy, -1e-3), (*lo_xy, depth), d_pocket))
-        if upper:
+        if kind != "tip":
             cuts.append(Cyl(f"pocket_upper_{i}", "pocket", (*hi_xy, t - depth), (*hi_xy, t + 1e-3), d_pocket))
         if kind == "intermediate":
             # Oblique by the taper (a few hundredths of a mm) so both pockets stay concentric.
@@ -283,8 +298,16 @@ def panel_layout(spec: TailSpec, k: int, half_angle: float | None = None) -> Pan
         elif kind == "root":
             cuts.append(Cyl(f"fitting_port_{i}", "port", (*hi_xy, -1e-3), (*hi_xy, t + 1e-3),
                             hole_d(spec, spec.mount.fitting_tap_drill_mm), tapped(spec.mount.fitting_tap_drill_mm)))
+    return cuts
 
-    # Tubes of the distal segments: segment s >= 2 starts at boundary panel p_s.
+
+def _tube_cuts(spec: TailSpec, k: int, t: float, r_pitch_lo: float, r_pitch_hi: float) -> tuple[list[Cyl], list[Cyl]]:
+    """The tubes of the distal segments through panel k (segment s >= 2 starts at boundary panel p_s, where
+    its tubes end in ports, passages and feed holes): (cuts, passages)."""
+    j = spec.joint
+    angles = soa_angles_deg()
+    cuts: list[Cyl] = []
+    passages: list[Cyl] = []
     d_tube = tube_hole_mm(spec)
     rings = {2: (spec.tubes.inner_radius_mm, mid_angles_deg()),
              3: (spec.tubes.second_radius_mm, angles)}
@@ -309,10 +332,15 @@ def panel_layout(spec: TailSpec, k: int, half_angle: float | None = None) -> Pan
                 d_pass = hole_d(spec, spec.tubes.passage_diameter_mm)
                 passages.append(Cyl(f"passage_s{s}_{i}", "passage", (*xy, zm), (*target, zm), d_pass))
                 cuts.append(Cyl(f"feed_s{s}_{i}", "feed", (*target, zm), (*target, t + 1e-3), d_pass))
+    return cuts, passages
 
-    # Vertebra socket.
+
+def _rod_socket(spec: TailSpec, kind: str, t: float) -> tuple[list[Cyl], list[Cyl]]:
+    """The vertebra's socket: the rod bore and, for set screws, the collar, its screw and its bore:
+    (cuts, bosses)."""
     d_rod = rod_bore_mm(spec)
-    cuts.append(Cyl("rod_bore", "rod", (0.0, 0.0, -1e-3), (0.0, 0.0, t + 1e-3), d_rod, rod_thread(spec)))
+    cuts = [Cyl("rod_bore", "rod", (0.0, 0.0, -1e-3), (0.0, 0.0, t + 1e-3), d_rod, rod_thread(spec))]
+    bosses: list[Cyl] = []
     if spec.vertebra.socket == "set_screw":
         boss_d = d_rod + 2 * spec.socket.boss_wall_mm
         h = spec.socket.boss_height_mm
@@ -328,7 +356,14 @@ def panel_layout(spec: TailSpec, k: int, half_angle: float | None = None) -> Pan
                         hole_d(spec, spec.socket.set_screw_tap_drill_mm), tapped(spec.socket.set_screw_tap_drill_mm)))
         z_lo, z_hi = bosses[-1].z_range
         cuts.append(Cyl("rod_bore_boss", "rod", (0.0, 0.0, z_lo - 1e-3), (0.0, 0.0, z_hi + 1e-3), d_rod))
+    return cuts, bosses
 
+
+def _insert_and_lightening_cuts(spec: TailSpec, kind: str, t: float, r_pitch_hi: float, r_rim_hi: float,
+                                d_pocket: float) -> list[Cyl]:
+    """The root's mount inserts (else the lightening holes between the pockets) and the tip's payload
+    inserts."""
+    cuts: list[Cyl] = []
     if kind == "root":
         for i, a in enumerate(mid_angles_deg(), start=1):
             xy = polar(spec.mount.bolt_circle_diameter_mm / 2, a)
@@ -346,13 +381,7 @@ def panel_layout(spec: TailSpec, k: int, half_angle: float | None = None) -> Pan
             xy = polar(spec.payload.insert_circle_diameter_mm / 2, 90.0 + 360.0 * i / n + 180.0 / n)
             cuts.append(Cyl(f"payload_insert_{i + 1}", "insert", (*xy, t - spec.payload.insert_depth_mm),
                             (*xy, t + 1e-3), hole_d(spec, spec.payload.insert_diameter_mm)))
-    return PanelLayout(
-        index=k, kind=kind, z0_mm=z0, thickness_mm=t,
-        rim_radius_lower_mm=r_rim_lo, rim_radius_upper_mm=r_rim_hi,
-        pitch_radius_lower_mm=r_pitch_lo, pitch_radius_upper_mm=r_pitch_hi,
-        pocket_depth_mm=depth, lower_pockets=lower, upper_pockets=upper,
-        cuts=tuple(cuts), bosses=tuple(bosses), passages=tuple(passages),
-    )
+    return cuts
 
 
 def soa_frame(lower: PanelLayout, upper: PanelLayout, angle_deg: float, rotation_deg: float) -> np.ndarray:
@@ -595,6 +624,20 @@ _WEB_KEYS = ("min_pocket_gap_mm", "min_wall_mm", "min_rim_lip_mm", "socket_floor
 
 def validate_layout(spec: TailSpec) -> list[str]:
     """Every geometric impossibility, as messages that name the parameter to change."""
+    problems = _axial_problems(spec)
+    if problems:
+        return problems
+    problems = _rim_problems(spec)
+    taper = _taper_problems(spec)
+    if taper:
+        return problems + taper
+    return problems + panel_rule_messages(spec, half_angle_rad(spec)) + mjf_problems(spec)
+
+
+def _axial_problems(spec: TailSpec) -> list[str]:
+    """What cannot stack along the axis: the gap in the joint, the SOA's shape and interior, its flanges'
+    pockets in the panels, the number of joints and segments, the tube ports' depth. Each of the first
+    rules stops the others (their numbers are meaningless past it)."""
     problems: list[str] = []
     j = spec.joint
     if j.gap_mm >= j.joint_height_mm:
@@ -652,8 +695,13 @@ def validate_layout(spec: TailSpec) -> list[str]:
                         f"{j.panel_thickness_mm:.2f} mm panels (joint.joint_height_mm = {j.joint_height_mm!r} minus "
                         f"joint.gap_mm = {j.gap_mm!r}): allowed {j.panel_thickness_mm / 2:.2f} to "
                         f"{j.panel_thickness_mm - spec.fabrication.socket_floor_mm:.2f} mm")
-    if problems:
-        return problems
+    return problems
+
+
+def _rim_problems(spec: TailSpec) -> list[str]:
+    """The panels' rim against the SOAs' reach."""
+    j = spec.joint
+    problems: list[str] = []
     radial_out, _ = soa_radial_extent_mm(spec)
     if j.pitch_diameter_mm / 2 + radial_out > j.panel_diameter_mm / 2 + 1e-9:
         soa = spec.soa
@@ -665,14 +713,17 @@ def validate_layout(spec: TailSpec) -> list[str]:
             f"soa.rotation_deg = {soa.rotation_deg!r}) reach {reach:.2f} mm, beyond the rim's "
             f"{j.panel_diameter_mm / 2:.2f} mm; allowed: >= {math.ceil(200 * reach) / 100:g} mm, or a smaller "
             "joint.pitch_diameter_mm or soa.long_side_mm")
+    return problems
+
+
+def _taper_problems(spec: TailSpec) -> list[str]:
+    """A cone beyond the feasible one, or too slight to cut; either stops the panel rules."""
     if spec.taper.half_angle_deg != AUTO:
         beta_max = max_feasible_taper_deg(spec)
         # Rules broken without any cone are the other keys' doing: reported below, not as the taper's.
         if float(spec.taper.half_angle_deg) > beta_max + 1e-9 and not _problems_at(spec, 0.0):
-            problems.append(
-                f"taper.half_angle_deg = {spec.taper.half_angle_deg}: beyond the feasible cone; allowed: 0 to "
-                f"{beta_max:.4f} deg ('auto' picks it); limited by: {_binding_text(spec)}")
-            return problems
+            return [f"taper.half_angle_deg = {spec.taper.half_angle_deg}: beyond the feasible cone; allowed: 0 to "
+                    f"{beta_max:.4f} deg ('auto' picks it); limited by: {_binding_text(spec)}"]
     beta_deg = math.degrees(half_angle_rad(spec))
     if 0.0 < beta_deg < MIN_BUILDABLE_TAPER_DEG and spec.joints_per_segment > 1:
         why = (f"a cone below {MIN_BUILDABLE_TAPER_DEG:g} deg tilts the intermediate panels' air channels so "
@@ -680,14 +731,12 @@ def validate_layout(spec: TailSpec) -> list[str]:
                "kernel cannot cut (the panel falls apart)")
         beta_max = max_feasible_taper_deg(spec)
         if spec.taper.half_angle_deg == AUTO:
-            problems.append(f"taper.half_angle_deg = 'auto': the largest feasible cone is {beta_deg:.4f} deg "
-                            f"(limited by: {_binding_text(spec)}); {why}; allowed: 0 (no taper)")
-        else:
-            wider = f", or {MIN_BUILDABLE_TAPER_DEG:g} to {beta_max:.4f} deg" \
-                if beta_max >= MIN_BUILDABLE_TAPER_DEG else ""
-            problems.append(f"taper.half_angle_deg = {spec.taper.half_angle_deg}: {why}; allowed: 0{wider}")
-        return problems
-    return problems + panel_rule_messages(spec, half_angle_rad(spec)) + mjf_problems(spec)
+            return [f"taper.half_angle_deg = 'auto': the largest feasible cone is {beta_deg:.4f} deg "
+                    f"(limited by: {_binding_text(spec)}); {why}; allowed: 0 (no taper)"]
+        wider = f", or {MIN_BUILDABLE_TAPER_DEG:g} to {beta_max:.4f} deg" \
+            if beta_max >= MIN_BUILDABLE_TAPER_DEG else ""
+        return [f"taper.half_angle_deg = {spec.taper.half_angle_deg}: {why}; allowed: 0{wider}"]
+    return []
 
 
 def mjf_problems(spec: TailSpec) -> list[str]:

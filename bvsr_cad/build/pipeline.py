@@ -202,9 +202,7 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None,
         with run.timed(REPORT):
             say("report pictures")
             pictures = report_pictures(tmp, manifest, run.memo)
-        if robot is None:  # the joint limits were not in when the checks started
-            with run.timed(ROBOT_FILES):
-                robot = _robot_late(run, asm, analyses, checks, manifest)
+        robot = _robot_before_wait(run, asm, analyses, checks, manifest, robot)
         results, drawn = analyses.results(lambda geometry: run_analyses(asm, say, str(params), protocol_radius_mm,
                                                                         geometry))
         manifest.update(run.run(ROBOT_FILES, lambda folder: {
@@ -305,18 +303,23 @@ def _robot_files(run: Runner, asm: Assembly, theta_max_rad: list[float]) -> dict
     return write_robot(robot, run.folder, run.say, asm.spec.cart, mesh_files)
 
 
-def _robot_late(run: Runner, asm: Assembly, analyses: Analyses, checks: Checks, manifest: dict) -> dict | None:
-    """The robot's files once the joint limits are in, before the wait for the rest of the analyses, and
-    their checks here unless the checks' process has begun them (whichever is free first); else the
-    collision fits now (what needs no limits) and the files after the analyses."""
-    limits = analyses.limits_ahead()
-    if limits is None:
-        if run.hit(ROBOT_GEOMETRY) is None:
-            collision_shapes(asm)
-        return None
-    robot = _robot_files(run, asm, limits)
+def _robot_before_wait(run: Runner, asm: Assembly, analyses: Analyses, checks: Checks, manifest: dict,
+                       robot: dict | None) -> dict | None:
+    """Before the wait for the analyses: the robot's files if the joint limits have come since the checks
+    started (else the collision fits now, what needs no limits, and the files after the analyses), and
+    their checks here unless the checks' process has begun them (whichever process is free first)."""
+    late = robot is None
+    if late:
+        with run.timed(ROBOT_FILES):
+            limits = analyses.limits_ahead()
+            if limits is None:
+                if run.hit(ROBOT_GEOMETRY) is None:
+                    collision_shapes(asm)
+                return None
+            robot = _robot_files(run, asm, limits)
     with run.timed(CHECKS):
-        write_manifest(run.folder, {**manifest, **robot})  # written again, in its order, at the end
+        if late:
+            write_manifest(run.folder, {**manifest, **robot})  # written again, in its order, at the end
         checks.robot_ahead()
     return robot
 

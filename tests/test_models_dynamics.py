@@ -195,15 +195,86 @@ def test_platform_on_the_ground_stays_down_for_a_slow_tail():
 
 
 # -- the tip payload ---------------------------------------------------------------------------------
-def test_a_tip_payload_adds_its_mass_and_its_offset_by_the_parallel_axis_rule():
-    """A point mass on the axis at D from the base: the body's mass grows by it and I_theta about the chord
-    midpoint L / 2 by m_p (D - L / 2)^2 (parallel axis, by hand); I_phi not at all (it sits on the axis)."""
-    m_p, D = 0.1, 0.2
-    body = BODY.with_tip_mass(m_p, D)
-    assert body.mass_kg == pytest.approx(0.1 + 0.1, rel=1e-15)
-    assert body.inertia_theta_kg_m2 == pytest.approx(1.6e-4 + 0.1 * (0.2 - 0.065) ** 2, rel=1e-14)
-    assert body.inertia_phi_kg_m2 == BODY.inertia_phi_kg_m2 and body.arc_length_m == BODY.arc_length_m
-    assert BODY.with_tip_mass(0.0, D) == BODY
+def _arc_end_m(L: float, phi: float, theta: float) -> np.ndarray:
+    """The end of a constant-curvature arc of length L bent by theta in the plane phi, by hand."""
+    r = L * (1 - math.cos(theta)) / theta if theta else 0.0
+    z = L * math.sin(theta) / theta if theta else L
+    return np.array([r * math.cos(phi), r * math.sin(phi), z])
+
+
+def test_a_tip_payload_is_a_point_mass_at_the_arcs_end():
+    """A payload m_p at the end of the body's arc: the body keeps its mass and inertias and the payload
+    adds its own kinetic and potential energy, with its position from the arc by hand (not from the model's
+    centre of mass).
+
+    M_theta grows by m_p |dp_tip/dtheta|^2 (finite differences, h = 1e-6: rel 1e-7 as for the body above);
+    straight, the tip moves across at L / 2 per unit theta: m_p L^2 / 4. Eq 7's M_phi carries the body as
+    m d^2 with d its distance from the base along the chord; the payload's distance is the whole chord
+    2 L sin(theta / 2) / theta, so M_phi grows by m_p chord^2. Gravity (-Y) grows by the gradient of
+    U_p = m_p g y_tip (y_tip by hand, differentiated by hand)."""
+    m_p, L = 0.1, BODY.arc_length_m
+    body = BODY.with_tip_mass(m_p)
+    assert (body.mass_kg, body.inertia_phi_kg_m2, body.inertia_theta_kg_m2, body.arc_length_m) == (
+        BODY.mass_kg, BODY.inertia_phi_kg_m2, BODY.inertia_theta_kg_m2, BODY.arc_length_m)
+    assert body.tip_mass_kg == m_p and body.total_mass_kg == pytest.approx(0.2, rel=1e-15)
+    assert BODY.with_tip_mass(0.0) is BODY and BODY.tip_mass_kg == 0.0
+    with pytest.raises(ValueError, match="mass_kg = -0.1"):
+        BODY.with_tip_mass(-0.1)
+
+    straight = dyn.mass_matrix(body, 0.0) - dyn.mass_matrix(BODY, 0.0)
+    assert straight[1, 1] == pytest.approx(m_p * L ** 2 / 4, rel=1e-12)
+    assert straight[0, 0] == pytest.approx(m_p * L ** 2, rel=1e-12)
+    th, h = 0.9, 1e-6
+    v2 = float(np.sum(((_arc_end_m(L, 0.0, th + h) - _arc_end_m(L, 0.0, th - h)) / (2 * h)) ** 2))
+    bent = dyn.mass_matrix(body, th) - dyn.mass_matrix(BODY, th)
+    assert bent[1, 1] == pytest.approx(m_p * v2, rel=1e-7)
+    assert bent[0, 0] == pytest.approx(m_p * (2 * L * math.sin(th / 2) / th) ** 2, rel=1e-12)
+    np.testing.assert_allclose(dyn.tip_position_m(body, 1.1, th), _arc_end_m(L, 1.1, th), rtol=1e-14, atol=1e-17)
+
+    g = np.array([0.0, -dyn.G_M_S2, 0.0])
+    phi = 1.1
+    r = L * (1 - math.cos(th)) / th
+    dU_dphi = m_p * dyn.G_M_S2 * r * math.cos(phi)
+    dU_dth = m_p * dyn.G_M_S2 * L * math.sin(phi) * (math.sin(th) / th - (1 - math.cos(th)) / th ** 2)
+    extra = dyn.gravity_force(body, phi, th, g) - dyn.gravity_force(BODY, phi, th, g)
+    assert extra == pytest.approx([dU_dphi, dU_dth], rel=1e-6)  # central differences, h = 1e-7
+
+
+@pytest.mark.parametrize("payload_kg", [0.0, 0.1])
+def test_without_damping_and_forcing_the_model_conserves_energy(payload_kg):
+    """Eq 6 with only M, c and G (no actuators, rod or damper): M q'' = -c - G from the public terms,
+    integrated (DOP853, rtol 1e-10) for 0.1 s of the tail, bent down and turning about its axis, falling
+    further under gravity (-Y). The energy q'^T M q' / 2 + U, with U = -m g . p_com - m_p g . p_tip (the
+    tip by hand), stays put to 1e-7 of the kinetic energy's swing: the integration and the terms' central
+    differences err by about 1e-8 of it here (measured), while a payload weighed at the centre of mass
+    instead of the tip drifts by half the swing. (The bend stays above 0.3 rad: near straight, Eq 7's
+    closed form cancels to a few digits and the central differences of M are noisier, at about 1e-6.)"""
+    from scipy.integrate import solve_ivp
+
+    body = BODY.with_tip_mass(payload_kg)
+    g = np.array([0.0, -dyn.G_M_S2, 0.0])
+
+    def f(t, y):
+        phi, th, dphi, dth = y
+        rhs = -dyn.coriolis(body, th, dphi, dth) - dyn.gravity_force(body, phi, th, g)
+        return [dphi, dth, *np.linalg.solve(dyn.mass_matrix(body, th), rhs)]
+
+    def energy(y):
+        phi, th, dphi, dth = y
+        qd = np.array([dphi, dth])
+        kinetic = 0.5 * qd @ dyn.mass_matrix(body, th) @ qd
+        tip = _arc_end_m(BODY.arc_length_m, phi, th)
+        return kinetic, kinetic - BODY.mass_kg * g @ dyn.com_position_m(BODY, phi, th) - payload_kg * g @ tip
+
+    sol = solve_ivp(f, (0.0, 0.1), [-1.2, 0.6, 1.5, 0.0], method="DOP853", rtol=1e-10, atol=1e-12,
+                    dense_output=True)
+    assert sol.status == 0
+    states = sol.sol(np.linspace(0.0, 0.1, 201)).T
+    kinetic, total = np.array([energy(y) for y in states]).T
+    assert 0.3 < states[:, 1].min() and states[:, 1].max() > 1.2  # it fell a long way
+    swing = kinetic.max() - kinetic.min()
+    assert swing > 0.5 * kinetic.max()
+    assert np.max(np.abs(total - total[0])) < 1e-7 * swing, (np.max(np.abs(total - total[0])), swing)
 
 
 def _constant_acceleration(n_joints: int, accel_rad_s2: float) -> dyn.Trajectory:
@@ -217,38 +288,36 @@ def _constant_acceleration(n_joints: int, accel_rad_s2: float) -> dyn.Trajectory
 
 def test_root_wrench_with_a_tip_payload_under_a_known_angular_acceleration(bvsr_spec, bvsr_data):
     """The predicted root force and torque of the whole tail with and without a 100 g tip payload, the
-    tail bending from rest at a known angular acceleration A (the segment angle A t^2 / 2).
+    tail bending from rest at a known angular acceleration A (the segment angle Theta = A t^2 / 2).
 
-    By hand, at rest (terms of second order in the angle Theta left out): the body
-    turns by half the angle, A / 2, and its centre of mass, on the chord midpoint L / 2 from the base face
-    (the model's premise, Eq 7), moves across at L A / 4. Force F = (m + m_p) L A / 4; torque about the
-    root panel's proximal face, t below the base face: (L / 2 + t) F + (I_theta + m_p (D - L / 2)^2) A / 2,
-    with the payload's offset from the midpoint by the parallel-axis rule and D = n H_j (the last panel's
-    distal face). np.gradient's central differences are exact on the quadratic (its one-sided ends give
-    less, never the peak). With A = 200 rad/s^2 over 2 ms, Theta <= 4e-4 rad; the left-out terms (the centre
-    of mass drawn in along the axis at (L / 4) A^2 t^2) are of relative order (2 Theta)^2 = 6.4e-7: rel 1e-6.
-
-    The premise carries the payload's translation at the chord midpoint: a point mass at the tip moves
-    across at D A / 2, twice as fast, so a point mass would add twice these increments; MuJoCo's
-    ``bvsr simulate`` carries the payload as a body (``test_simulate_carries_the_payload_as_a_point_mass``)."""
+    By hand, at rest (terms of second order in Theta left out): the body turns by half the angle, so at
+    A / 2, and its centre of mass, on the chord midpoint L / 2 from the base face (the model's premise,
+    Eq 7), moves across at (L / 2)(A / 2) = L A / 4. The payload, a point mass on the arc's end, sits at
+    L (1 - cos Theta) / Theta ~ L Theta / 2 across and L along the axis: it moves across at L A / 2, twice
+    as fast. Force F = (m L / 4 + m_p L / 2) A; torque about the root panel's proximal face, t below the
+    base face: (L / 2 + t) m L A / 4 + I_theta A / 2 + (L + t) m_p L A / 2, with L = n H_j (the last
+    panel's distal face). np.gradient's central differences are exact on the quadratic (its one-sided
+    ends give less, never the peak). With A = 200 rad/s^2 over 2 ms, Theta <= 4e-4 rad; the left-out
+    terms (the centre of mass and the tip drawn in along the axis, at order A^2 t^2 of their lateral
+    lever) are of relative order (2 Theta)^2 = 6.4e-7: rel 1e-6."""
     from bvsr_cad.analysis.predict import Predictor
     from bvsr_cad.assembly.bodies import moving_body
 
     pred = Predictor.from_spec(bvsr_spec)
     n = bvsr_spec.joints
     h_j, gap = bvsr_data["joint"]["joint_height_mm"] / 1e3, bvsr_data["joint"]["gap_mm"] / 1e3
-    t_panel, D, A = h_j - gap, n * h_j, 200.0
+    t_panel, A = h_j - gap, 200.0
     body = moving_body(pred.asm, 1, n)
-    L = body.arc_length_m
-    assert L == pytest.approx(D, rel=1e-12)  # the segment's arc: n H_j
+    m, L = body.mass_kg, body.arc_length_m
+    assert L == pytest.approx(n * h_j, rel=1e-12)  # the segment's arc ends on the last panel's distal face
     for payload_g in (0.0, 100.0):
         m_p = payload_g / 1e3
         model = pred.joint_model(1, n, payload_g)
         tr = _constant_acceleration(n, A)
         pred.tail_pulse = lambda motion, bar, grams, model=model, tr=tr: (model, tr)
         force_n, torque_nm = pred.root_wrench("extension", 6.0, payload_g)
-        f = (body.mass_kg + m_p) * L * A / 4
-        torque = (L / 2 + t_panel) * f + (body.inertia_theta_kg_m2 + m_p * (D - L / 2) ** 2) * A / 2
+        f = (m * L / 4 + m_p * L / 2) * A
+        torque = (L / 2 + t_panel) * m * L * A / 4 + body.inertia_theta_kg_m2 * A / 2 + (L + t_panel) * m_p * L * A / 2
         assert force_n == pytest.approx(f, rel=1e-6), payload_g
         assert torque_nm == pytest.approx(torque, rel=1e-6), payload_g
 

@@ -24,12 +24,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import units
-from ..assembly.bodies import moving_body, tip_distance_m
+from ..assembly.bodies import moving_body
 from ..assembly.build import Assembly, build_assembly
 from ..assembly.pneumatic_lines import line_supply
 from ..models.actuator import soa_force_law
-from ..models.dynamics import (G_M_S2, VELOCITY_WINDOW_DEG, JointModel, Trajectory, com_position_m, ramp_pa,
-                               simulate_joint)
+from ..models.dynamics import (G_M_S2, TIP_OVER_COM, VELOCITY_WINDOW_DEG, JointModel, Trajectory, com_position_m,
+                               ramp_pa, simulate_joint)
 from ..models.kinematics import joint_geometries
 from ..models.platform import Platform, TailOnPlatform, platform_motion
 from ..models.rod import rod_section
@@ -113,7 +113,7 @@ class Predictor:
     def joint_model(self, first_joint: int, n_joints: int, payload_g: float = 0.0) -> JointModel:
         spec = self.spec
         body = moving_body(self.asm, first_joint, n_joints)
-        body = body.with_tip_mass(units.g_to_kg(payload_g), tip_distance_m(self.asm, n_joints))
+        body = body.with_tip_mass(units.g_to_kg(payload_g))  # on the arc's end: the last panel's distal face
         geoms = joint_geometries(spec)[first_joint - 1: first_joint - 1 + n_joints]
         rod = rod_section(spec).bending_stiffness_nm_per_rad(spec.joint.gap_mm)
         return JointModel(geoms, soa_force_law(spec), rod, body, GRAVITY_M_S2)
@@ -223,13 +223,20 @@ class Predictor:
         body = model.body
         big = model.n * tr.theta_rad
         pos = np.array([com_position_m(body, ph, th) for ph, th in zip(tr.phi_rad, big)])
-        acc = np.gradient(np.gradient(pos, tr.time_s, axis=0), tr.time_s, axis=0)
-        force = body.mass_kg * acc
-        lever = pos + np.array([0.0, 0.0, units.mm_to_m(self.spec.joint.panel_thickness_mm)])
+        tip = TIP_OVER_COM * pos  # the payload, a point mass at the arc's end (tip_position_m)
+
+        def second_derivative(x: np.ndarray) -> np.ndarray:
+            return np.gradient(np.gradient(x, tr.time_s, axis=0), tr.time_s, axis=0)
+
+        force_body = body.mass_kg * second_derivative(pos)
+        force_tip = body.tip_mass_kg * second_derivative(tip)
+        # The sensor sits under the root panel: its face is the panel's thickness below the base face.
+        face = np.array([0.0, 0.0, units.mm_to_m(self.spec.joint.panel_thickness_mm)])
         ang_acc = np.gradient(np.gradient(big / 2.0, tr.time_s), tr.time_s)
-        torque = np.cross(lever, force)
+        torque = np.cross(pos + face, force_body) + np.cross(tip + face, force_tip)
         normal = np.stack([-np.sin(tr.phi_rad), np.cos(tr.phi_rad), np.zeros_like(tr.phi_rad)], -1)
         torque = torque + body.inertia_theta_kg_m2 * ang_acc[:, None] * normal
+        force = force_body + force_tip
         return float(np.max(np.linalg.norm(force, axis=1))), float(np.max(np.linalg.norm(torque, axis=1)))
 
     def root_peak_force(self, pressure_bar: float, payload_g: float, motion: str) -> float:

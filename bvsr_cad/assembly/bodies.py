@@ -59,9 +59,4 @@ def moving_body(asm: Assembly, first_joint: int, n_joints: int) -> RigidBody:
                      units.mm_to_m(arc_mm))
 
 
-def tip_distance_m(asm: Assembly, n_joints: int) -> float:
-    """Distance at rest from the body's base face to the distal face of its last panel (where a payload sits)."""
-    return units.mm_to_m(n_joints * asm.spec.joint.joint_height_mm)
-
-
-__all__ = ["moving_body", "tip_distance_m"]
+__all__ = ["moving_body"]

@@ -3,7 +3,9 @@
 Generalised coordinates q = [phi, theta] (bending plane, bending angle). The
 moving part is one rigid body whose centre of mass sits on the chord at
 d = (L / theta) sin(theta / 2) from the base and which turns by theta / 2
-(Fig. 2b). Then, in SI,
+(Fig. 2b). A tip payload m_p is a point mass at the arc's end, p_tip = 2 p_com
+(the chord's end): it adds 4 m_p to m in Eq 7's translational terms (and so to Eq 8)
+and 2 m_p to m in the gravity potential. Then, in SI,
 
     M(q) q'' + c(q, q') + D(q) q' + G(q) = K(q),                       (Eq 6)
 
@@ -42,7 +44,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -52,6 +54,9 @@ from .kinematics import JointGeometry, socket_lengths_and_jacobian
 
 #: Standard gravity, m/s^2.
 G_M_S2 = units.STANDARD_GRAVITY_M_S2
+#: The arc's end over the body's centre of mass: the chord is 2 (L / theta) sin(theta / 2) along the
+#: direction theta / 2, and the centre of mass sits at its midpoint (Eq 7's premise), so p_tip = 2 p_com.
+TIP_OVER_COM = 2.0
 #: The paper measures a segment's peak velocity before its angle passes this (Sec. IV-A-3).
 VELOCITY_WINDOW_DEG = 38.0
 
@@ -64,24 +69,38 @@ def ramp_pa(t_s, p0_pa: float, t0_s: float):
 
 @dataclass(frozen=True)
 class RigidBody:
-    """The moving body of Fig. 2b: mass, inertias about its centre of mass, arc length it rides on."""
+    """The moving body of Fig. 2b: mass, inertias about its centre of mass, arc length it rides on,
+    and a point mass at the arc's end (a tip payload)."""
 
     mass_kg: float
     inertia_phi_kg_m2: float  # about the tail axis
     inertia_theta_kg_m2: float  # about an axis normal to the bending plane
     arc_length_m: float  # L of Eq 7-9 (one joint: H_a; a segment: its whole bending length)
+    tip_mass_kg: float = 0.0  # m_p, a point mass at the arc's end: TIP_OVER_COM times the body's p_com
 
-    def with_tip_mass(self, mass_kg: float, distance_m: float) -> "RigidBody":
-        """Add a point mass on the axis at ``distance_m`` from the base (a tip payload), keeping
-        the body's centre of mass at the chord midpoint (the model's premise): the payload's
-        offset from it enters the inertia by the parallel-axis rule."""
-        if mass_kg <= 0:
+    def with_tip_mass(self, mass_kg: float) -> "RigidBody":
+        """This body with a point mass ``mass_kg`` added at the end of its arc (a tip payload)."""
+        if mass_kg < 0:
+            raise ValueError(f"tip payload mass_kg = {mass_kg}: allowed >= 0")
+        if mass_kg == 0:
             return self
-        m = self.mass_kg + mass_kg
-        com = 0.5 * self.arc_length_m
-        shift = distance_m - com
-        return RigidBody(m, self.inertia_phi_kg_m2, self.inertia_theta_kg_m2 + mass_kg * shift ** 2,
-                         self.arc_length_m)
+        return replace(self, tip_mass_kg=self.tip_mass_kg + mass_kg)
+
+    @property
+    def total_mass_kg(self) -> float:
+        """The body with its tip payload."""
+        return self.mass_kg + self.tip_mass_kg
+
+    @property
+    def translational_mass_kg(self) -> float:
+        """The mass that multiplies |p_com'|^2 / 2 in the kinetic energy: the tip moves at
+        TIP_OVER_COM times the centre of mass's velocity."""
+        return self.mass_kg + TIP_OVER_COM ** 2 * self.tip_mass_kg
+
+    @property
+    def gravity_mass_kg(self) -> float:
+        """The mass that multiplies -g . p_com in the potential (the tip is at TIP_OVER_COM p_com)."""
+        return self.mass_kg + TIP_OVER_COM * self.tip_mass_kg
 
 
 def _chord_factor(theta: float) -> float:
@@ -101,7 +120,7 @@ def _m_theta_factor(theta: float) -> float:
 def _mass_diagonal(body: RigidBody, theta: float) -> tuple[float, float]:
     """Eq 7's diagonal (M_phi, M_theta) as floats (the integrators' right-hand sides ask for it
     thousands of times a run: no array per call)."""
-    L, m = body.arc_length_m, body.mass_kg
+    L, m = body.arc_length_m, body.translational_mass_kg
     m_phi = body.inertia_phi_kg_m2 + m * (L * _chord_factor(theta)) ** 2
     m_theta = body.inertia_theta_kg_m2 / 4.0 + m * L ** 2 * _m_theta_factor(theta)
     return m_phi, m_theta
@@ -134,8 +153,9 @@ def coriolis(body: RigidBody, theta: float, phi_dot: float, theta_dot: float) ->
 
 
 def paper_coriolis(body: RigidBody, theta: float, phi_dot: float, theta_dot: float) -> np.ndarray:
-    """Eq 8 exactly as printed (the I_theta term of M has no theta-dependence, so it drops out)."""
-    L, m = body.arc_length_m, body.mass_kg
+    """Eq 8 exactly as printed (the I_theta term of M has no theta-dependence, so it drops out), with
+    m the mass of Eq 7's translational terms (a tip payload enters them as TIP_OVER_COM^2 m_p)."""
+    L, m = body.arc_length_m, body.translational_mass_kg
     s2, c2 = math.sin(theta / 2), math.cos(theta / 2)
     a = m * L ** 2 / theta ** 3 * (theta / 2 * math.sin(theta) - 2 * s2 ** 2)
     b = m * L ** 2 / theta ** 5 * (theta * math.sin(theta) - 2 * s2 ** 2 - theta ** 2 / 2 * c2 ** 2)
@@ -153,8 +173,13 @@ def _com_position(body: RigidBody, phi: float, theta: float) -> tuple[float, flo
     return d * (s * math.cos(phi)), d * (s * math.sin(phi)), d * c
 
 
+def tip_position_m(body: RigidBody, phi: float, theta: float) -> np.ndarray:
+    """The arc's end (where a tip payload sits) in the base frame: TIP_OVER_COM p_com."""
+    return TIP_OVER_COM * com_position_m(body, phi, theta)
+
+
 def gravity_force(body: RigidBody, phi: float, theta: float, gravity_m_s2: np.ndarray) -> np.ndarray:
-    """G(q) = dU/dq with U = -m g . p_com (central differences of the exact potential)."""
+    """G(q) = dU/dq with U = -m g . p_com - m_p g . p_tip (central differences of the exact potential)."""
     return np.array(_gravity_terms(body, phi, theta, tuple(float(g) for g in gravity_m_s2)))
 
 
@@ -164,10 +189,11 @@ def _gravity_terms(body: RigidBody, phi: float, theta: float, gravity_m_s2: tupl
     gx, gy, gz = gravity_m_s2
     if gx == gy == gz == 0.0:
         return 0.0, 0.0
+    m = body.gravity_mass_kg
 
     def potential(p_: float, t_: float) -> float:
         x, y, z = _com_position(body, p_, t_)
-        return -body.mass_kg * (gx * x + gy * y + gz * z)
+        return -m * (gx * x + gy * y + gz * z)
 
     h = 1e-7
     return ((potential(phi + h, theta) - potential(phi - h, theta)) / (2 * h),
@@ -342,4 +368,5 @@ def simulate_joint(model: JointModel, pressure: PressureInput | None = None, sec
 
 
 __all__ = ["RigidBody", "JointModel", "Trajectory", "simulate_joint", "ramp_pa", "mass_matrix", "coriolis",
-           "paper_coriolis", "gravity_force", "com_position_m", "G_M_S2", "VELOCITY_WINDOW_DEG"]
+           "paper_coriolis", "gravity_force", "com_position_m", "tip_position_m", "TIP_OVER_COM", "G_M_S2",
+           "VELOCITY_WINDOW_DEG"]

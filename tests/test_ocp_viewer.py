@@ -45,7 +45,7 @@ def viewer():
     """The standalone viewer on a free port, and a client registered as its browser."""
     missing = [m for m in ("ocp_vscode", "ocp_viewer", "websockets") if importlib.util.find_spec(m) is None]
     if missing:
-        pytest.skip(f"the OCP CAD Viewer test needs {', '.join(missing)}: pip install 'bvsr_cad[viewer]' ocp-viewer")
+        pytest.skip(f"the OCP CAD Viewer test needs {', '.join(missing)}: pip install 'bvsr_cad[viewer]'")
     from websockets.sync.client import connect
 
     port = _free_port()

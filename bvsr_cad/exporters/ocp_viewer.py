@@ -24,7 +24,7 @@ if TYPE_CHECKING:  # the CAD imports take seconds: `bvsr show` refuses a missing
 
 #: The port the viewer listens on unless told otherwise (ocp_vscode's and ocp_viewer's default).
 DEFAULT_PORT = 3939
-HOW_TO_START = ("install the viewer extra (pip install 'bvsr_cad[viewer]' ocp-viewer) and start one: "
+HOW_TO_START = ("install the viewer extra (pip install 'bvsr_cad[viewer]') and start one: "
                 "`python -m ocp_viewer` (standalone, then open http://127.0.0.1:{port} in a browser), or "
                 "the OCP CAD Viewer extension in VS Code")
 

@@ -1,4 +1,4 @@
-"""Every file that loads, builds (issue 60): what the analyses are asked for is decided at load.
+"""Every file that loads, builds: what the analyses are asked for is decided at load.
 
 * The closed-form rest gaps of :mod:`bvsr_cad.parameters.feasibility` against the FCL distances of the
   build's own meshes (a second method), and the hand formula of the tip's flange gap.
@@ -324,7 +324,7 @@ def _names_a_changed_key(problems: list[str], changes: dict[str, Any]) -> bool:
 #: Every case the search found (kept, whatever the search draws next): each loaded and then failed in the
 #: build, was refused naming only keys that were not changed, or took over 10 s to refuse.
 FOUND = [
-    {"analysis.min_clearance_mm": 3.771},  # issue 60: loaded, then every joint limit 0 after 300-960 s
+    {"analysis.min_clearance_mm": 3.771},  # the tip flanges stand 1.1 mm apart: no pose keeps 3.771
     {"fabrication.min_pocket_gap_mm": 0.3},  # the auto cone leaves the tip's flanges 0.4 mm apart, under 0.5
     # A rim that cuts every feature: the refusal searched 18 keys' allowed values, 12-39 s.
     {"joint.panel_diameter_mm": 17.735},

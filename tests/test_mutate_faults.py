@@ -1,6 +1,6 @@
 """``tools/mutate.py`` checks that the tests catch physically wrong answers by applying each of its faults
-to the source: a fault whose snippet no longer occurs in the code (the code moved on) checks nothing, and
-four had rotted that way unnoticed. Each must apply, exactly once, and name the tests that catch it
+to the source: a fault whose snippet no longer occurs in the code (the code moved on) checks nothing
+and fails silently. Each must apply, exactly once, and name the tests that catch it
 (``--targeted`` runs each fault against those alone): every named test must exist."""
 
 from __future__ import annotations

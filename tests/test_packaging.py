@@ -1,4 +1,4 @@
-"""The package outside the repository (issue 59): the default inputs it carries, `bvsr init`, the one
+"""The package outside the repository: the default inputs it carries, `bvsr init`, the one
 version, and the extras a command or a check asks for. The wheel itself, installed into a fresh
 virtualenv and used in an empty folder, is tools/wheel_check.sh's."""
 

@@ -183,7 +183,7 @@ def _held_tip(path, pattern: dict, timestep_s: float, seconds: float = 0.3):
 
 @pytest.mark.parametrize("pattern", sorted(HELD_PATTERNS))
 def test_default_mjcf_holds_at_legged_robot_steps(robot_export, pattern):
-    """Issue 17: after 0.3 s of a held pressure pattern from rest, the default scene's tip, stepped at its
+    """After 0.3 s of a held pressure pattern from rest, the default scene's tip, stepped at its
     exported 2 ms and at a legged robot's coarser 4 ms, lies near the same model stepped at 0.05 ms, and
     MuJoCo warns of nothing.
 

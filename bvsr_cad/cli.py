@@ -641,7 +641,8 @@ _BAD_INPUT = (("analysis.calibrate", "CalibrationError"), ("checks.export", "Exp
               ("checks.printability", "SlicerMissingError"), ("extras", "ExtraMissing"), ("parameters.load", "ParamError"),
               ("parameters.measurements", "MeasurementError"), ("parameters.study", "StudyError"),
               ("exporters.ocp_viewer", "ViewerUnavailable"),
-              ("publish", "OutputError"), ("sim", "SimulationInputError"), ("sweep", "SweepError"))
+              ("build.publish", "OutputError"), ("simulation.sim", "SimulationInputError"),
+              ("studies.sweep", "SweepError"))
 
 
 def _error_classes() -> tuple[tuple[type[Exception], ...], type[Exception] | None]:

@@ -310,7 +310,7 @@ def test_the_standby_head_start_is_used_only_for_the_bytes_it_was_built_from(tmp
     """`bvsr build` names the file to its standby analyses' process, which builds the assembly while the
     build reads its cache; the work that comes uses it only if it names the same file with the same
     SHA-256, else it builds the file as it is now."""
-    from bvsr_cad import analyses_process as pipeline
+    from bvsr_cad.build._runtime import analyses_process as pipeline
     from bvsr_cad.analysis import run
     from bvsr_cad.parameters.load import params_sha256
 

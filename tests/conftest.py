@@ -96,12 +96,18 @@ def bvsr_export(tmp_path_factory, request) -> Path:
     return out
 
 
-def benchmark_script(name: str):
-    """``benchmarks/<name>.py`` loaded as a module (the benchmarks are scripts, not a package)."""
-    spec = importlib.util.spec_from_file_location(f"bench_{name}", ROOT / "benchmarks" / f"{name}.py")
+def script(folder: str, name: str):
+    """``<folder>/<name>.py`` of the repository loaded as a module (benchmarks and tools are scripts, not
+    a package)."""
+    spec = importlib.util.spec_from_file_location(f"{folder}_{name}", ROOT / folder / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def benchmark_script(name: str):
+    """``benchmarks/<name>.py`` loaded as a module."""
+    return script("benchmarks", name)
 
 
 def write_toml(path: Path, data: dict) -> Path:

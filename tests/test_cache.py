@@ -17,7 +17,10 @@ import pytest
 
 from bvsr_cad.build.cache import ArtifactCache, spec_without, stage_key
 
-from .conftest import PARAMS, benchmark_script, write_toml
+from .conftest import PARAMS, benchmark_script, script, write_toml
+
+#: Two exports compared file for file, the manifest's volatile section aside (also tools/wheel_check.sh's).
+differences = script("tools", "compare_exports").differences
 
 
 def test_put_get_and_concurrent_puts_of_one_key(tmp_path):
@@ -157,35 +160,28 @@ def test_check_verdicts_follow_the_bytes_of_the_files_they_read(tmp_path):
     assert len(runs) == 3
 
 
-def _files(root: Path) -> dict[str, bytes]:
-    out = {}
-    for p in sorted(root.rglob("*")):
-        if p.is_file():
-            data = p.read_bytes()
-            if p.name == "manifest.json" and p.parent == root:
-                m = json.loads(data)
-                m.pop("volatile")
-                data = json.dumps(m, sort_keys=True).encode()
-            out[p.relative_to(root).as_posix()] = data
-    return out
-
-
-def _differences(a: Path, b: Path) -> list[str]:
-    fa, fb = _files(a), _files(b)
-    differ = [k for k in set(fa) & set(fb) if fa[k] != fb[k]]
-    return sorted(set(fa) ^ set(fb)) + sorted(differ)
+def test_two_exports_differ_by_their_files_not_by_the_manifests_volatile_section(tmp_path):
+    a, b = tmp_path / "a", tmp_path / "b"
+    for root, when in ((a, "10:00"), (b, "11:00")):
+        (root / "stl").mkdir(parents=True)
+        (root / "stl" / "soa.stl").write_bytes(b"solid soa")
+        (root / "manifest.json").write_text(json.dumps({"name": "t", "volatile": {"built_at": when}}))
+    assert differences(a, b) == []
+    (b / "stl" / "soa.stl").write_bytes(b"solid SOA")
+    (b / "stl" / "rod.stl").write_bytes(b"solid rod")
+    assert differences(a, b) == ["stl/rod.stl", "stl/soa.stl"]
 
 
 @pytest.mark.slow
 def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(bvsr_export, tmp_path, data):
-    """bvsr_export (this session's first build) filled the session's cache. The same file again is one
+    """bvsr_export (the test run's first build) filled the test run's cache. The same file again is one
     reused stage; a rod-material edit built by two builds at once through the shared cache equals,
     file for file, the same edit built with --no-cache (the manifest's volatile section aside)."""
     from bvsr_cad.build.pipeline import build_export
 
     noop = build_export(PARAMS / "bvsr.toml", tmp_path / "noop")
     assert [(s["stage"], s["status"]) for s in noop.stages] == [("export", "reused")]
-    assert _differences(bvsr_export, tmp_path / "noop") == []
+    assert differences(bvsr_export, tmp_path / "noop") == []
 
     data["vertebra"]["material"] = "PVC"
     edit = write_toml(tmp_path / "pvc.toml", data)
@@ -219,7 +215,7 @@ def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(bvsr_expo
     assert 0.8 * counted <= reported <= counted + 0.05, (reported, counted)  # rounded to 0.01 s each
     assert main_no_cache(edit, tmp_path / "fresh") == 0
     for i in (1, 2):
-        assert _differences(tmp_path / f"cached{i}", tmp_path / "fresh") == []
+        assert differences(tmp_path / f"cached{i}", tmp_path / "fresh") == []
 
 
 #: The CI-sized tail of :func:`test_every_benchmark_edit_built_from_the_cache_equals_a_fresh_build`: the
@@ -259,7 +255,7 @@ def test_every_benchmark_edit_built_from_the_cache_equals_a_fresh_build(tmp_path
         statuses = {s["status"] for s in cached.stages}
         assert statuses == {"built", "reused"}, (name, cached.stages)
         assert {s["status"] for s in fresh.stages} == {"built"}, name
-        assert _differences(tmp_path / "cached", tmp_path / "fresh") == [], name
+        assert differences(tmp_path / "cached", tmp_path / "fresh") == [], name
 
 
 def _edit_beside_its_data(tmp_path: Path, data: dict) -> Path:
@@ -357,7 +353,7 @@ def test_a_noop_build_command_publishes_the_cached_export_before_the_cad_imports
     imported = {line.rsplit("|", 1)[1].strip() for line in done.stderr.splitlines() if line.startswith("import time:")}
     assert "bvsr_cad.build.publish" in imported  # the listing is there to read
     assert not imported & HEAVY_MODULES
-    assert _differences(bvsr_export, out) == []
+    assert differences(bvsr_export, out) == []
 
 
 def main_no_cache(params: Path, out: Path) -> int:

@@ -105,6 +105,11 @@ def test_check_fails_on_a_broken_stl(bvsr_export, tmp_path, capsys):
     out = json.loads(capsys.readouterr().out)
     failed = {c["name"] for c in out["checks"] if c["passed"] is False}
     assert "stl_watertight:soa" in failed and "stl_volume:soa" in failed
+    # The summary without --json: the failing group, and each failure in full.
+    assert main(["check", str(broken), "-q"]) == 1
+    lines = capsys.readouterr().out.splitlines()
+    assert any(line.startswith("FAIL  stl ") for line in lines)
+    assert any(line.startswith("FAIL  stl_watertight:soa: ") for line in lines)
 
 
 def test_checks_started_early_see_a_file_changed_before_they_finish(bvsr_export, tmp_path):

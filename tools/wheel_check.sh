@@ -70,26 +70,6 @@ if [ -z "$extras" ]; then
 fi
 
 if [ -n "${BVSR_WHEEL_REFERENCE:-}" ]; then
-    python - "$BVSR_WHEEL_REFERENCE" exports/bvsr <<'EOF'
-import json, sys
-from pathlib import Path
-
-def files(root: Path) -> dict[str, bytes]:
-    out = {}
-    for p in sorted(root.rglob("*")):
-        if p.is_file():
-            data = p.read_bytes()
-            if p.name == "manifest.json" and p.parent == root:
-                m = json.loads(data)
-                m.pop("volatile")
-                data = json.dumps(m, sort_keys=True).encode()
-            out[p.relative_to(root).as_posix()] = data
-    return out
-
-a, b = (files(Path(x)) for x in sys.argv[1:])
-differ = sorted(set(a) ^ set(b)) + sorted(k for k in set(a) & set(b) if a[k] != b[k])
-print(f"export against {sys.argv[1]}: {len(b)} files, {len(differ)} differ" + (f": {differ[:20]}" if differ else ""))
-sys.exit(1 if differ else 0)
-EOF
+    python "$repo/tools/compare_exports.py" "$BVSR_WHEEL_REFERENCE" exports/bvsr
 fi
 say "wheel check passed"

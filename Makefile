@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml $(LOCK)
 	@$(PYTHON) -c 'import sys; sys.exit(not (3, 11) <= sys.version_info[:2] <= (3, 13))' || \
 		{ echo "needs Python 3.11, 3.12 or 3.13 (found $(PYTHON)); run: make PYTHON=/path/to/python3.12"; exit 2; }
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --quiet -c $(LOCK) -e '.[test,gpu,cad,docs]'
+	$(BIN)/pip install --quiet -c $(LOCK) -e '.[test,gpu,cad,docs,lint]'
 	$(BIN)/python -m compileall -q bvsr_cad  # as pip does for a regular install (this one is editable)
 	touch $(STAMP)
 

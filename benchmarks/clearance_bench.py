@@ -20,7 +20,9 @@ from bvsr_cad.parameters.load import load_spec
 def main() -> None:
     ap = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()))
     ap.add_argument("params", nargs="?", default="params/bvsr.toml")
-    ap.add_argument("subset", nargs="?", type=int, default=20, help="poses checked by brute force (default 20)")
+    ap.add_argument(
+        "subset", nargs="?", type=int, default=20, help="poses checked by brute force (default 20)"
+    )
     args = ap.parse_args()
     params, subset = args.params, args.subset
     asm = build_assembly(load_spec(params))
@@ -38,14 +40,24 @@ def main() -> None:
     sub = clearance_over(pt, w[:subset])
     rate, bf_rate = res.poses_per_s, subset / bf_s
     print(f"{params}: {len(pt.pairs)} pairs; setup (meshes, rest distances) {setup_s:.2f} s")
-    print(f"two-stage: {res.poses} poses in {res.seconds:.3f} s = {rate:.0f} poses/s (again: {warm.poses_per_s:.0f}); "
-          f"min {res.min_clearance_mm:.4f} mm {res.pair}; stage-1a minimum {res.stage1_min_mm:.4f} mm, "
-          f"{res.refined} candidates refined, {res.confirmed} exact, certified {res.certified} "
-          f"(lower bound {res.lower_bound_mm:.4f} mm)")
-    print(f"brute force: {subset} poses x {len(pt.pairs)} pairs in {bf_s:.2f} s = {bf_rate:.2f} poses/s; "
-          f"min {bf.min():.4f} mm")
-    print(f"ratio {rate / bf_rate:.0f}x; largest disagreement in the minimum clearance on the subset: "
-          f"{abs(sub.min_clearance_mm - bf.min()):.2e} mm")
+    print(
+        f"two-stage: {res.poses} poses in {res.seconds:.3f} s = {rate:.0f} poses/s (again: "
+        f"{warm.poses_per_s:.0f}); "
+        f"min {res.min_clearance_mm:.4f} mm {res.pair}; stage-1a minimum {res.stage1_min_mm:.4f} "
+        "mm, "
+        f"{res.refined} candidates refined, {res.confirmed} exact, certified {res.certified} "
+        f"(lower bound {res.lower_bound_mm:.4f} mm)"
+    )
+    print(
+        f"brute force: {subset} poses x {len(pt.pairs)} pairs in {bf_s:.2f} s = {bf_rate:.2f} "
+        "poses/s; "
+        f"min {bf.min():.4f} mm"
+    )
+    print(
+        f"ratio {rate / bf_rate:.0f}x; largest disagreement in the minimum clearance on the "
+        "subset: "
+        f"{abs(sub.min_clearance_mm - bf.min()):.2e} mm"
+    )
 
 
 if __name__ == "__main__":

@@ -27,7 +27,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("params", nargs="?", default=str(ROOT / "params" / "bvsr.toml"))
     ap.add_argument("--supply", choices=("ramp", "valve"), default=None)
-    ap.add_argument("--uncalibrated", action="store_true", help="the tables' values, not the file's fitted ones")
+    ap.add_argument(
+        "--uncalibrated", action="store_true", help="the tables' values, not the file's fitted ones"
+    )
     ap.add_argument("--pressures", default="1,3,6", help="gauge pressures in bar (default 1,3,6)")
     args = ap.parse_args()
     spec = load_spec(args.params)
@@ -39,9 +41,17 @@ def main() -> None:
     if pred.spec.pneumatics.model != supply:
         import dataclasses
 
-        pred = pred.with_spec(dataclasses.replace(spec, pneumatics=dataclasses.replace(spec.pneumatics, model=supply)))
-    print(f"{spec.name} ({'uncalibrated' if args.uncalibrated else 'as the file says'}), supply {supply}")
-    print(f"{'P (bar)':>8} {'Eq 6-12 (deg/s)':>16} {'MuJoCo (deg/s)':>15} {'MuJoCo / Eq':>12} {'seconds':>8}")
+        pred = pred.with_spec(
+            dataclasses.replace(spec, pneumatics=dataclasses.replace(spec.pneumatics, model=supply))
+        )
+    print(
+        f"{spec.name} ({'uncalibrated' if args.uncalibrated else 'as the file says'}), supply "
+        f"{supply}"
+    )
+    print(
+        f"{'P (bar)':>8} {'Eq 6-12 (deg/s)':>16} {'MuJoCo (deg/s)':>15} {'MuJoCo / Eq':>12} "
+        f"{'seconds':>8}"
+    )
     for p in (float(x) for x in args.pressures.split(",")):
         t0 = time.perf_counter()
         eq = pred.segment_peak_velocity("extension", p)

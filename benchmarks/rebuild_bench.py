@@ -25,8 +25,8 @@ import argparse
 import compileall
 import json
 import os
-import resource
 import re
+import resource
 import shutil
 import statistics
 import subprocess
@@ -67,22 +67,31 @@ def edited(text: str, table: str, key: str, value: str) -> str:
 
 
 def command_seconds(path: Path, out: Path) -> tuple[float, float, list[dict], dict[str, float]]:
-    """`bvsr build PATH -o OUT --json` in a new interpreter: (wall seconds, CPU seconds of it and its
-    children, its stages and its CPU seconds by process as ``--json`` lists them)."""
+    """`bvsr build PATH -o OUT --json` in a new interpreter: (wall seconds, CPU seconds of it and
+    its children, its stages and its CPU seconds by process as ``--json`` lists them)."""
     c0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    done = subprocess.run([sys.executable, "-m", "bvsr_cad.cli", "build", str(path), "-o", str(out), "--json"],
-                          cwd=ROOT, capture_output=True, text=True, check=True)
+    done = subprocess.run(
+        [sys.executable, "-m", "bvsr_cad.cli", "build", str(path), "-o", str(out), "--json"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     seconds = time.perf_counter() - t0
     c1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     summary = json.loads(done.stdout)
-    return seconds, (c1.ru_utime + c1.ru_stime) - (c0.ru_utime + c0.ru_stime), summary["stages"], \
-        summary["cpu_seconds"]
+    return (
+        seconds,
+        (c1.ru_utime + c1.ru_stime) - (c0.ru_utime + c0.ru_stime),
+        summary["stages"],
+        summary["cpu_seconds"],
+    )
 
 
 #: The reference loop benchmarks/RESULTS.md quotes: ``time python3 -c`` of this, at module level
-#: (global names: about 2.5 times the seconds of the same loop inside a function); timed here without
-#: the interpreter's start, which a ``time python3 -c`` figure includes (0.1-0.15 s more).
+#: (global names: about 2.5 times the seconds of the same loop inside a function); timed here
+#: without the interpreter's start, which a ``time python3 -c`` figure includes (0.1-0.15 s more).
 REFERENCE_LOOP = "s = 0\nfor i in range(10000000):\n    s += i\n"
 
 
@@ -98,18 +107,25 @@ def reference_loop_s() -> float:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("params", nargs="?", default=str(ROOT / "params" / "bvsr.toml"))
-    ap.add_argument("--edits", default=",".join(EDITS), help="comma-separated edit names (default: all)")
-    ap.add_argument("--cold", type=int, default=1, metavar="N",
-                    help="cold builds, each from an empty cache (default 1); the ratios are to their median: "
-                         "a shared machine's speed drifts between minutes")
+    ap.add_argument(
+        "--edits", default=",".join(EDITS), help="comma-separated edit names (default: all)"
+    )
+    ap.add_argument(
+        "--cold",
+        type=int,
+        default=1,
+        metavar="N",
+        help="cold builds, each from an empty cache (default 1); the ratios are to their median: "
+        "a shared machine's speed drifts between minutes",
+    )
     args = ap.parse_args()
     if args.cold < 1:
         ap.error(f"--cold must be at least 1, not {args.cold}")
     work = Path(tempfile.mkdtemp(prefix="bvsr-rebuild-bench-"))
     users_cache = os.environ.get("BVSR_CACHE")
     os.environ["BVSR_CACHE"] = str(work / "cache")
-    from bvsr_cad.build.cache import process_start
     from bvsr_cad.build._runtime.worker import SecondProcess, library_imports, tune_process
+    from bvsr_cad.build.cache import process_start
 
     tune_process()  # as the `bvsr` command does, and its imports
     with library_imports():
@@ -123,27 +139,48 @@ def main() -> None:
     rows = []
 
     def cpu_s() -> float:
-        return sum(u.ru_utime + u.ru_stime for u in (resource.getrusage(resource.RUSAGE_SELF),
-                                                     resource.getrusage(resource.RUSAGE_CHILDREN)))
+        return sum(
+            u.ru_utime + u.ru_stime
+            for u in (
+                resource.getrusage(resource.RUSAGE_SELF),
+                resource.getrusage(resource.RUSAGE_CHILDREN),
+            )
+        )
 
-    def row(label: str, seconds: float, cpu: float, stages: list[dict], by_process: dict[str, float]) -> float:
+    def row(
+        label: str, seconds: float, cpu: float, stages: list[dict], by_process: dict[str, float]
+    ) -> float:
         reused = [s["stage"] for s in stages if s["status"] == "reused"]
         split = " + ".join(f"{name} {s:.1f}" for name, s in by_process.items())
         rows.append((label, seconds, cpu, split))
-        print(f"{label:18} {seconds:7.1f} s  {cpu:6.1f} CPU s  reused: {', '.join(reused) or '-'}", flush=True)
-        print("    " + "; ".join(f"{s['stage']} {s['status']} {s['seconds']:.1f} s" for s in stages), flush=True)
+        print(
+            f"{label:18} {seconds:7.1f} s  {cpu:6.1f} CPU s  reused: {', '.join(reused) or '-'}",
+            flush=True,
+        )
+        print(
+            "    " + "; ".join(f"{s['stage']} {s['status']} {s['seconds']:.1f} s" for s in stages),
+            flush=True,
+        )
         print(f"    CPU s by process, as the build reports them: {split}", flush=True)
         return seconds
 
     def run(label: str, path: Path) -> float:
         t0, c0 = time.perf_counter(), cpu_s()
-        # As `bvsr build` does: the analyses' process started ahead, building the assembly of the file.
-        res = build_export(path, work / "out", standby=SecondProcess.standby("bvsr_cad.build._runtime.analyses_process", None, [str(path)]))
+        # As `bvsr build` does: the analyses' process started ahead, building the assembly of the
+        # file.
+        res = build_export(
+            path,
+            work / "out",
+            standby=SecondProcess.standby(
+                "bvsr_cad.build._runtime.analyses_process", None, [str(path)]
+            ),
+        )
         return row(label, time.perf_counter() - t0, cpu_s() - c0, res.stages, res.cpu_s)
 
     # The package's bytecode, as Python writes it on a first run and `make` at install: where the
-    # environment sets PYTHONDONTWRITEBYTECODE (this machine's does) and the files changed since, every
-    # process of every build would compile the package's modules again (0.2 CPU s each, measured).
+    # environment sets PYTHONDONTWRITEBYTECODE (this machine's does) and the files changed since,
+    # every process of every build would compile the package's modules again (0.2 CPU s each,
+    # measured).
     compileall.compile_dir(ROOT / "bvsr_cad", quiet=1)
     before = reference_loop_s()
     print(f"reference loop {before:.2f} s, {os.cpu_count()} cores", flush=True)
@@ -158,8 +195,8 @@ def main() -> None:
         row("no-op, command", *command_seconds(base, work / "out"))
         for name in (n.strip() for n in args.edits.split(",") if n.strip()):
             table, key, value = EDITS[name]
-            # Beside the base, so its data_file resolves as the base's does; named by this process, so
-            # the next run removes it if this one is killed before its `finally`.
+            # Beside the base, so its data_file resolves as the base's does; named by this process,
+            # so the next run removes it if this one is killed before its `finally`.
             path = base.parent / f".bench-{os.getpid()}-{name.replace(' ', '_')}.toml"
             path.write_text(edited(text, table, key, value))
             try:
@@ -177,7 +214,9 @@ def main() -> None:
         print(f"reference loop {before:.2f} s before, {reference_loop_s():.2f} s after")
     finally:
         shutil.rmtree(work, ignore_errors=True)
-        if users_cache is None:  # the environment as it was (main() may run inside a longer process)
+        if (
+            users_cache is None
+        ):  # the environment as it was (main() may run inside a longer process)
             os.environ.pop("BVSR_CACHE", None)
         else:
             os.environ["BVSR_CACHE"] = users_cache

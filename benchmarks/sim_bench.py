@@ -1,20 +1,22 @@
 """Simulation throughput of an exported tail, in one run:
 
-- CPU MuJoCo on one core: steps/s and real-time factor (simulated s per wall s) at the exported time step;
+- CPU MuJoCo on one core: steps/s and real-time factor (simulated s per wall s) at the exported time
+  step;
 - MJX (``jax.vmap`` over a model with per-world fields) and MuJoCo Warp (batched model) at batch 1,
   1024 and 8192 on a CUDA GPU, constraint buffers sized from the model, stiffness, damping and tip
-  payload varied per world; each batch's world 0 is checked against CPU MuJoCo stepping world 0's model.
+  payload varied per world; each batch's world 0 is checked against CPU MuJoCo stepping world 0's
+  model.
 
 Without a CUDA GPU it says so and runs tiny batches on the CPU backends (``--cpu-batches``) to prove
 the code path; their rates say nothing about a GPU. MJX and Warp come with the extra ``.[gpu]``
 (MJX on an NVIDIA GPU also needs ``jax[cuda12]``).
 
     python benchmarks/sim_bench.py EXPORT_DIR [--scene robot/scene.xml] [--steps 100]
-    python benchmarks/sim_bench.py /tmp/x --cpu-batches 1,4 --no-mjx     # skip MJX's CPU compile (25-40 s a batch)
-    python benchmarks/sim_bench.py /tmp/x --gpu-batches 8192,65536 --profile   # where a Warp step's GPU time goes
+    python benchmarks/sim_bench.py /tmp/x --cpu-batches 1,4 --no-mjx  # without MJX's CPU compile
+    python benchmarks/sim_bench.py /tmp/x --gpu-batches 8192,65536 --profile  # Warp's GPU time
 
-``--profile`` (CUDA only) ends with MuJoCo Warp's slowest kernels at the largest batch, in GPU ms per
-step, from steps launched one by one under Warp's kernel timing.
+``--profile`` (CUDA only) ends with MuJoCo Warp's slowest kernels at the largest batch, in GPU ms
+per step, from steps launched one by one under Warp's kernel timing.
 """
 
 from __future__ import annotations
@@ -55,14 +57,18 @@ def cuda_present() -> str | None:
         return None
     try:
         wp, _ = sim_gpu.import_warp()
-        return f"{wp.get_cuda_device_count()} CUDA device(s): {wp.get_device('cuda:0').name}" \
-            if wp.get_cuda_device_count() else None
+        return (
+            f"{wp.get_cuda_device_count()} CUDA device(s): {wp.get_device('cuda:0').name}"
+            if wp.get_cuda_device_count()
+            else None
+        )
     except ImportError:
         return "nvidia-smi found (install the .[gpu] extra to use it)"
 
 
 def batch_row(make, model, ctrl, nworld: int, steps: int, rand: sim_gpu.Randomisation) -> str:
-    """Build a batch of ``nworld`` randomised worlds, time ``steps`` steps after a warm-up step, check world 0."""
+    """Build a batch of ``nworld`` randomised worlds, time ``steps`` steps after a warm-up step,
+    check world 0."""
     fields = sim_gpu.randomised_fields(model, nworld, rand)
     start = time.perf_counter()
     batch = make(fields)
@@ -74,9 +80,13 @@ def batch_row(make, model, ctrl, nworld: int, steps: int, rand: sim_gpu.Randomis
     rate = nworld * steps / wall
     diff = sim_gpu.world_difference(batch, model, ctrl, fields, steps + 1, world=0)
     problems = batch.check()
-    return (f"  {batch.engine:5s} batch {nworld:5d}: {rate:12,.0f} steps/s = {rate * model.opt.timestep:10.3g} "
-            f"simulated s/s (first step incl. compile {first:6.1f} s); world 0 vs CPU MuJoCo max|dqpos| "
-            f"{diff:.1e}" + (f"  PROBLEMS: {problems}" if problems else ""))
+    return (
+        f"  {batch.engine:5s} batch {nworld:5d}: {rate:12,.0f} steps/s = "
+        f"{rate * model.opt.timestep:10.3g} "
+        f"simulated s/s (first step incl. compile {first:6.1f} s); world 0 vs CPU MuJoCo "
+        "max|dqpos| "
+        f"{diff:.1e}" + (f"  PROBLEMS: {problems}" if problems else "")
+    )
 
 
 def main(argv=None) -> int:
@@ -85,13 +95,29 @@ def main(argv=None) -> int:
     ap.add_argument("--scene", help="MJCF inside the export (default: the manifest's robot.mjcf)")
     ap.add_argument("--steps", type=int, default=100, help="timed steps per batch")
     ap.add_argument("--cpu-seconds", type=float, default=3.0)
-    ap.add_argument("--pressure-fraction", type=float, default=0.6, help="held pressure, fraction of the range's top")
-    ap.add_argument("--cpu-batches", default="1,4", help="batch sizes on the CPU backends when there is no GPU")
-    ap.add_argument("--gpu-batches", default=",".join(map(str, GPU_BATCHES)), help="batch sizes on a CUDA GPU")
-    ap.add_argument("--profile", action="store_true",
-                    help="on a CUDA GPU, end with MuJoCo Warp's slowest kernels at the largest batch")
+    ap.add_argument(
+        "--pressure-fraction",
+        type=float,
+        default=0.6,
+        help="held pressure, fraction of the range's top",
+    )
+    ap.add_argument(
+        "--cpu-batches", default="1,4", help="batch sizes on the CPU backends when there is no GPU"
+    )
+    ap.add_argument(
+        "--gpu-batches", default=",".join(map(str, GPU_BATCHES)), help="batch sizes on a CUDA GPU"
+    )
+    ap.add_argument(
+        "--profile",
+        action="store_true",
+        help="on a CUDA GPU, end with MuJoCo Warp's slowest kernels at the largest batch",
+    )
     ap.add_argument("--profile-rows", type=int, default=15, help="kernels --profile lists")
-    ap.add_argument("--no-mjx", action="store_true", help="skip MJX (its CPU compile of the tail takes 25-40 s per batch size)")
+    ap.add_argument(
+        "--no-mjx",
+        action="store_true",
+        help="skip MJX (its CPU compile of the tail takes 25-40 s per batch size)",
+    )
     args = ap.parse_args(argv)
     try:
         gpu_batches, cpu_batches = _sizes(args.gpu_batches), _sizes(args.cpu_batches)
@@ -104,18 +130,25 @@ def main(argv=None) -> int:
     model = mujoco.MjModel.from_xml_path(str(path))
     ctrl = args.pressure_fraction * model.actuator_ctrlrange[:, 1]
     dt = model.opt.timestep
-    print(f"{path}: nq {model.nq}, nv {model.nv}, nu {model.nu}, neq {model.neq}, time step {dt * 1e3:g} ms, "
-          f"held pressure {args.pressure_fraction:.0%} of {model.actuator_ctrlrange[0, 1]:g} Pa")
+    print(
+        f"{path}: nq {model.nq}, nv {model.nv}, nu {model.nu}, neq {model.neq}, time step "
+        f"{dt * 1e3:g} ms, "
+        f"held pressure {args.pressure_fraction:.0%} of {model.actuator_ctrlrange[0, 1]:g} Pa"
+    )
 
     rate, warned = cpu_rate(model, ctrl, args.cpu_seconds)
-    print(f"CPU MuJoCo {mujoco.__version__}, one core: {rate:,.0f} steps/s, real-time factor {rate * dt:.2f}"
-          + (f"  WARNINGS: {warned}" if warned else ""))
+    print(
+        f"CPU MuJoCo {mujoco.__version__}, one core: {rate:,.0f} steps/s, real-time factor "
+        f"{rate * dt:.2f}" + (f"  WARNINGS: {warned}" if warned else "")
+    )
 
     buffers = sim_gpu.constraint_buffers(model)
     rand = sim_gpu.Randomisation()
     print(f"constraint buffers from the model: {buffers.line()}")
-    print(f"per world: hinge stiffness x U{rand.stiffness_scale}, damping x U{rand.damping_scale}, "
-          f"tip payload U{rand.payload_kg} kg")
+    print(
+        f"per world: hinge stiffness x U{rand.stiffness_scale}, damping x U{rand.damping_scale}, "
+        f"tip payload U{rand.payload_kg} kg"
+    )
 
     gpu = cuda_present()
     if gpu:
@@ -123,8 +156,10 @@ def main(argv=None) -> int:
         batches, device = gpu_batches, "cuda:0"
     else:
         batches, device = cpu_batches, "cpu"
-        print(f"no CUDA GPU here: tiny batches {batches} on the CPU backends prove the code path "
-              "(their rates are not GPU figures)")
+        print(
+            f"no CUDA GPU here: tiny batches {batches} on the CPU backends prove the code path "
+            "(their rates are not GPU figures)"
+        )
 
     engines = []
 
@@ -140,7 +175,10 @@ def main(argv=None) -> int:
         try:
             jax, _ = sim_gpu.import_mjx()
             if gpu and not any(d.platform == "gpu" for d in jax.devices()):
-                print("MJX: JAX sees no GPU (pip install 'jax[cuda12]==0.10.2'); MJX runs on JAX's CPU backend")
+                print(
+                    "MJX: JAX sees no GPU (pip install 'jax[cuda12]==0.10.2'); MJX runs on JAX's "
+                    "CPU backend"
+                )
             engines.append(lambda f: sim_gpu.mjx_batch(model, ctrl, f))
         except ImportError as exc:
             print(f"MJX skipped: {exc}")
@@ -171,10 +209,16 @@ def profile_lines(model, ctrl, nworld: int, buffers, rand, rows: int) -> str:
     fields = sim_gpu.randomised_fields(model, nworld, rand)
     times = sim_gpu.warp_kernel_profile(model, ctrl, fields, buffers)
     total = sum(k.ms_per_step for k in times)
-    lines = [f"MuJoCo Warp kernels at batch {nworld}: {sum(k.launches_per_step for k in times):.0f} launches "
-             f"and {total:.3f} ms of GPU time per step (launched one by one); the slowest {rows}:"]
-    lines += [f"  {k.ms_per_step:8.4f} ms {k.ms_per_step / total:6.1%}  x{k.launches_per_step:<3g} {k.name}"
-              for k in times[:rows]]
+    lines = [
+        f"MuJoCo Warp kernels at batch {nworld}: {sum(k.launches_per_step for k in times):.0f} "
+        "launches "
+        f"and {total:.3f} ms of GPU time per step (launched one by one); the slowest {rows}:"
+    ]
+    lines += [
+        f"  {k.ms_per_step:8.4f} ms {k.ms_per_step / total:6.1%}  x{k.launches_per_step:<3g} "
+        f"{k.name}"
+        for k in times[:rows]
+    ]
     return "\n".join(lines)
 
 

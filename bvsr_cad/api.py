@@ -50,7 +50,7 @@ if TYPE_CHECKING:  # CadQuery is needed only by Tail.cadquery_assembly
 SLICES_PER_GAP = 8
 
 
-def load(path: str | Path) -> "Tail":
+def load(path: str | Path) -> Tail:
     """Read and validate a tail parameter file (TOML).
 
     Args:
@@ -92,7 +92,9 @@ class Tail:
                 (:func:`bvsr_cad.assembly.build.build_assembly`); None: built on first use.
         """
         if assembly is not None and assembly.spec != spec:
-            raise ValueError("assembly: built from another spec; allowed: None or build_assembly(spec)")
+            raise ValueError(
+                "assembly: built from another spec; allowed: None or build_assembly(spec)"
+            )
         self._spec = spec
         if assembly is not None:
             self.__dict__["_assembly"] = assembly  # the cached_property's slot
@@ -160,9 +162,14 @@ class Tail:
         """
         return labelled_compound(placed_instances(self._assembly), self.name)
 
-    def posed(self, theta_deg: float | Sequence[float], phi_deg: float | Sequence[float] = 0.0,
-              slices_per_gap: int = SLICES_PER_GAP) -> bd.Compound:
-        """The tail bent by constant-curvature joints, as the same labelled compound as :meth:`assembly`.
+    def posed(
+        self,
+        theta_deg: float | Sequence[float],
+        phi_deg: float | Sequence[float] = 0.0,
+        slices_per_gap: int = SLICES_PER_GAP,
+    ) -> bd.Compound:
+        """The tail bent by constant-curvature joints, as the same labelled compound as
+        :meth:`assembly`.
 
         The plane-section deformation of :mod:`bvsr_cad.analysis.clearance`
         places every piece: a panel, and the parts of an SOA or the rod inside
@@ -194,7 +201,7 @@ class Tail:
         """
         return labelled_compound(self._posed_placed(theta_deg, phi_deg, slices_per_gap), self.name)
 
-    def cadquery_assembly(self, posed: bd.Compound | None = None) -> "cq.Assembly":
+    def cadquery_assembly(self, posed: bd.Compound | None = None) -> cq.Assembly:
         """The same instances as a ``cadquery.Assembly`` (CadQuery 2.8 shares OCP with build123d).
 
         Every child keeps its name, its colour (``cq.Color``) and its placement
@@ -208,7 +215,8 @@ class Tail:
             A ``cadquery.Assembly`` named after the tail, one child per instance.
 
         Raises:
-            ExtraMissing: CadQuery is not installed (it is optional: ``pip install 'bvsr_cad[cad]'``).
+            ExtraMissing: CadQuery is not installed (it is optional: ``pip install
+                'bvsr_cad[cad]'``).
 
         Example::
 
@@ -223,8 +231,12 @@ class Tail:
         assy = cq.Assembly(name=compound.label or self.name)
         for child in compound.children:
             at = child.wrapped.Location()
-            assy.add(cq.Shape.cast(child.wrapped.Located(TopLoc_Location())), name=child.label,
-                     color=cq.Color(*tuple(child.color)), loc=cq.Location(at))
+            assy.add(
+                cq.Shape.cast(child.wrapped.Located(TopLoc_Location())),
+                name=child.label,
+                color=cq.Color(*tuple(child.color)),
+                loc=cq.Location(at),
+            )
         return assy
 
     def write_step(self, path: str | Path, posed: bd.Compound | None = None) -> Path:
@@ -267,8 +279,8 @@ class Tail:
             The instance names sent.
 
         Raises:
-            ViewerUnavailable: ``ocp_vscode`` is not installed (``pip install 'bvsr_cad[viewer]'``) or no
-                viewer listens on the port; the message says how to start one.
+            ViewerUnavailable: ``ocp_vscode`` is not installed (``pip install 'bvsr_cad[viewer]'``)
+                or no viewer listens on the port; the message says how to start one.
 
         Example::
 
@@ -292,7 +304,9 @@ class Tail:
         w = uv_from_theta_phi(theta_rad, phi_rad)
         section = self._plane_sections
         hj, t = spec.joint.joint_height_mm, spec.joint.panel_thickness_mm
-        cuts = np.concatenate([np.linspace(k * hj + t, (k + 1) * hj, slices_per_gap + 1) for k in range(n)])
+        cuts = np.concatenate(
+            [np.linspace(k * hj + t, (k + 1) * hj, slices_per_gap + 1) for k in range(n)]
+        )
         cache: dict[tuple, list[tuple[bd.Solid, float]]] = {}
         out = []
         for inst in asm.instances:
@@ -300,12 +314,19 @@ class Tail:
             T = np.asarray(inst.transform, float)
             if part.kind == "panel":
                 z_mid = inst.panel * hj + t / 2
-                out.append(PlacedShape(inst.name, part.kind, part.solid,
-                                       _rows(_section_frame(section, w, z_mid) @ T)))
+                out.append(
+                    PlacedShape(
+                        inst.name,
+                        part.kind,
+                        part.solid,
+                        _rows(_section_frame(section, w, z_mid) @ T),
+                    )
+                )
                 continue
             pieces = []
             for piece, z in _slices(part.name, part.solid, T, cuts, cache):
-                # z: the tail-frame height of a point inside the piece; its slab's mid-height places it.
+                # z: the tail-frame height of a point inside the piece; its slab's mid-height places
+                # it.
                 i = np.searchsorted(cuts, z)
                 lo = cuts[i - 1] if i > 0 else z
                 hi = cuts[i] if i < len(cuts) else z
@@ -322,7 +343,9 @@ def _per_joint(field: str, value_deg, n_joints: int) -> np.ndarray:
     if arr.ndim == 0:
         arr = np.full(n_joints, float(arr))
     if arr.shape != (n_joints,) or not np.all(np.isfinite(arr)):
-        raise ValueError(f"{field}: {value_deg!r}; allowed: one finite number or {n_joints} (one per joint)")
+        raise ValueError(
+            f"{field}: {value_deg!r}; allowed: one finite number or {n_joints} (one per joint)"
+        )
     return np.array([units.deg_to_rad(v) for v in arr])
 
 
@@ -337,8 +360,9 @@ def _section_frame(section: PosedTail, w: np.ndarray, z_mm: float) -> np.ndarray
     return m @ shift
 
 
-def _slices(part_name: str, solid: bd.Solid, T: np.ndarray, cuts_mm: np.ndarray,
-            cache: dict) -> list[tuple[bd.Solid, float]]:
+def _slices(
+    part_name: str, solid: bd.Solid, T: np.ndarray, cuts_mm: np.ndarray, cache: dict
+) -> list[tuple[bd.Solid, float]]:
     """The part cut by the tail-frame planes z = cuts that cross it (once per distinct set of planes
     in the part frame), each piece with the tail-frame height of its centre."""
     normal = T[2, :3]  # z_tail = normal . x + T[2, 3] for x in the part frame
@@ -356,7 +380,9 @@ def _z_extent(solid: bd.Solid, T: np.ndarray) -> tuple[float, float]:
     return bb.min.Z, bb.max.Z
 
 
-def _split(solid: bd.Solid, normal: np.ndarray, offsets: np.ndarray) -> list[tuple[bd.Solid, np.ndarray]]:
+def _split(
+    solid: bd.Solid, normal: np.ndarray, offsets: np.ndarray
+) -> list[tuple[bd.Solid, np.ndarray]]:
     """The solid cut by the planes normal . x = offset, pieces with their centres (part frame)."""
     if len(offsets) == 0:
         return [(solid, np.array(tuple(solid.center())))]

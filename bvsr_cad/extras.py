@@ -1,16 +1,18 @@
-"""The optional parts of the package (``pyproject.toml``'s extras) and the one way code asks for one.
+"""The optional parts of the package (``pyproject.toml``'s extras) and the one way code asks for
+one.
 
 The core installs what ``bvsr build``, ``check``, ``workspace``, ``clearance``, ``simulate`` and
-``calibrate`` need. A command that needs an extra that is not installed stops with exit code 2 and the
-``pip install`` line (:class:`ExtraMissing`, :func:`require`); a check that needs one is reported as
-skipped (:func:`missing`).
+``calibrate`` need. A command that needs an extra that is not installed stops with exit code 2 and
+the ``pip install`` line (:class:`ExtraMissing`, :func:`require`); a check that needs one is
+reported as skipped (:func:`missing`).
 """
 
 from __future__ import annotations
 
 import importlib.util
 
-#: The modules each extra installs that this package imports (their distributions: ``pyproject.toml``).
+#: The modules each extra installs that this package imports (their distributions:
+#: ``pyproject.toml``).
 MODULES = {
     "studies": ("dask", "distributed", "optuna", "pandas", "pyarrow"),
     "crosscheck": ("pybullet", "yourdfpy"),
@@ -28,8 +30,10 @@ class ExtraMissing(ImportError):
 
     def __init__(self, extra: str, what: str, modules: list[str]):
         self.extra, self.what, self.modules = extra, what, modules
-        super().__init__(f"{what} needs the '{extra}' extra ({', '.join(modules)} not installed): "
-                         f"{install_line(extra)}")
+        super().__init__(
+            f"{what} needs the '{extra}' extra ({', '.join(modules)} not installed): "
+            f"{install_line(extra)}"
+        )
 
 
 def _importable(module: str) -> bool:
@@ -45,8 +49,8 @@ def missing(extra: str) -> list[str]:
 
 
 def require(extra: str, what: str) -> None:
-    """Raise :class:`ExtraMissing` unless every module of ``extra`` can be imported; ``what`` names the
-    command or function that needs it (``"bvsr sweep"``)."""
+    """Raise :class:`ExtraMissing` unless every module of ``extra`` can be imported; ``what`` names
+    the command or function that needs it (``"bvsr sweep"``)."""
     gone = missing(extra)
     if gone:
         raise ExtraMissing(extra, what, gone)

@@ -70,4 +70,4 @@ def mm2_to_m2(value_mm2: float) -> float:
 
 
 def mm3_to_m3(value_mm3: float) -> float:
-    return value_mm3 / MM_PER_M ** 3
+    return value_mm3 / MM_PER_M**3

@@ -12,10 +12,12 @@ ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / "params"
 
 # Hypothesis profiles (tests/test_feasibility.py's search for the frontier): "ci", loaded unless
-# --hypothesis-profile names another, draws a fixed sequence of a bounded number of examples (about 30 CPU s
-# on 2 cores); "long", by hand, a fresh random search twelve times as long (a case it finds goes into
-# test_feasibility.FOUND as an @example, not into a database).
-settings.register_profile("ci", max_examples=100, derandomize=True, database=None, deadline=None, print_blob=True)
+# --hypothesis-profile names another, draws a fixed sequence of a bounded number of examples (about
+# 30 CPU s on 2 cores); "long", by hand, a fresh random search twelve times as long (a case it finds
+# goes into test_feasibility.FOUND as an @example, not into a database).
+settings.register_profile(
+    "ci", max_examples=100, derandomize=True, database=None, deadline=None, print_blob=True
+)
 settings.register_profile("long", max_examples=1200, database=None, deadline=None, print_blob=True)
 settings.load_profile("ci")
 
@@ -29,8 +31,9 @@ def pytest_configure(config):
     if "BVSR_TEST_KEEP_CACHE" in os.environ:
         return
     if hasattr(config, "workerinput"):
-        # A pytest-xdist worker: it was started with the cache its controller made (the environment is
-        # inherited), which the workers share as two concurrent builds share one; the controller removes it.
+        # A pytest-xdist worker: it was started with the cache its controller made (the environment
+        # is inherited), which the workers share as two concurrent builds share one; the controller
+        # removes it.
         return
     config._bvsr_test_cache = tempfile.mkdtemp(prefix="bvsr-test-cache-")
     os.environ["BVSR_CACHE"] = config._bvsr_test_cache
@@ -46,8 +49,9 @@ def pytest_unconfigure(config):
 
 
 def pytest_collection_modifyitems(config, items):
-    """A test that needs the full default build (``bvsr_export``, about 30 s or more) is slow by definition:
-    ``pytest -m "not slow"`` stays a fast suite of in-memory tests (tools/mutate.py runs it per fault)."""
+    """A test that needs the full default build (``bvsr_export``, about 30 s or more) is slow by
+    definition: ``pytest -m "not slow"`` stays a fast suite of in-memory tests (tools/mutate.py runs
+    it per fault)."""
     for item in items:
         if "bvsr_export" in getattr(item, "fixturenames", ()):
             item.add_marker(pytest.mark.slow)
@@ -75,8 +79,9 @@ def bvsr_spec():
 def bvsr_export(tmp_path_factory, request) -> Path:
     """One full default build shared by the export tests (read-only to them).
 
-    Under pytest-xdist (``make test`` runs ``-n auto``) the workers share it too: the first to need it builds
-    it under a lock in the session's common temporary folder, the others wait for that build and read it."""
+    Under pytest-xdist (``make test`` runs ``-n auto``) the workers share it too: the first to need
+    it builds it under a lock in the session's common temporary folder, the others wait for that
+    build and read it."""
     import fcntl
 
     from bvsr_cad.build.pipeline import build_export
@@ -90,15 +95,17 @@ def bvsr_export(tmp_path_factory, request) -> Path:
     out = shared / "bvsr"
     with open(shared / ".lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes, even if the build fails
-        if not (shared / ".built").exists():  # a worker's failed build leaves no mark: the next one tries again
+        if not (
+            shared / ".built"
+        ).exists():  # a worker's failed build leaves no mark: the next one tries again
             build_export(PARAMS / "bvsr.toml", out)
             (shared / ".built").touch()
     return out
 
 
 def script(folder: str, name: str):
-    """``<folder>/<name>.py`` of the repository loaded as a module (benchmarks and tools are scripts, not
-    a package)."""
+    """``<folder>/<name>.py`` of the repository loaded as a module (benchmarks and tools are
+    scripts, not a package)."""
     spec = importlib.util.spec_from_file_location(f"{folder}_{name}", ROOT / folder / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)

@@ -19,7 +19,8 @@ from bvsr_cad.build.cache import ArtifactCache, spec_without, stage_key
 
 from .conftest import PARAMS, benchmark_script, script, write_toml
 
-#: Two exports compared file for file, the manifest's volatile section aside (also tools/wheel_check.sh's).
+#: Two exports compared file for file, the manifest's volatile section aside (also
+#: tools/wheel_check.sh's).
 differences = script("tools", "compare_exports").differences
 
 
@@ -33,7 +34,10 @@ def test_put_get_and_concurrent_puts_of_one_key(tmp_path):
         (folder / "f.txt").write_text(text)
         time.sleep(0.05)
 
-    threads = [threading.Thread(target=cache.put, args=("ab" * 32, lambda d, t=t: fill(d, t))) for t in "xy"]
+    threads = [
+        threading.Thread(target=cache.put, args=("ab" * 32, lambda d, t=t: fill(d, t)))
+        for t in "xy"
+    ]
     for th in threads:
         th.start()
     for th in threads:
@@ -67,8 +71,9 @@ def test_least_recently_used_entries_go_first(tmp_path):
 
 
 def test_keys_follow_exactly_the_declared_inputs(bvsr_spec):
-    """The pipeline's declarations: the rod's material moves no solid (the part files' key stays), its
-    diameter and the tail's name (the assembly STEP's product) do; the analyses read the material."""
+    """The pipeline's declarations: the rod's material moves no solid (the part files' key stays),
+    its diameter and the tail's name (the assembly STEP's product) do; the analyses read the
+    material."""
     import dataclasses
 
     from bvsr_cad.build.pipeline import ANALYSES_IGNORE, PART_FILES_IGNORE
@@ -76,8 +81,12 @@ def test_keys_follow_exactly_the_declared_inputs(bvsr_spec):
     def key(stage, spec, ignore):
         return stage_key(stage, spec=spec_without(spec, *ignore))
 
-    pvc = dataclasses.replace(bvsr_spec, vertebra=dataclasses.replace(bvsr_spec.vertebra, material="PVC"))
-    thin = dataclasses.replace(bvsr_spec, vertebra=dataclasses.replace(bvsr_spec.vertebra, diameter_mm=5.0))
+    pvc = dataclasses.replace(
+        bvsr_spec, vertebra=dataclasses.replace(bvsr_spec.vertebra, material="PVC")
+    )
+    thin = dataclasses.replace(
+        bvsr_spec, vertebra=dataclasses.replace(bvsr_spec.vertebra, diameter_mm=5.0)
+    )
     renamed = dataclasses.replace(bvsr_spec, name="other")
     base = key("part_files", bvsr_spec, PART_FILES_IGNORE)
     assert key("part_files", pvc, PART_FILES_IGNORE) == base
@@ -91,22 +100,38 @@ def test_keys_follow_exactly_the_declared_inputs(bvsr_spec):
     assert key("analysis_geometry", pvc, GEO) == key("analysis_geometry", bvsr_spec, GEO)
     assert key("analysis_geometry", renamed, GEO) == key("analysis_geometry", bvsr_spec, GEO)
     assert key("analysis_geometry", thin, GEO) != key("analysis_geometry", bvsr_spec, GEO)
-    # The robot's meshes and collision fits: the solids and which collision shapes, not the material,
-    # the name or the robot table's other values.
+    # The robot's meshes and collision fits: the solids and which collision shapes, not the
+    # material, the name or the robot table's other values.
     from bvsr_cad.build.pipeline import robot_geometry_key
 
     robot = robot_geometry_key(bvsr_spec)
     assert robot_geometry_key(pvc) == robot_geometry_key(renamed) == robot
-    assert robot_geometry_key(dataclasses.replace(bvsr_spec, robot=dataclasses.replace(
-        bvsr_spec.robot, velocity_margin=2 * bvsr_spec.robot.velocity_margin))) == robot
+    assert (
+        robot_geometry_key(
+            dataclasses.replace(
+                bvsr_spec,
+                robot=dataclasses.replace(
+                    bvsr_spec.robot, velocity_margin=2 * bvsr_spec.robot.velocity_margin
+                ),
+            )
+        )
+        == robot
+    )
     assert robot_geometry_key(thin) != robot
-    assert robot_geometry_key(dataclasses.replace(bvsr_spec, robot=dataclasses.replace(
-        bvsr_spec.robot, collision_geometry="convex"))) != robot
+    assert (
+        robot_geometry_key(
+            dataclasses.replace(
+                bvsr_spec, robot=dataclasses.replace(bvsr_spec.robot, collision_geometry="convex")
+            )
+        )
+        != robot
+    )
 
 
 def test_keys_follow_the_libraries_the_results_are_computed_with(monkeypatch):
-    """Every runtime dependency of pyproject.toml (and the OCP builds under build123d and CadQuery) is in
-    the code's fingerprint: another installed MuJoCo, or OCP, gives every stage another key."""
+    """Every runtime dependency of pyproject.toml (and the OCP builds under build123d and CadQuery)
+    is in the code's fingerprint: another installed MuJoCo, or OCP, gives every stage another
+    key."""
     import re
     import tomllib
     from importlib import metadata
@@ -114,15 +139,22 @@ def test_keys_follow_the_libraries_the_results_are_computed_with(monkeypatch):
     from bvsr_cad.build import cache
 
     project = tomllib.loads((PARAMS.parent / "pyproject.toml").read_text())["project"]
-    computing = project["dependencies"] + [r for extra in ("studies", "crosscheck")  # a study's table, a check
-                                           for r in project["optional-dependencies"][extra]]
+    computing = project["dependencies"] + [
+        r
+        for extra in ("studies", "crosscheck")  # a study's table, a check
+        for r in project["optional-dependencies"][extra]
+    ]
     declared = {re.split(r"[ ;=<>!~\[]", r, maxsplit=1)[0].lower() for r in computing}
-    assert declared | {"cadquery", "cadquery-ocp", "cadquery-ocp-novtk"} == set(cache.RESULT_DISTRIBUTIONS)
+    assert declared | {"cadquery", "cadquery-ocp", "cadquery-ocp-novtk"} == set(
+        cache.RESULT_DISTRIBUTIONS
+    )
     base = stage_key("analyses", x=1)
     real = metadata.version
     try:
         for name in ("mujoco", "cadquery-ocp-novtk"):
-            monkeypatch.setattr(metadata, "version", lambda n, name=name: "0.0.1" if n == name else real(n))
+            monkeypatch.setattr(
+                metadata, "version", lambda n, name=name: "0.0.1" if n == name else real(n)
+            )
             cache.code_fingerprint.cache_clear()
             assert stage_key("analyses", x=1) != base, name
         monkeypatch.setattr(metadata, "version", real)
@@ -134,10 +166,10 @@ def test_keys_follow_the_libraries_the_results_are_computed_with(monkeypatch):
 
 
 def test_check_verdicts_follow_the_bytes_of_the_files_they_read(tmp_path):
-    """A group's verdicts are reused while its files' bytes and manifest values are unchanged (a file
-    rewritten with the same bytes too), and computed again when either changes."""
-    from bvsr_cad.checks.export import Export
+    """A group's verdicts are reused while its files' bytes and manifest values are unchanged (a
+    file rewritten with the same bytes too), and computed again when either changes."""
     from bvsr_cad.build.stages import verdict_store
+    from bvsr_cad.checks.export import Export
     from bvsr_cad.checks.memo import CheckMemo
     from bvsr_cad.checks.result import CheckResult
 
@@ -148,8 +180,11 @@ def test_check_verdicts_follow_the_bytes_of_the_files_they_read(tmp_path):
 
     def verdicts(value):
         memo = CheckMemo(Export.open(tmp_path), verdict_store(cache))
-        return memo("g", (["a.stl"], {"limit": value}),
-                    lambda: runs.append(1) or [CheckResult("c", True, (1, 2), value, "mm", "a.stl")])
+        return memo(
+            "g",
+            (["a.stl"], {"limit": value}),
+            lambda: runs.append(1) or [CheckResult("c", True, (1, 2), value, "mm", "a.stl")],
+        )
 
     first = verdicts(1.0)
     (tmp_path / "a.stl").write_bytes(b"solid a")  # rewritten, same bytes
@@ -165,7 +200,9 @@ def test_two_exports_differ_by_their_files_not_by_the_manifests_volatile_section
     for root, when in ((a, "10:00"), (b, "11:00")):
         (root / "stl").mkdir(parents=True)
         (root / "stl" / "soa.stl").write_bytes(b"solid soa")
-        (root / "manifest.json").write_text(json.dumps({"name": "t", "volatile": {"built_at": when}}))
+        (root / "manifest.json").write_text(
+            json.dumps({"name": "t", "volatile": {"built_at": when}})
+        )
     assert differences(a, b) == []
     (b / "stl" / "soa.stl").write_bytes(b"solid SOA")
     (b / "stl" / "rod.stl").write_bytes(b"solid rod")
@@ -174,9 +211,10 @@ def test_two_exports_differ_by_their_files_not_by_the_manifests_volatile_section
 
 @pytest.mark.slow
 def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(bvsr_export, tmp_path, data):
-    """bvsr_export (the test run's first build) filled the test run's cache. The same file again is one
-    reused stage; a rod-material edit built by two builds at once through the shared cache equals,
-    file for file, the same edit built with --no-cache (the manifest's volatile section aside)."""
+    """bvsr_export (the test run's first build) filled the test run's cache. The same file again is
+    one reused stage; a rod-material edit built by two builds at once through the shared cache
+    equals, file for file, the same edit built with --no-cache (the manifest's volatile section
+    aside)."""
     from bvsr_cad.build.pipeline import build_export
 
     noop = build_export(PARAMS / "bvsr.toml", tmp_path / "noop")
@@ -188,54 +226,80 @@ def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(bvsr_expo
     bvsr = Path(sys.executable).with_name("bvsr")
     cmd = [str(bvsr)] if bvsr.exists() else [sys.executable, "-m", "bvsr_cad.cli"]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    runs = [subprocess.Popen([*cmd, "build", str(edit), "-o", str(tmp_path / f"cached{i}"), "--json", "-q"],
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for i in (1, 2)]
+    runs = [
+        subprocess.Popen(
+            [*cmd, "build", str(edit), "-o", str(tmp_path / f"cached{i}"), "--json", "-q"],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for i in (1, 2)
+    ]
     outs = [r.communicate(timeout=1200) for r in runs]
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     assert [r.returncode for r in runs] == [0, 0], [o[1][-2000:] for o in outs]
     summaries = [json.loads(o[0]) for o in outs]
     stages = {s["stage"]: s["status"] for s in summaries[0]["stages"]}
-    # The rod's material moves no solid: nothing is meshed or fitted again, no rest distance measured again.
-    assert stages["part files"] == stages["previews"] == stages["robot meshes, collision fits"] == "reused"
+    # The rod's material moves no solid: nothing is meshed or fitted again, no rest distance
+    # measured again.
+    assert (
+        stages["part files"]
+        == stages["previews"]
+        == stages["robot meshes, collision fits"]
+        == "reused"
+    )
     assert stages["analysis geometry (joint limits, clearance map)"] == "reused"
     # The CPU seconds each build reports by process (its own since it opened, each second process's
     # own) against the kernel's count of the two commands and everything they started: all of it but
-    # their interpreters' start, imports and parameter loading, the tools the checks run, and a standby
-    # analyses' process closed unused where a build took the analyses from the other's cache entry
-    # (measured: 43.8 of 46.6 s, both building them; without its analyses' process a build would
-    # report about half of it).
+    # their interpreters' start, imports and parameter loading, the tools the checks run, and a
+    # standby analyses' process closed unused where a build took the analyses from the other's cache
+    # entry (measured: 43.8 of 46.6 s, both building them; without its analyses' process a build
+    # would report about half of it).
     for summary in summaries:
         cpu = summary["cpu_seconds"]
         built = {s["stage"] for s in summary["stages"] if s["status"] == "built"}
         expected = {"build"} | ({"analyses", "checks"} if (os.cpu_count() or 1) > 1 else set())
-        assert set(cpu) == (expected if "analyses" in built else expected - {"analyses"}), (cpu, built)
+        assert set(cpu) == (expected if "analyses" in built else expected - {"analyses"}), (
+            cpu,
+            built,
+        )
         assert all(v > 0 for v in cpu.values()), cpu
     reported = sum(v for summary in summaries for v in summary["cpu_seconds"].values())
     counted = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
-    assert 0.8 * counted <= reported <= counted + 0.05, (reported, counted)  # rounded to 0.01 s each
+    assert 0.8 * counted <= reported <= counted + 0.05, (
+        reported,
+        counted,
+    )  # rounded to 0.01 s each
     assert main_no_cache(edit, tmp_path / "fresh") == 0
     for i in (1, 2):
         assert differences(tmp_path / f"cached{i}", tmp_path / "fresh") == []
 
 
-#: The CI-sized tail of :func:`test_every_benchmark_edit_built_from_the_cache_equals_a_fresh_build`: the
-#: default file with one segment (its segment-count edit then goes to three) and the schema's smallest
-#: workspace protocol and samples; the stages, their keys and their code are the default tail's. Measured:
-#: a build of it from scratch 17.6 s (29 CPU s) against 25.0 s (41) with two segments.
-SMALL_TAIL = (("", "segments", "1"), ("analysis", "workspace_protocol_cycles", "10"),
-              ("analysis", "build_workspace_samples", "100"), ("analysis", "build_clearance_poses", "100"))
+#: The CI-sized tail of :func:`test_every_benchmark_edit_built_from_the_cache_equals_a_fresh_build`:
+#: the default file with one segment (its segment-count edit then goes to three) and the schema's
+#: smallest workspace protocol and samples; the stages, their keys and their code are the default
+#: tail's. Measured: a build of it from scratch 17.6 s (29 CPU s) against 25.0 s (41) with two
+#: segments.
+SMALL_TAIL = (
+    ("", "segments", "1"),
+    ("analysis", "workspace_protocol_cycles", "10"),
+    ("analysis", "build_workspace_samples", "100"),
+    ("analysis", "build_clearance_poses", "100"),
+)
 
 
 @pytest.mark.slow
 def test_every_benchmark_edit_built_from_the_cache_equals_a_fresh_build(tmp_path, monkeypatch):
-    """Each one-parameter edit of the rebuild benchmark (rod material and diameter, pocket clearance, taper,
-    segment count, casting shrinkage, printer volume, effective area), built through a cache that holds
-    the unedited file's build, equals the same file built with the cache off, file for file (the
-    manifest's volatile section aside); each reuses at least one stage and rebuilds at least one. A
-    CI-sized tail (:data:`SMALL_TAIL`) in a cache of its own."""
+    """Each one-parameter edit of the rebuild benchmark (rod material and diameter, pocket
+    clearance, taper, segment count, casting shrinkage, printer volume, effective area), built
+    through a cache that holds the unedited file's build, equals the same file built with the cache
+    off, file for file (the manifest's volatile section aside); each reuses at least one stage and
+    rebuilds at least one. A CI-sized tail (:data:`SMALL_TAIL`) in a cache of its own."""
     from bvsr_cad.build.pipeline import build_export
 
-    bench = benchmark_script("rebuild_bench")  # its edits and its editor of parameter text: one source
+    bench = benchmark_script(
+        "rebuild_bench"
+    )  # its edits and its editor of parameter text: one source
     monkeypatch.setenv("BVSR_CACHE", str(tmp_path / "cache"))
     (tmp_path / "params").mkdir()
     (tmp_path / "data").mkdir()
@@ -260,7 +324,8 @@ def test_every_benchmark_edit_built_from_the_cache_equals_a_fresh_build(tmp_path
 
 def _edit_beside_its_data(tmp_path: Path, data: dict) -> Path:
     """``data`` written as ``tmp_path/params/bvsr.toml``, with the calibration's data file where its
-    relative path leads (so that the edit's analyses compare the same rows as the default file's)."""
+    relative path leads (so that the edit's analyses compare the same rows as the default
+    file's)."""
     (tmp_path / "params").mkdir()
     (tmp_path / "data").mkdir()
     data_file = (PARAMS / data["calibration"]["data_file"]).resolve()
@@ -273,12 +338,13 @@ class _StageReached(Exception):
 
 
 @pytest.mark.slow
-def test_a_build_whose_analyses_are_cached_stops_its_standby_before_its_stages(bvsr_export, tmp_path, data,
-                                                                                monkeypatch):
-    """bvsr_export filled the session's cache. A printer-volume edit reads the same analyses: the build takes
-    them from the cache and stops its standby analyses' process before the assembly, so that its imports
-    and head start do not take a core from the build's stages. Without the cache it is given the
-    analyses, and runs beside them."""
+def test_a_build_whose_analyses_are_cached_stops_its_standby_before_its_stages(
+    bvsr_export, tmp_path, data, monkeypatch
+):
+    """bvsr_export filled the session's cache. A printer-volume edit reads the same analyses: the
+    build takes them from the cache and stops its standby analyses' process before the assembly, so
+    that its imports and head start do not take a core from the build's stages. Without the cache it
+    is given the analyses, and runs beside them."""
     from bvsr_cad.build import pipeline
     from bvsr_cad.build._runtime import worker
 
@@ -292,7 +358,9 @@ def test_a_build_whose_analyses_are_cached_stops_its_standby_before_its_stages(b
 
     monkeypatch.setattr(pipeline, "build_assembly", first_stage)
     for use_cache in (True, False):
-        standby = worker.SecondProcess.standby("bvsr_cad.build._runtime.analyses_process", None, [str(edit)])
+        standby = worker.SecondProcess.standby(
+            "bvsr_cad.build._runtime.analyses_process", None, [str(edit)]
+        )
         if standby is None:
             pytest.skip("one core: the analyses never leave the process")
         with pytest.raises(_StageReached):
@@ -302,15 +370,18 @@ def test_a_build_whose_analyses_are_cached_stops_its_standby_before_its_stages(b
 
 
 @pytest.mark.slow
-def test_analyses_take_both_cores_when_the_geometry_is_cached(bvsr_export, tmp_path, data, monkeypatch):
-    """bvsr_export filled the session's cache. An effective-area edit moves no solid: its geometry analyses
-    (and so the part files, previews and drawings) come from the cache and the analyses' process is told
-    to run the protocol's two simulations side by side (BESIDE_IDLE_BUILD_THREADS); without the cache the
-    build's own stages share the cores with it (BESIDE_BUILD_THREADS). The table is the same either way
-    (compare_rows); measured on the default tail, 2 cores: 22.9-24.4 s with 2 threads, 19.0-20.1 with 3."""
+def test_analyses_take_both_cores_when_the_geometry_is_cached(
+    bvsr_export, tmp_path, data, monkeypatch
+):
+    """bvsr_export filled the session's cache. An effective-area edit moves no solid: its geometry
+    analyses (and so the part files, previews and drawings) come from the cache and the analyses'
+    process is told to run the protocol's two simulations side by side (BESIDE_IDLE_BUILD_THREADS);
+    without the cache the build's own stages share the cores with it (BESIDE_BUILD_THREADS). The
+    table is the same either way (compare_rows); measured on the default tail, 2 cores: 22.9-24.4 s
+    with 2 threads, 19.0-20.1 with 3."""
+    from bvsr_cad.analysis.run import BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS
     from bvsr_cad.build import pipeline
     from bvsr_cad.build._runtime import worker
-    from bvsr_cad.analysis.run import BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS
 
     data["actuation"]["effective_area_mm2"] = 150.0
     edit = _edit_beside_its_data(tmp_path, data)
@@ -328,29 +399,69 @@ def test_analyses_take_both_cores_when_the_geometry_is_cached(bvsr_export, tmp_p
     for use_cache in (True, False):
         with pytest.raises(_StageReached):
             pipeline.build_export(edit, tmp_path / "out", use_cache=use_cache)
-    assert [(bool(args[2]), args[3]) for args in given] == [(True, str(BESIDE_IDLE_BUILD_THREADS)),
-                                                           (False, str(BESIDE_BUILD_THREADS))]
+    assert [(bool(args[2]), args[3]) for args in given] == [
+        (True, str(BESIDE_IDLE_BUILD_THREADS)),
+        (False, str(BESIDE_BUILD_THREADS)),
+    ]
     assert BESIDE_IDLE_BUILD_THREADS > BESIDE_BUILD_THREADS
 
 
-#: What a rebuild that finds its whole export in the cache must not import (seconds of the command's time).
-HEAVY_MODULES = {"build123d", "OCP", "cadquery", "trimesh", "manifold3d", "scipy", "mujoco", "matplotlib", "pyvista",
-                 "bvsr_cad.build.pipeline", "bvsr_cad.assembly", "bvsr_cad.checks.printability"}
+#: What a rebuild that finds its whole export in the cache must not import (seconds of the command's
+#: time).
+HEAVY_MODULES = {
+    "build123d",
+    "OCP",
+    "cadquery",
+    "trimesh",
+    "manifold3d",
+    "scipy",
+    "mujoco",
+    "matplotlib",
+    "pyvista",
+    "bvsr_cad.build.pipeline",
+    "bvsr_cad.assembly",
+    "bvsr_cad.checks.printability",
+}
 
 
 @pytest.mark.slow
-def test_a_noop_build_command_publishes_the_cached_export_before_the_cad_imports(bvsr_export, tmp_path):
-    """`bvsr build` of a file the cache holds whole (bvsr_export filled the session's cache) publishes that
-    export from the parameters, the cache and the checks' environment alone: the command's interpreter
-    never imports the CAD kernel, the mesh libraries, the simulator or the pipeline (``-X importtime`` lists
-    every module it imported), and the export equals the first build's, file for file."""
+def test_a_noop_build_command_publishes_the_cached_export_before_the_cad_imports(
+    bvsr_export, tmp_path
+):
+    """`bvsr build` of a file the cache holds whole (bvsr_export filled the session's cache)
+    publishes that export from the parameters, the cache and the checks' environment alone: the
+    command's interpreter never imports the CAD kernel, the mesh libraries, the simulator or the
+    pipeline (``-X importtime`` lists every module it imported), and the export equals the first
+    build's, file for file."""
     out = tmp_path / "again"
-    done = subprocess.run([sys.executable, "-X", "importtime", "-m", "bvsr_cad.cli", "build", str(PARAMS / "bvsr.toml"),
-                           "-o", str(out), "--json", "-q"], capture_output=True, text=True, timeout=600,
-                          cwd=PARAMS.parent)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-X",
+            "importtime",
+            "-m",
+            "bvsr_cad.cli",
+            "build",
+            str(PARAMS / "bvsr.toml"),
+            "-o",
+            str(out),
+            "--json",
+            "-q",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        cwd=PARAMS.parent,
+    )
     assert done.returncode == 0, done.stderr[-2000:]
-    assert [(s["stage"], s["status"]) for s in json.loads(done.stdout)["stages"]] == [("export", "reused")]
-    imported = {line.rsplit("|", 1)[1].strip() for line in done.stderr.splitlines() if line.startswith("import time:")}
+    assert [(s["stage"], s["status"]) for s in json.loads(done.stdout)["stages"]] == [
+        ("export", "reused")
+    ]
+    imported = {
+        line.rsplit("|", 1)[1].strip()
+        for line in done.stderr.splitlines()
+        if line.startswith("import time:")
+    }
     assert "bvsr_cad.build.publish" in imported  # the listing is there to read
     assert not imported & HEAVY_MODULES
     assert differences(bvsr_export, out) == []

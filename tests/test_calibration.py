@@ -16,21 +16,45 @@ HEADER = "experiment,quantity,conditions,value,unit,role,source\n"
 GOOD = "T3,segment_max_angle,motion=extension,51.9,deg,fit,Table III\n"
 
 
-@pytest.mark.parametrize("row,expected", [
-    ("T3,segment_max_angel,motion=extension,51.9,deg,fit,s\n", "row 2, column quantity = 'segment_max_angel'"),
-    ("T3,segment_max_angle,motion=extension,51.9,,fit,s\n", "row 2, column unit: missing"),
-    ("T3,segment_max_angle,motion=extension,fifty,deg,fit,s\n", "row 2, column value = 'fifty': not a number"),
-    ("T3,segment_max_angle,motion=sideways,51.9,deg,fit,s\n", "row 2, column conditions: motion = 'sideways'"),
-    ("T3,segment_max_angle,motion=extension,51.9,deg,maybe,s\n", "row 2, column role = 'maybe'"),
-    ("T3,segment_max_angle,motion=extension,51.9,rad,fit,s\n", "row 2, column unit = 'rad'"),
-    # Conditions a model cannot be asked (a protocol range upside down crashed the analyses).
-    ("W,tip_workspace_radius,segments=2; pressurised_max_kpa_abs=50; depressurised_min_kpa_abs=150,100,mm,fit,s\n",
-     "row 2, column conditions: depressurised_min_kpa_abs = 150 exceeds pressurised_max_kpa_abs = 50"),
-    ("W,tip_workspace_radius,segments=2.5; pressurised_max_kpa_abs=150; depressurised_min_kpa_abs=50,100,mm,fit,s\n",
-     "row 2, column conditions: segments = 2.5; allowed: whole numbers 1 to 3"),
-    ("P,segment_peak_velocity,motion=extension; pressure_bar=-6,678.6,deg/s,fit,s\n",
-     "row 2, column conditions: pressure_bar = -6; allowed: 0.01 to 10"),
-])
+@pytest.mark.parametrize(
+    "row,expected",
+    [
+        (
+            "T3,segment_max_angel,motion=extension,51.9,deg,fit,s\n",
+            "row 2, column quantity = 'segment_max_angel'",
+        ),
+        ("T3,segment_max_angle,motion=extension,51.9,,fit,s\n", "row 2, column unit: missing"),
+        (
+            "T3,segment_max_angle,motion=extension,fifty,deg,fit,s\n",
+            "row 2, column value = 'fifty': not a number",
+        ),
+        (
+            "T3,segment_max_angle,motion=sideways,51.9,deg,fit,s\n",
+            "row 2, column conditions: motion = 'sideways'",
+        ),
+        (
+            "T3,segment_max_angle,motion=extension,51.9,deg,maybe,s\n",
+            "row 2, column role = 'maybe'",
+        ),
+        ("T3,segment_max_angle,motion=extension,51.9,rad,fit,s\n", "row 2, column unit = 'rad'"),
+        # Conditions a model cannot be asked (a protocol range upside down crashed the analyses).
+        (
+            "W,tip_workspace_radius,segments=2; pressurised_max_kpa_abs=50; "
+            "depressurised_min_kpa_abs=150,100,mm,fit,s\n",
+            "row 2, column conditions: depressurised_min_kpa_abs = 150 exceeds "
+            "pressurised_max_kpa_abs = 50",
+        ),
+        (
+            "W,tip_workspace_radius,segments=2.5; pressurised_max_kpa_abs=150; "
+            "depressurised_min_kpa_abs=50,100,mm,fit,s\n",
+            "row 2, column conditions: segments = 2.5; allowed: whole numbers 1 to 3",
+        ),
+        (
+            "P,segment_peak_velocity,motion=extension; pressure_bar=-6,678.6,deg/s,fit,s\n",
+            "row 2, column conditions: pressure_bar = -6; allowed: 0.01 to 10",
+        ),
+    ],
+)
 def test_bad_data_exits_2_naming_row_and_column(tmp_path, capsys, row, expected):
     data = tmp_path / "bad.csv"
     data.write_text(HEADER + row)
@@ -50,23 +74,42 @@ def test_no_fit_rows_exits_2(tmp_path, capsys):
 
 def test_missing_column_exits_2(tmp_path, capsys):
     data = tmp_path / "no_unit.csv"
-    data.write_text("experiment,quantity,conditions,value,role,source\nT3,segment_max_angle,motion=extension,51.9,fit,s\n")
+    data.write_text(
+        "experiment,quantity,conditions,value,role,source\nT3,segment_max_angle,motion=extension,51.9,fit,s\n"
+    )
     assert main(["calibrate", str(PARAMS / "bvsr.toml"), str(data), "-q"]) == 2
     assert "row 1 (header): missing column(s) unit" in capsys.readouterr().err
 
 
 def test_holdout_rows_do_not_move_the_fit(tmp_path, capsys):
-    """Two data files that differ only in their holdout rows give the same fitted values to the bit."""
-    rows = ("T3,segment_max_angle,motion=extension,51.9,deg,fit,Table III\n"
-            "T3,segment_blocked_force,motion=extension,19.7,N,fit,Table III\n")
+    """Two data files that differ only in their holdout rows give the same fitted values to the
+    bit."""
+    rows = (
+        "T3,segment_max_angle,motion=extension,51.9,deg,fit,Table III\n"
+        "T3,segment_blocked_force,motion=extension,19.7,N,fit,Table III\n"
+    )
     a, b = tmp_path / "a.csv", tmp_path / "b.csv"
     a.write_text(HEADER + rows + "T3,segment_max_angle,motion=flexion,46.5,deg,holdout,Table III\n")
-    b.write_text(HEADER + rows + "T3,segment_max_angle,motion=flexion,10.0,deg,holdout,changed\n"
-                 "T3,segment_blocked_force,motion=waggle,99.0,N,holdout,added\n")
+    b.write_text(
+        HEADER + rows + "T3,segment_max_angle,motion=flexion,10.0,deg,holdout,changed\n"
+        "T3,segment_blocked_force,motion=waggle,99.0,N,holdout,added\n"
+    )
     fits = []
     for data in (a, b):
-        assert main(["calibrate", str(PARAMS / "bvsr.toml"), str(data), "--json", "-q",
-                     "--fit", "effective_area_mm2,rod_flexural_rigidity_n_mm2"]) == 0
+        assert (
+            main(
+                [
+                    "calibrate",
+                    str(PARAMS / "bvsr.toml"),
+                    str(data),
+                    "--json",
+                    "-q",
+                    "--fit",
+                    "effective_area_mm2,rod_flexural_rigidity_n_mm2",
+                ]
+            )
+            == 0
+        )
         fits.append(json.loads(capsys.readouterr().out))
     assert fits[0]["fitted"] == fits[1]["fitted"]
     assert fits[0]["rms_rel_fit"] == fits[1]["rms_rel_fit"]
@@ -83,8 +126,14 @@ def test_fitted_values_reach_every_home(bvsr_spec):
     from bvsr_cad.models.statics import TailStatics
 
     spec = bvsr_spec
-    fitted = {"effective_area_mm2": 200.0, "rod_flexural_rigidity_n_mm2": 5.0e4, "damping_n_s_per_m": 10.0}
-    cal = dataclasses.replace(spec, calibration=dataclasses.replace(spec.calibration, fitted=fitted))
+    fitted = {
+        "effective_area_mm2": 200.0,
+        "rod_flexural_rigidity_n_mm2": 5.0e4,
+        "damping_n_s_per_m": 10.0,
+    }
+    cal = dataclasses.replace(
+        spec, calibration=dataclasses.replace(spec.calibration, fitted=fitted)
+    )
     assert soa_force_law(cal).area_m2 == pytest.approx(200e-6)
     assert soa_force_law(cal).damping_n_s_per_m == 10.0
     assert rod_section(cal).flexural_rigidity_n_mm2 == 5.0e4
@@ -108,8 +157,8 @@ def test_every_quantity_has_a_prediction_with_its_conditions():
 
 
 def test_shipped_files_carry_the_calibration_of_the_shipped_data(bvsr_data):
-    """params/bvsr.toml was calibrated on data/paper_bvsr.csv as it is now (same SHA-256), and BVSR_L
-    inherits the same fitted values (same SOAs, rods and valves)."""
+    """params/bvsr.toml was calibrated on data/paper_bvsr.csv as it is now (same SHA-256), and
+    BVSR_L inherits the same fitted values (same SOAs, rods and valves)."""
     import tomllib
 
     from bvsr_cad.parameters.measurements import data_sha256
@@ -122,15 +171,19 @@ def test_shipped_files_carry_the_calibration_of_the_shipped_data(bvsr_data):
     assert cal["data_sha256"] == data_sha256(ROOT / "data" / "paper_bvsr.csv")
     assert cal["measured_tail"] == bvsr_data["name"] == "bvsr" and cal_l["measured_tail"] == "bvsr"
     assert cal_l["fitted"] == cal["fitted"] and cal_l["data_sha256"] == cal["data_sha256"]
-    assert set(cal["fitted"]) == {"effective_area_mm2", "rod_flexural_rigidity_n_mm2",
-                                  "valve_sonic_conductance_l_s_bar"}
+    assert set(cal["fitted"]) == {
+        "effective_area_mm2",
+        "rod_flexural_rigidity_n_mm2",
+        "valve_sonic_conductance_l_s_bar",
+    }
     assert cal["rms_rel_holdout"] < 0.5 * cal["rms_rel_holdout_uncalibrated"]
 
 
 def test_shipped_fitted_rigidity_reaches_the_mjcf(bvsr_data, bvsr_spec):
-    """Both MJCF chains carry the file's fitted E I (hand calculation, SI): the exact chain's half-angle
-    hinges 2 E I / L each, and the reduced chain's four pivot hinges per joint 2 E I / L each (a pure
-    bend turns both pivots' hinges by theta / 2: their energies add up to (1/2)(E I / L) theta^2)."""
+    """Both MJCF chains carry the file's fitted E I (hand calculation, SI): the exact chain's
+    half-angle hinges 2 E I / L each, and the reduced chain's four pivot hinges per joint 2 E I / L
+    each (a pure bend turns both pivots' hinges by theta / 2: their energies add up to (1/2)(E I /
+    L) theta^2)."""
     import mujoco
 
     from bvsr_cad.assembly.build import build_assembly
@@ -143,20 +196,26 @@ def test_shipped_fitted_rigidity_reaches_the_mjcf(bvsr_data, bvsr_spec):
     ei_l = ei_nmm2 * 1e-6 / (bvsr_data["joint"]["gap_mm"] / 1000.0)  # N mm^2 = 1e-6 N m^2
     robot = robot_model(build_assembly(bvsr_spec), [0.5] * bvsr_spec.joints)
     n = bvsr_spec.joints
-    hinges = {"exact": ["j1_theta_a", "j1_theta_b", f"j{n}_theta_a", f"j{n}_theta_b"],
-              "reduced": [f"j{k}_{h}" for k in (1, n) for h in ("ax", "ay", "bx", "by")]}
+    hinges = {
+        "exact": ["j1_theta_a", "j1_theta_b", f"j{n}_theta_a", f"j{n}_theta_b"],
+        "reduced": [f"j{k}_{h}" for k in (1, n) for h in ("ax", "ay", "bx", "by")],
+    }
     for chain, names in hinges.items():
         tree, _ = mjcf_tree(robot, _mesh_files(robot), False, chain=chain)
         m = mujoco.MjModel.from_xml_string(_without_meshes(tree.getroot()))
         for name in names:
-            assert m.jnt_stiffness[m.joint(name).id] == pytest.approx(2 * ei_l, rel=1e-9), (chain, name)
+            assert m.jnt_stiffness[m.joint(name).id] == pytest.approx(2 * ei_l, rel=1e-9), (
+                chain,
+                name,
+            )
 
 
 def test_inherited_calibration_compares_only_the_rows_of_its_own_tail(bvsr_spec):
-    """A tail that takes another tail's fitted values compares the rows that name its segment count, and
-    no other: BVSR_L (3 segments) the BVSR_L workspace row, with the tables' and the fitted values (here
-    through a stand-in for the simulator that records what it was asked); a tail no row measured gets a
-    note. The BVSR build's rows are the others, each row in exactly one of the two."""
+    """A tail that takes another tail's fitted values compares the rows that name its segment count,
+    and no other: BVSR_L (3 segments) the BVSR_L workspace row, with the tables' and the fitted
+    values (here through a stand-in for the simulator that records what it was asked); a tail no row
+    measured gets a note. The BVSR build's rows are the others, each row in exactly one of the
+    two."""
     from types import SimpleNamespace
 
     from bvsr_cad.analysis.calibrate import uncalibrated
@@ -171,7 +230,8 @@ def test_inherited_calibration_compares_only_the_rows_of_its_own_tail(bvsr_spec)
     bvsr, bvsr_others = rows_of_tail(data, 2, inherited=False)
     bvsr_l, bvsr_l_others = rows_of_tail(data, 3, inherited=True)
     assert [m.row for m in bvsr_l] == [m.row for m in bvsr_others] == [
-        m.row for m in data if m.condition("segments") == 3] and len(bvsr_l) == 1
+        m.row for m in data if m.condition("segments") == 3
+    ] and len(bvsr_l) == 1
     assert sorted(m.row for m in bvsr + bvsr_l) == [m.row for m in data]
     assert [m.row for m in bvsr_l_others] == [m.row for m in bvsr]
 
@@ -179,9 +239,16 @@ def test_inherited_calibration_compares_only_the_rows_of_its_own_tail(bvsr_spec)
     asked = []
 
     def sim(asm, spec, limits):
-        asked.append((asm.spec.segments, spec.segments, spec.actuation.workspace_pressurised_max_kpa_abs,
-                      spec.actuation.workspace_depressurised_min_kpa_abs, bool(spec.calibration.fitted),
-                      tuple(limits)))
+        asked.append(
+            (
+                asm.spec.segments,
+                spec.segments,
+                spec.actuation.workspace_pressurised_max_kpa_abs,
+                spec.actuation.workspace_depressurised_min_kpa_abs,
+                bool(spec.calibration.fitted),
+                tuple(limits),
+            )
+        )
         return 310.0 if spec.calibration.fitted else 300.0
 
     limits = [0.9] * spec_l.joints
@@ -201,26 +268,32 @@ def test_inherited_calibration_compares_only_the_rows_of_its_own_tail(bvsr_spec)
 
 
 def test_another_rod_is_noted_not_compared(bvsr_spec):
-    """The data measured the tail with the rod the calibration records; a file with another rod is another
-    tail: a note, no predictions of measurements it was not part of."""
+    """The data measured the tail with the rod the calibration records; a file with another rod is
+    another tail: a note, no predictions of measurements it was not part of."""
     from types import SimpleNamespace
 
     from bvsr_cad.analysis.measured import compare_measurements
 
     assert (bvsr_spec.calibration.rod_material, bvsr_spec.calibration.rod_diameter_mm) == (
-        bvsr_spec.vertebra.material, bvsr_spec.vertebra.diameter_mm)
-    for vertebra in (dataclasses.replace(bvsr_spec.vertebra, material="PVC"),
-                     dataclasses.replace(bvsr_spec.vertebra, diameter_mm=5.0)):
-        res = compare_measurements(SimpleNamespace(spec=dataclasses.replace(bvsr_spec, vertebra=vertebra)),
-                                   "params/bvsr.toml")
+        bvsr_spec.vertebra.material,
+        bvsr_spec.vertebra.diameter_mm,
+    )
+    for vertebra in (
+        dataclasses.replace(bvsr_spec.vertebra, material="PVC"),
+        dataclasses.replace(bvsr_spec.vertebra, diameter_mm=5.0),
+    ):
+        res = compare_measurements(
+            SimpleNamespace(spec=dataclasses.replace(bvsr_spec, vertebra=vertebra)),
+            "params/bvsr.toml",
+        )
         assert res is not None and not res.rows and "another tail" in res.note
         assert f"{vertebra.material} {vertebra.diameter_mm:g} mm" in res.note
         assert res.fitted == dict(bvsr_spec.calibration.fitted)
 
 
 def test_rows_predicted_in_threads_equal_rows_predicted_one_by_one(bvsr_spec):
-    """compare_rows predicts in threads (the workspace protocol steps beside the other rows, which take
-    one thread of their own): the table is the same, value for value, with one thread."""
+    """compare_rows predicts in threads (the workspace protocol steps beside the other rows, which
+    take one thread of their own): the table is the same, value for value, with one thread."""
     from bvsr_cad.analysis.calibrate import compare_rows, uncalibrated
     from bvsr_cad.analysis.predict import Predictor
     from bvsr_cad.assembly.build import build_assembly
@@ -228,9 +301,19 @@ def test_rows_predicted_in_threads_equal_rows_predicted_one_by_one(bvsr_spec):
 
     from .conftest import ROOT
 
-    rows = [m for m in load_measurements(ROOT / "data" / "paper_bvsr.csv")
-            if m.quantity in ("segment_max_angle", "segment_peak_velocity", "velocity_pressure_exponent",
-                              "root_peak_torque", "root_peak_force", "soa_stiffness")]
+    rows = [
+        m
+        for m in load_measurements(ROOT / "data" / "paper_bvsr.csv")
+        if m.quantity
+        in (
+            "segment_max_angle",
+            "segment_peak_velocity",
+            "velocity_pressure_exponent",
+            "root_peak_torque",
+            "root_peak_force",
+            "soa_stiffness",
+        )
+    ]
     assert len(rows) >= 8
     asm = build_assembly(bvsr_spec)
 

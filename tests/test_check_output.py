@@ -1,5 +1,5 @@
-"""`bvsr check` reads at a glance: one line per check group, every failure in full, the paper comparisons,
-and a missing tool named once. `--verbose` lists every check, `--json` every result."""
+"""`bvsr check` reads at a glance: one line per check group, every failure in full, the paper
+comparisons, and a missing tool named once. `--verbose` lists every check, `--json` every result."""
 
 from __future__ import annotations
 
@@ -13,19 +13,27 @@ MAX_SUMMARY_LINES = 40
 
 
 def _results() -> list[CheckResult]:
-    ok = [CheckResult(f"stl_watertight:part{i}", True, 0, 0, "open edges", f"stl/part{i}.stl") for i in range(30)]
+    ok = [
+        CheckResult(f"stl_watertight:part{i}", True, 0, 0, "open edges", f"stl/part{i}.stl")
+        for i in range(30)
+    ]
     return ok + [
         CheckResult("stl_volume:part9", False, 12.5, 10.0, "mm3", "stl/part9.stl", "too big"),
         CheckResult("paper:tail_mass", None, 211.5, 283.0, "g", "Table IV", "computed 211.5"),
         CheckResult("print_overhang:a", None, 3.0, 0.0, "mm2", "print/a.stl"),
-        CheckResult("slice:a", None, None, 0, "errors", "print/a.stl", "prusa-slicer is not installed"),
-        CheckResult("slice:b", None, None, 0, "errors", "print/b.stl", "prusa-slicer is not installed"),
+        CheckResult(
+            "slice:a", None, None, 0, "errors", "print/a.stl", "prusa-slicer is not installed"
+        ),
+        CheckResult(
+            "slice:b", None, None, 0, "errors", "print/b.stl", "prusa-slicer is not installed"
+        ),
     ]
 
 
 def test_the_summary_counts_each_group_and_prints_failures_and_paper_rows_in_full():
     lines = summary_lines(_results())
-    # Counted by hand from _results(): 30 passing STL checks and one failing; one overhang row, two slices.
+    # Counted by hand from _results(): 30 passing STL checks and one failing; one overhang row, two
+    # slices.
     assert lines[0].split() == ["FAIL", "stl", "30", "passed,", "1", "failed"]
     assert lines[1].split() == ["INFO", "paper", "1", "informational"]
     assert lines[2].split() == ["INFO", "print", "1", "informational"]
@@ -38,8 +46,13 @@ def test_the_summary_counts_each_group_and_prints_failures_and_paper_rows_in_ful
 
 
 def test_a_skipped_check_never_prints_none():
-    row = CheckResult("urdf_check_urdf", None, None, 0, "exit code", "robot/bvsr.urdf", "check_urdf not installed")
-    assert row.skipped and row.line() == "SKIP  urdf_check_urdf [robot/bvsr.urdf]  check_urdf not installed"
+    row = CheckResult(
+        "urdf_check_urdf", None, None, 0, "exit code", "robot/bvsr.urdf", "check_urdf not installed"
+    )
+    assert (
+        row.skipped
+        and row.line() == "SKIP  urdf_check_urdf [robot/bvsr.urdf]  check_urdf not installed"
+    )
 
 
 def test_a_passing_default_export_reads_at_a_glance(bvsr_export, capsys):
@@ -51,8 +64,12 @@ def test_a_passing_default_export_reads_at_a_glance(bvsr_export, capsys):
     checks = json.loads(capsys.readouterr().out)["checks"]
     # Every group of the JSON result has its own line, and the paper rows are all listed.
     groups = {c["name"].split(":", 1)[0].split("_", 1)[0] for c in checks}
-    assert {line.split()[1] for line in out if line[:4] in ("PASS", "INFO", "SKIP", "FAIL")} >= groups
+    assert {
+        line.split()[1] for line in out if line[:4] in ("PASS", "INFO", "SKIP", "FAIL")
+    } >= groups
     paper = [c["name"] for c in checks if c["name"].startswith("paper:")]
     assert paper and all(any(f"  {name}:" in line for line in out) for name in paper)
     assert main(["check", str(bvsr_export), "-q", "--verbose"]) == 0
-    assert len(capsys.readouterr().out.splitlines()) == len(checks) + 1  # every check, then the total
+    assert (
+        len(capsys.readouterr().out.splitlines()) == len(checks) + 1
+    )  # every check, then the total

@@ -1,5 +1,6 @@
-"""The command's table of bad-input errors (exit code 2) names each error class by its module: a module
-that moved, or a class renamed, would make that error a traceback with exit code 1, silently."""
+"""The command's table of bad-input errors (exit code 2) names each error class by its module: a
+module that moved, or a class renamed, would make that error a traceback with exit code 1,
+silently."""
 
 from __future__ import annotations
 

@@ -22,19 +22,21 @@ SCHEMA = ROOT / "bvsr_cad" / "parameters" / "data" / "schema.toml"
 
 
 def _generator():
-    spec = importlib.util.spec_from_file_location("docs_generate", ROOT / "docs" / "hooks" / "generate.py")
+    spec = importlib.util.spec_from_file_location(
+        "docs_generate", ROOT / "docs" / "hooks" / "generate.py"
+    )
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
 
 
 def schema_keys() -> set[str]:
-    """Every dotted key a parameter file may hold, read from schema.toml itself (the tables' names from
-    TailSpec's field types: which table of the schema each key of a file opens)."""
+    """Every dotted key a parameter file may hold, read from schema.toml itself (the tables' names
+    from TailSpec's field types: which table of the schema each key of a file opens)."""
     schema = tomllib.loads(SCHEMA.read_text(encoding="utf-8"))
     hints = typing.get_type_hints(TailSpec)
     keys = set()
-    for name, rule in schema["TailSpec"].items():
+    for name in schema["TailSpec"]:
         typ = hints[name]
         if dataclasses.is_dataclass(typ):
             for sub, subrule in schema[typ.__name__].items():
@@ -52,18 +54,25 @@ def schema_keys() -> set[str]:
 def test_schema_keys_are_many():
     # The walk above must see the nested tables: the shipped schema has well over a hundred keys.
     assert len(schema_keys()) > 100
-    assert {"joint.gap_mm", "materials.<name>.density_g_cm3", "calibration.fitted.effective_area_mm2"} <= schema_keys()
+    assert {
+        "joint.gap_mm",
+        "materials.<name>.density_g_cm3",
+        "calibration.fitted.effective_area_mm2",
+    } <= schema_keys()
 
 
 def test_parameter_reference_lists_every_schema_key():
     page = _generator().parameters_markdown()
     listed = set(re.findall(r"^\| `([^`]+)` \|", page, re.MULTILINE))
     assert schema_keys() - listed == set(), "schema keys missing from the parameter reference"
-    assert listed - schema_keys() == set(), "keys in the parameter reference that the schema does not hold"
+    assert listed - schema_keys() == set(), (
+        "keys in the parameter reference that the schema does not hold"
+    )
 
 
 def test_parameter_reference_rows_carry_the_rules():
-    """Each row shows the schema's own bounds, choices and defaults (read here from the TOML text)."""
+    """Each row shows the schema's own bounds, choices and defaults (read here from the TOML
+    text)."""
     schema = tomllib.loads(SCHEMA.read_text(encoding="utf-8"))
     rows = {r["key"]: r for r in _generator().parameter_rows()}
     gap = rows["joint.gap_mm"]
@@ -96,13 +105,20 @@ def _table_of(key: str) -> str:
 
 
 #: Float keys that are ratios or exponents: no unit in their name, on purpose.
-DIMENSIONLESS = {"robot.velocity_margin", "fabrication_package.tube_bend_allowance",
-                 "pneumatics.valve_critical_pressure_ratio", "pneumatics.polytropic_index",
-                 "calibration.rms_rel_fit", "calibration.rms_rel_holdout", "calibration.rms_rel_holdout_uncalibrated"}
+DIMENSIONLESS = {
+    "robot.velocity_margin",
+    "fabrication_package.tube_bend_allowance",
+    "pneumatics.valve_critical_pressure_ratio",
+    "pneumatics.polytropic_index",
+    "calibration.rms_rel_fit",
+    "calibration.rms_rel_holdout",
+    "calibration.rms_rel_holdout_uncalibrated",
+}
 
 
 def test_every_float_key_has_a_unit():
-    """A new float key must carry its unit in its name (or be a declared ratio): the reference reads it there."""
+    """A new float key must carry its unit in its name (or be a declared ratio): the reference reads
+    it there."""
     hints = typing.get_type_hints(TailSpec)
     floats = set()
     for name, typ in hints.items():
@@ -114,9 +130,9 @@ def test_every_float_key_has_a_unit():
 
 
 def test_moves_column_follows_the_stage_keys():
-    """The outputs a key moves come from the build's own ignore lists: a casting allowance moves the mold
-    set and its drawings only, a material's modulus the analyses but no geometry, a robot setting no
-    cached stage."""
+    """The outputs a key moves come from the build's own ignore lists: a casting allowance moves the
+    mold set and its drawings only, a material's modulus the analyses but no geometry, a robot
+    setting no cached stage."""
     gen = _generator()
     assert gen.stage_readers("casting.shrinkage_percent") == ["drawings", "mold set"]
     assert gen.stage_readers("materials.<name>.youngs_modulus_mpa") == ["analyses"]
@@ -126,32 +142,54 @@ def test_moves_column_follows_the_stage_keys():
 
 
 def test_sphinx_roles_render_as_code():
-    spec = importlib.util.spec_from_file_location("docs_roles", ROOT / "docs" / "hooks" / "sphinx_roles.py")
+    spec = importlib.util.spec_from_file_location(
+        "docs_roles", ROOT / "docs" / "hooks" / "sphinx_roles.py"
+    )
     roles = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(roles)
-    text = "Uses :func:`~bvsr_cad.api.load`, :data:`bvsr_cad.build.pipeline.X` and ``a``. Example::\n\n    x = 1"
-    assert roles.markdown(text) == "Uses `load`, `bvsr_cad.build.pipeline.X` and `a`. Example:\n\n    x = 1"
+    text = (
+        "Uses :func:`~bvsr_cad.api.load`, :data:`bvsr_cad.build.pipeline.X` and ``a``. "
+        "Example::\n\n    x = 1"
+    )
+    assert (
+        roles.markdown(text)
+        == "Uses `load`, `bvsr_cad.build.pipeline.X` and `a`. Example:\n\n    x = 1"
+    )
 
 
-@pytest.mark.skipif(shutil.which("mkdocs", path=str(Path(sys.executable).parent)) is None,
-                    reason="mkdocs not installed (the docs extra)")
+@pytest.mark.skipif(
+    shutil.which("mkdocs", path=str(Path(sys.executable).parent)) is None,
+    reason="mkdocs not installed (the docs extra)",
+)
 def test_docs_build_strict_with_every_parameter(tmp_path):
-    """`mkdocs build --strict` passes (a broken link or reference fails it) and the built parameter page
-    holds every schema key."""
+    """`mkdocs build --strict` passes (a broken link or reference fails it) and the built parameter
+    page holds every schema key."""
     mkdocs = Path(sys.executable).parent / "mkdocs"
-    run = subprocess.run([str(mkdocs), "build", "--strict", "-q", "-d", str(tmp_path / "site")], cwd=ROOT,
-                         capture_output=True, text=True, timeout=300)
+    run = subprocess.run(
+        [str(mkdocs), "build", "--strict", "-q", "-d", str(tmp_path / "site")],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stderr[-3000:]
-    html = (tmp_path / "site" / "reference" / "parameters" / "index.html").read_text(encoding="utf-8")
-    missing = {k for k in schema_keys() if f"<code>{k.replace('<', '&lt;').replace('>', '&gt;')}</code>" not in html}
+    html = (tmp_path / "site" / "reference" / "parameters" / "index.html").read_text(
+        encoding="utf-8"
+    )
+    missing = {
+        k
+        for k in schema_keys()
+        if f"<code>{k.replace('<', '&lt;').replace('>', '&gt;')}</code>" not in html
+    }
     assert missing == set()
 
 
 @pytest.mark.slow
 def test_export_summary_matches_the_default_build(bvsr_export):
-    """The docs' export reference and paper tables read docs/data/export_summary.json: its files, manifest
-    keys (type and unit), paper checks and measurement rows must be those the default file builds now
-    (refresh: python docs/hooks/generate.py EXPORT). Figures may move with the models; names may not."""
+    """The docs' export reference and paper tables read docs/data/export_summary.json: its files,
+    manifest keys (type and unit), paper checks and measurement rows must be those the default file
+    builds now (refresh: python docs/hooks/generate.py EXPORT). Figures may move with the models;
+    names may not."""
     gen = _generator()
     fresh = json.loads(json.dumps(gen.export_summary(bvsr_export)))
     committed = json.loads(gen.EXPORT_SUMMARY.read_text(encoding="utf-8"))
@@ -159,10 +197,16 @@ def test_export_summary_matches_the_default_build(bvsr_export):
     assert fresh["files"] == committed["files"], hint
     shape = {k: (v["type"], v["unit"]) for k, v in fresh["manifest_keys"].items()}
     assert shape == {k: (v["type"], v["unit"]) for k, v in committed["manifest_keys"].items()}, hint
-    assert [c["name"] for c in fresh["paper_checks"]] == [c["name"] for c in committed["paper_checks"]], hint
+    assert [c["name"] for c in fresh["paper_checks"]] == [
+        c["name"] for c in committed["paper_checks"]
+    ], hint
     rows = [(r["row"], r["label"], r["role"]) for r in fresh["measurements"]["rows"]]
-    assert rows == [(r["row"], r["label"], r["role"]) for r in committed["measurements"]["rows"]], hint
-    assert [k for k, (t, u) in shape.items() if t.endswith("number") and u == "?"] == [], "manifest numbers without a unit"
+    assert rows == [(r["row"], r["label"], r["role"]) for r in committed["measurements"]["rows"]], (
+        hint
+    )
+    assert [k for k, (t, u) in shape.items() if t.endswith("number") and u == "?"] == [], (
+        "manifest numbers without a unit"
+    )
 
 
 def test_readme_is_short_and_undated():

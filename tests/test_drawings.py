@@ -1,5 +1,6 @@
-"""Drawings: a sheet per panel and per mold part, whose hole table equals the bores
-found independently on the part's B-rep (its cylindrical faces), with the params SHA-256 in the title block."""
+"""Drawings: a sheet per panel and per mold part, whose hole table equals the bores found
+independently on the part's B-rep (its cylindrical faces), with the params SHA-256 in the title
+block."""
 
 from __future__ import annotations
 
@@ -19,12 +20,16 @@ def _rows(svg: Path) -> list[list[str]]:
     root = ET.parse(svg).getroot()  # parses: a well-formed SVG document
     assert root.tag == "{http://www.w3.org/2000/svg}svg"
     table = root.find(".//s:g[@id='hole-table']", NS)
-    return [[t.text for t in g.findall("s:text", NS)] for g in table.findall("s:g[@class='hole-row']", NS)]
+    return [
+        [t.text for t in g.findall("s:text", NS)]
+        for g in table.findall("s:g[@class='hole-row']", NS)
+    ]
 
 
 def _bores(solid: bd.Solid) -> tuple[list[float], list[float]]:
-    """(hole diameters, pin diameters) from the B-rep alone: cylindrical faces grouped into one bore per
-    radius, axis line and connected axial span; a hole's face points at its axis, a pin's away from it."""
+    """(hole diameters, pin diameters) from the B-rep alone: cylindrical faces grouped into one bore
+    per radius, axis line and connected axial span; a hole's face points at its axis, a pin's away
+    from it."""
     groups: list[dict] = []
     for f in solid.faces():
         if f.geom_type != bd.GeomType.CYLINDER:
@@ -37,8 +42,11 @@ def _bores(solid: bd.Solid) -> tuple[list[float], list[float]]:
         s = sorted(float((np.array([*v]) - p) @ d) for v in f.vertices())
         for g in groups:
             off = p - g["p"]
-            if (abs(g["r"] - f.radius) < 1e-4 and abs(abs(g["d"] @ d) - 1) < 1e-6
-                    and np.linalg.norm(off - (off @ g["d"]) * g["d"]) < 1e-3):
+            if (
+                abs(g["r"] - f.radius) < 1e-4
+                and abs(abs(g["d"] @ d) - 1) < 1e-6
+                and np.linalg.norm(off - (off @ g["d"]) * g["d"]) < 1e-3
+            ):
                 shift = float(off @ g["d"])
                 lo, hi = sorted(x * float(g["d"] @ d) + shift for x in (s[0], s[-1]))
                 if lo <= g["hi"] + 1e-3 and hi >= g["lo"] - 1e-3:
@@ -71,7 +79,11 @@ def test_a_sheet_per_panel_and_mold_part_listed_with_its_sha256(bvsr_export, she
 
 def test_hole_tables_equal_the_bores_of_the_brep(bvsr_export, sheets):
     for item, s in sheets["by_item"].items():
-        folder, name = ("molds/step", item.removeprefix("mold_")) if item.startswith("mold_") else ("step", item)
+        folder, name = (
+            ("molds/step", item.removeprefix("mold_"))
+            if item.startswith("mold_")
+            else ("step", item)
+        )
         solid = bd.import_step(bvsr_export / folder / f"{name}.step").solids()[0]
         holes, pins = _bores(solid)
         rows = _rows(bvsr_export / s["svg"])
@@ -80,7 +92,9 @@ def test_hole_tables_equal_the_bores_of_the_brep(bvsr_export, sheets):
         table_pins = sorted(round(float(r[6]), 3) for r in rows if r[0].startswith("P"))
         # the table gives 2 decimals
         assert table_holes == pytest.approx(holes, abs=5.1e-3), item
-        if item.startswith("mold_"):  # a mold part's only outer cylinders are its pins (a panel's rim is a cone)
+        if item.startswith(
+            "mold_"
+        ):  # a mold part's only outer cylinders are its pins (a panel's rim is a cone)
             assert table_pins == pytest.approx(pins, abs=5.1e-3), item
         else:
             assert table_pins == []
@@ -92,10 +106,17 @@ def test_hole_table_says_thread_and_tap_drill_and_through_or_blind(bvsr_export, 
     root = _rows(bvsr_export / sheets["by_item"]["panel0"]["svg"])
     rod = metric(bvsr_spec.vertebra.diameter_mm)
     bore = next(r for r in root if r[1] == "rod_bore")
-    assert bore[7] == "through" and bore[8] == f"M{rod.diameter_mm:g}x{rod.pitch_mm:g} tap, drill {rod.tap_drill_mm:g}"
-    assert float(bore[6]) == pytest.approx(rod.tap_drill_mm + bvsr_spec.fabrication.hole_compensation_mm)
+    assert (
+        bore[7] == "through"
+        and bore[8] == f"M{rod.diameter_mm:g}x{rod.pitch_mm:g} tap, drill {rod.tap_drill_mm:g}"
+    )
+    assert float(bore[6]) == pytest.approx(
+        rod.tap_drill_mm + bvsr_spec.fabrication.hole_compensation_mm
+    )
     ports = [r for r in root if r[1].startswith("fitting_port")]
-    assert len(ports) == 5 and all(r[8].startswith("M5x0.8 tap") and r[7] == "through" for r in ports)
+    assert len(ports) == 5 and all(
+        r[8].startswith("M5x0.8 tap") and r[7] == "through" for r in ports
+    )
     inserts = [r for r in root if r[1].startswith("mount_insert")]
     assert [r[7] for r in inserts] == [f"blind, {bvsr_spec.mount.insert_depth_mm:.2f} deep"] * 5
     plate = _rows(bvsr_export / sheets["by_item"]["mold_bottom_plate"]["svg"])
@@ -113,11 +134,15 @@ def test_title_block_carries_the_params_sha256_material_and_process(bvsr_export,
         assert text["title-part"] == item
         if item.startswith("panel"):
             part = next(p for p in manifest["parts"] if p["name"] == item)
-            assert text["title-material"].startswith(part["material"] + ":") and text["title-process"] == part["process"]
+            assert (
+                text["title-material"].startswith(part["material"] + ":")
+                and text["title-process"] == part["process"]
+            )
 
 
 def test_same_geometry_gives_the_same_sheet(bvsr_spec):
-    """Two draws of one geometry are byte-identical (the export-wide determinism is test_cache's)."""
+    """Two draws of one geometry are byte-identical (the export-wide determinism is
+    test_cache's)."""
     from bvsr_cad.exporters.drawings import draw_sheet
     from bvsr_cad.parts.mold import mold_set
 
@@ -125,43 +150,70 @@ def test_same_geometry_gives_the_same_sheet(bvsr_spec):
     views = [["top"], ["front", "right"]]
     first, n = draw_sheet("mold_lid", lid.solid, list(lid.features), views)
     assert draw_sheet("mold_lid", lid.solid, list(lid.features), views) == (first, n)
-    assert n == len(lid.features) == 4 + 1 + 4 + 2  # the lid: vents, flange pocket, bolts, pins: one row each
+    assert (
+        n == len(lid.features) == 4 + 1 + 4 + 2
+    )  # the lid: vents, flange pocket, bolts, pins: one row each
 
 
 def test_the_title_block_is_the_same_bytes_in_a_fresh_process(bvsr_spec):
-    """A build that takes the sheets from the cache never runs build123d's SVG export (which registers
-    SVG as ElementTree's default namespace, process-wide): its stamped title block must not change."""
+    """A build that takes the sheets from the cache never runs build123d's SVG export (which
+    registers SVG as ElementTree's default namespace, process-wide): its stamped title block must
+    not change."""
     import subprocess
     import sys
 
     from bvsr_cad.exporters.drawings import _title_block
 
-    code = ("import sys; from bvsr_cad.exporters.drawings import _title_block as t; "
-            "from bvsr_cad.parameters.load import load_spec\n"
-            "class I: material, process, quantity = 'PA12_MJF', 'MJF', 1\n"
-            "sys.stdout.buffer.write(t('panel0', I, load_spec(sys.argv[1]), 'f' * 64))")
+    code = (
+        "import sys; from bvsr_cad.exporters.drawings import _title_block as t; "
+        "from bvsr_cad.parameters.load import load_spec\n"
+        "class I: material, process, quantity = 'PA12_MJF', 'MJF', 1\n"
+        "sys.stdout.buffer.write(t('panel0', I, load_spec(sys.argv[1]), 'f' * 64))"
+    )
     params = Path(__file__).resolve().parents[1] / "params" / "bvsr.toml"
-    fresh = subprocess.run([sys.executable, "-c", code, str(params)], capture_output=True, check=True).stdout
+    fresh = subprocess.run(
+        [sys.executable, "-c", code, str(params)], capture_output=True, check=True
+    ).stdout
 
     class Item:
         material, process, quantity = "PA12_MJF", "MJF", 1
 
-    ET.register_namespace("svg", "http://www.w3.org/2000/svg")  # whatever another module registered before
+    ET.register_namespace(
+        "svg", "http://www.w3.org/2000/svg"
+    )  # whatever another module registered before
     assert _title_block("panel0", Item, bvsr_spec, "f" * 64) == fresh
     assert fresh.startswith(b'<g xmlns="http://www.w3.org/2000/svg" id="title-block"')
 
 
 def test_dimensions_are_the_parts_extents_along_each_views_axes(bvsr_export, sheets):
-    """Each view's overall dimensions (its width, and a side view's height) read the part's B-rep extent
-    along the view's horizontal and vertical axes, found here from the STEP file's bounding box."""
+    """Each view's overall dimensions (its width, and a side view's height) read the part's B-rep
+    extent along the view's horizontal and vertical axes, found here from the STEP file's bounding
+    box."""
     axes = {"top": ("X", None), "front": ("X", "Z"), "right": ("Y", "Z")}
     for item, s in sheets["by_item"].items():
-        folder, name = ("molds/step", item.removeprefix("mold_")) if item.startswith("mold_") else ("step", item)
-        size = bd.import_step(bvsr_export / folder / f"{name}.step").solids()[0].bounding_box(optimal=True).size
+        folder, name = (
+            ("molds/step", item.removeprefix("mold_"))
+            if item.startswith("mold_")
+            else ("step", item)
+        )
+        size = (
+            bd.import_step(bvsr_export / folder / f"{name}.step")
+            .solids()[0]
+            .bounding_box(optimal=True)
+            .size
+        )
         root = ET.parse(bvsr_export / s["svg"]).getroot()
-        read = [float(t.text) for t in root.findall(".//s:g[@id='dimensions']/s:g[@class='dim']/s:text", NS)]
-        views = [t.text.split(" ")[0] for t in root.findall(".//s:g[@id='views']/s:text", NS)
-                 if " (looking along " in (t.text or "")]
+        read = [
+            float(t.text)
+            for t in root.findall(".//s:g[@id='dimensions']/s:g[@class='dim']/s:text", NS)
+        ]
+        views = [
+            t.text.split(" ")[0]
+            for t in root.findall(".//s:g[@id='views']/s:text", NS)
+            if " (looking along " in (t.text or "")
+        ]
         expected = [getattr(size, a) for v in views for a in axes[v] if a is not None]
-        assert views[0] == "top" and len(read) == len(expected) == (3 if item.startswith("panel") else 5), item
+        assert views[0] == "top" and len(read) == len(expected) == (
+            3 if item.startswith("panel") else 5
+        ), item
         assert read == pytest.approx(expected, abs=0.006), item

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 import trimesh
 
-from bvsr_cad.assembly.build import build_assembly
 from bvsr_cad import cli
+from bvsr_cad.assembly.build import build_assembly
 from bvsr_cad.cli import main
 from bvsr_cad.parameters import paper
 
@@ -38,7 +38,8 @@ def test_manifest_round_trips(bvsr_export, bvsr_spec):
     assert m["params_sha256"] == hashlib.sha256((PARAMS / "bvsr.toml").read_bytes()).hexdigest()
     assert (bvsr_export / m["params_file"]).read_bytes() == (PARAMS / "bvsr.toml").read_bytes()
     asm = build_assembly(bvsr_spec)
-    # The rigid comparison tail's pieces are listed too (kind rigid_tail); they are not part of the BVSR.
+    # The rigid comparison tail's pieces are listed too (kind rigid_tail); they are not part of the
+    # BVSR.
     tail_parts = [p for p in m["parts"] if p["kind"] != "rigid_tail"]
     by_name = {p["name"]: p for p in tail_parts}
     assert set(by_name) == set(asm.parts)
@@ -49,11 +50,16 @@ def test_manifest_round_trips(bvsr_export, bvsr_spec):
         assert part["mass_g"] == pytest.approx(asm.mass_g(name), rel=1e-9)
     assert by_name["soa"]["count"] == 30
     # Tail mass = sum of instance masses; segments (shared panel split) add up to it.
-    assert m["mass_g"]["tail"] == pytest.approx(sum(p["count"] * p["mass_g"] for p in tail_parts), rel=1e-12)
+    assert m["mass_g"]["tail"] == pytest.approx(
+        sum(p["count"] * p["mass_g"] for p in tail_parts), rel=1e-12
+    )
     assert sum(m["mass_g"]["segments"]) == pytest.approx(m["mass_g"]["tail"], rel=1e-12)
     # Standalone segment 1: panels 0-3, 15 SOAs, rod_s1.
-    standalone = sum(by_name[f"panel{k}"]["mass_g"] for k in range(4)) + 15 * by_name["soa"]["mass_g"] \
+    standalone = (
+        sum(by_name[f"panel{k}"]["mass_g"] for k in range(4))
+        + 15 * by_name["soa"]["mass_g"]
         + by_name["rod_s1"]["mass_g"]
+    )
     assert m["mass_g"]["segment_standalone"] == pytest.approx(standalone, rel=1e-12)
     # Measured length equals Table I's N H_a + (N + 1) t.
     assert m["length_mm"] == pytest.approx(6 * 36.51 + 7 * (42.51 - 36.51), abs=1e-6)
@@ -87,8 +93,12 @@ def test_check_json_passes(bvsr_export, capsys):
     out = json.loads(capsys.readouterr().out)
     assert out["passed"] is True
     names = {c["name"] for c in out["checks"]}
-    assert {"stl_watertight:soa", "mass_parts_sum_to_tail", "pentagon_spacing:panel1:upper",
-            "paper:segment_standalone_mass"} <= names
+    assert {
+        "stl_watertight:soa",
+        "mass_parts_sum_to_tail",
+        "pentagon_spacing:panel1:upper",
+        "paper:segment_standalone_mass",
+    } <= names
     info = [c for c in out["checks"] if c["name"].startswith("paper:")]
     assert info and all(c["passed"] is None for c in info)
     for c in out["checks"]:
@@ -113,9 +123,9 @@ def test_check_fails_on_a_broken_stl(bvsr_export, tmp_path, capsys):
 
 
 def test_checks_started_early_see_a_file_changed_before_they_finish(bvsr_export, tmp_path):
-    """A build runs the CAD files' checks before its analyses are in (Checks.start) and the rest after
-    (Checks.finish): a file changed in between is checked again, so the verdicts are those of the
-    final export, the same as one run of every check."""
+    """A build runs the CAD files' checks before its analyses are in (Checks.start) and the rest
+    after (Checks.finish): a file changed in between is checked again, so the verdicts are those of
+    the final export, the same as one run of every check."""
     from bvsr_cad.build._runtime.checks_process import run_checks, start_checks
 
     copy = tmp_path / "copy"
@@ -129,10 +139,13 @@ def test_checks_started_early_see_a_file_changed_before_they_finish(bvsr_export,
     assert [r.to_json() for r in late] == [r.to_json() for r in run_checks(copy, parallel=False)]
 
 
-def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_changed(bvsr_export, tmp_path):
+def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_changed(
+    bvsr_export, tmp_path
+):
     """A build sends the part meshes' and the masses' checks to the printability process too
-    (``meshes_beside``): unchanged, their verdicts come from there (none of them runs here); a part's
-    STL changed after the start is checked again here, and the results are one run of every check's."""
+    (``meshes_beside``): unchanged, their verdicts come from there (none of them runs here); a
+    part's STL changed after the start is checked again here, and the results are one run of every
+    check's."""
     import os
 
     from bvsr_cad.build._runtime.checks_process import run_checks, start_checks
@@ -144,7 +157,9 @@ def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_change
     assert checks._printability.proc is not None and not any(m.startswith("mesh ") for m in said)
     kept = checks.finish()
     assert not any(m.startswith("mesh ") or m == "masses" for m in said), said
-    assert [r.to_json() for r in kept] == [r.to_json() for r in run_checks(bvsr_export, parallel=False)]
+    assert [r.to_json() for r in kept] == [
+        r.to_json() for r in run_checks(bvsr_export, parallel=False)
+    ]
     copy = tmp_path / "copy"
     shutil.copytree(bvsr_export, copy)
     said.clear()
@@ -158,14 +173,17 @@ def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_change
     assert [r.to_json() for r in late] == [r.to_json() for r in run_checks(copy, parallel=False)]
 
 
-def test_mold_checks_in_the_second_process_see_a_mold_file_changed_before_they_finish(bvsr_export, tmp_path):
+def test_mold_checks_in_the_second_process_see_a_mold_file_changed_before_they_finish(
+    bvsr_export, tmp_path
+):
     """The mold checks run in the printability process from Checks.start; a mold file changed before
-    Checks.finish (whether that process had read it yet or not) is checked again, on the file as it is."""
+    Checks.finish (whether that process had read it yet or not) is checked again, on the file as it
+    is."""
     import os
 
+    from bvsr_cad.build._runtime.checks_process import start_checks
     from bvsr_cad.checks.export import Export
     from bvsr_cad.checks.molds import check_molds
-    from bvsr_cad.build._runtime.checks_process import start_checks
 
     if (os.cpu_count() or 1) < 2:
         pytest.skip("one core: the mold checks never leave the process")
@@ -187,7 +205,9 @@ def test_mold_checks_in_the_second_process_see_a_mold_file_changed_before_they_f
     said.clear()
     checks = start_checks(bvsr_export, said.append)
     kept = checks.finish()
-    assert any(m.startswith("printability and molds: done in the second process") for m in said), said
+    assert any(m.startswith("printability and molds: done in the second process") for m in said), (
+        said
+    )
     assert "molds" not in said
     assert {r.name for r in kept} >= names
 
@@ -201,8 +221,13 @@ def test_check_moved_pocket_fails_the_pentagon(bvsr_export, tmp_path, capsys):
     mesh.apply_transform(trimesh.transformations.rotation_matrix(np.radians(2.0), [0, 0, 1]))
     mesh.export(moved / part["files"]["stl"])
     assert main(["check", str(moved), "--json"]) == 1
-    failed = {c["name"] for c in json.loads(capsys.readouterr().out)["checks"] if c["passed"] is False}
-    assert "pentagon_soa1_dorsal:panel1:upper" in failed and "pentagon_mirror_yz:panel1:lower" in failed
+    failed = {
+        c["name"] for c in json.loads(capsys.readouterr().out)["checks"] if c["passed"] is False
+    }
+    assert (
+        "pentagon_soa1_dorsal:panel1:upper" in failed
+        and "pentagon_mirror_yz:panel1:lower" in failed
+    )
 
 
 def test_check_bad_folder_exit_2(tmp_path, capsys):
@@ -252,8 +277,11 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
 
     changed = write_toml(tmp_path / "edited.toml", {"name": "edited"})
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    proc = worker.SecondProcess.start("bvsr_cad.build._runtime.analyses_process", [str(changed), "sha256 of what the build read"],
-                                      tmp_path)
+    proc = worker.SecondProcess.start(
+        "bvsr_cad.build._runtime.analyses_process",
+        [str(changed), "sha256 of what the build read"],
+        tmp_path,
+    )
     if proc is None:
         pytest.skip("one core: the analyses never leave the process")
     assert proc.cpu_s is None
@@ -261,8 +289,8 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
     with pytest.raises(ParamError, match=r"edited.toml(.|\n)*changed while the build was running"):
         proc.result()
     assert not proc.running
-    # With the CPU seconds it used (its imports of the pipeline), as the kernel counted them but for its
-    # last steps (pickling the answer, leaving).
+    # With the CPU seconds it used (its imports of the pipeline), as the kernel counted them but for
+    # its last steps (pickling the answer, leaving).
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     counted = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
     assert counted > 0.5 and counted - 0.2 <= proc.cpu_s <= counted, (proc.cpu_s, counted)
@@ -270,8 +298,9 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
     monkeypatch.setattr(worker.sys, "executable", shutil.which("false") or "/bin/false")
     lost = worker.SecondProcess.start("bvsr_cad.build._runtime.analyses_process", [], tmp_path)
     said: list[str] = []
-    assert worker.result_or(lost, lambda: {"analysis": "computed here"}, said.append, "analyses") == {
-        "analysis": "computed here"}
+    assert worker.result_or(
+        lost, lambda: {"analysis": "computed here"}, said.append, "analyses"
+    ) == {"analysis": "computed here"}
     assert any("without a result; running them here" in m for m in said), said
     assert lost.cpu_s is None
 
@@ -294,8 +323,8 @@ def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path, monkeypatch
     assert standby.begin([str(changed), "sha256 of what the build read"], tmp_path)
     with pytest.raises(ParamError, match=r"edited.toml(.|\n)*changed while the build was running"):
         standby.result()
-    # A relative working folder is this process's, not the child's (`bvsr build -o exports/x` names the
-    # build's temporary folder relative to where the user stands; the child started in /tmp).
+    # A relative working folder is this process's, not the child's (`bvsr build -o exports/x` names
+    # the build's temporary folder relative to where the user stands; the child started in /tmp).
     here = tmp_path / "here"
     (here / "exports").mkdir(parents=True)
     monkeypatch.chdir(here)
@@ -312,16 +341,18 @@ def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path, monkeypatch
 
 
 def test_the_standby_head_start_is_used_only_for_the_bytes_it_was_built_from(tmp_path, monkeypatch):
-    """`bvsr build` names the file to its standby analyses' process, which builds the assembly while the
-    build reads its cache; the work that comes uses it only if it names the same file with the same
-    SHA-256, else it builds the file as it is now."""
-    from bvsr_cad.build._runtime import analyses_process as pipeline
+    """`bvsr build` names the file to its standby analyses' process, which builds the assembly while
+    the build reads its cache; the work that comes uses it only if it names the same file with the
+    same SHA-256, else it builds the file as it is now."""
     from bvsr_cad.analysis import run
+    from bvsr_cad.build._runtime import analyses_process as pipeline
     from bvsr_cad.parameters.load import params_sha256
 
     params = tmp_path / "tail.toml"
     shutil.copyfile(PARAMS / "bvsr.toml", params)
-    monkeypatch.setattr(run, "run_analyses", lambda asm, *_a, **_k: asm)  # the analyses' input, handed back
+    monkeypatch.setattr(
+        run, "run_analyses", lambda asm, *_a, **_k: asm
+    )  # the analyses' input, handed back
     monkeypatch.setattr(pipeline, "_PREPARED", {})
     pipeline._prepare_analyses(str(params))
     first = params_sha256(params)
@@ -332,20 +363,24 @@ def test_the_standby_head_start_is_used_only_for_the_bytes_it_was_built_from(tmp
     pipeline._prepare_analyses(str(params))
     params.write_text(params.read_text().replace('name = "bvsr"', 'name = "edited"', 1))
     built, _drawn = pipeline._analyses_process(str(params), params_sha256(params))
-    assert built.spec.name == "edited" and built is not pipeline._PREPARED[str(params.resolve()), first]
+    assert (
+        built.spec.name == "edited"
+        and built is not pipeline._PREPARED[str(params.resolve()), first]
+    )
 
 
 def test_the_build_and_its_analyses_process_make_each_part_solid_once(tmp_path, monkeypatch):
     """A cold build's two processes share the parts' solids through a folder of BRep files
-    (:class:`~bvsr_cad.build._runtime.analyses_process.SharedSolids`): the build makes its parts from the first, the analyses'
-    process from the last, and each reads what the other made instead of making it again. Every solid is
-    the one its bytes give back, so a part read from the other process equals, to the byte, the one made
-    here, and both equal a plain assembly's; the build removes the folder once the analyses are in."""
-    from bvsr_cad.build._runtime import analyses_process
+    (:class:`~bvsr_cad.build._runtime.analyses_process.SharedSolids`): the build makes its parts
+    from the first, the analyses' process from the last, and each reads what the other made instead
+    of making it again. Every solid is the one its bytes give back, so a part read from the other
+    process equals, to the byte, the one made here, and both equal a plain assembly's; the build
+    removes the folder once the analyses are in."""
     from bvsr_cad.analysis import run
     from bvsr_cad.assembly import build as build_mod
-    from bvsr_cad.build._runtime.analyses_process import SharedSolids
     from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.build._runtime import analyses_process
+    from bvsr_cad.build._runtime.analyses_process import SharedSolids
     from bvsr_cad.parameters.load import load_spec, params_sha256
     from bvsr_cad.parts._kernel import brep_bytes
 
@@ -364,31 +399,43 @@ def test_the_build_and_its_analyses_process_make_each_part_solid_once(tmp_path, 
     for name in ("panel0", "panel1", "panel2"):
         first.parts[name].solid  # noqa: B018
     assert made == ["panel0", "panel1", "panel2"]
-    monkeypatch.setattr(run, "run_analyses", lambda asm, *_a, **_k: asm)  # the analyses' input, handed back
-    monkeypatch.setattr("bvsr_cad.exporters.analysis_files.write_analysis_pictures", lambda *_a: None)
+    monkeypatch.setattr(
+        run, "run_analyses", lambda asm, *_a, **_k: asm
+    )  # the analyses' input, handed back
+    monkeypatch.setattr(
+        "bvsr_cad.exporters.analysis_files.write_analysis_pictures", lambda *_a: None
+    )
     monkeypatch.setattr(analyses_process, "_PREPARED", {})
     made.clear()
-    used, _drawn = analyses_process._analyses_process(str(params), params_sha256(params), "", "",
-                                                      str(tmp_path / "build"), "tail")
+    used, _drawn = analyses_process._analyses_process(
+        str(params), params_sha256(params), "", "", str(tmp_path / "build"), "tail"
+    )
     assert made == ["panel6", "panel5", "panel4", "panel3"]  # from the last; the first three read
     assert sorted(p.name for p in folder.glob("*.brep")) == sorted(f"{n}.brep" for n in plain.parts)
-    # The build's remaining parts are read, not made; every solid is the plain assembly's to the byte.
+    # The build's remaining parts are read, not made; every solid is the plain assembly's to the
+    # byte.
     made.clear()
-    assert {n: brep_bytes(p.solid) for n, p in first.parts.items()} == want == \
-        {n: brep_bytes(p.solid) for n, p in used.parts.items()}
+    assert (
+        {n: brep_bytes(p.solid) for n, p in first.parts.items()}
+        == want
+        == {n: brep_bytes(p.solid) for n, p in used.parts.items()}
+    )
     assert made == []
     analyses_process.drop_geometry_ahead(tmp_path / "build")
     assert not folder.exists()
 
 
-def test_the_analyses_process_leaves_the_joint_limits_before_its_other_analyses(tmp_path, monkeypatch):
-    """The analyses' process puts its geometry analyses (the joint limits) into the build's folder as soon
-    as it has them, whole (never a half-written file under the name the build reads), before its other
-    analyses: the build writes and checks the robot files while those go on. The build takes the file
-    once (:func:`~bvsr_cad.build._runtime.analyses_process.take_geometry_ahead` removes it)."""
-    from bvsr_cad.build._runtime import analyses_process
+def test_the_analyses_process_leaves_the_joint_limits_before_its_other_analyses(
+    tmp_path, monkeypatch
+):
+    """The analyses' process puts its geometry analyses (the joint limits) into the build's folder
+    as soon as it has them, whole (never a half-written file under the name the build reads), before
+    its other analyses: the build writes and checks the robot files while those go on. The build
+    takes the file once (:func:`~bvsr_cad.build._runtime.analyses_process.take_geometry_ahead`
+    removes it)."""
     from bvsr_cad.analysis import run
     from bvsr_cad.analysis.limits import per_joint_rad
+    from bvsr_cad.build._runtime import analyses_process
     from bvsr_cad.parameters.load import load_spec, params_sha256
 
     class Reached(Exception):
@@ -402,23 +449,33 @@ def test_the_analyses_process_leaves_the_joint_limits_before_its_other_analyses(
         raise Reached
 
     monkeypatch.setattr(run, "run_workspace", workspace)
-    monkeypatch.setattr(run, "compare_measurements", lambda *_a, **_k: None)  # the measurements' thread
+    monkeypatch.setattr(
+        run, "compare_measurements", lambda *_a, **_k: None
+    )  # the measurements' thread
     params = PARAMS / "bvsr.toml"
     with pytest.raises(Reached):
-        analyses_process._analyses_process(str(params), params_sha256(params), "", "", str(tmp_path), "bvsr")
+        analyses_process._analyses_process(
+            str(params), params_sha256(params), "", "", str(tmp_path), "bvsr"
+        )
     names, geo = seen
-    # Beside it the rest geometry (for the build's cache) and the part solids it shared with the build,
-    # and no part file left beside either.
+    # Beside it the rest geometry (for the build's cache) and the part solids it shared with the
+    # build, and no part file left beside either.
     shared = analyses_process.SHARED_SOLIDS_FOLDER
-    assert names == sorted([analyses_process.GEOMETRY_AHEAD_FILE, analyses_process.REST_AHEAD_FILE, shared])
+    assert names == sorted(
+        [analyses_process.GEOMETRY_AHEAD_FILE, analyses_process.REST_AHEAD_FILE, shared]
+    )
     assert isinstance(geo, run.GeometryAnalyses)
-    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([analyses_process.REST_AHEAD_FILE, shared])
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        [analyses_process.REST_AHEAD_FILE, shared]
+    )
     assert not [p.name for p in (tmp_path / shared).iterdir() if not p.name.endswith(".brep")]
     limits = per_joint_rad(geo.limits)
-    assert len(limits) == load_spec(params).joints and all(0 < t <= run.THETA_SEARCH_MAX_RAD for t in limits)
+    assert len(limits) == load_spec(params).joints and all(
+        0 < t <= run.THETA_SEARCH_MAX_RAD for t in limits
+    )
     assert analyses_process.take_geometry_ahead(tmp_path) is None  # taken once
-    # The build moves the rest geometry into its cache entry of the geometry analyses; the next build's
-    # analyses read it from there: the posed tail and every part's mass properties.
+    # The build moves the rest geometry into its cache entry of the geometry analyses; the next
+    # build's analyses read it from there: the posed tail and every part's mass properties.
     entry = tmp_path / "entry"
     entry.mkdir()
     analyses_process.keep_rest(tmp_path, entry)
@@ -431,24 +488,26 @@ def test_the_analyses_process_leaves_the_joint_limits_before_its_other_analyses(
 
 
 def test_the_export_holds_the_robot_files_made_with_the_analyses_joint_limits(bvsr_export):
-    """The build writes the robot files with the joint limits the analyses' process left ahead; they are
-    the limits of the export's analysis (the minimum over each joint's bending planes), and the file they
-    came in is not published."""
+    """The build writes the robot files with the joint limits the analyses' process left ahead; they
+    are the limits of the export's analysis (the minimum over each joint's bending planes), and the
+    file they came in is not published."""
     from bvsr_cad.build._runtime.analyses_process import GEOMETRY_AHEAD_FILE
 
     manifest = json.loads((bvsr_export / "manifest.json").read_text())
     analysis = json.loads((bvsr_export / "analysis" / "limits.json").read_text())
     assert [b["theta_max_rad"] for b in manifest["robot"]["bending_joints"]] == [
-        min(j["theta_max_rad"]) for j in analysis["joints"]]
+        min(j["theta_max_rad"]) for j in analysis["joints"]
+    ]
     assert not (bvsr_export / GEOMETRY_AHEAD_FILE).exists()
     assert not list(bvsr_export.rglob(GEOMETRY_AHEAD_FILE + "*"))
 
 
 def test_the_robot_checks_run_once_in_whichever_process_claims_them(bvsr_export, tmp_path):
-    """The build's robot checks come in two parts, each to whichever of its processes is free first (the
-    checks' process, given them at its start, or the build's own, at its wait for the analyses): the
-    first to claim a part takes it and no later one does. The export holds every robot check once, in the
-    order and with the verdicts of the checks run in one go, and no claim."""
+    """The build's robot checks come in two parts, each to whichever of its processes is free first
+    (the checks' process, given them at its start, or the build's own, at its wait for the
+    analyses): the first to claim a part takes it and no later one does. The export holds every
+    robot check once, in the order and with the verdicts of the checks run in one go, and no
+    claim."""
     from bvsr_cad.checks.export import Export
     from bvsr_cad.checks.robot import ROBOT_PARTS, check_robot
     from bvsr_cad.checks.run import ROBOT_CLAIM_FILES, claim_robot_checks
@@ -463,15 +522,17 @@ def test_the_robot_checks_run_once_in_whichever_process_claims_them(bvsr_export,
     alone = check_robot(Export.open(bvsr_export))
     robot = {r.name for r in alone}
     assert len(alone) > 50 and len(robot) == len(alone)
-    assert [(c["name"], c["passed"]) for c in manifest["checks"] if c["name"] in robot] == \
-        [(r.name, r.passed) for r in alone]
+    assert [(c["name"], c["passed"]) for c in manifest["checks"] if c["name"] in robot] == [
+        (r.name, r.passed) for r in alone
+    ]
     assert not any((bvsr_export / claim).exists() for claim in ROBOT_CLAIM_FILES)
 
 
 def test_the_analyses_process_is_told_where_to_draw_as_an_absolute_folder(tmp_path, monkeypatch):
-    """The analyses' process draws their pictures into the build's temporary folder, working in another
-    folder than the build's: a build into a relative output folder (``make exports``: ``-o exports/bvsr``)
-    names it by its absolute path (a relative one made the process fail: the folder was not found)."""
+    """The analyses' process draws their pictures into the build's temporary folder, working in
+    another folder than the build's: a build into a relative output folder (``make exports``: ``-o
+    exports/bvsr``) names it by its absolute path (a relative one made the process fail: the folder
+    was not found)."""
     from bvsr_cad.build import pipeline
     from bvsr_cad.build._runtime import worker
 
@@ -492,7 +553,7 @@ def test_the_analyses_process_is_told_where_to_draw_as_an_absolute_folder(tmp_pa
     monkeypatch.chdir(tmp_path)
     with pytest.raises(Reached):
         pipeline.build_export(PARAMS / "bvsr.toml", Path("exports") / "bvsr", use_cache=False)
-    (module, *_rest, pictures, name), = given
+    ((module, *_rest, pictures, name),) = given
     assert module == "bvsr_cad.build._runtime.analyses_process" and name == "bvsr"
     assert Path(pictures).is_absolute() and Path(pictures).parent == tmp_path / "exports"
     assert Path(pictures).name.startswith(".bvsr.tmp-")
@@ -500,9 +561,11 @@ def test_the_analyses_process_is_told_where_to_draw_as_an_absolute_folder(tmp_pa
 
 @pytest.mark.parametrize("during", ["a command", "a C extension's import"])
 def test_ctrl_c_exits_130_with_one_line_not_a_traceback(monkeypatch, capsys, during):
-    """Ctrl-C during OCP's import reaches Python as ``ImportError: initialization failed`` raised from the
-    KeyboardInterrupt (pybind11); unless treated as an interrupt it would end in exit code 1 and a second
-    ImportError's traceback (the error classes import OCP again). Both forms are an interrupt."""
+    """Ctrl-C during OCP's import reaches Python as ``ImportError: initialization failed`` raised
+    from the KeyboardInterrupt (pybind11); unless treated as an interrupt it would end in exit code
+    1 and a second ImportError's traceback (the error classes import OCP again). Both forms are an
+    interrupt."""
+
     def interrupted(args):
         if during == "a command":
             raise KeyboardInterrupt
@@ -512,18 +575,21 @@ def test_ctrl_c_exits_130_with_one_line_not_a_traceback(monkeypatch, capsys, dur
             raise ImportError("initialization failed") from exc
 
     monkeypatch.setattr(cli, "cmd_build", interrupted)
-    monkeypatch.setattr(cli, "_error_classes", lambda: pytest.fail("an interrupt is not an error to classify"))
+    monkeypatch.setattr(
+        cli, "_error_classes", lambda: pytest.fail("an interrupt is not an error to classify")
+    )
     assert cli.main(["build", "params/bvsr.toml"]) == 130
     assert capsys.readouterr().err == "bvsr: interrupted; nothing was published\n"
 
 
-#: The ``read`` system call's number, by machine (what ``/proc/PID/syscall`` shows for a process waiting on it).
+#: The ``read`` system call's number, by machine (what ``/proc/PID/syscall`` shows for a process
+#: waiting on it).
 _READ_SYSCALL = {"x86_64": "0", "aarch64": "63"}
 
 
 def _reads_stdin(pid: int) -> bool | None:
-    """Whether the process is blocked reading its standard input (its main thread in ``read(0, ...)``);
-    None where ``/proc/PID/syscall`` cannot tell (another system, another machine)."""
+    """Whether the process is blocked reading its standard input (its main thread in ``read(0,
+    ...)``); None where ``/proc/PID/syscall`` cannot tell (another system, another machine)."""
     import platform
 
     try:
@@ -538,13 +604,15 @@ def _reads_stdin(pid: int) -> bool | None:
 
 @contextlib.contextmanager
 def _sigint_reaches_children():
-    """Children started in the block get SIGINT's default action whatever this process has: a runner that
-    ignores it (a background job of a shell script, nohup: how CI was run here) hands SIG_IGN on to every
-    child, and an ignored Ctrl-C stops nothing (as it should: ``nohup bvsr build &`` is not to be
-    interrupted)."""
+    """Children started in the block get SIGINT's default action whatever this process has: a runner
+    that ignores it (a background job of a shell script, nohup: how CI was run here) hands SIG_IGN
+    on to every child, and an ignored Ctrl-C stops nothing (as it should: ``nohup bvsr build &`` is
+    not to be interrupted)."""
     import signal
 
-    before = signal.signal(signal.SIGINT, signal.default_int_handler)  # handled here: default after exec
+    before = signal.signal(
+        signal.SIGINT, signal.default_int_handler
+    )  # handled here: default after exec
     try:
         yield
     finally:
@@ -553,10 +621,10 @@ def _sigint_reaches_children():
 
 def test_ctrl_c_leaves_a_waiting_standby_process_quietly(tmp_path):
     """Ctrl-C reaches the standby analyses process too (same process group): it leaves with 130 and
-    no KeyboardInterrupt traceback (from its wait on stdin) among the build's lines. Under a background
-    job the child would inherit an ignored SIGINT, so it is given the default
-    (:func:`_sigint_reaches_children`). It waits until the child is blocked on its stdin, not
-    until its CPU time stands still for a second (which a process waiting for a core shows too)."""
+    no KeyboardInterrupt traceback (from its wait on stdin) among the build's lines. Under a
+    background job the child would inherit an ignored SIGINT, so it is given the default
+    (:func:`_sigint_reaches_children`). It waits until the child is blocked on its stdin, not until
+    its CPU time stands still for a second (which a process waiting for a core shows too)."""
     import signal
     import time
 
@@ -564,7 +632,9 @@ def test_ctrl_c_leaves_a_waiting_standby_process_quietly(tmp_path):
 
     lines: list[str] = []
     with _sigint_reaches_children():
-        standby = worker.SecondProcess.standby("bvsr_cad.build._runtime.analyses_process", progress=lines.append)
+        standby = worker.SecondProcess.standby(
+            "bvsr_cad.build._runtime.analyses_process", progress=lines.append
+        )
     if standby is None:
         pytest.skip("one core: the analyses never leave the process")
     pid, last, still = standby.proc.pid, None, 0
@@ -589,14 +659,17 @@ def test_ctrl_c_leaves_a_waiting_standby_process_quietly(tmp_path):
 
 def test_an_interrupt_is_held_through_imports_that_catch_base_exception():
     """trimesh's optional imports catch ``BaseException``: a Ctrl-C landing in one was swallowed and
-    ``bvsr build`` ran on. :func:`~bvsr_cad.build._runtime.worker.interrupts_held` delivers it when the block ends."""
+    ``bvsr build`` ran on. :func:`~bvsr_cad.build._runtime.worker.interrupts_held` delivers it when
+    the block ends."""
     import os
     import signal
     import threading
 
     from bvsr_cad.build._runtime.worker import interrupts_held
 
-    def optional_import() -> bool:  # trimesh's pattern (trimesh/grouping.py): True when it swallowed one
+    def optional_import() -> (
+        bool
+    ):  # trimesh's pattern (trimesh/grouping.py): True when it swallowed one
         try:
             os.kill(os.getpid(), signal.SIGINT)
             for _ in range(1000):  # the handler runs between bytecodes
@@ -606,7 +679,9 @@ def test_an_interrupt_is_held_through_imports_that_catch_base_exception():
         return False
 
     assert threading.current_thread() is threading.main_thread()
-    before = signal.signal(signal.SIGINT, signal.default_int_handler)  # pytest-xdist's worker may have its own
+    before = signal.signal(
+        signal.SIGINT, signal.default_int_handler
+    )  # pytest-xdist's worker may have its own
     try:
         assert optional_import()  # the premise: unheld, the interrupt is lost in the library
         swallowed = None
@@ -617,7 +692,9 @@ def test_an_interrupt_is_held_through_imports_that_catch_base_exception():
         assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
         with interrupts_held():  # no interrupt: nothing raised
             pass
-        with pytest.raises(KeyboardInterrupt) as info:  # an interrupt wins over the block's own error
+        with pytest.raises(
+            KeyboardInterrupt
+        ) as info:  # an interrupt wins over the block's own error
             with interrupts_held():
                 optional_import()
                 raise ImportError("a library's import failed after the Ctrl-C")
@@ -632,10 +709,10 @@ def test_an_interrupt_is_held_through_imports_that_catch_base_exception():
 @pytest.mark.slow
 @pytest.mark.parametrize("after_s", [0.3, 0.7, 1.2])
 def test_ctrl_c_while_the_build_imports_stops_it_quietly(tmp_path, after_s):
-    """Ctrl-C (SIGINT to the command's process group, as a terminal sends it) early in ``bvsr build``,
-    while the command and its second process import their libraries (trimesh's optional imports catch
-    ``BaseException``, so an interrupt there would be swallowed, or print the second process's traceback).
-    Each ends with 130, one line, nothing published and no process left."""
+    """Ctrl-C (SIGINT to the command's process group, as a terminal sends it) early in ``bvsr
+    build``, while the command and its second process import their libraries (trimesh's optional
+    imports catch ``BaseException``, so an interrupt there would be swallowed, or print the second
+    process's traceback). Each ends with 130, one line, nothing published and no process left."""
     import os
     import signal
     import subprocess
@@ -645,11 +722,19 @@ def test_ctrl_c_while_the_build_imports_stops_it_quietly(tmp_path, after_s):
     out = tmp_path / "exp"
     bvsr = Path(sys.executable).with_name("bvsr")
     cmd = [str(bvsr)] if bvsr.exists() else [sys.executable, "-m", "bvsr_cad.cli"]
-    env = {**os.environ, "BVSR_CACHE": str(tmp_path / "cache")}  # a cold cache: the pipeline is imported
+    env = {
+        **os.environ,
+        "BVSR_CACHE": str(tmp_path / "cache"),
+    }  # a cold cache: the pipeline is imported
     with _sigint_reaches_children():
-        build = subprocess.Popen([*cmd, "build", str(PARAMS / "bvsr.toml"), "-o", str(out)], env=env,
-                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                                 start_new_session=True)
+        build = subprocess.Popen(
+            [*cmd, "build", str(PARAMS / "bvsr.toml"), "-o", str(out)],
+            env=env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            text=True,
+            start_new_session=True,
+        )
     try:
         time.sleep(after_s)
         os.killpg(build.pid, signal.SIGINT)

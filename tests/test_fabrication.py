@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from bvsr_cad.build._runtime.checks_process import run_checks
 from bvsr_cad.build.cache import ArtifactCache
 from bvsr_cad.checks import printability
 from bvsr_cad.checks.export import Export
@@ -31,7 +32,6 @@ from bvsr_cad.checks.printability import (
     slice_items,
     slice_stls,
 )
-from bvsr_cad.build._runtime.checks_process import run_checks
 from bvsr_cad.cli import main
 
 
@@ -46,7 +46,9 @@ def _checks(manifest: dict, prefix: str) -> list[dict]:
 
 def test_rigid_pieces_one_per_joint_and_fit_the_printer(manifest, bvsr_export):
     pieces = [p for p in manifest["parts"] if p["kind"] == "rigid_tail"]
-    assert [p["name"] for p in pieces] == [f"rigid_j{k}" for k in range(1, manifest["joints"] + 1)] + ["rigid_tip"]
+    assert [p["name"] for p in pieces] == [
+        f"rigid_j{k}" for k in range(1, manifest["joints"] + 1)
+    ] + ["rigid_tip"]
     vx, vy, vz = manifest["rigid_tail"]["printer_volume_mm"]
     assert (vx, vy, vz) == (250.0, 210.0, 210.0)
     for p in pieces:
@@ -60,7 +62,9 @@ def test_rigid_pieces_one_per_joint_and_fit_the_printer(manifest, bvsr_export):
 def test_rigid_pieces_stack_to_the_tail_length(manifest):
     pieces = [p for p in manifest["parts"] if p["kind"] == "rigid_tail"]
     top = max(p["tail_transform"][2][3] + p["info"]["size_mm"][2] for p in pieces)
-    assert top == pytest.approx(6 * 36.51 + 7 * (42.51 - 36.51), abs=1e-6)  # Table I: N H_a + (N + 1) t
+    assert top == pytest.approx(
+        6 * 36.51 + 7 * (42.51 - 36.51), abs=1e-6
+    )  # Table I: N H_a + (N + 1) t
 
 
 def test_rigid_envelope_equals_bvsr_at_rest(bvsr_export, manifest):
@@ -78,7 +82,8 @@ def test_rigid_pieces_need_no_support(manifest):
 
 
 def test_overhang_map_finds_a_flat_ceiling():
-    # A table: a 40 x 40 top on one 5 x 5 leg; the top's underside needs support, 35 mm > 10 mm bridge.
+    # A table: a 40 x 40 top on one 5 x 5 leg; the top's underside needs support, 35 mm > 10 mm
+    # bridge.
     leg = trimesh.creation.box((5, 5, 20))
     leg.apply_translation((0, 0, 10))
     top = trimesh.creation.box((40, 40, 3))
@@ -124,13 +129,19 @@ def test_bom_counts_equal_the_assembly(manifest, bvsr_export):
     for p in manifest["parts"]:
         assert float(by_item[p["name"]]["quantity"]) == p["count"], p["name"]
     assert float(by_item["soa"]["quantity"]) == 30
-    assert sum(float(r["quantity"]) for r in rows if r["item"].startswith("panel")) == manifest["panels"] == 7
+    assert (
+        sum(float(r["quantity"]) for r in rows if r["item"].startswith("panel"))
+        == manifest["panels"]
+        == 7
+    )
     assert float(by_item["solenoid valve"]["quantity"]) == 20  # 2 per line, 10 lines
     assert float(by_item["dowel pin"]["quantity"]) == 5 * manifest["joints"]
     tubes = [r for r in rows if r["item"].startswith("tube s")]
     assert len(tubes) == 5 * manifest["segments"]
     total = next(r for r in rows if r["category"] == "total" and r["item"] == "tube")
-    assert float(total["quantity"]) == pytest.approx(sum(float(r["quantity"]) for r in tubes), abs=0.1)
+    assert float(total["quantity"]) == pytest.approx(
+        sum(float(r["quantity"]) for r in tubes), abs=0.1
+    )
     modelled = next(r for r in rows if r["item"] == "BVSR modelled mass")
     assert float(modelled["mass_total_g"]) == pytest.approx(manifest["mass_g"]["tail"], abs=0.01)
     assert (bvsr_export / "bom.md").read_text().count("| qty |") >= 3
@@ -173,14 +184,18 @@ def _no_slicer_started(monkeypatch) -> None:
     monkeypatch.setattr(printability.subprocess, "run", refuse)
 
 
-def test_slicing_not_in_the_cache_is_null_with_the_command(bvsr_export, manifest, monkeypatch, tmp_path):
+def test_slicing_not_in_the_cache_is_null_with_the_command(
+    bvsr_export, manifest, monkeypatch, tmp_path
+):
     monkeypatch.setenv("BVSR_CACHE", str(tmp_path / "empty_cache"))
     _no_slicer_started(monkeypatch)
     results = check_slicing(Export.open(bvsr_export))
     assert len(results) == sum(len(j["items"]) for j in manifest["print_jobs"])
     for r in results:
         assert r.name.startswith("slice:") and r.passed is None and r.value is None, r.line()
-        assert "bvsr check EXPORT --slice" in r.note, r.note  # the same in every folder (reused builds)
+        assert "bvsr check EXPORT --slice" in r.note, (
+            r.note
+        )  # the same in every folder (reused builds)
         assert "not sliced in the build" in r.note or "not installed" in r.note
 
 
@@ -192,7 +207,9 @@ def test_slice_one_stl_as_check_slice_does(bvsr_export, monkeypatch, tmp_path):
     core = [it for it in slice_items(exp) if it.name == "FDM_PVA/mold_core"]
     assert len(core) == 1
     said: list[str] = []
-    done = slice_stls(exp, core, progress=said.append)  # what `bvsr check --slice` runs, on one small STL
+    done = slice_stls(
+        exp, core, progress=said.append
+    )  # what `bvsr check --slice` runs, on one small STL
     assert done["FDM_PVA/mold_core"]["ok"] is True and done["FDM_PVA/mold_core"]["layers"] > 0, done
     assert any(m.startswith("slice 1/1 print/FDM_PVA/mold_core.stl: ok, ") for m in said), said
     (now,) = check_slicing(exp, core, sliced_now=done)
@@ -212,7 +229,9 @@ def test_check_slice_without_the_slicer_exits_2(bvsr_export, monkeypatch, tmp_pa
     monkeypatch.setenv("BVSR_CACHE", str(tmp_path / "cache"))
     assert main(["check", str(bvsr_export), "--slice", "-q"]) == 2
     err = capsys.readouterr().err
-    assert "prusa-slicer" in err and "not on PATH" in err and "apt-get install prusa-slicer" in err, err
+    assert (
+        "prusa-slicer" in err and "not on PATH" in err and "apt-get install prusa-slicer" in err
+    ), err
 
 
 def test_printability_in_a_second_process_gives_the_same_results(bvsr_export):
@@ -221,13 +240,17 @@ def test_printability_in_a_second_process_gives_the_same_results(bvsr_export):
     alone = run_checks(bvsr_export, parallel=False)
     assert json.dumps([r.to_json() for r in beside]) == json.dumps([r.to_json() for r in alone])
     if (os.cpu_count() or 1) >= 2:
-        assert any(m.startswith("printability and molds: done in the second process") for m in said), said
+        assert any(
+            m.startswith("printability and molds: done in the second process") for m in said
+        ), said
 
 
-def test_a_relative_cache_is_where_the_user_stands_not_in_the_export(bvsr_export, monkeypatch, tmp_path):
-    """`BVSR_CACHE=cache bvsr build ...`: the cache is `cache/` where the command runs, for the printability
-    process too, which works in the export's folder (handed the path as written, it once filed its
-    entries in a `cache/` inside the export)."""
+def test_a_relative_cache_is_where_the_user_stands_not_in_the_export(
+    bvsr_export, monkeypatch, tmp_path
+):
+    """`BVSR_CACHE=cache bvsr build ...`: the cache is `cache/` where the command runs, for the
+    printability process too, which works in the export's folder (handed the path as written, it
+    once filed its entries in a `cache/` inside the export)."""
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("BVSR_CACHE", "relative_cache")
     before = sorted(p.relative_to(bvsr_export) for p in bvsr_export.rglob("*"))
@@ -236,11 +259,14 @@ def test_a_relative_cache_is_where_the_user_stands_not_in_the_export(bvsr_export
     assert any((tmp_path / "relative_cache" / "artifacts").rglob(".done"))
 
 
-def test_a_second_process_in_another_folder_reads_the_slice_cache_the_user_names(monkeypatch, tmp_path):
-    """With a relative BVSR_CACHE, a child started in another working folder (as the printability process
-    is, in the export's) finds slices.json where the user stands, not under its own folder."""
-    from bvsr_cad.checks.environment import slice_cache_path
+def test_a_second_process_in_another_folder_reads_the_slice_cache_the_user_names(
+    monkeypatch, tmp_path
+):
+    """With a relative BVSR_CACHE, a child started in another working folder (as the printability
+    process is, in the export's) finds slices.json where the user stands, not under its own
+    folder."""
     from bvsr_cad.build._runtime.worker import child_env
+    from bvsr_cad.checks.environment import slice_cache_path
 
     (tmp_path / "user").mkdir()
     (tmp_path / "elsewhere").mkdir()
@@ -248,9 +274,18 @@ def test_a_second_process_in_another_folder_reads_the_slice_cache_the_user_names
     monkeypatch.setenv("BVSR_CACHE", "relative_cache")
     here = slice_cache_path()
     assert here == tmp_path / "user" / "relative_cache" / "slices.json"
-    there = subprocess.run([sys.executable, "-c", "from bvsr_cad.checks.environment import slice_cache_path; "
-                            "print(slice_cache_path())"], cwd=tmp_path / "elsewhere", env=child_env(),
-                           capture_output=True, text=True, check=True).stdout.strip()
+    there = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "from bvsr_cad.checks.environment import slice_cache_path; print(slice_cache_path())",
+        ],
+        cwd=tmp_path / "elsewhere",
+        env=child_env(),
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.strip()
     assert Path(there) == here
 
 
@@ -261,8 +296,12 @@ def test_printability_runs_here_when_the_second_process_fails(bvsr_export, monke
 
     if (os.cpu_count() or 1) < 2:
         pytest.skip("one core: the printability checks never leave the process")
-    monkeypatch.setattr(worker.sys, "executable", shutil.which("false") or "/bin/false")  # exits, no results
-    monkeypatch.setattr(run, "check_printability", lambda exp, sliced_now=(), memo=None: ["ran here"])
+    monkeypatch.setattr(
+        worker.sys, "executable", shutil.which("false") or "/bin/false"
+    )  # exits, no results
+    monkeypatch.setattr(
+        run, "check_printability", lambda exp, sliced_now=(), memo=None: ["ran here"]
+    )
     said: list[str] = []
     group = run._Printability(Export.open(bvsr_export), (), said.append, beside(None))
     assert group.proc is not None
@@ -274,7 +313,10 @@ def test_printability_runs_here_when_the_second_process_fails(bvsr_export, monke
 def test_min_hole_sections_agree_with_trimesh():
     # A plate with a 3 mm and a 5 mm hole along z and a 2.5 mm hole along x.
     plate = trimesh.creation.box((40, 20, 8))
-    cut = [trimesh.creation.cylinder(1.5, 30, sections=48), trimesh.creation.cylinder(2.5, 30, sections=48)]
+    cut = [
+        trimesh.creation.cylinder(1.5, 30, sections=48),
+        trimesh.creation.cylinder(2.5, 30, sections=48),
+    ]
     cut[0].apply_translation((-10, 0, 0))
     cut[1].apply_translation((10, 0, 0))
     side = trimesh.creation.cylinder(1.25, 60, sections=32)
@@ -297,11 +339,15 @@ def test_min_hole_sections_agree_with_trimesh():
 def test_closest_points_as_trimesh_computes_them():
     mesh = trimesh.creation.annulus(3.0, 8.0, 5.0, sections=40)
     rng = np.random.default_rng(3)
-    pts = np.vstack([rng.uniform(-10, 10, (300, 3)), trimesh.sample.sample_surface(mesh, 300, seed=4)[0]])
+    pts = np.vstack(
+        [rng.uniform(-10, 10, (300, 3)), trimesh.sample.sample_surface(mesh, 300, seed=4)[0]]
+    )
     index = _SurfaceIndex(mesh)
     _, d, _ = index.closest_point(pts)
     assert np.allclose(d, trimesh.proximity.closest_point(mesh, pts)[1], atol=1e-12)
-    assert np.allclose(index.signed_distance(pts), trimesh.proximity.signed_distance(mesh, pts), atol=1e-12)
+    assert np.allclose(
+        index.signed_distance(pts), trimesh.proximity.signed_distance(mesh, pts), atol=1e-12
+    )
 
 
 def test_rigid_robot_loads_in_mujoco(manifest, bvsr_export):
@@ -316,10 +362,10 @@ def test_rigid_robot_loads_in_mujoco(manifest, bvsr_export):
 
 
 def test_model_against_measurements(manifest, bvsr_export):
-    """The shipped file is calibrated on data/paper_bvsr.csv: the build predicts every row that measured
-    the 2-segment tail (all but those naming another segment count, which the note names) with the
-    tables' and the fitted values; the SOA stiffness rows are the paper's k = 9.4 P + 2918 N/m (P in
-    kPa, a closed form); the counts and RMS in the report are those of the rows."""
+    """The shipped file is calibrated on data/paper_bvsr.csv: the build predicts every row that
+    measured the 2-segment tail (all but those naming another segment count, which the note names)
+    with the tables' and the fitted values; the SOA stiffness rows are the paper's k = 9.4 P + 2918
+    N/m (P in kPa, a closed form); the counts and RMS in the report are those of the rows."""
     import csv
 
     from .conftest import ROOT
@@ -327,15 +373,22 @@ def test_model_against_measurements(manifest, bvsr_export):
     meas = json.loads((bvsr_export / manifest["analysis"]["measurements"]).read_text())
     with open(ROOT / "data" / "paper_bvsr.csv", newline="") as fh:
         data = [r for r in csv.reader(line for line in fh if not line.startswith("#"))][1:]
-    other = [n for n, r in enumerate(data, start=2) if "segments=" in r[2] and "segments=2" not in r[2]]
-    assert other and [r["row"] for r in meas["rows"]] == [n for n in range(2, len(data) + 2) if n not in other]
+    other = [
+        n for n, r in enumerate(data, start=2) if "segments=" in r[2] and "segments=2" not in r[2]
+    ]
+    assert other and [r["row"] for r in meas["rows"]] == [
+        n for n in range(2, len(data) + 2) if n not in other
+    ]
     assert f"row {other[0]} measured a 3-segment tail" in meas["note"] and len(other) == 1
     for r in meas["rows"]:
         if r["quantity"] == "soa_stiffness":
             p_kpa = float(r["label"].split("pressure_kpa=")[1].rstrip(")"))
             assert r["calibrated"] == pytest.approx(9.4 * p_kpa + 2918, rel=1e-9)
     hold = [r for r in meas["rows"] if r["role"] == "holdout"]
-    assert meas["holdout_landed"] == [sum(abs(r["rel_calibrated"]) <= 0.30 for r in hold), len(hold)]
+    assert meas["holdout_landed"] == [
+        sum(abs(r["rel_calibrated"]) <= 0.30 for r in hold),
+        len(hold),
+    ]
     assert meas["rms_rel_holdout"] < 0.5 * meas["rms_rel_holdout_uncalibrated"]
     html = (bvsr_export / "report.html").read_text()
     assert "Model against measurements" in html
@@ -349,12 +402,19 @@ def test_report_has_its_pictures(manifest, bvsr_export):
     srcs = re.findall(r'<img src="([^"]+)"', html)
     assert srcs and all((bvsr_export / s).is_file() for s in srcs)
     for part in manifest["parts"]:
-        assert f"report/parts/{part['name']}.png" in srcs or f"report/parts/{part['name']}.png" in html
+        assert (
+            f"report/parts/{part['name']}.png" in srcs or f"report/parts/{part['name']}.png" in html
+        )
     assert "Against the paper" in html and "not computed here" in html and "678.6" in html
     # The interactive view: its scripts are in the export, nothing is fetched from a network.
-    assert "bvsr-viewer" in html and "http://" not in html.replace('xmlns="http://', "") and "https://" not in html
-    assert (bvsr_export / "report" / "viewer.js").is_file() and {s["name"] for s in manifest["viewer"]["scenes"]} >= {
-        "rest", "extension", "flexion", "waggle", "molds", "rigid_twin"}
+    assert (
+        "bvsr-viewer" in html
+        and "http://" not in html.replace('xmlns="http://', "")
+        and "https://" not in html
+    )
+    assert (bvsr_export / "report" / "viewer.js").is_file() and {
+        s["name"] for s in manifest["viewer"]["scenes"]
+    } >= {"rest", "extension", "flexion", "waggle", "molds", "rigid_twin"}
     for png in ("analysis/workspace.png", "molds/exploded.png", "analysis/measurements.png"):
         if (bvsr_export / png).is_file():
             assert png in srcs

@@ -1,4 +1,5 @@
-"""The one-way data flow of DESIGN.md: every module sits in exactly one layer and nothing imports upward."""
+"""The one-way data flow of DESIGN.md: every module sits in exactly one layer and nothing imports
+upward."""
 
 from __future__ import annotations
 
@@ -7,10 +8,11 @@ from pathlib import Path
 
 PKG = Path(__file__).resolve().parents[1] / "bvsr_cad"
 
-#: Every top-level module and package of bvsr_cad in exactly one layer, lowest first (DESIGN.md's import
-#: direction). A module imports its own package freely and another package only from a lower layer: two
-#: packages of one layer (the writers and the checks) never import each other, so no layer hides an import.
-#: ``__version__`` is the package root's one value read below it (its ``__init__`` imports nothing at import).
+#: Every top-level module and package of bvsr_cad in exactly one layer, lowest first (DESIGN.md's
+#: import direction). A module imports its own package freely and another package only from a lower
+#: layer: two packages of one layer (the writers and the checks) never import each other, so no
+#: layer hides an import. ``__version__`` is the package root's one value read below it (its
+#: ``__init__`` imports nothing at import).
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("foundations", ("units", "colors", "folders", "extras", "defaults", "__version__")),
     ("parameters", ("parameters",)),
@@ -34,8 +36,8 @@ def _top(module: str) -> str:
 
 
 def _imports(path: Path) -> list[str]:
-    """The bvsr_cad modules ``path`` imports (anywhere in it: inside a function too), as dotted names under
-    the package."""
+    """The bvsr_cad modules ``path`` imports (anywhere in it: inside a function too), as dotted
+    names under the package."""
     parts = path.relative_to(PKG).with_suffix("").parts
     out = []
     for node in ast.walk(ast.parse(path.read_text())):
@@ -51,12 +53,20 @@ def _imports(path: Path) -> list[str]:
             elif node.module == "bvsr_cad":
                 out += [n.name for n in node.names]
         elif isinstance(node, ast.Import):
-            out += [a.name.removeprefix("bvsr_cad.") for a in node.names if a.name.startswith("bvsr_cad.")]
+            out += [
+                a.name.removeprefix("bvsr_cad.")
+                for a in node.names
+                if a.name.startswith("bvsr_cad.")
+            ]
     return out
 
 
 def _modules() -> list[Path]:
-    return [p for p in sorted(PKG.rglob("*.py")) if "__pycache__" not in p.parts and p.relative_to(PKG) != Path("__init__.py")]
+    return [
+        p
+        for p in sorted(PKG.rglob("*.py"))
+        if "__pycache__" not in p.parts and p.relative_to(PKG) != Path("__init__.py")
+    ]
 
 
 def upward_imports() -> list[str]:
@@ -70,8 +80,10 @@ def upward_imports() -> list[str]:
             if there not in LAYER:
                 bad.append(f"{here} imports {target}, which no layer holds")
             elif LAYER[there] >= LAYER[_top(here)]:
-                bad.append(f"{here} imports {target}: {LAYERS[LAYER[there]][0]} is not below "
-                           f"{LAYERS[LAYER[_top(here)]][0]}")
+                bad.append(
+                    f"{here} imports {target}: {LAYERS[LAYER[there]][0]} is not below "
+                    f"{LAYERS[LAYER[_top(here)]][0]}"
+                )
     return bad
 
 
@@ -92,16 +104,33 @@ def test_nothing_imports_upward():
 def test_checks_never_build_geometry():
     for path in (PKG / "checks").rglob("*.py"):
         text = path.read_text()
-        assert "build123d" not in text and "..parts" not in text and "..assembly" not in text, path.name
+        assert "build123d" not in text and "..parts" not in text and "..assembly" not in text, (
+            path.name
+        )
 
 
 #: Calls that write a file (or a picture) to disk.
-WRITERS = ("write_text", "write_bytes", "savefig", "screenshot", "export_stl", "export_step", "Write", "mkdir", "copyfile",
-           "rename", "unlink", "rmtree", "mkstemp", "mkdtemp")
+WRITERS = (
+    "write_text",
+    "write_bytes",
+    "savefig",
+    "screenshot",
+    "export_stl",
+    "export_step",
+    "Write",
+    "mkdir",
+    "copyfile",
+    "rename",
+    "unlink",
+    "rmtree",
+    "mkstemp",
+    "mkdtemp",
+)
 
 
 def test_nothing_below_the_exporters_writes_a_file():
-    """DESIGN.md: compute first, write last; the layers below exporters/ hand on objects in memory."""
+    """DESIGN.md: compute first, write last; the layers below exporters/ hand on objects in
+    memory."""
     bad = []
     for path in PKG.rglob("*.py"):
         rel = path.relative_to(PKG).with_suffix("")
@@ -111,8 +140,13 @@ def test_nothing_below_the_exporters_writes_a_file():
             if isinstance(node, ast.Call):
                 f = node.func
                 name = f.attr if isinstance(f, ast.Attribute) else getattr(f, "id", "")
-                mode = [a.value for a in node.args[1:2] if isinstance(a, ast.Constant)] + \
-                       [k.value.value for k in node.keywords if k.arg == "mode" and isinstance(k.value, ast.Constant)]
-                if name in WRITERS or (name == "open" and any(set(str(m)) & set("wax") for m in mode)):
+                mode = [a.value for a in node.args[1:2] if isinstance(a, ast.Constant)] + [
+                    k.value.value
+                    for k in node.keywords
+                    if k.arg == "mode" and isinstance(k.value, ast.Constant)
+                ]
+                if name in WRITERS or (
+                    name == "open" and any(set(str(m)) & set("wax") for m in mode)
+                ):
                     bad.append(f"{rel}:{node.lineno} {name}")
     assert not bad, bad

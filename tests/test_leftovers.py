@@ -1,4 +1,5 @@
-"""A build killed with SIGKILL leaves no process running, and the next build removes its leftovers."""
+"""A build killed with SIGKILL leaves no process running, and the next build removes its
+leftovers."""
 
 from __future__ import annotations
 
@@ -27,7 +28,9 @@ def test_leftovers_of_dead_builds_are_removed_live_ones_kept(tmp_path):
     out = tmp_path / "bvsr"
     dead = tmp_path / ".bvsr.tmp-dead"
     live = tmp_path / ".bvsr.tmp-live"
-    reused = tmp_path / ".bvsr.tmp-reused"  # a live PID that is another process now (start time differs)
+    reused = (
+        tmp_path / ".bvsr.tmp-reused"
+    )  # a live PID that is another process now (start time differs)
     for folder in (dead, live, reused):
         folder.mkdir()
     (dead / OWNER_FILE).write_text(f"{_dead_pid()} 12345\n")
@@ -48,8 +51,12 @@ def test_sigkill_leaves_no_second_process_and_the_next_build_cleans_up(tmp_path)
     out = tmp_path / "exp"
     bvsr = Path(sys.executable).with_name("bvsr")
     cmd = [str(bvsr)] if bvsr.exists() else [sys.executable, "-m", "bvsr_cad.cli"]
-    build = subprocess.Popen([*cmd, "build", str(PARAMS / "bvsr.toml"), "-o", str(out), "--no-cache"],
-                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    build = subprocess.Popen(
+        [*cmd, "build", str(PARAMS / "bvsr.toml"), "-o", str(out), "--no-cache"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     child = None
     deadline = time.time() + 120
     for line in build.stderr:  # wait until the second process reports progress
@@ -58,7 +65,10 @@ def test_sigkill_leaves_no_second_process_and_the_next_build_cleans_up(tmp_path)
     for pid in os.listdir("/proc"):
         if pid.isdigit():
             try:
-                if f"{build.pid}" == Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1]:
+                if (
+                    f"{build.pid}"
+                    == Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1]
+                ):
                     cmdline = Path(f"/proc/{pid}/cmdline").read_bytes()
                     if b"bvsr_cad.build._runtime.analyses_process" in cmdline:
                         child = int(pid)
@@ -78,16 +88,18 @@ def test_sigkill_leaves_no_second_process_and_the_next_build_cleans_up(tmp_path)
 
 
 def test_cache_entries_a_dead_build_was_writing_are_removed_live_ones_kept(tmp_path):
-    """A build SIGKILLed while it fills a cache entry leaves ``.<key>.tmp-*`` in the cache (megabytes of
-    STEP and STL); the next build removes such folders, never a live writer's, and a finished entry
-    carries no owner file."""
+    """A build SIGKILLed while it fills a cache entry leaves ``.<key>.tmp-*`` in the cache
+    (megabytes of STEP and STL); the next build removes such folders, never a live writer's, and a
+    finished entry carries no owner file."""
     cache = ArtifactCache(tmp_path / "artifacts")
     key = "ab" + "0" * 62
     entry = cache.put(key, lambda folder: (folder / "x.txt").write_text("x"))
     assert not (entry / OWNER_FILE).exists() and cache.get(key) == entry
     shard = tmp_path / "artifacts" / "cd"
     shard.mkdir()
-    dead, live, reused, old, new = (shard / f".cd0000000000.tmp-{n}" for n in ("dead", "live", "reused", "old", "new"))
+    dead, live, reused, old, new = (
+        shard / f".cd0000000000.tmp-{n}" for n in ("dead", "live", "reused", "old", "new")
+    )
     for folder in (dead, live, reused, old, new):
         folder.mkdir()
         (folder / "part.stl").write_text("solid\n")

@@ -12,7 +12,6 @@ import pytest
 import trimesh
 
 from bvsr_cad.checks.export import Export, clear_cache
-from bvsr_cad.checks.queries import contains
 from bvsr_cad.checks.molds import (
     MoldMesh,
     cast_samples,
@@ -21,9 +20,10 @@ from bvsr_cad.checks.molds import (
     mold_meshes,
     subdivided_triangles,
 )
+from bvsr_cad.checks.queries import contains
 from bvsr_cad.exporters.mold_files import write_molds
-from bvsr_cad.parts.mold import mold_set
 from bvsr_cad.parameters.load import ParamError, spec_from_dict
+from bvsr_cad.parts.mold import mold_set
 
 MOLD_PARTS = {"half_a", "half_b", "bottom_plate", "lid", "core"}
 
@@ -31,8 +31,12 @@ MOLD_PARTS = {"half_a", "half_b", "bottom_plate", "lid", "core"}
 def _export_molds(spec, root: Path) -> Export:
     """Write only the mold set of ``spec`` and open it as an export."""
     root.mkdir(parents=True, exist_ok=True)
-    fragment = write_molds(SimpleNamespace(spec=spec), mold_set(spec.soa, spec.joint.base_diameter_mm, spec.casting),
-                           root, lambda _m: None)
+    fragment = write_molds(
+        SimpleNamespace(spec=spec),
+        mold_set(spec.soa, spec.joint.base_diameter_mm, spec.casting),
+        root,
+        lambda _m: None,
+    )
     (root / "molds.json").write_text(json.dumps(fragment))
     return Export(root, fragment)
 
@@ -63,8 +67,12 @@ def test_manifest_follows_spec_section_7(default_molds):
         else:
             assert np.linalg.norm(p["pull_direction"]) == pytest.approx(1.0, abs=1e-12)
     # SPEC's example: half_a leaves along (1, -1, 0)/sqrt(2), half_b the other way.
-    assert parts["half_a"]["pull_direction"] == pytest.approx([math.sqrt(0.5), -math.sqrt(0.5), 0.0])
-    assert parts["half_b"]["pull_direction"] == pytest.approx([-math.sqrt(0.5), math.sqrt(0.5), 0.0])
+    assert parts["half_a"]["pull_direction"] == pytest.approx(
+        [math.sqrt(0.5), -math.sqrt(0.5), 0.0]
+    )
+    assert parts["half_b"]["pull_direction"] == pytest.approx(
+        [-math.sqrt(0.5), math.sqrt(0.5), 0.0]
+    )
     assert parts["lid"]["pull_direction"] == pytest.approx([0, 0, 1])
     assert parts["bottom_plate"]["pull_direction"] == pytest.approx([0, 0, -1])
 
@@ -73,7 +81,7 @@ def test_cast_is_the_soa_scaled_by_the_shrinkage(bvsr_spec):
     molds = mold_set(bvsr_spec.soa, bvsr_spec.joint.base_diameter_mm, bvsr_spec.casting)
     k = 1.0 + bvsr_spec.casting.shrinkage_percent / 100.0
     assert molds.scale == k
-    assert molds.cast.volume == pytest.approx(k ** 3 * molds.soa_volume_mm3, rel=1e-9)
+    assert molds.cast.volume == pytest.approx(k**3 * molds.soa_volume_mm3, rel=1e-9)
     box = molds.cast.bounding_box()
     assert box.min.Z == pytest.approx(0.0, abs=1e-5)  # bounding boxes carry a 1e-7 gap
     # fold_height_from = "origami_height": the SOA is Table II's H = 37.60 mm tall.
@@ -110,8 +118,17 @@ def exp_volume(exp: Export) -> float:
 def test_half_pulled_along_the_axis_is_not_demoldable(default_molds):
     exp, _ = default_molds
     cast, parts, channels = mold_meshes(exp)
-    wrong = [MoldMesh(p.name, p.assembled, np.array([0.0, 0.0, 1.0]) if p.name == "half_a" else p.pull_direction,
-                      p.parting_planes, p.printed, p.where) for p in parts]
+    wrong = [
+        MoldMesh(
+            p.name,
+            p.assembled,
+            np.array([0.0, 0.0, 1.0]) if p.name == "half_a" else p.pull_direction,
+            p.parting_planes,
+            p.printed,
+            p.where,
+        )
+        for p in parts
+    ]
     samples = cast_samples(cast, wrong, [m for _, _, m in channels])
     by = _by_name(check_demolding(cast, wrong, samples, exp.manifest["molds"]["parting_margin_mm"]))
     bad = by["mold_demold:half_a"]
@@ -150,7 +167,10 @@ def test_bad_casting_parameters_are_named(data, bvsr_spec):
 
 def test_subdivision_is_trimeshs_subdivide_to_size():
     # A box with long and short edges and a cylinder (thin fan triangles): every case of the split.
-    for mesh in (trimesh.creation.box((7.3, 2.2, 0.6)), trimesh.creation.cylinder(4.0, 9.0, sections=24)):
+    for mesh in (
+        trimesh.creation.box((7.3, 2.2, 0.6)),
+        trimesh.creation.cylinder(4.0, 9.0, sections=24),
+    ):
         v, f = trimesh.remesh.subdivide_to_size(mesh.vertices, mesh.faces, max_edge=1.0)
         got = subdivided_triangles(mesh, 1.0)
         assert got.shape == (len(f), 3, 3)
@@ -169,4 +189,3 @@ def test_contains_is_trimeshs():
     side = rng.choice([-1.0, 1.0], len(on))[:, None]
     pts = np.vstack([rng.uniform(-6, 6, (4000, 3)), on + 0.02 * side * mesh.face_normals[faces]])
     assert np.array_equal(contains(mesh, pts), mesh.contains(pts))
-

@@ -1,9 +1,9 @@
 """`bvsr show`, `Tail.show` and `bvsr watch --show`: the tail in a running OCP CAD Viewer.
 
 The viewer test starts the real standalone viewer (``python -m ocp_viewer``, headless: no browser is
-opened) and registers a websocket client with it as its browser, so what the viewer received is what it
-relays to that client; the expected names and colours come from the assembly's instances and the colour
-table, not from the sending code.
+opened) and registers a websocket client with it as its browser, so what the viewer received is what
+it relays to that client; the expected names and colours come from the assembly's instances and the
+colour table, not from the sending code.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ import time
 import pytest
 
 from bvsr_cad.colors import ALPHA, rgb
+
 from .conftest import PARAMS
 
 
@@ -37,20 +38,30 @@ def test_show_without_a_viewer_exits_2_and_says_how_to_start_one(capsys):
     assert "python -m ocp_viewer" in err and "bvsr_cad[viewer]" in err, err
     if importlib.util.find_spec("ocp_vscode") is not None:
         assert f"no OCP CAD Viewer listens on port {port}" in err
-    assert main(["watch", str(PARAMS / "bvsr.toml"), "--show", "--port", str(port)]) == 2  # before any build
+    assert (
+        main(["watch", str(PARAMS / "bvsr.toml"), "--show", "--port", str(port)]) == 2
+    )  # before any build
 
 
 @pytest.fixture(scope="module")
 def viewer():
     """The standalone viewer on a free port, and a client registered as its browser."""
-    missing = [m for m in ("ocp_vscode", "ocp_viewer", "websockets") if importlib.util.find_spec(m) is None]
+    missing = [
+        m for m in ("ocp_vscode", "ocp_viewer", "websockets") if importlib.util.find_spec(m) is None
+    ]
     if missing:
-        pytest.skip(f"the OCP CAD Viewer test needs {', '.join(missing)}: pip install 'bvsr_cad[viewer]'")
+        pytest.skip(
+            f"the OCP CAD Viewer test needs {', '.join(missing)}: pip install 'bvsr_cad[viewer]'"
+        )
     from websockets.sync.client import connect
 
     port = _free_port()
-    proc = subprocess.Popen([sys.executable, "-m", "ocp_viewer", "--port", str(port)],
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "ocp_viewer", "--port", str(port)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     try:
         end = time.time() + 60
         while True:
@@ -92,13 +103,20 @@ def test_the_standalone_viewer_receives_every_instance_named_and_coloured(viewer
         assert p["alpha"] == pytest.approx(ALPHA.get(kind, 1.0))
         assert p["subtype"] == "solid"
     tip = f"panel{tail.spec.panels - 1}"
-    assert next(p for p in parts if p["name"] == tip)["loc"][1] == pytest.approx([0, 0, 0, 1], abs=1e-9)
-    # Posed through the command line: the same instances; every joint bent 10 deg towards +Y (phi 90 deg)
-    # turns the tip panel by joints x 10 deg about -X (constant curvature: the angles add up), the
-    # quaternion (x, y, z, w) = (-sin(a/2), 0, 0, cos(a/2)).
+    assert next(p for p in parts if p["name"] == tip)["loc"][1] == pytest.approx(
+        [0, 0, 0, 1], abs=1e-9
+    )
+    # Posed through the command line: the same instances; every joint bent 10 deg towards +Y (phi 90
+    # deg) turns the tip panel by joints x 10 deg about -X (constant curvature: the angles add up),
+    # the quaternion (x, y, z, w) = (-sin(a/2), 0, 0, cos(a/2)).
     from bvsr_cad.cli import main
 
-    assert main(["show", str(PARAMS / "bvsr.toml"), "--theta", "10", "--phi", "90", "--port", str(port)]) == 0
+    assert (
+        main(
+            ["show", str(PARAMS / "bvsr.toml"), "--theta", "10", "--phi", "90", "--port", str(port)]
+        )
+        == 0
+    )
     posed = _next_model(browser)["shapes"]["parts"]
     assert [p["name"] for p in posed] == [i.name for i in asm.instances]
     half = math.radians(10 * tail.spec.joints) / 2
@@ -108,12 +126,14 @@ def test_the_standalone_viewer_receives_every_instance_named_and_coloured(viewer
 
 @pytest.mark.slow
 def test_a_build_hands_on_its_assembly_before_it_writes_the_part_files(tmp_path, monkeypatch):
-    """`bvsr watch --show`'s hook (build_export's on_assembly): called once per build with the tail's
-    assembly, before any part file is written, with the instances the published manifest lists; an
-    export the cache holds whole is published and its assembly still handed on. A CI-sized tail."""
+    """`bvsr watch --show`'s hook (build_export's on_assembly): called once per build with the
+    tail's assembly, before any part file is written, with the instances the published manifest
+    lists; an export the cache holds whole is published and its assembly still handed on. A CI-sized
+    tail."""
     import tomllib
 
     from bvsr_cad.build.pipeline import build_export
+
     from .conftest import benchmark_script
     from .test_cache import SMALL_TAIL
 
@@ -132,11 +152,19 @@ def test_a_build_hands_on_its_assembly_before_it_writes_the_part_files(tmp_path,
     seen = []
 
     def on_assembly(asm):
-        seen.append({"names": [i.name for i in asm.instances],
-                     "part_files": sorted(p.name for p in tmp_path.rglob("*.stl") if "cache" not in p.parts)})
+        seen.append(
+            {
+                "names": [i.name for i in asm.instances],
+                "part_files": sorted(
+                    p.name for p in tmp_path.rglob("*.stl") if "cache" not in p.parts
+                ),
+            }
+        )
 
     build_export(params, out, on_assembly=on_assembly)
-    listed = [i["name"] for i in json.loads((out / "manifest.json").read_text())["assembly"]["instances"]]
+    listed = [
+        i["name"] for i in json.loads((out / "manifest.json").read_text())["assembly"]["instances"]
+    ]
     assert len(seen) == 1 and seen[0]["names"] == listed and seen[0]["part_files"] == []
     again = build_export(params, out, on_assembly=on_assembly)
     assert [s["status"] for s in again.stages] == ["reused"]

@@ -8,11 +8,11 @@ import math
 import pytest
 
 from bvsr_cad.assembly.build import build_assembly
+from bvsr_cad.parameters import layout
+from bvsr_cad.parameters.load import load_spec, spec_from_dict
 from bvsr_cad.parts.panel import panel
 from bvsr_cad.parts.soa import bellows_profile, soa_body
 from bvsr_cad.parts.vertebra import rod
-from bvsr_cad.parameters import layout
-from bvsr_cad.parameters.load import load_spec, spec_from_dict
 
 from .conftest import PARAMS
 
@@ -41,14 +41,18 @@ def _bellows_volume_closed_form(soa, flange_d):
     off = soa.facet_thickness_mm / math.cos(math.atan(depth / rise))
     vol = 0.0
     for m in range(2 * soa.pleats):
-        s0, s1 = (soa.long_side_mm, soa.short_side_mm) if m % 2 == 0 else (soa.short_side_mm, soa.long_side_mm)
+        s0, s1 = (
+            (soa.long_side_mm, soa.short_side_mm)
+            if m % 2 == 0
+            else (soa.short_side_mm, soa.long_side_mm)
+        )
         outer = rise * (s0 * s0 + s0 * s1 + s1 * s1) / 3 - (4 - math.pi) * R * R * rise
         i0, i1 = s0 - 2 * off, s1 - 2 * off
         inner = rise * (i0 * i0 + i0 * i1 + i1 * i1) / 3
         vol += outer - inner
     f = (soa.height_mm - soa.origami_height_mm) / 2
     end_inner = soa.long_side_mm - 2 * off
-    vol += 2 * f * (math.pi * flange_d ** 2 / 4 - end_inner ** 2)
+    vol += 2 * f * (math.pi * flange_d**2 / 4 - end_inner**2)
     return vol
 
 
@@ -57,8 +61,9 @@ def test_soa_volume_matches_closed_form(bvsr_spec, pleats, t):
     soa = dataclasses.replace(bvsr_spec.soa, pleats=pleats, facet_thickness_mm=t)
     solid = soa_body(soa, bvsr_spec.joint.base_diameter_mm)
     assert solid.is_valid
-    assert solid.volume == pytest.approx(_bellows_volume_closed_form(soa, bvsr_spec.joint.base_diameter_mm),
-                                         rel=1e-6)
+    assert solid.volume == pytest.approx(
+        _bellows_volume_closed_form(soa, bvsr_spec.joint.base_diameter_mm), rel=1e-6
+    )
     box = solid.bounding_box()
     assert box.max.Z - box.min.Z == pytest.approx(soa.built_height_mm, abs=1e-6)
 
@@ -98,11 +103,17 @@ def _panel_kinds(spec):
 @pytest.mark.parametrize("socket", ["threaded", "set_screw"])
 @pytest.mark.parametrize("diameter", [4.0, 5.0, 6.0])
 def test_every_rod_diameter_and_socket_gives_valid_panels(bvsr_spec, diameter, socket):
-    spec = dataclasses.replace(bvsr_spec, vertebra=dataclasses.replace(
-        bvsr_spec.vertebra, diameter_mm=diameter, socket=socket))
-    if diameter == 4.0:  # the twin's M3 tie-rod hole would leave 0.3 mm of a 4 mm rod column: M2 fits
-        spec = dataclasses.replace(spec, fabrication_package=dataclasses.replace(
-            spec.fabrication_package, tie_rod_thread=2.0))
+    spec = dataclasses.replace(
+        bvsr_spec,
+        vertebra=dataclasses.replace(bvsr_spec.vertebra, diameter_mm=diameter, socket=socket),
+    )
+    if (
+        diameter == 4.0
+    ):  # the twin's M3 tie-rod hole would leave 0.3 mm of a 4 mm rod column: M2 fits
+        spec = dataclasses.replace(
+            spec,
+            fabrication_package=dataclasses.replace(spec.fabrication_package, tie_rod_thread=2.0),
+        )
     spec = spec_from_dict(dataclasses.asdict(spec))  # goes through validation
     for kind, k in _panel_kinds(spec).items():
         lay = layout.panel_layout(spec, k)
@@ -113,25 +124,28 @@ def test_every_rod_diameter_and_socket_gives_valid_panels(bvsr_spec, diameter, s
         plain = dataclasses.replace(lay, cuts=tuple(c for c in lay.cuts if c.role != "rod"))
         z_lo = min([0.0] + [b.z_range[0] for b in lay.bosses])
         z_hi = max([lay.thickness_mm] + [b.z_range[1] for b in lay.bosses])
-        # ISO 2306 tap drill of M4/M5/M6 (3.3, 4.2, 5.0) plus the printed-hole compensation; not rod_bore_mm().
+        # ISO 2306 tap drill of M4/M5/M6 (3.3, 4.2, 5.0) plus the printed-hole compensation; not
+        # rod_bore_mm().
         bore = {4.0: 3.3, 5.0: 4.2, 6.0: 5.0}[diameter] + spec.fabrication.hole_compensation_mm
-        expected = math.pi * bore ** 2 / 4 * (z_hi - z_lo)
+        expected = math.pi * bore**2 / 4 * (z_hi - z_lo)
         if socket == "set_screw":
             continue  # the set screw crosses the bore: checked by validity above
         assert panel(plain).volume - solid.volume == pytest.approx(expected, rel=1e-6), kind
 
 
 def test_rod_material_changes_mass_not_geometry(bvsr_spec):
-    pvc = dataclasses.replace(bvsr_spec, vertebra=dataclasses.replace(bvsr_spec.vertebra, material="PVC"))
+    pvc = dataclasses.replace(
+        bvsr_spec, vertebra=dataclasses.replace(bvsr_spec.vertebra, material="PVC")
+    )
     a = layout.panel_layout(bvsr_spec, 1)
     b = layout.panel_layout(pvc, 1)
     assert a == b
 
 
 def test_remembered_solids_are_made_once_copied_per_call_and_bounded():
-    """parts._kernel.remembered: a repeated call does not make the solid again and gets its own copy (a
-    triangulation or label on one leaves the others as they were); past REMEMBERED_MAX arguments the
-    least recently used is made again, the others are not."""
+    """parts._kernel.remembered: a repeated call does not make the solid again and gets its own copy
+    (a triangulation or label on one leaves the others as they were); past REMEMBERED_MAX arguments
+    the least recently used is made again, the others are not."""
     import build123d as bd
 
     from bvsr_cad.parts import _kernel
@@ -166,8 +180,9 @@ def test_remembered_solids_are_made_once_copied_per_call_and_bounded():
 
 
 def test_kernel_threads_run_the_kernel_on_one_thread_for_the_same_solids(bvsr_spec, tmp_path):
-    """parts._kernel.kernel_threads: OCCT's pool on the threads asked for, the number before returned (to
-    give back); a panel's booleans and its print STL on one thread are the parallel ones, byte for byte."""
+    """parts._kernel.kernel_threads: OCCT's pool on the threads asked for, the number before
+    returned (to give back); a panel's booleans and its print STL on one thread are the parallel
+    ones, byte for byte."""
     from OCP.OSD import OSD_ThreadPool
 
     from bvsr_cad.exporters.cad import write_stl
@@ -182,15 +197,18 @@ def test_kernel_threads_run_the_kernel_on_one_thread_for_the_same_solids(bvsr_sp
         assert _kernel.kernel_threads(1) == 2 and pool.NbThreads() == 1
         write_stl(panel(lay), tmp_path / "one.stl")
         assert (tmp_path / "one.stl").read_bytes() == (tmp_path / "parallel.stl").read_bytes()
-        assert _kernel.kernel_threads(0) == 1 and pool.NbThreads() == 1  # at least the calling thread
+        assert (
+            _kernel.kernel_threads(0) == 1 and pool.NbThreads() == 1
+        )  # at least the calling thread
     finally:
         _kernel.kernel_threads(before)
 
 
 def test_ruled_loft_gives_its_flat_bands_planes_for_the_same_solid(bvsr_spec):
-    """A ruled loft of squares is a stack of square frusta, V = h (a^2 + a b + b^2) / 3 each, every band
-    flat: all of them planes. Of the rounded squares only the corners' bands are curved: every face
-    left a B-spline is one (not flat), and the outer surface is the loft's own (volume to 1e-9)."""
+    """A ruled loft of squares is a stack of square frusta, V = h (a^2 + a b + b^2) / 3 each, every
+    band flat: all of them planes. Of the rounded squares only the corners' bands are curved: every
+    face left a B-spline is one (not flat), and the outer surface is the loft's own (volume to
+    1e-9)."""
     import build123d as bd
     from OCP.BRep import BRep_Tool
     from OCP.GeomLib import GeomLib_IsPlanarSurface
@@ -200,16 +218,22 @@ def test_ruled_loft_gives_its_flat_bands_planes_for_the_same_solid(bvsr_spec):
 
     sides, zs = (20.0, 8.0, 14.0), (0.0, 5.0, 12.0)
     solid = ruled_loft([rounded_square(s, 0.0, z) for s, z in zip(sides, zs)], "test loft")
-    frusta = sum((z1 - z0) * (a * a + a * b + b * b) / 3
-                 for a, b, z0, z1 in zip(sides, sides[1:], zs, zs[1:]))
+    frusta = sum(
+        (z1 - z0) * (a * a + a * b + b * b) / 3
+        for a, b, z0, z1 in zip(sides, sides[1:], zs, zs[1:])
+    )
     assert solid.is_valid and solid.volume == pytest.approx(frusta, rel=1e-9)
-    assert {f.geom_type for f in solid.faces()} == {bd.GeomType.PLANE} and len(solid.faces()) == 2 + 4 * 2
+    assert {f.geom_type for f in solid.faces()} == {bd.GeomType.PLANE} and len(
+        solid.faces()
+    ) == 2 + 4 * 2
     p = bellows_profile(bvsr_spec.soa, bvsr_spec.joint.base_diameter_mm)
     sections = [rounded_square(s, p.corner_radius_mm, z) for s, z in zip(p.outer_side_mm, p.z_mm)]
     made, plain = ruled_loft(sections, "outer"), bd.loft(sections, ruled=True)
     assert made.is_valid and made.volume == pytest.approx(plain.volume, rel=1e-9)
     bands = [f for f in made.faces() if f.geom_type == bd.GeomType.BSPLINE]
-    assert not any(GeomLib_IsPlanarSurface(BRep_Tool.Surface_s(f.wrapped), 1e-7).IsPlanar() for f in bands)
+    assert not any(
+        GeomLib_IsPlanarSurface(BRep_Tool.Surface_s(f.wrapped), 1e-7).IsPlanar() for f in bands
+    )
     assert len(bands) == 4 * (len(sections) - 1)  # the four corners of each band
 
 
@@ -233,9 +257,9 @@ def test_solid_properties_are_build123d_s_three_properties_to_the_bit(bvsr_spec)
 
 
 def test_bounds_is_bounding_box_and_keeps_the_triangulation(bvsr_spec):
-    """parts._kernel.bounds gives build123d's ``bounding_box`` to the bit on every part, every face of
-    a part and the placed tail, and leaves a meshed shape's triangulation in place (``bounding_box``
-    clears it: a robot mesh or a fit after it meshed again)."""
+    """parts._kernel.bounds gives build123d's ``bounding_box`` to the bit on every part, every face
+    of a part and the placed tail, and leaves a meshed shape's triangulation in place
+    (``bounding_box`` clears it: a robot mesh or a fit after it meshed again)."""
     import build123d as bd
     from OCP.BRepTools import BRepTools
 
@@ -252,4 +276,6 @@ def test_bounds_is_bounding_box_and_keeps_the_triangulation(bvsr_spec):
         assert BRepTools.Triangulation_s(s.wrapped, 0.01), type(s).__name__
         ref = s.bounding_box()
         assert not BRepTools.Triangulation_s(s.wrapped, 0.01)  # what bounds avoids
-        assert (tuple(box.min), tuple(box.max)) == (tuple(ref.min), tuple(ref.max)), type(s).__name__
+        assert (tuple(box.min), tuple(box.max)) == (tuple(ref.min), tuple(ref.max)), type(
+            s
+        ).__name__

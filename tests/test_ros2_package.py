@@ -1,4 +1,5 @@
-"""The ROS 2 description package: valid files, self-contained meshes, the URDF unchanged but for mesh URIs."""
+"""The ROS 2 description package: valid files, self-contained meshes, the URDF unchanged but for
+mesh URIs."""
 
 from __future__ import annotations
 
@@ -56,8 +57,14 @@ def test_manifest_lists_exactly_the_files(written, source):
     assert info["name"] == PACKAGE and info["urdf"] == f"urdf/{NAME}.urdf"
     on_disk = sorted(p.relative_to(pkg).as_posix() for p in pkg.rglob("*") if p.is_file())
     assert info["files"] == on_disk
-    assert {"package.xml", "CMakeLists.txt", f"urdf/{NAME}.urdf", "launch/display.launch.py",
-            "rviz/display.rviz", "README.md"} <= set(on_disk)
+    assert {
+        "package.xml",
+        "CMakeLists.txt",
+        f"urdf/{NAME}.urdf",
+        "launch/display.launch.py",
+        "rviz/display.rviz",
+        "README.md",
+    } <= set(on_disk)
     assert info["meshes"] == len(list((pkg / "meshes").iterdir())) > 0
     # nothing but the package is left in out_dir (no temporary folder)
     assert [p.name for p in (source / "ros2").iterdir()] == [PACKAGE]
@@ -73,14 +80,18 @@ def test_package_xml_and_cmake_agree(written):
     assert "tail" in root.findtext("description")
     assert root.find("maintainer").get("email")
     assert [e.text for e in root.findall("buildtool_depend")] == ["ament_cmake"]
-    assert {"robot_state_publisher", "joint_state_publisher_gui", "rviz2"} <= {e.text for e in root.findall("exec_depend")}
+    assert {"robot_state_publisher", "joint_state_publisher_gui", "rviz2"} <= {
+        e.text for e in root.findall("exec_depend")
+    }
     assert root.findtext("export/build_type") == "ament_cmake"
 
     cmake = (pkg / "CMakeLists.txt").read_text()
     assert re.search(r"cmake_minimum_required\(VERSION 3\.8\)", cmake)
     assert re.findall(r"^project\((\w+)\)", cmake, re.M) == [PACKAGE]
     assert "find_package(ament_cmake REQUIRED)" in cmake
-    install = re.search(r"install\(DIRECTORY ([\w ]+) DESTINATION share/\$\{PROJECT_NAME\}\)", cmake)
+    install = re.search(
+        r"install\(DIRECTORY ([\w ]+) DESTINATION share/\$\{PROJECT_NAME\}\)", cmake
+    )
     assert install and set(install.group(1).split()) == {"urdf", "meshes", "launch", "rviz"}
     assert all((pkg / d).is_dir() for d in install.group(1).split())
     assert cmake.rstrip().endswith("ament_package()")
@@ -107,8 +118,12 @@ def _canonical(el: ET.Element, mesh_name) -> tuple:
     attrib = dict(el.attrib)
     if el.tag == "mesh":
         attrib["filename"] = mesh_name(attrib["filename"])
-    return (el.tag, sorted(attrib.items()), (el.text or "").strip(),
-            [_canonical(c, mesh_name) for c in el])
+    return (
+        el.tag,
+        sorted(attrib.items()),
+        (el.text or "").strip(),
+        [_canonical(c, mesh_name) for c in el],
+    )
 
 
 def test_urdf_unchanged_but_for_mesh_uris(written, source):
@@ -117,12 +132,17 @@ def test_urdf_unchanged_but_for_mesh_uris(written, source):
     pkg_text = (pkg / "urdf" / f"{NAME}.urdf").read_text()
     assert pkg_text.startswith("<?xml")  # the declaration is kept
     src, out = ET.fromstring(src_text.encode()), ET.fromstring(pkg_text.encode())
-    assert _canonical(src, lambda f: f.removeprefix("meshes/")) == _canonical(out, lambda f: f.removeprefix(PREFIX))
+    assert _canonical(src, lambda f: f.removeprefix("meshes/")) == _canonical(
+        out, lambda f: f.removeprefix(PREFIX)
+    )
     # the same things, spelled out
     for tag in ("link", "joint", "material"):
-        assert [e.get("name") for e in src.findall(tag)] == [e.get("name") for e in out.findall(tag)]
-    assert {l.get("name"): float(l.find("inertial/mass").get("value")) for l in src.findall("link")} == \
-           {l.get("name"): float(l.find("inertial/mass").get("value")) for l in out.findall("link")}
+        assert [e.get("name") for e in src.findall(tag)] == [
+            e.get("name") for e in out.findall(tag)
+        ]
+    assert {
+        l.get("name"): float(l.find("inertial/mass").get("value")) for l in src.findall("link")
+    } == {l.get("name"): float(l.find("inertial/mass").get("value")) for l in out.findall("link")}
     assert len(list(out.iter("mesh"))) == len(list(src.iter("mesh"))) > 0
 
 
@@ -131,7 +151,9 @@ def test_launch_file_compiles_and_launches_the_package(written, monkeypatch):
     path = pkg / "launch" / "display.launch.py"
     code = compile(path.read_text(), str(path), "exec")
     tree = ast.parse(path.read_text())
-    assert "generate_launch_description" in {n.name for n in tree.body if isinstance(n, ast.FunctionDef)}
+    assert "generate_launch_description" in {
+        n.name for n in tree.body if isinstance(n, ast.FunctionDef)
+    }
 
     # Run it against stand-ins of launch, launch_ros and ament_index_python: the share folder of an
     # installed package has the source package's layout, so the package folder stands in for it.
@@ -149,10 +171,13 @@ def test_launch_file_compiles_and_launches_the_package(written, monkeypatch):
         def __init__(self, entities):
             self.entities = entities
 
-    stubs = {"ament_index_python": types.ModuleType("ament_index_python"),
-             "ament_index_python.packages": types.ModuleType("ament_index_python.packages"),
-             "launch": types.ModuleType("launch"), "launch_ros": types.ModuleType("launch_ros"),
-             "launch_ros.actions": types.ModuleType("launch_ros.actions")}
+    stubs = {
+        "ament_index_python": types.ModuleType("ament_index_python"),
+        "ament_index_python.packages": types.ModuleType("ament_index_python.packages"),
+        "launch": types.ModuleType("launch"),
+        "launch_ros": types.ModuleType("launch_ros"),
+        "launch_ros.actions": types.ModuleType("launch_ros.actions"),
+    }
     stubs["ament_index_python.packages"].get_package_share_directory = get_package_share_directory
     stubs["launch"].LaunchDescription = LaunchDescription
     stubs["launch_ros.actions"].Node = Node
@@ -184,7 +209,10 @@ def test_rviz_config_fixes_the_root_link(written):
     displays = {d["Class"]: d for d in vm["Displays"]}
     assert {"rviz_default_plugins/Grid", "rviz_default_plugins/RobotModel"} <= set(displays)
     model = displays["rviz_default_plugins/RobotModel"]
-    assert model["Description Source"] == "Topic" and model["Description Topic"]["Value"] == "/robot_description"
+    assert (
+        model["Description Source"] == "Topic"
+        and model["Description Topic"]["Value"] == "/robot_description"
+    )
     assert all(d["Enabled"] for d in displays.values())
 
 
@@ -199,7 +227,9 @@ def test_check_urdf_accepts_the_package_urdf(written):
     if exe is None:
         pytest.skip("check_urdf (Debian liburdfdom-tools) is not installed")
     _, pkg = written
-    run = subprocess.run([exe, str(pkg / "urdf" / f"{NAME}.urdf")], capture_output=True, text=True, timeout=60)
+    run = subprocess.run(
+        [exe, str(pkg / "urdf" / f"{NAME}.urdf")], capture_output=True, text=True, timeout=60
+    )
     assert run.returncode == 0, run.stdout + run.stderr
     assert "root Link: panel0" in run.stdout
 
@@ -213,7 +243,10 @@ def test_a_second_write_replaces_the_package(source, tmp_path):
     second = write_ros2_package(source / f"{NAME}.urdf", source / "meshes", out, NAME)
     assert second == first
     assert not (pkg / "stale.txt").exists() and not (pkg / "meshes" / "stale.stl").exists()
-    assert sorted(p.relative_to(pkg).as_posix() for p in pkg.rglob("*") if p.is_file()) == second["files"]
+    assert (
+        sorted(p.relative_to(pkg).as_posix() for p in pkg.rglob("*") if p.is_file())
+        == second["files"]
+    )
     assert [p.name for p in out.iterdir()] == [PACKAGE]
 
 
@@ -221,7 +254,9 @@ def test_a_missing_mesh_raises_and_writes_nothing(source, tmp_path):
     text = (source / f"{NAME}.urdf").read_text()
     assert text.count('filename="meshes/panel0.stl"') >= 1
     broken = tmp_path / "broken.urdf"
-    broken.write_text(text.replace('filename="meshes/panel0.stl"', 'filename="meshes/missing_panel.stl"', 1))
+    broken.write_text(
+        text.replace('filename="meshes/panel0.stl"', 'filename="meshes/missing_panel.stl"', 1)
+    )
     out = tmp_path / "ros2"
     with pytest.raises(FileNotFoundError, match=r"missing_panel\.stl") as err:
         write_ros2_package(broken, source / "meshes", out, NAME)
@@ -234,7 +269,10 @@ def test_a_missing_mesh_raises_and_writes_nothing(source, tmp_path):
         write_ros2_package(broken, source / "meshes", out, NAME)
     assert [p.name for p in out.iterdir()] == [PACKAGE]
     pkg = Path(good["path"])
-    assert sorted(p.relative_to(pkg).as_posix() for p in pkg.rglob("*") if p.is_file()) == good["files"]
+    assert (
+        sorted(p.relative_to(pkg).as_posix() for p in pkg.rglob("*") if p.is_file())
+        == good["files"]
+    )
 
 
 def test_an_invalid_package_name_is_refused(source, tmp_path):
@@ -243,7 +281,9 @@ def test_an_invalid_package_name_is_refused(source, tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_a_failure_while_writing_leaves_the_old_package_and_no_temporary_folder(source, tmp_path, monkeypatch):
+def test_a_failure_while_writing_leaves_the_old_package_and_no_temporary_folder(
+    source, tmp_path, monkeypatch
+):
     import bvsr_cad.exporters.ros2_package as mod
 
     out = tmp_path / "ros2"
@@ -263,4 +303,7 @@ def test_a_failure_while_writing_leaves_the_old_package_and_no_temporary_folder(
     assert len(copies) == 3 and all(Path(c).parent.parent.name.endswith(".tmp") for c in copies)
     assert [p.name for p in out.iterdir()] == [PACKAGE]
     pkg = Path(good["path"])
-    assert sorted(p.relative_to(pkg).as_posix() for p in pkg.rglob("*") if p.is_file()) == good["files"]
+    assert (
+        sorted(p.relative_to(pkg).as_posix() for p in pkg.rglob("*") if p.is_file())
+        == good["files"]
+    )

@@ -1,5 +1,6 @@
-"""Batched simulation (bvsr_cad/simulation/sim_gpu.py): MJX and MuJoCo Warp on their CPU backends step the exported
-scenes, and every randomised world agrees with CPU MuJoCo stepping the same world's model.
+"""Batched simulation (bvsr_cad/simulation/sim_gpu.py): MJX and MuJoCo Warp on their CPU backends
+step the exported scenes, and every randomised world agrees with CPU MuJoCo stepping the same
+world's model.
 
 The engines come with the optional extra ``.[gpu]``; without it their tests skip and say so. The
 randomisation and the buffer sizing need only MuJoCo and always run."""
@@ -16,26 +17,32 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from bvsr_cad.simulation import sim_gpu  # noqa: E402
 from bvsr_cad.exporters.mjcf import BEND_LIMIT_DIRECTIONS  # noqa: E402
+from bvsr_cad.simulation import sim_gpu  # noqa: E402
 
 SKIP = f"needs {sim_gpu.GPU_EXTRA}"
 
-#: Two hinges with springs, limits and motors: Warp's batched model checked on a model small enough to
-#: read (MJX's batching is checked on the exported scene itself, which compiles in under a minute).
+#: Two hinges with springs, limits and motors: Warp's batched model checked on a model small enough
+#: to read (MJX's batching is checked on the exported scene itself, which compiles in under a
+#: minute).
 TWO_LINKS = """<mujoco><option timestep="0.001" integrator="implicitfast"/><worldbody>
 <body name="a"><joint name="h1" axis="0 1 0" stiffness="2" damping="0.01" range="-0.3 0.3"/>
 <geom type="capsule" fromto="0 0 0 0.1 0 0" size="0.01" mass="0.1"/>
-<body name="b" pos="0.1 0 0"><joint name="h2" axis="0 1 0" stiffness="2" damping="0.01" range="-0.3 0.3"/>
+<body name="b" pos="0.1 0 0">
+<joint name="h2" axis="0 1 0" stiffness="2" damping="0.01" range="-0.3 0.3"/>
 <geom type="capsule" fromto="0 0 0 0.1 0 0" size="0.01" mass="0.1"/></body></body></worldbody>
-<actuator><motor name="a_m1" joint="h1" ctrlrange="-1 1"/><motor name="b_m1" joint="h2" ctrlrange="-1 1"/>
+<actuator><motor name="a_m1" joint="h1" ctrlrange="-1 1"/>
+<motor name="b_m1" joint="h2" ctrlrange="-1 1"/>
 </actuator></mujoco>"""
 
 
 @pytest.fixture(scope="module")
 def scenes(bvsr_export):
     robot = sim_gpu.scene_path(bvsr_export).parent
-    return {name: mujoco.MjModel.from_xml_path(str(robot / name)) for name in ("scene.xml", "scene_segments.xml")}
+    return {
+        name: mujoco.MjModel.from_xml_path(str(robot / name))
+        for name in ("scene.xml", "scene_segments.xml")
+    }
 
 
 @pytest.fixture(scope="module")
@@ -43,7 +50,9 @@ def jax_x64():
     if not _has("mujoco.mjx"):
         pytest.skip(SKIP)
     jax, _ = sim_gpu.import_mjx()
-    jax.config.update("jax_enable_x64", True)  # CPU MuJoCo is double precision: compare like with like
+    jax.config.update(
+        "jax_enable_x64", True
+    )  # CPU MuJoCo is double precision: compare like with like
     return jax
 
 
@@ -71,14 +80,21 @@ def test_tip_payload_moves_mass_and_subtree_mass_like_mujoco(scenes):
     for w in range(4):
         world = sim_gpu.world_model(model, fields, w)
         ours = world.body_subtreemass.copy()
-        mujoco.mj_setConst(world, mujoco.MjData(world))  # MuJoCo's own subtree masses from body_mass
+        mujoco.mj_setConst(
+            world, mujoco.MjData(world)
+        )  # MuJoCo's own subtree masses from body_mass
         assert np.allclose(ours, world.body_subtreemass, rtol=1e-12)
         assert ours[0] == pytest.approx(model.body_subtreemass[0] + payload[w])
     # The springs of the hinges (the rod) are scaled, the chord slides' are not.
     hinge = model.jnt_type == mujoco.mjtJoint.mjJNT_HINGE
-    scale = fields["jnt_stiffness"][:, hinge & (model.jnt_stiffness > 0)] / model.jnt_stiffness[hinge & (model.jnt_stiffness > 0)]
+    scale = (
+        fields["jnt_stiffness"][:, hinge & (model.jnt_stiffness > 0)]
+        / model.jnt_stiffness[hinge & (model.jnt_stiffness > 0)]
+    )
     assert np.allclose(scale, scale[:, :1]) and ((scale >= 0.8) & (scale <= 1.2)).all()
-    assert np.array_equal(fields["jnt_stiffness"][:, ~hinge], np.tile(model.jnt_stiffness[~hinge], (4, 1)))
+    assert np.array_equal(
+        fields["jnt_stiffness"][:, ~hinge], np.tile(model.jnt_stiffness[~hinge], (4, 1))
+    )
 
 
 def test_bad_randomisation_names_the_field():
@@ -89,8 +105,9 @@ def test_bad_randomisation_names_the_field():
 
 
 def test_constraint_buffers_cover_random_held_pressures(scenes):
-    """The probe's buffers hold every constraint row of runs it did not see: random held pressures, and
-    every joint bent past its bend limit (rows the pressures never reach, reserved one per limit)."""
+    """The probe's buffers hold every constraint row of runs it did not see: random held pressures,
+    and every joint bent past its bend limit (rows the pressures never reach, reserved one per
+    limit)."""
     rng = np.random.default_rng(7)
     for name, model in scenes.items():
         buffers = sim_gpu.constraint_buffers(model, seconds=0.15)
@@ -102,14 +119,18 @@ def test_constraint_buffers_cover_random_held_pressures(scenes):
             data.ctrl[:] = rng.uniform(lo, hi)
             for _ in range(round(0.15 / model.opt.timestep)):
                 mujoco.mj_step(model, data)
-                assert data.nefc <= buffers.njmax and data.ncon <= buffers.nconmax, (name, buffers.line())
-        # Every joint bent diagonally past its bend limit (a = b = 0.4 rad on both pivots: three faces each).
+                assert data.nefc <= buffers.njmax and data.ncon <= buffers.nconmax, (
+                    name,
+                    buffers.line(),
+                )
+        # Every joint bent diagonally past its bend limit (a = b = 0.4 rad on both pivots: three
+        # faces each).
         joints = model.njnt // 4
         assert buffers.limit_rows == BEND_LIMIT_DIRECTIONS * joints == model.tendon_limited.sum()
         mujoco.mj_resetData(model, data)
         data.qpos[:] = 0.4
         mujoco.mj_forward(model, data)
-        limits = (data.efc_type[:data.nefc] == mujoco.mjtConstraint.mjCNSTR_LIMIT_TENDON).sum()
+        limits = (data.efc_type[: data.nefc] == mujoco.mjtConstraint.mjCNSTR_LIMIT_TENDON).sum()
         assert limits == 3 * joints and data.nefc <= buffers.njmax, (name, limits, buffers.line())
 
 
@@ -117,7 +138,9 @@ def _agrees(batch, model, ctrl, fields, steps, tol):
     batch.step(steps)
     assert not batch.check(), batch.check()
     moved = np.abs(batch.qpos() - model.qpos0).max()
-    worst = max(sim_gpu.world_difference(batch, model, ctrl, fields, steps, w) for w in range(batch.nworld))
+    worst = max(
+        sim_gpu.world_difference(batch, model, ctrl, fields, steps, w) for w in range(batch.nworld)
+    )
     assert worst < tol < moved / 100, (batch.engine, worst, moved)
     return worst
 
@@ -133,8 +156,8 @@ def test_warp_batch_of_two_links_matches_cpu_per_world():
 
 @pytest.mark.parametrize("name", ["scene.xml", "scene_segments.xml"])
 def test_warp_steps_the_exported_scene_like_cpu(scenes, name):
-    """Warp's CPU device, float32, three randomised worlds at full pressure on every line: each world
-    within 1e-5 (rad or m) of CPU MuJoCo after 10 ms, with buffers sized from the model (the
+    """Warp's CPU device, float32, three randomised worlds at full pressure on every line: each
+    world within 1e-5 (rad or m) of CPU MuJoCo after 10 ms, with buffers sized from the model (the
     per-segment scene went NaN in the default 64 rows on a GPU)."""
     _needs_warp()
     model = scenes[name]
@@ -145,29 +168,50 @@ def test_warp_steps_the_exported_scene_like_cpu(scenes, name):
 
 
 def test_mjx_steps_the_exported_scene_like_cpu(scenes, jax_x64):
-    """MJX on JAX's CPU backend, float64, two randomised worlds of the default scene with the extension
-    lines (3 and 4) of every joint at full pressure: after 50 ms each world within 1e-13 (rad) of CPU
-    MuJoCo stepping that world's model (measured 4e-16; the hinges move by up to 0.19 rad). It compiles
-    with sim_gpu.compiler_options (XLA:CPU's fusion off): 35-38 s of CPU here (25 s wall on a quiet
-    machine), where with XLA's fusion one unbatched float64 step was still compiling after 7 minutes of CPU."""
+    """MJX on JAX's CPU backend, float64, two randomised worlds of the default scene with the
+    extension lines (3 and 4) of every joint at full pressure: after 50 ms each world within 1e-13
+    (rad) of CPU MuJoCo stepping that world's model (measured 4e-16; the hinges move by up to 0.19
+    rad). It compiles with sim_gpu.compiler_options (XLA:CPU's fusion off): 35-38 s of CPU here (25
+    s wall on a quiet machine), where with XLA's fusion one unbatched float64 step was still
+    compiling after 7 minutes of CPU."""
     model = scenes["scene.xml"]
     assert sim_gpu.compiler_options() == sim_gpu.CPU_COMPILER_OPTIONS
     fields = sim_gpu.randomised_fields(model, 2)
-    lines = np.array([model.actuator(i).name.rsplit("_", 1)[-1] in ("soa3", "soa4") for i in range(model.nu)])
+    lines = np.array(
+        [model.actuator(i).name.rsplit("_", 1)[-1] in ("soa3", "soa4") for i in range(model.nu)]
+    )
     ctrl = np.where(lines, model.actuator_ctrlrange[:, 1], 0.0)
-    _agrees(sim_gpu.mjx_batch(model, ctrl, fields), model, ctrl, fields, round(0.05 / model.opt.timestep), 1e-13)
+    _agrees(
+        sim_gpu.mjx_batch(model, ctrl, fields),
+        model,
+        ctrl,
+        fields,
+        round(0.05 / model.opt.timestep),
+        1e-13,
+    )
 
 
-# --- the benchmark's per-kernel profile ------------------------------------------------------------
+# --- the benchmark's per-kernel profile
+# ------------------------------------------------------------
 
 
 def test_kernel_label_strips_warp_decorations():
     """Names as Warp 1.19 times them: the module hash and the closure suffix
     go, so one kernel is one row however many builds of it ran."""
-    assert sim_gpu.kernel_label("forward kernel _qderiv_tendon_damping_2a52f8da") == "_qderiv_tendon_damping"
-    assert sim_gpu.kernel_label("forward kernel _spring_damper_tendon_passive__locals__kernel_1c3d22e2") \
+    assert (
+        sim_gpu.kernel_label("forward kernel _qderiv_tendon_damping_2a52f8da")
+        == "_qderiv_tendon_damping"
+    )
+    assert (
+        sim_gpu.kernel_label(
+            "forward kernel _spring_damper_tendon_passive__locals__kernel_1c3d22e2"
+        )
         == "_spring_damper_tendon_passive"
-    assert sim_gpu.kernel_label("forward kernel mul_m_kernel__locals___mul_m_2eb0ef19") == "mul_m_kernel"
+    )
+    assert (
+        sim_gpu.kernel_label("forward kernel mul_m_kernel__locals___mul_m_2eb0ef19")
+        == "mul_m_kernel"
+    )
     assert sim_gpu.kernel_label("forward kernel _comvel_branch_0f933c58") == "_comvel_branch"
     # a name without Warp's suffix is kept whole (a short hex-like tail is not a hash)
     assert sim_gpu.kernel_label("memcpy HtoD") == "memcpy HtoD"
@@ -180,14 +224,20 @@ def test_kernel_times_sum_each_kernel_per_step_slowest_first():
             self.name, self.elapsed = name, elapsed
 
     steps = 2
-    results = [R("forward kernel _a_0000aaaa", 1.0), R("forward kernel _b__locals__kernel_1111bbbb", 0.5),
-               R("forward kernel _a_2222cccc", 3.0), R("forward kernel _b__locals__kernel_1111bbbb", 0.5),
-               R("forward kernel _b__locals__kernel_1111bbbb", 0.25)]
+    results = [
+        R("forward kernel _a_0000aaaa", 1.0),
+        R("forward kernel _b__locals__kernel_1111bbbb", 0.5),
+        R("forward kernel _a_2222cccc", 3.0),
+        R("forward kernel _b__locals__kernel_1111bbbb", 0.5),
+        R("forward kernel _b__locals__kernel_1111bbbb", 0.25),
+    ]
     times = sim_gpu.kernel_times(results, steps)
     assert [t.name for t in times] == ["_a", "_b"]
     assert times[0] == sim_gpu.KernelTime("_a", 2.0, 1.0)
     assert times[1] == sim_gpu.KernelTime("_b", 0.625, 1.5)
-    assert sum(t.ms_per_step for t in times) * steps == pytest.approx(sum(r.elapsed for r in results))
+    assert sum(t.ms_per_step for t in times) * steps == pytest.approx(
+        sum(r.elapsed for r in results)
+    )
 
 
 def test_warp_kernel_profile_refuses_a_cpu_device():
@@ -195,4 +245,6 @@ def test_warp_kernel_profile_refuses_a_cpu_device():
     model = mujoco.MjModel.from_xml_string(TWO_LINKS)
     fields = sim_gpu.randomised_fields(model, 1)
     with pytest.raises(ValueError, match="per-kernel times need a CUDA device; 'cpu' is not one"):
-        sim_gpu.warp_kernel_profile(model, np.zeros(2), fields, sim_gpu.constraint_buffers(model), device="cpu")
+        sim_gpu.warp_kernel_profile(
+            model, np.zeros(2), fields, sim_gpu.constraint_buffers(model), device="cpu"
+        )

@@ -55,7 +55,8 @@ def _as_dict(spec):
 def test_the_web_rule_between_cuts_flags_every_pair_a_pair_by_pair_test_flags(name):
     """panel_problems tests only the pairs of cuts whose plan-view circles come near (numpy's gaps,
     :func:`~bvsr_cad.parameters.layout._near_pairs`): on every panel, from no cone to well past the
-    feasible one (where webs break), it flags the same pairs, in the same order, as testing every pair."""
+    feasible one (where webs break), it flags the same pairs, in the same order, as testing every
+    pair."""
     import numpy as np
 
     spec = load_spec(PARAMS / f"{name}.toml")
@@ -67,16 +68,21 @@ def test_the_web_rule_between_cuts_flags_every_pair_a_pair_by_pair_test_flags(na
             cuts = list(lay.cuts)
             every = []
             for i, a in enumerate(cuts):
-                for b in cuts[i + 1:]:
+                for b in cuts[i + 1 :]:
                     if not layout._z_overlap(a, b) or "setscrew" in (a.role, b.role):
                         continue
                     gap, nested = layout._circle_gap(a, b)
-                    need = fab.min_pocket_gap_mm if a.role == b.role == "pocket" else fab.min_wall_mm
+                    need = (
+                        fab.min_pocket_gap_mm if a.role == b.role == "pocket" else fab.min_wall_mm
+                    )
                     if not nested and gap < need - 1e-9:
                         every.append((a.name, b.name))
             names = {c.name for c in cuts}
-            found = [p.features for p in layout.panel_problems(spec, lay)
-                     if len(p.features) == 2 and set(p.features) <= names]
+            found = [
+                p.features
+                for p in layout.panel_problems(spec, lay)
+                if len(p.features) == 2 and set(p.features) <= names
+            ]
             assert found == every, (name, beta, k)
             flagged_somewhere += len(every)
     assert flagged_somewhere > 0  # the sweep reaches cones where webs between cuts break
@@ -88,15 +94,22 @@ def test_soa_fold_residual_is_computed_not_forced(bvsr_spec):
     assert rise * 4 == pytest.approx(34.370, abs=1e-3)
     assert soa.built_origami_height_mm == pytest.approx(35.0)  # fold_height_from = origami_height
     assert soa.implied_dihedral_deg == pytest.approx(72.83, abs=0.01)
-    shorter = spec_from_dict({**_as_dict(bvsr_spec), "soa": {**_as_dict(bvsr_spec)["soa"],
-                                                             "fold_height_from": "dihedral"}})
+    shorter = spec_from_dict(
+        {
+            **_as_dict(bvsr_spec),
+            "soa": {**_as_dict(bvsr_spec)["soa"], "fold_height_from": "dihedral"},
+        }
+    )
     assert shorter.soa.built_height_mm == pytest.approx(34.370 + 2.6, abs=1e-3)
 
 
 def _bad_cases() -> list:
     """The cases of tests/data/bad_params.toml as pytest params (id: the case's description)."""
     cases = tomllib.loads((Path(__file__).parent / "data" / "bad_params.toml").read_text())["case"]
-    return [pytest.param(c.get("set", {}), c.get("delete", []), c["expect"], id=c["desc"]) for c in cases]
+    return [
+        pytest.param(c.get("set", {}), c.get("delete", []), c["expect"], id=c["desc"])
+        for c in cases
+    ]
 
 
 def _edit(data: dict, path: str) -> tuple[dict, str]:
@@ -151,19 +164,22 @@ def test_every_error_is_collected(tmp_path, data):
 
 
 def test_thin_mold_wall_names_the_rule_and_the_smallest_wall(data):
-    """casting.cavity_wall_mm = 3.0 is refused at load, with why and what is allowed (not mid-build).
+    """casting.cavity_wall_mm = 3.0 is refused at load, with why and what is allowed (not
+    mid-build).
 
     Hand calculation: the pins sit mid-wall, so the wall needs a pin socket (3.0 + 0.2 mm) and
-    casting.min_print_wall_mm = 1.2 mm on both sides: 3.2 + 2 x 1.2 = 5.6 mm. The bolts in the block corners
-    need (sqrt 2 - 1)(rho + wall) >= sqrt 2 (1.7 + 2.4) + 1.7 with rho = 1.003 x 12.39 mm (the bellows
-    corners): wall >= 5.69 mm, which binds.
+    casting.min_print_wall_mm = 1.2 mm on both sides: 3.2 + 2 x 1.2 = 5.6 mm. The bolts in the block
+    corners need (sqrt 2 - 1)(rho + wall) >= sqrt 2 (1.7 + 2.4) + 1.7 with rho = 1.003 x 12.39 mm
+    (the bellows corners): wall >= 5.69 mm, which binds.
     """
     data["casting"]["cavity_wall_mm"] = 3.0
     with pytest.raises(ParamError) as err:
         spec_from_dict(data, "bad.toml")
     msg = str(err.value)
     assert "casting.cavity_wall_mm = 3.0: mold set:" in msg
-    assert "1.30 mm short of casting.min_print_wall_mm" in msg  # 3.0 / 2 - 3.2 / 2 = -0.1 mm web, 1.2 needed
+    assert (
+        "1.30 mm short of casting.min_print_wall_mm" in msg
+    )  # 3.0 / 2 - 3.2 / 2 = -0.1 mm web, 1.2 needed
     rho = 1.003 * ((18.21 / 2 - 1.2) * math.sqrt(2) + 1.2)
     wall = (math.sqrt(2) * (3.4 / 2 + 2 * 1.2) + 3.4 / 2) / (math.sqrt(2) - 1) - rho
     assert f"allowed: >= {math.ceil(wall * 100) / 100:.2f} mm" in msg
@@ -181,11 +197,16 @@ def _generator_fails(monkeypatch, error):
     monkeypatch.setattr(panel_module, "cut_all", broken)
 
 
-@pytest.mark.parametrize("error", [
-    "GeometryError('panel0: the kernel produced 2 solids instead of one')",
-    "ValueError('joint.pitch_diameter_mm = 45.87: a rule the loader missed')",
-])
-def test_generator_failure_exits_2_with_advice_not_a_traceback(tmp_path, monkeypatch, capsys, error):
+@pytest.mark.parametrize(
+    "error",
+    [
+        "GeometryError('panel0: the kernel produced 2 solids instead of one')",
+        "ValueError('joint.pitch_diameter_mm = 45.87: a rule the loader missed')",
+    ],
+)
+def test_generator_failure_exits_2_with_advice_not_a_traceback(
+    tmp_path, monkeypatch, capsys, error
+):
     from bvsr_cad.parts._kernel import GeometryError  # noqa: F401 - used by eval
 
     _generator_fails(monkeypatch, eval(error))
@@ -195,7 +216,11 @@ def test_generator_failure_exits_2_with_advice_not_a_traceback(tmp_path, monkeyp
     assert "Traceback" not in err and err.count("\n") == 1  # one paragraph
     assert "bvsr.toml passed validation, but building a panel failed" in err
     assert "Nothing was published" in err and not out.exists()
-    advice = "change joint.pitch_diameter_mm" if "pitch" in error else "change [fabrication] (min_wall_mm"
+    advice = (
+        "change joint.pitch_diameter_mm"
+        if "pitch" in error
+        else "change [fabrication] (min_wall_mm"
+    )
     assert advice in err
 
 
@@ -218,26 +243,47 @@ def test_a_bad_file_is_refused_before_the_pipeline_is_imported(tmp_path):
 
     bad = tmp_path / "bad.toml"
     bad.write_text((PARAMS / "bvsr.toml").read_text().replace("pleats = 2 ", "pleats = 0 "))
-    code = ("import sys; from bvsr_cad.cli import main; rc = main(['build', sys.argv[1], '-o', sys.argv[2], '-q']); "
-            "print(rc, 'bvsr_cad.build.pipeline' in sys.modules, 'build123d' in sys.modules)")
-    run = subprocess.run([sys.executable, "-c", code, str(bad), str(tmp_path / "out")], capture_output=True, text=True,
-                         timeout=120)
+    code = (
+        "import sys; from bvsr_cad.cli import main; rc = main(['build', sys.argv[1], '-o', "
+        "sys.argv[2], '-q']); "
+        "print(rc, 'bvsr_cad.build.pipeline' in sys.modules, 'build123d' in sys.modules)"
+    )
+    run = subprocess.run(
+        [sys.executable, "-c", code, str(bad), str(tmp_path / "out")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert run.stdout.split() == ["2", "False", "False"], run.stdout + run.stderr
     assert "soa.pleats = 0" in run.stderr and not (tmp_path / "out").exists()
 
 
 def test_the_command_ends_with_mains_exit_code_and_all_it_printed(tmp_path):
-    """`python -m bvsr_cad.cli` (as the `bvsr` script, :func:`bvsr_cad.cli.console`) ends without the
-    interpreter's teardown: with main's exit code, and every line it printed on either stream."""
+    """`python -m bvsr_cad.cli` (as the `bvsr` script, :func:`bvsr_cad.cli.console`) ends without
+    the interpreter's teardown: with main's exit code, and every line it printed on either
+    stream."""
     bad = tmp_path / "bad.toml"
     bad.write_text((PARAMS / "bvsr.toml").read_text().replace("segments = 2", "segments = 0", 1))
-    done = subprocess.run([sys.executable, "-m", "bvsr_cad.cli", "build", str(bad), "-o", str(tmp_path / "out")],
-                          capture_output=True, text=True, timeout=300)
-    assert done.returncode == 2 and "segments" in done.stderr and "bvsr: error" in done.stderr, done.stderr
+    done = subprocess.run(
+        [sys.executable, "-m", "bvsr_cad.cli", "build", str(bad), "-o", str(tmp_path / "out")],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 2 and "segments" in done.stderr and "bvsr: error" in done.stderr, (
+        done.stderr
+    )
     assert not (tmp_path / "out").exists()
-    buffered = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}  # a pipe's block buffering
-    helped = subprocess.run([sys.executable, "-m", "bvsr_cad.cli", "build", "--help"], capture_output=True,
-                            text=True, timeout=300, env=buffered)
+    buffered = {
+        k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"
+    }  # a pipe's block buffering
+    helped = subprocess.run(
+        [sys.executable, "-m", "bvsr_cad.cli", "build", "--help"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=buffered,
+    )
     # The whole help, to its last line (what is still buffered when main returns is flushed first).
     assert helped.returncode == 0 and helped.stdout.startswith("usage: bvsr build")
     assert helped.stdout.rstrip().endswith("~/.cache/bvsr_cad/artifacts)")
@@ -246,7 +292,8 @@ def test_the_command_ends_with_mains_exit_code_and_all_it_printed(tmp_path):
 ALLOCATIONS = r"""
 import ctypes, sys
 import numpy as np
-fields = ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks", "uordblks", "fordblks", "keepcost")
+fields = ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks", "uordblks",
+          "fordblks", "keepcost")
 class Info(ctypes.Structure):
     _fields_ = [(name, ctypes.c_size_t) for name in fields]
 libc = ctypes.CDLL(None)
@@ -264,21 +311,34 @@ print(mapped, kept)
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt")
 def test_a_bvsr_process_reuses_freed_memory():
-    """:func:`bvsr_cad.build._runtime.worker.tune_allocator` (the command and its second processes): a large array comes
-    from the heap and, freed, stays there for the next one; with glibc's defaults it is a mapping of its
-    own, handed back to the kernel when freed, whose pages the kernel zeroes again at the next one (a
-    cold build's minor page faults 690,000-725,000 with the defaults, 503,000-524,000 tuned). Read from
-    glibc's own accounting (``mallinfo2``): page-fault counts move with transparent huge pages."""
+    """:func:`bvsr_cad.build._runtime.worker.tune_allocator` (the command and its second processes):
+    a large array comes from the heap and, freed, stays there for the next one; with glibc's
+    defaults it is a mapping of its own, handed back to the kernel when freed, whose pages the
+    kernel zeroes again at the next one (a cold build's minor page faults 690,000-725,000 with the
+    defaults, 503,000-524,000 tuned). Read from glibc's own accounting (``mallinfo2``): page-fault
+    counts move with transparent huge pages."""
     import ctypes
 
     if not hasattr(ctypes.CDLL(None), "mallinfo2"):
         pytest.skip("glibc before 2.33: no mallinfo2")
-    out = {mode: [int(x) for x in subprocess.run([sys.executable, "-c", ALLOCATIONS, mode], capture_output=True,
-                                                  text=True, check=True, timeout=120).stdout.split()]
-           for mode in ("default", "tuned")}
+    out = {
+        mode: [
+            int(x)
+            for x in subprocess.run(
+                [sys.executable, "-c", ALLOCATIONS, mode],
+                capture_output=True,
+                text=True,
+                check=True,
+                timeout=120,
+            ).stdout.split()
+        ]
+        for mode in ("default", "tuned")
+    }
     (mapped_default, _), (mapped_tuned, kept_tuned) = out["default"], out["tuned"]
     array_bytes = 16 << 20
-    assert mapped_default >= array_bytes and mapped_tuned < array_bytes and kept_tuned >= array_bytes, out
+    assert (
+        mapped_default >= array_bytes and mapped_tuned < array_bytes and kept_tuned >= array_bytes
+    ), out
 
 
 COLLECTIONS = r"""
@@ -302,13 +362,21 @@ print(during, gc.isenabled(), gc.get_freeze_count())
 
 
 def test_library_imports_pause_the_garbage_collector():
-    """:func:`bvsr_cad.build._runtime.worker.library_imports`: the libraries' imports (the CAD kernel, scipy, trimesh, ...)
-    run without Python's cyclic collector, which ran hundreds of times over them otherwise (0.4-0.5 CPU s
-    a process); it runs again after, and only an entry point's process (:func:`~bvsr_cad.build._runtime.worker.tune_collector`)
-    freezes what was imported (a library call in someone else's process leaves its collector as it was)."""
-    out = {mode: subprocess.run([sys.executable, "-c", COLLECTIONS, mode], capture_output=True, text=True,
-                                check=True, timeout=300).stdout.split()
-           for mode in ("plain", "library", "entry")}
+    """:func:`bvsr_cad.build._runtime.worker.library_imports`: the libraries' imports (the CAD
+    kernel, scipy, trimesh, ...) run without Python's cyclic collector, which ran hundreds of times
+    over them otherwise (0.4-0.5 CPU s a process); it runs again after, and only an entry point's
+    process (:func:`~bvsr_cad.build._runtime.worker.tune_collector`) freezes what was imported (a
+    library call in someone else's process leaves its collector as it was)."""
+    out = {
+        mode: subprocess.run(
+            [sys.executable, "-c", COLLECTIONS, mode],
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=300,
+        ).stdout.split()
+        for mode in ("plain", "library", "entry")
+    }
     plain, library, entry = ((int(n), on == "True", int(frozen)) for n, on, frozen in out.values())
     assert plain[0] > 100 and plain[1] and plain[2] == 0, out
     assert library == (0, True, 0), out
@@ -327,15 +395,23 @@ print("glfw" in sys.modules, os.environ.get("MUJOCO_GL", "-"))
 
 @pytest.mark.parametrize("users", [None, "glfw"])
 def test_a_bvsr_process_loads_no_opengl_for_mujoco(users):
-    """:func:`bvsr_cad.build._runtime.worker.no_mujoco_rendering` (the command and its second processes): ``import mujoco``
-    loads no GLFW, whose binding starts a Python interpreter at import (0.1 s a process); an environment
-    that names MuJoCo's OpenGL keeps it."""
+    """:func:`bvsr_cad.build._runtime.worker.no_mujoco_rendering` (the command and its second
+    processes): ``import mujoco`` loads no GLFW, whose binding starts a Python interpreter at import
+    (0.1 s a process); an environment that names MuJoCo's OpenGL keeps it."""
     env = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
     if users:
         env["MUJOCO_GL"] = users
-    out = {mode: subprocess.run([sys.executable, "-c", MUJOCO_IMPORT, mode], capture_output=True, text=True,
-                                check=True, timeout=120, env=env).stdout.split()
-           for mode in ("plain", "entry")}
+    out = {
+        mode: subprocess.run(
+            [sys.executable, "-c", MUJOCO_IMPORT, mode],
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=120,
+            env=env,
+        ).stdout.split()
+        for mode in ("plain", "entry")
+    }
     if users is None:
         assert out == {"plain": ["True", "-"], "entry": ["False", "disable"]}, out
     else:
@@ -355,16 +431,23 @@ print(sorted({i["num_threads"] for i in threadpool_info() if i["internal_api"] =
 
 @pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="OpenBLAS runs one thread on one core anyway")
 def test_a_bvsr_process_runs_openblas_on_one_thread():
-    """:func:`bvsr_cad.build._runtime.worker.one_blas_thread` (the command and its second processes): numpy's and scipy's
-    OpenBLAS on one thread, where they would take one per core; a number the environment sets is kept."""
+    """:func:`bvsr_cad.build._runtime.worker.one_blas_thread` (the command and its second
+    processes): numpy's and scipy's OpenBLAS on one thread, where they would take one per core; a
+    number the environment sets is kept."""
     pytest.importorskip("threadpoolctl")
     from bvsr_cad.build._runtime.worker import BLAS_THREAD_VARIABLES
 
     env = {k: v for k, v in os.environ.items() if k not in BLAS_THREAD_VARIABLES}
 
     def threads(mode: str, **extra: str) -> list[int]:
-        done = subprocess.run([sys.executable, "-c", BLAS_THREADS, mode], capture_output=True, text=True,
-                              check=True, timeout=120, env={**env, **extra})
+        done = subprocess.run(
+            [sys.executable, "-c", BLAS_THREADS, mode],
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=120,
+            env={**env, **extra},
+        )
         return json.loads(done.stdout)
 
     assert threads("entry") == [1]

@@ -1,5 +1,6 @@
-"""The paper's workspace experiment run in time (bvsr_cad.simulation.sim.workspace_protocol): the exported MJCF
-driven by a new random pressure per line every cycle, as Sec. IV-A-5 drives the real tail.
+"""The paper's workspace experiment run in time (bvsr_cad.simulation.sim.workspace_protocol): the
+exported MJCF driven by a new random pressure per line every cycle, as Sec. IV-A-5 drives the real
+tail.
 
 Two independent models meet here: where the tail has settled at the end of each 1 s cycle,
 MuJoCo's reduced chain must put the tip where the quasi-static model of the analyses puts it for
@@ -10,13 +11,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bvsr_cad.simulation import sim
 from bvsr_cad.analysis.predict import NeedsSimulator, Predictor
 from bvsr_cad.analysis.workspace import sample_line_pressures_kpa, tail_statics
 from bvsr_cad.assembly.build import build_assembly
+from bvsr_cad.simulation import sim
 
 CYCLES = 40
-#: Joint limits beyond any bend of this protocol (0.5 bar): the run does not need the clearance analysis.
+#: Joint limits beyond any bend of this protocol (0.5 bar): the run does not need the clearance
+#: analysis.
 FREE_LIMITS_RAD = 0.9
 
 
@@ -27,14 +29,18 @@ def asm(bvsr_spec):
 
 @pytest.fixture(scope="module")
 def run(asm, bvsr_spec):
-    return sim.workspace_protocol(asm, bvsr_spec, [FREE_LIMITS_RAD] * bvsr_spec.joints, cycles=CYCLES)
+    return sim.workspace_protocol(
+        asm, bvsr_spec, [FREE_LIMITS_RAD] * bvsr_spec.joints, cycles=CYCLES
+    )
 
 
 def test_settled_tip_is_where_the_statics_put_it(run, asm, bvsr_spec):
     assert run.warnings == 0
     assert run.settled_mm.shape == (CYCLES, 3)
     st = tail_statics(asm, spec=bvsr_spec)
-    draws = sample_line_pressures_kpa(bvsr_spec, CYCLES, np.random.default_rng(bvsr_spec.analysis.seed))
+    draws = sample_line_pressures_kpa(
+        bvsr_spec, CYCLES, np.random.default_rng(bvsr_spec.analysis.seed)
+    )
     tips = st.kin.tip_point_mm(st.forward(draws))
     rest = st.kin.tip_point_mm(st.forward(np.zeros((bvsr_spec.segments, 5))))
     statics = np.hypot(tips[:, 0] - rest[0], tips[:, 1] - rest[1])
@@ -49,7 +55,7 @@ def test_path_is_sampled_through_every_cycle(run, bvsr_spec):
     per_cycle = round(bvsr_spec.actuation.workspace_cycle_s / sim.PROTOCOL_SAMPLE_S)
     assert run.tip_mm.shape == (CYCLES * per_cycle, 3)
     # The last sample of each cycle is the settled point.
-    np.testing.assert_allclose(run.tip_mm[per_cycle - 1::per_cycle], run.settled_mm, atol=1e-9)
+    np.testing.assert_allclose(run.tip_mm[per_cycle - 1 :: per_cycle], run.settled_mm, atol=1e-9)
     assert run.radius_mm >= run.settled_radius_mm
     assert np.linalg.norm(run.axis) == pytest.approx(1.0)
 

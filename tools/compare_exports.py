@@ -1,10 +1,11 @@
 #!/usr/bin/env python
-"""Compare two export folders file for file, the manifest's ``volatile`` section (times, hosts) aside.
+"""Compare two export folders file for file, the manifest's ``volatile`` section (times, hosts)
+aside.
 
     python tools/compare_exports.py REFERENCE EXPORT     # exit 0: equal, 1: files differ
 
-Standard library only, so that it runs in any virtualenv (tools/wheel_check.sh runs it in the wheel's);
-the cache tests use the same functions (tests/test_cache.py).
+Standard library only, so that it runs in any virtualenv (tools/wheel_check.sh runs it in the
+wheel's); the cache tests use the same functions (tests/test_cache.py).
 """
 
 from __future__ import annotations
@@ -15,7 +16,8 @@ from pathlib import Path
 
 
 def export_files(root: Path) -> dict[str, bytes]:
-    """Each file's bytes by its path in the export; the top manifest without its volatile section."""
+    """Each file's bytes by its path in the export; the top manifest without its volatile
+    section."""
     out = {}
     for p in sorted(root.rglob("*")):
         if p.is_file():
@@ -40,8 +42,10 @@ def main(argv: list[str]) -> int:
         return 2
     reference, export = (Path(a) for a in argv)
     differ = differences(reference, export)
-    print(f"export against {reference}: {len(export_files(export))} files, {len(differ)} differ"
-          + (f": {differ[:20]}" if differ else ""))
+    print(
+        f"export against {reference}: {len(export_files(export))} files, {len(differ)} differ"
+        + (f": {differ[:20]}" if differ else "")
+    )
     return 1 if differ else 0
 
 

@@ -22,18 +22,18 @@ usage problem (a rotten snippet, a leftover backup, a failing baseline).
 If a run is killed hard (SIGKILL, power loss), the backup stays behind; the
 next run refuses to start until ``--restore`` has put the original back.
 
-Each fault also names its *catchers*, the tests written to catch it. ``--targeted`` (what CI runs) applies
-each fault in a private copy of the tree (``--jobs`` copies side by side; the working tree is never
-touched) and runs its catchers alone: the fault is caught only if every one of them fails, so a test that
-stops catching its fault fails the run (PARTIAL). All the catchers first run once on the unmutated copies
-and must pass, so a failure under a fault is the fault's. ``tests/test_mutate_faults.py`` checks that every
-fault applies and names catchers that exist.
+Each fault also names its *catchers*, the tests written to catch it. ``--targeted`` (what CI runs)
+applies each fault in a private copy of the tree (``--jobs`` copies side by side; the working tree
+is never touched) and runs its catchers alone: the fault is caught only if every one of them fails,
+so a test that stops catching its fault fails the run (PARTIAL). All the catchers first run once on
+the unmutated copies and must pass, so a failure under a fault is the fault's.
+``tests/test_mutate_faults.py`` checks that every fault applies and names catchers that exist.
 
 Usage (from the repository root)::
 
     .venv/bin/python tools/mutate.py --targeted      # every fault against its catchers (CI)
     .venv/bin/python tools/mutate.py                 # every fault against the fast suite (by hand)
-    .venv/bin/python tools/mutate.py --list          # the faults, whether each still applies, its catchers
+    .venv/bin/python tools/mutate.py --list          # the faults, whether each applies, catchers
     .venv/bin/python tools/mutate.py --only rod_bore_2mm --only ei_d_cubed
     .venv/bin/python tools/mutate.py --json          # one JSON object on stdout
     .venv/bin/python tools/mutate.py --restore       # after a killed run
@@ -59,8 +59,8 @@ import hashlib
 import json
 import os
 import re
-import signal
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -73,15 +73,38 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 BACKUP_SUFFIX = ".mutate-orig"
 STATE_FILE = Path("tools") / ".mutate-state.json"
-#: The test that every fault applies (``tests/test_mutate_faults.py``) fails under any applied fault, whose
-#: snippet is then gone: it would "catch" them all, so the suite run for a fault leaves it out.
+#: The test that every fault applies (``tests/test_mutate_faults.py``) fails under any applied
+#: fault, whose snippet is then gone: it would "catch" them all, so the suite run for a fault leaves
+#: it out.
 SELF_TEST = "tests/test_mutate_faults.py"
-PYTEST_ARGS = ["-m", "pytest", "-x", "-q", "-m", "not slow", "-p", "no:cacheprovider", "-rfE",
-               "--no-header", "-W", "ignore::DeprecationWarning", f"--ignore={SELF_TEST}"]
-#: ``--targeted``: a fault's catchers alone, each run to its end (every one must fail, so no -x), whether
-#: marked slow or not (they are named).
-TARGETED_ARGS = ["-m", "pytest", "-q", "-p", "no:cacheprovider", "-rfE", "--no-header",
-                 "-W", "ignore::DeprecationWarning"]
+PYTEST_ARGS = [
+    "-m",
+    "pytest",
+    "-x",
+    "-q",
+    "-m",
+    "not slow",
+    "-p",
+    "no:cacheprovider",
+    "-rfE",
+    "--no-header",
+    "-W",
+    "ignore::DeprecationWarning",
+    f"--ignore={SELF_TEST}",
+]
+#: ``--targeted``: a fault's catchers alone, each run to its end (every one must fail, so no -x),
+#: whether marked slow or not (they are named).
+TARGETED_ARGS = [
+    "-m",
+    "pytest",
+    "-q",
+    "-p",
+    "no:cacheprovider",
+    "-rfE",
+    "--no-header",
+    "-W",
+    "ignore::DeprecationWarning",
+]
 
 
 @dataclass(frozen=True)
@@ -91,253 +114,396 @@ class Fault:
     old: str  # must occur exactly once in the file
     new: str
     description: str
-    #: pytest node ids (a parametrised test's id without its [...] stands for all its cases) that must each
-    #: fail under this fault: ``--targeted`` runs these alone.
+    #: pytest node ids (a parametrised test's id without its [...] stands for all its cases) that
+    #: must each fail under this fault: ``--targeted`` runs these alone.
     catchers: tuple[str, ...] = ()
 
 
 # Every fault is a physically wrong answer that still imports, builds and runs.
 FAULTS: list[Fault] = [
     # -- the four faults of the review ---------------------------------------------------------
-    Fault("rod_bore_2mm", "bvsr_cad/parameters/layout.py",
-          "def rod_bore_mm(spec: TailSpec) -> float:\n    thread = rod_thread(spec)\n",
-          "def rod_bore_mm(spec: TailSpec) -> float:\n    return 2.0\n    thread = rod_thread(spec)\n",
-          "the panels' rod bore is 2 mm for a 6 mm rod",
-          catchers=("tests/test_truth.py::test_rod_bore_is_the_iso_tap_drill_or_the_rod_with_clearance",)),
-    Fault("ei_d_cubed", "bvsr_cad/models/rod.py",
-          "return math.pi * self.diameter_mm ** 4 / 64.0",
-          "return math.pi * self.diameter_mm ** 3 / 64.0",
-          "the rod's second moment of area is pi d^3 / 64 instead of pi d^4 / 64",
-          catchers=("tests/test_truth.py::test_rod_section_is_the_closed_form_with_the_tables_material",)),
-    Fault("robot_ei_x1.5", "bvsr_cad/assembly/robot.py",
-          "rod_bending_stiffness_nm_rad=rod.bending_stiffness_nm_per_rad(L_mm),",
-          "rod_bending_stiffness_nm_rad=1.5 * rod.bending_stiffness_nm_per_rad(L_mm),",
-          "the robot model's rod E I / L is 1.5 times the rod's",
-          catchers=("tests/test_truth.py::test_robot_rod_stiffness_is_ei_over_l_in_si",)),
-    Fault("rod_panel_material", "bvsr_cad/models/rod.py",
-          "table = _table_section(spec, v.material, v.diameter_mm)",
-          "table = _table_section(spec, spec.use.panel, v.diameter_mm)",
-          "the rod's section (E, density) takes the panel's material",
-          catchers=("tests/test_truth.py::test_rod_section_is_the_closed_form_with_the_tables_material",)),
+    Fault(
+        "rod_bore_2mm",
+        "bvsr_cad/parameters/layout.py",
+        "def rod_bore_mm(spec: TailSpec) -> float:\n    thread = rod_thread(spec)\n",
+        "def rod_bore_mm(spec: TailSpec) -> float:\n"
+        "    return 2.0\n    thread = rod_thread(spec)\n",
+        "the panels' rod bore is 2 mm for a 6 mm rod",
+        catchers=(
+            "tests/test_truth.py::test_rod_bore_is_the_iso_tap_drill_or_the_rod_with_clearance",
+        ),
+    ),
+    Fault(
+        "ei_d_cubed",
+        "bvsr_cad/models/rod.py",
+        "return math.pi * self.diameter_mm**4 / 64.0",
+        "return math.pi * self.diameter_mm**3 / 64.0",
+        "the rod's second moment of area is pi d^3 / 64 instead of pi d^4 / 64",
+        catchers=(
+            "tests/test_truth.py::test_rod_section_is_the_closed_form_with_the_tables_material",
+        ),
+    ),
+    Fault(
+        "robot_ei_x1.5",
+        "bvsr_cad/assembly/robot.py",
+        "rod_bending_stiffness_nm_rad=rod.bending_stiffness_nm_per_rad(L_mm),",
+        "rod_bending_stiffness_nm_rad=1.5 * rod.bending_stiffness_nm_per_rad(L_mm),",
+        "the robot model's rod E I / L is 1.5 times the rod's",
+        catchers=("tests/test_truth.py::test_robot_rod_stiffness_is_ei_over_l_in_si",),
+    ),
+    Fault(
+        "rod_panel_material",
+        "bvsr_cad/models/rod.py",
+        "table = _table_section(spec, v.material, v.diameter_mm)",
+        "table = _table_section(spec, spec.use.panel, v.diameter_mm)",
+        "the rod's section (E, density) takes the panel's material",
+        catchers=(
+            "tests/test_truth.py::test_rod_section_is_the_closed_form_with_the_tables_material",
+        ),
+    ),
     # -- more faults in the core numbers ------------------------------------------------------
-    Fault("rod_part_panel_material", "bvsr_cad/assembly/build.py",
-          'kind="rod", material=spec.vertebra.material',
-          'kind="rod", material=spec.use.panel',
-          "the rod part (its mass, its BOM line) is made of the panel's material",
-          catchers=("tests/test_truth.py::test_parts_are_made_of_their_tables_material",)),
-    Fault("tap_drill_m6", "bvsr_cad/parameters/data/iso_metric.toml",
-          "pitch_mm = 1.0\ntap_drill_mm = 5.0\n",
-          "pitch_mm = 1.0\ntap_drill_mm = 5.5\n",
-          "the M6 tap drill is 5.5 mm (ISO 2306: 5.0 mm)",
-          catchers=(
-              "tests/test_truth.py::test_rod_bore_is_the_iso_tap_drill_or_the_rod_with_clearance[6.0-threaded]",
-          )),
-    Fault("set_screw_bore_no_clearance", "bvsr_cad/parameters/layout.py",
-          "return hole_d(spec, spec.vertebra.diameter_mm + spec.socket.rod_clearance_mm)",
-          "return hole_d(spec, spec.vertebra.diameter_mm - spec.socket.rod_clearance_mm)",
-          "the set-screw bore is smaller than the rod (clearance subtracted)",
-          catchers=(
-              "tests/test_truth.py::test_rod_bore_is_the_iso_tap_drill_or_the_rod_with_clearance[6.0-set_screw]",
-          )),
-    Fault("polar_cos_sin_swapped", "bvsr_cad/parameters/layout.py",
-          "return (radius_mm * math.cos(a), radius_mm * math.sin(a))",
-          "return (radius_mm * math.sin(a), radius_mm * math.cos(a))",
-          "x and y swapped in the pentagon's polar(): SOA 1 lateral instead of dorsal",
-          catchers=("tests/test_truth.py::test_soas_sit_on_the_pentagon",)),
-    Fault("pentagon_clockwise", "bvsr_cad/parameters/layout.py",
-          "return 90.0 + 72.0 * np.arange(N_SOA)",
-          "return 90.0 - 72.0 * np.arange(N_SOA)",
-          "the SOAs are numbered clockwise (soa2 at 18 deg instead of 162 deg)",
-          catchers=("tests/test_truth.py::test_soas_sit_on_the_pentagon",)),
-    Fault("dropped_soa", "bvsr_cad/assembly/build.py",
-          "for i, a in enumerate(soa_angles_deg(), start=1):",
-          "for i, a in enumerate(soa_angles_deg()[:4], start=1):",
-          "each joint places 4 SOAs instead of N_SOA = 5",
-          catchers=("tests/test_truth.py::test_soas_sit_on_the_pentagon",)),
-    Fault("soa_stiffness_sign", "bvsr_cad/models/actuator.py",
-          "return p * self.area_m2 - self.stiffness_n_per_m(p) * stretch_m",
-          "return p * self.area_m2 + self.stiffness_n_per_m(p) * stretch_m",
-          "the SOA's spring pushes with its stretch instead of against it (Eq 3 sign)",
-          catchers=("tests/test_truth.py::test_soa_force_law_by_hand",)),
-    Fault("soa_slope_kpa_as_pa", "bvsr_cad/models/actuator.py",
-          "stiffness_slope_n_per_m_per_pa=a.stiffness_slope_n_per_m_per_kpa / units.PA_PER_KPA,",
-          "stiffness_slope_n_per_m_per_pa=a.stiffness_slope_n_per_m_per_kpa,",
-          "m_a of Eq 4 given per kPa is used per Pa (1000 times too stiff under pressure)",
-          catchers=("tests/test_truth.py::test_soa_force_law_by_hand",)),
-    Fault("chord_full_angle", "bvsr_cad/models/kinematics.py",
-          "S, _, _, _ = _series_coefficients(np.abs(np.asarray(theta_rad, float)) / 2)",
-          "S, _, _, _ = _series_coefficients(np.abs(np.asarray(theta_rad, float)))",
-          "the chord is L sin(theta) / theta instead of 2 L sin(theta / 2) / theta",
-          catchers=("tests/test_truth.py::test_chord_is_two_l_sin_half_theta_over_theta",)),
-    Fault("parallel_axis_sign", "bvsr_cad/assembly/inertia.py",
-          "I += i.inertia + i.mass_kg * (np.dot(d, d) * np.eye(3) - np.outer(d, d))",
-          "I += i.inertia + i.mass_kg * (np.dot(d, d) * np.eye(3) + np.outer(d, d))",
-          "the parallel-axis term of compose() adds d d^T instead of subtracting it",
-          catchers=("tests/test_truth.py::test_composed_inertia_by_hand",)),
-    Fault("density_mm3_per_cm3", "bvsr_cad/units.py",
-          "MM3_PER_CM3 = 1000.0",
-          "MM3_PER_CM3 = 100.0",
-          "1 cm^3 = 100 mm^3: every mass from a density is 10 times too large",
-          catchers=("tests/test_truth.py::test_unit_conversions_by_hand",)),
-    Fault("density_kg_m3_factor", "bvsr_cad/units.py",
-          "return value_g_cm3 * 1000.0",
-          "return value_g_cm3 * 100.0",
-          "g/cm^3 -> kg/m^3 by 100 instead of 1000",
-          catchers=("tests/test_truth.py::test_unit_conversions_by_hand",)),
-    Fault("inertia_mm2_to_m2", "bvsr_cad/units.py",
-          "return value_g_mm2 / G_PER_KG / (MM_PER_M * MM_PER_M)",
-          "return value_g_mm2 / G_PER_KG / MM_PER_M",
-          "g mm^2 -> kg m^2 divides by 1e6 instead of 1e9",
-          catchers=("tests/test_truth.py::test_unit_conversions_by_hand",)),
-    Fault("panel_thickness", "bvsr_cad/parameters/tables.py",
-          "return self.joint_height_mm - self.gap_mm\n",
-          "return self.joint_height_mm - self.gap_mm + 0.2\n",
-          "the panel thickness is H_j - H_a + 0.2 mm (still a valid parameter file)",
-          catchers=("tests/test_truth.py::test_panels_sit_every_h_j_and_are_h_j_minus_h_a_thick",)),
-    Fault("taper_upper_rim", "bvsr_cad/parameters/layout.py",
-          "r_rim_hi = j.panel_diameter_mm / 2 - (z0 + t) * tan_b",
-          "r_rim_hi = j.panel_diameter_mm / 2 - z0 * tan_b",
-          "the rim does not follow the cone across a panel's thickness",
-          catchers=("tests/test_truth.py::test_rims_and_pitch_circles_follow_one_cone",)),
-    Fault("flange_thickness", "bvsr_cad/parameters/tables.py",
-          "return (self.height_mm - self.origami_height_mm) / 2.0",
-          "return (self.height_mm - self.origami_height_mm) / 2.5",
-          "each SOA flange is (H - H_o) / 2.5 thick instead of (H - H_o) / 2",
-          catchers=("tests/test_truth.py::test_soa_body_height_and_pocket_depth",)),
-    Fault("mold_shrinkage_scale", "bvsr_cad/parameters/molds.py",
-          "k = 1.0 + c.shrinkage_percent / 100.0",
-          "k = 1.0 + c.shrinkage_percent / 10.0",
-          "the mold cavity scales by 1 + shrinkage / 10 instead of 1 + shrinkage / 100",
-          catchers=("tests/test_truth.py::test_mold_cast_is_the_soa_grown_by_the_shrinkage",)),
-    Fault("twin_pin_hole", "bvsr_cad/parameters/twin.py",
-          "return fp.pin_diameter_mm + fp.pin_hole_clearance_mm",
-          "return fp.pin_diameter_mm - fp.pin_hole_clearance_mm",
-          "the rigid twin's dowel holes are smaller than the dowel",
-          catchers=("tests/test_truth.py::test_rigid_twin_dowel_holes",)),
-    Fault("robot_rod_panel_material", "bvsr_cad/assembly/robot.py",
-          "rod_mat = spec.materials.get(spec.vertebra.material)  # None: no rod (no rod pieces either)",
-          "rod_mat = spec.materials.get(spec.use.panel)  # None: no rod (no rod pieces either)",
-          "the robot model's rod pieces (links' mass and inertia) take the panel's density",
-          catchers=("tests/test_truth.py::test_robot_mass_by_hand",)),
-    Fault("robot_theta_about_x", "bvsr_cad/assembly/robot.py",
-          "names[0], names[1], _as_tuple(np.eye(4)), (0, 1, 0),",
-          "names[0], names[1], _as_tuple(np.eye(4)), (1, 0, 0),",
-          "the first half-angle joint turns about X instead of Y (swapped axis in the chain)",
-          catchers=("tests/test_truth.py::test_mujoco_bent_joint_is_eq2_by_hand",)),
-    Fault("robot_phi_origin_in_mm", "bvsr_cad/assembly/robot.py",
-          "_as_tuple(translation_m(z=t)), (0, 0, 1),",
-          "_as_tuple(translation_m(z=t_mm)), (0, 0, 1),",
-          "each joint's chain starts t millimetres written as metres above its panel (mm -> m)",
-          catchers=("tests/test_truth.py::test_mujoco_rest_pose_is_the_straight_tail",)),
-    Fault("robot_top_site_frame", "bvsr_cad/assembly/robot.py",
-          "(top_mm - [0, 0, hi.z0_mm])",
-          "(top_mm - [0, 0, lo.z0_mm])",
-          "an SOA's top socket is placed in the lower panel's frame",
-          catchers=("tests/test_truth.py::test_mujoco_sockets_on_the_pentagon",)),
-    Fault("robot_velocity_not_shared", "bvsr_cad/assembly/robot.py",
-          "return units.deg_s_to_rad_s(segment_deg_s) / joints_per_segment * margin",
-          "return units.deg_s_to_rad_s(segment_deg_s) * margin",
-          "a joint's velocity limit is the whole segment's rate (not shared by its joints)",
-          catchers=("tests/test_truth.py::test_robot_limits_by_hand",)),
-    Fault("robot_effort_on_diameter", "bvsr_cad/assembly/robot.py",
-          "effort_limit_nm = push_n * units.mm_to_m(spec.joint.pitch_diameter_mm / 2)",
-          "effort_limit_nm = push_n * units.mm_to_m(spec.joint.pitch_diameter_mm)",
-          "the SOAs' torque limit uses the pitch diameter as the lever arm",
-          catchers=("tests/test_truth.py::test_robot_limits_by_hand",)),
-    Fault("mjcf_soa_spring_sign", "bvsr_cad/exporters/mjcf.py",
-          "biasprm=_vec((n_a * l0, -n_a, -c))",
-          "biasprm=_vec((-n_a * l0, n_a, -c))",
-          "the MJCF actuator's SOA spring pushes with the stretch (Eq 3 sign in MuJoCo)",
-          catchers=("tests/test_truth.py::test_mujoco_soa_actuator_is_eq3_by_hand",)),
-    Fault("kinematics_xy_swapped", "bvsr_cad/models/kinematics.py",
-          "trans = length_mm * np.stack([self.u * C, self.v * C, S], -1)",
-          "trans = length_mm * np.stack([self.v * C, self.u * C, S], -1)",
-          "X and Y swapped in the translation of Eq 2",
-          catchers=("tests/test_truth.py::test_linearised_equilibrium_of_one_pressurised_soa",)),
-    Fault("mid_angles_off_1deg", "bvsr_cad/parameters/layout.py",
-          "return soa_angles_deg() + 36.0",
-          "return soa_angles_deg() + 35.0",
-          "the features between the pockets (lightening, tubes, inserts) are 1 deg off the mid-angles",
-          catchers=("tests/test_truth.py::test_features_between_the_pockets_sit_on_the_mid_angles",)),
-    Fault("pocket_clearance_sign", "bvsr_cad/parameters/layout.py",
-          "return spec.joint.base_diameter_mm + spec.fabrication.pocket_clearance_mm",
-          "return spec.joint.base_diameter_mm - spec.fabrication.pocket_clearance_mm",
-          "a flange pocket is smaller than the D_b flange (clearance subtracted)",
-          catchers=("tests/test_truth.py::test_flange_pockets_are_d_b_plus_clearance",)),
-    Fault("m3_nut_across_flats", "bvsr_cad/parameters/data/iso_metric.toml",
-          "tap_drill_mm = 2.5\nnut_af_mm = 5.5\n",
-          "tap_drill_mm = 2.5\nnut_af_mm = 5.0\n",
-          "the M3 nut is 5.0 mm across flats (ISO 4032: 5.5 mm): the twin's nut pockets are too small",
-          catchers=("tests/test_truth.py::test_rigid_twin_tie_rod_and_nut_pocket",)),
-    # -- the directions of the physics: payload, gravity, taper, density -----------------------------
-    Fault("payload_ignored_in_simulate", "bvsr_cad/simulation/sim.py",
-          'tail_xml = _model_xml(spec, theta_max_rad, folder / "tail", payload_g)',
-          'tail_xml = _model_xml(spec, theta_max_rad, folder / "tail", 0.0)',
-          "bvsr simulate --payload-g runs the tail without its payload",
-          catchers=("tests/test_simulate_payload.py::test_simulate_carries_the_payload_as_a_point_mass",)),
-    Fault("payload_left_out_of_dynamics", "bvsr_cad/models/dynamics.py",
-          "return replace(self, tip_mass_kg=self.tip_mass_kg + mass_kg)",
-          "return replace(self, tip_mass_kg=self.tip_mass_kg)",
-          "RigidBody.with_tip_mass ignores the payload (the Eq 6-12 model runs without it)",
-          catchers=(
-              "tests/test_models_dynamics.py::test_a_tip_payload_is_a_point_mass_at_the_arcs_end",
-              "tests/test_models_dynamics.py::test_root_wrench_with_a_tip_payload_under_a_known_angular_acceleration",
-          )),
-    Fault("payload_not_passed_to_the_model", "bvsr_cad/analysis/predict.py",
-          "body = body.with_tip_mass(units.g_to_kg(payload_g))",
-          "body = body.with_tip_mass(0.0)",
-          "the predictions' joint model leaves the tip payload out",
-          catchers=(
-              "tests/test_models_dynamics.py::test_root_wrench_with_a_tip_payload_under_a_known_angular_acceleration",
-          )),
-    Fault("payload_offset_from_the_base", "bvsr_cad/models/dynamics.py",
-          "TIP_OVER_COM = 2.0",
-          "TIP_OVER_COM = 1.0",
-          "the payload rides at the body's centre of mass (the chord midpoint, half-way from the base) instead "
-          "of at the arc's end",
-          catchers=(
-              "tests/test_models_dynamics.py::test_a_tip_payload_is_a_point_mass_at_the_arcs_end",
-              "tests/test_models_dynamics.py::test_root_wrench_with_a_tip_payload_under_a_known_angular_acceleration",
-          )),
-    Fault("payload_weighed_at_the_centre_of_mass", "bvsr_cad/models/dynamics.py",
-          "return self.mass_kg + TIP_OVER_COM * self.tip_mass_kg",
-          "return self.mass_kg + self.tip_mass_kg",
-          "gravity pulls the tip payload as if it sat at the body's centre of mass",
-          catchers=(
-              "tests/test_models_dynamics.py::test_a_tip_payload_is_a_point_mass_at_the_arcs_end",
-              "tests/test_models_dynamics.py::test_without_damping_and_forcing_the_model_conserves_energy[0.1]",
-          )),
-    Fault("root_torque_lever_without_panel", "bvsr_cad/analysis/predict.py",
-          "face = np.array([0.0, 0.0, units.mm_to_m(self.spec.joint.panel_thickness_mm)])",
-          "face = np.zeros(3)",
-          "the predicted root torque is taken about the body's base face, not the root sensor's face",
-          catchers=(
-              "tests/test_models_dynamics.py::test_root_wrench_with_a_tip_payload_under_a_known_angular_acceleration",
-          )),
-    Fault("statics_gravity_sign", "bvsr_cad/models/statics.py",
-          "down = np.array([0.0, -G_N_PER_KG, 0.0])",
-          "down = np.array([0.0, G_N_PER_KG, 0.0])",
-          "gravity points along +Y in the statics (the horizontal tail sags upwards)",
-          catchers=(
-              "tests/test_statics.py::test_the_horizontal_tail_sags_towards_minus_y_as_hand_statics_give",
-          )),
-    Fault("dynamics_gravity_sign", "bvsr_cad/analysis/predict.py",
-          "GRAVITY_M_S2 = np.array([0.0, -G_M_S2, 0.0])",
-          "GRAVITY_M_S2 = np.array([0.0, G_M_S2, 0.0])",
-          "gravity points along +Y in the predictions' Eq 6-12 model",
-          catchers=(
-              "tests/test_models_dynamics.py::test_the_predictions_tail_sags_towards_minus_y_without_pressure",
-          )),
-    Fault("taper_sign", "bvsr_cad/parameters/layout.py",
-          "        return math.radians(max_feasible_taper_deg(spec))\n",
-          "        return -math.radians(max_feasible_taper_deg(spec))\n",
-          "the cone opens the wrong way: panels grow from the root to the tip",
-          catchers=("tests/test_truth.py::test_panels_narrow_from_root_to_tip_on_the_b_rep",)),
-    Fault("soa_density", "bvsr_cad/defaults/params/bvsr.toml",
-          'name = "cast polyurethane rubber, Shore 75-80A"\ndensity_g_cm3 = 1.05\n',
-          'name = "cast polyurethane rubber, Shore 75-80A"\ndensity_g_cm3 = 1.15\n',
-          "the SOA's polyurethane is 1.15 g/cm^3 (datasheets: 1.04-1.06): every SOA 10 % heavier",
-          catchers=("tests/test_truth.py::test_soa_and_tail_masses_within_the_datasheets_densities",)),
+    Fault(
+        "rod_part_panel_material",
+        "bvsr_cad/assembly/build.py",
+        'kind="rod",\n                material=spec.vertebra.material,',
+        'kind="rod",\n                material=spec.use.panel,',
+        "the rod part (its mass, its BOM line) is made of the panel's material",
+        catchers=("tests/test_truth.py::test_parts_are_made_of_their_tables_material",),
+    ),
+    Fault(
+        "tap_drill_m6",
+        "bvsr_cad/parameters/data/iso_metric.toml",
+        "pitch_mm = 1.0\ntap_drill_mm = 5.0\n",
+        "pitch_mm = 1.0\ntap_drill_mm = 5.5\n",
+        "the M6 tap drill is 5.5 mm (ISO 2306: 5.0 mm)",
+        catchers=(
+            "tests/test_truth.py::test_rod_bore_is_the_iso_tap_drill_or_the_rod_with_clearance[6.0-threaded]",
+        ),
+    ),
+    Fault(
+        "set_screw_bore_no_clearance",
+        "bvsr_cad/parameters/layout.py",
+        "return hole_d(spec, spec.vertebra.diameter_mm + spec.socket.rod_clearance_mm)",
+        "return hole_d(spec, spec.vertebra.diameter_mm - spec.socket.rod_clearance_mm)",
+        "the set-screw bore is smaller than the rod (clearance subtracted)",
+        catchers=(
+            "tests/test_truth.py::test_rod_bore_is_the_iso_tap_drill_or_the_rod_with_clearance[6.0-set_screw]",
+        ),
+    ),
+    Fault(
+        "polar_cos_sin_swapped",
+        "bvsr_cad/parameters/layout.py",
+        "return (radius_mm * math.cos(a), radius_mm * math.sin(a))",
+        "return (radius_mm * math.sin(a), radius_mm * math.cos(a))",
+        "x and y swapped in the pentagon's polar(): SOA 1 lateral instead of dorsal",
+        catchers=("tests/test_truth.py::test_soas_sit_on_the_pentagon",),
+    ),
+    Fault(
+        "pentagon_clockwise",
+        "bvsr_cad/parameters/layout.py",
+        "return 90.0 + 72.0 * np.arange(N_SOA)",
+        "return 90.0 - 72.0 * np.arange(N_SOA)",
+        "the SOAs are numbered clockwise (soa2 at 18 deg instead of 162 deg)",
+        catchers=("tests/test_truth.py::test_soas_sit_on_the_pentagon",),
+    ),
+    Fault(
+        "dropped_soa",
+        "bvsr_cad/assembly/build.py",
+        "for i, a in enumerate(soa_angles_deg(), start=1):",
+        "for i, a in enumerate(soa_angles_deg()[:4], start=1):",
+        "each joint places 4 SOAs instead of N_SOA = 5",
+        catchers=("tests/test_truth.py::test_soas_sit_on_the_pentagon",),
+    ),
+    Fault(
+        "soa_stiffness_sign",
+        "bvsr_cad/models/actuator.py",
+        "p * self.area_m2\n            - self.stiffness_n_per_m(p) * stretch_m",
+        "p * self.area_m2\n            + self.stiffness_n_per_m(p) * stretch_m",
+        "the SOA's spring pushes with its stretch instead of against it (Eq 3 sign)",
+        catchers=("tests/test_truth.py::test_soa_force_law_by_hand",),
+    ),
+    Fault(
+        "soa_slope_kpa_as_pa",
+        "bvsr_cad/models/actuator.py",
+        "stiffness_slope_n_per_m_per_pa=a.stiffness_slope_n_per_m_per_kpa / units.PA_PER_KPA,",
+        "stiffness_slope_n_per_m_per_pa=a.stiffness_slope_n_per_m_per_kpa,",
+        "m_a of Eq 4 given per kPa is used per Pa (1000 times too stiff under pressure)",
+        catchers=("tests/test_truth.py::test_soa_force_law_by_hand",),
+    ),
+    Fault(
+        "chord_full_angle",
+        "bvsr_cad/models/kinematics.py",
+        "S, _, _, _ = _series_coefficients(np.abs(np.asarray(theta_rad, float)) / 2)",
+        "S, _, _, _ = _series_coefficients(np.abs(np.asarray(theta_rad, float)))",
+        "the chord is L sin(theta) / theta instead of 2 L sin(theta / 2) / theta",
+        catchers=("tests/test_truth.py::test_chord_is_two_l_sin_half_theta_over_theta",),
+    ),
+    Fault(
+        "parallel_axis_sign",
+        "bvsr_cad/assembly/inertia.py",
+        "I += i.inertia + i.mass_kg * (np.dot(d, d) * np.eye(3) - np.outer(d, d))",
+        "I += i.inertia + i.mass_kg * (np.dot(d, d) * np.eye(3) + np.outer(d, d))",
+        "the parallel-axis term of compose() adds d d^T instead of subtracting it",
+        catchers=("tests/test_truth.py::test_composed_inertia_by_hand",),
+    ),
+    Fault(
+        "density_mm3_per_cm3",
+        "bvsr_cad/units.py",
+        "MM3_PER_CM3 = 1000.0",
+        "MM3_PER_CM3 = 100.0",
+        "1 cm^3 = 100 mm^3: every mass from a density is 10 times too large",
+        catchers=("tests/test_truth.py::test_unit_conversions_by_hand",),
+    ),
+    Fault(
+        "density_kg_m3_factor",
+        "bvsr_cad/units.py",
+        "return value_g_cm3 * 1000.0",
+        "return value_g_cm3 * 100.0",
+        "g/cm^3 -> kg/m^3 by 100 instead of 1000",
+        catchers=("tests/test_truth.py::test_unit_conversions_by_hand",),
+    ),
+    Fault(
+        "inertia_mm2_to_m2",
+        "bvsr_cad/units.py",
+        "return value_g_mm2 / G_PER_KG / (MM_PER_M * MM_PER_M)",
+        "return value_g_mm2 / G_PER_KG / MM_PER_M",
+        "g mm^2 -> kg m^2 divides by 1e6 instead of 1e9",
+        catchers=("tests/test_truth.py::test_unit_conversions_by_hand",),
+    ),
+    Fault(
+        "panel_thickness",
+        "bvsr_cad/parameters/tables.py",
+        "return self.joint_height_mm - self.gap_mm\n",
+        "return self.joint_height_mm - self.gap_mm + 0.2\n",
+        "the panel thickness is H_j - H_a + 0.2 mm (still a valid parameter file)",
+        catchers=("tests/test_truth.py::test_panels_sit_every_h_j_and_are_h_j_minus_h_a_thick",),
+    ),
+    Fault(
+        "taper_upper_rim",
+        "bvsr_cad/parameters/layout.py",
+        "r_rim_hi = j.panel_diameter_mm / 2 - (z0 + t) * tan_b",
+        "r_rim_hi = j.panel_diameter_mm / 2 - z0 * tan_b",
+        "the rim does not follow the cone across a panel's thickness",
+        catchers=("tests/test_truth.py::test_rims_and_pitch_circles_follow_one_cone",),
+    ),
+    Fault(
+        "flange_thickness",
+        "bvsr_cad/parameters/tables.py",
+        "return (self.height_mm - self.origami_height_mm) / 2.0",
+        "return (self.height_mm - self.origami_height_mm) / 2.5",
+        "each SOA flange is (H - H_o) / 2.5 thick instead of (H - H_o) / 2",
+        catchers=("tests/test_truth.py::test_soa_body_height_and_pocket_depth",),
+    ),
+    Fault(
+        "mold_shrinkage_scale",
+        "bvsr_cad/parameters/molds.py",
+        "k = 1.0 + c.shrinkage_percent / 100.0",
+        "k = 1.0 + c.shrinkage_percent / 10.0",
+        "the mold cavity scales by 1 + shrinkage / 10 instead of 1 + shrinkage / 100",
+        catchers=("tests/test_truth.py::test_mold_cast_is_the_soa_grown_by_the_shrinkage",),
+    ),
+    Fault(
+        "twin_pin_hole",
+        "bvsr_cad/parameters/twin.py",
+        "return fp.pin_diameter_mm + fp.pin_hole_clearance_mm",
+        "return fp.pin_diameter_mm - fp.pin_hole_clearance_mm",
+        "the rigid twin's dowel holes are smaller than the dowel",
+        catchers=("tests/test_truth.py::test_rigid_twin_dowel_holes",),
+    ),
+    Fault(
+        "robot_rod_panel_material",
+        "bvsr_cad/assembly/robot.py",
+        "rod_mat = spec.materials.get(spec.vertebra.material)  # None: no rod (no rod pieces "
+        "either)",
+        "rod_mat = spec.materials.get(spec.use.panel)  # None: no rod (no rod pieces either)",
+        "the robot model's rod pieces (links' mass and inertia) take the panel's density",
+        catchers=("tests/test_truth.py::test_robot_mass_by_hand",),
+    ),
+    Fault(
+        "robot_theta_about_x",
+        "bvsr_cad/assembly/robot.py",
+        "names[1],\n            _as_tuple(np.eye(4)),\n            (0, 1, 0),",
+        "names[1],\n            _as_tuple(np.eye(4)),\n            (1, 0, 0),",
+        "the first half-angle joint turns about X instead of Y (swapped axis in the chain)",
+        catchers=("tests/test_truth.py::test_mujoco_bent_joint_is_eq2_by_hand",),
+    ),
+    Fault(
+        "robot_phi_origin_in_mm",
+        "bvsr_cad/assembly/robot.py",
+        "_as_tuple(translation_m(z=t)),\n            (0, 0, 1),",
+        "_as_tuple(translation_m(z=t_mm)),\n            (0, 0, 1),",
+        "each joint's chain starts t millimetres written as metres above its panel (mm -> m)",
+        catchers=("tests/test_truth.py::test_mujoco_rest_pose_is_the_straight_tail",),
+    ),
+    Fault(
+        "robot_top_site_frame",
+        "bvsr_cad/assembly/robot.py",
+        "(top_mm - [0, 0, hi.z0_mm])",
+        "(top_mm - [0, 0, lo.z0_mm])",
+        "an SOA's top socket is placed in the lower panel's frame",
+        catchers=("tests/test_truth.py::test_mujoco_sockets_on_the_pentagon",),
+    ),
+    Fault(
+        "robot_velocity_not_shared",
+        "bvsr_cad/assembly/robot.py",
+        "return units.deg_s_to_rad_s(segment_deg_s) / joints_per_segment * margin",
+        "return units.deg_s_to_rad_s(segment_deg_s) * margin",
+        "a joint's velocity limit is the whole segment's rate (not shared by its joints)",
+        catchers=("tests/test_truth.py::test_robot_limits_by_hand",),
+    ),
+    Fault(
+        "robot_effort_on_diameter",
+        "bvsr_cad/assembly/robot.py",
+        "effort_limit_nm = push_n * units.mm_to_m(spec.joint.pitch_diameter_mm / 2)",
+        "effort_limit_nm = push_n * units.mm_to_m(spec.joint.pitch_diameter_mm)",
+        "the SOAs' torque limit uses the pitch diameter as the lever arm",
+        catchers=("tests/test_truth.py::test_robot_limits_by_hand",),
+    ),
+    Fault(
+        "mjcf_soa_spring_sign",
+        "bvsr_cad/exporters/mjcf.py",
+        "biasprm=_vec((n_a * l0, -n_a, -c))",
+        "biasprm=_vec((-n_a * l0, n_a, -c))",
+        "the MJCF actuator's SOA spring pushes with the stretch (Eq 3 sign in MuJoCo)",
+        catchers=("tests/test_truth.py::test_mujoco_soa_actuator_is_eq3_by_hand",),
+    ),
+    Fault(
+        "kinematics_xy_swapped",
+        "bvsr_cad/models/kinematics.py",
+        "trans = length_mm * np.stack([self.u * C, self.v * C, S], -1)",
+        "trans = length_mm * np.stack([self.v * C, self.u * C, S], -1)",
+        "X and Y swapped in the translation of Eq 2",
+        catchers=("tests/test_truth.py::test_linearised_equilibrium_of_one_pressurised_soa",),
+    ),
+    Fault(
+        "mid_angles_off_1deg",
+        "bvsr_cad/parameters/layout.py",
+        "return soa_angles_deg() + 36.0",
+        "return soa_angles_deg() + 35.0",
+        "the features between the pockets (lightening, tubes, inserts) are 1 deg off the "
+        "mid-angles",
+        catchers=("tests/test_truth.py::test_features_between_the_pockets_sit_on_the_mid_angles",),
+    ),
+    Fault(
+        "pocket_clearance_sign",
+        "bvsr_cad/parameters/layout.py",
+        "return spec.joint.base_diameter_mm + spec.fabrication.pocket_clearance_mm",
+        "return spec.joint.base_diameter_mm - spec.fabrication.pocket_clearance_mm",
+        "a flange pocket is smaller than the D_b flange (clearance subtracted)",
+        catchers=("tests/test_truth.py::test_flange_pockets_are_d_b_plus_clearance",),
+    ),
+    Fault(
+        "m3_nut_across_flats",
+        "bvsr_cad/parameters/data/iso_metric.toml",
+        "tap_drill_mm = 2.5\nnut_af_mm = 5.5\n",
+        "tap_drill_mm = 2.5\nnut_af_mm = 5.0\n",
+        "the M3 nut is 5.0 mm across flats (ISO 4032: 5.5 mm): the twin's nut pockets are too "
+        "small",
+        catchers=("tests/test_truth.py::test_rigid_twin_tie_rod_and_nut_pocket",),
+    ),
+    # -- the directions of the physics: payload, gravity, taper, density
+    # -----------------------------
+    Fault(
+        "payload_ignored_in_simulate",
+        "bvsr_cad/simulation/sim.py",
+        'tail_xml = _model_xml(spec, theta_max_rad, folder / "tail", payload_g)',
+        'tail_xml = _model_xml(spec, theta_max_rad, folder / "tail", 0.0)',
+        "bvsr simulate --payload-g runs the tail without its payload",
+        catchers=(
+            "tests/test_simulate_payload.py::test_simulate_carries_the_payload_as_a_point_mass",
+        ),
+    ),
+    Fault(
+        "payload_left_out_of_dynamics",
+        "bvsr_cad/models/dynamics.py",
+        "return replace(self, tip_mass_kg=self.tip_mass_kg + mass_kg)",
+        "return replace(self, tip_mass_kg=self.tip_mass_kg)",
+        "RigidBody.with_tip_mass ignores the payload (the Eq 6-12 model runs without it)",
+        catchers=(
+            "tests/test_models_dynamics.py::test_a_tip_payload_is_a_point_mass_at_the_arcs_end",
+            "tests/test_models_dynamics.py::test_root_wrench_with_a_tip_payload_under_a_known_angular_acceleration",
+        ),
+    ),
+    Fault(
+        "payload_not_passed_to_the_model",
+        "bvsr_cad/analysis/predict.py",
+        "body = body.with_tip_mass(units.g_to_kg(payload_g))",
+        "body = body.with_tip_mass(0.0)",
+        "the predictions' joint model leaves the tip payload out",
+        catchers=(
+            "tests/test_models_dynamics.py::test_root_wrench_with_a_tip_payload_under_a_known_angular_acceleration",
+        ),
+    ),
+    Fault(
+        "payload_offset_from_the_base",
+        "bvsr_cad/models/dynamics.py",
+        "TIP_OVER_COM = 2.0",
+        "TIP_OVER_COM = 1.0",
+        "the payload rides at the body's centre of mass (the chord midpoint, half-way from the "
+        "base) instead "
+        "of at the arc's end",
+        catchers=(
+            "tests/test_models_dynamics.py::test_a_tip_payload_is_a_point_mass_at_the_arcs_end",
+            "tests/test_models_dynamics.py::test_root_wrench_with_a_tip_payload_under_a_known_angular_acceleration",
+        ),
+    ),
+    Fault(
+        "payload_weighed_at_the_centre_of_mass",
+        "bvsr_cad/models/dynamics.py",
+        "return self.mass_kg + TIP_OVER_COM * self.tip_mass_kg",
+        "return self.mass_kg + self.tip_mass_kg",
+        "gravity pulls the tip payload as if it sat at the body's centre of mass",
+        catchers=(
+            "tests/test_models_dynamics.py::test_a_tip_payload_is_a_point_mass_at_the_arcs_end",
+            "tests/test_models_dynamics.py::test_without_damping_and_forcing_the_model_conserves_energy[0.1]",
+        ),
+    ),
+    Fault(
+        "root_torque_lever_without_panel",
+        "bvsr_cad/analysis/predict.py",
+        "face = np.array([0.0, 0.0, units.mm_to_m(self.spec.joint.panel_thickness_mm)])",
+        "face = np.zeros(3)",
+        "the predicted root torque is taken about the body's base face, not the root sensor's face",
+        catchers=(
+            "tests/test_models_dynamics.py::test_root_wrench_with_a_tip_payload_under_a_known_angular_acceleration",
+        ),
+    ),
+    Fault(
+        "statics_gravity_sign",
+        "bvsr_cad/models/statics.py",
+        "down = np.array([0.0, -G_N_PER_KG, 0.0])",
+        "down = np.array([0.0, G_N_PER_KG, 0.0])",
+        "gravity points along +Y in the statics (the horizontal tail sags upwards)",
+        catchers=(
+            "tests/test_statics.py::test_the_horizontal_tail_sags_towards_minus_y_as_hand_statics_give",
+        ),
+    ),
+    Fault(
+        "dynamics_gravity_sign",
+        "bvsr_cad/analysis/predict.py",
+        "GRAVITY_M_S2 = np.array([0.0, -G_M_S2, 0.0])",
+        "GRAVITY_M_S2 = np.array([0.0, G_M_S2, 0.0])",
+        "gravity points along +Y in the predictions' Eq 6-12 model",
+        catchers=(
+            "tests/test_models_dynamics.py::test_the_predictions_tail_sags_towards_minus_y_without_pressure",
+        ),
+    ),
+    Fault(
+        "taper_sign",
+        "bvsr_cad/parameters/layout.py",
+        "        return math.radians(max_feasible_taper_deg(spec))\n",
+        "        return -math.radians(max_feasible_taper_deg(spec))\n",
+        "the cone opens the wrong way: panels grow from the root to the tip",
+        catchers=("tests/test_truth.py::test_panels_narrow_from_root_to_tip_on_the_b_rep",),
+    ),
+    Fault(
+        "soa_density",
+        "bvsr_cad/defaults/params/bvsr.toml",
+        'name = "cast polyurethane rubber, Shore 75-80A"\ndensity_g_cm3 = 1.05\n',
+        'name = "cast polyurethane rubber, Shore 75-80A"\ndensity_g_cm3 = 1.15\n',
+        "the SOA's polyurethane is 1.15 g/cm^3 (datasheets: 1.04-1.06): every SOA 10 % heavier",
+        catchers=("tests/test_truth.py::test_soa_and_tail_masses_within_the_datasheets_densities",),
+    ),
 ]
 
 
@@ -353,7 +519,11 @@ def _sha(data: bytes) -> str:
 def _leftovers(root: Path) -> list[Path]:
     out = []
     for dirpath, dirnames, filenames in os.walk(root):
-        dirnames[:] = [d for d in dirnames if d not in (".git", ".venv", "node_modules", "exports", "__pycache__")]
+        dirnames[:] = [
+            d
+            for d in dirnames
+            if d not in (".git", ".venv", "node_modules", "exports", "__pycache__")
+        ]
         out += [Path(dirpath) / f for f in filenames if f.endswith(BACKUP_SUFFIX)]
     return sorted(out)
 
@@ -409,9 +579,17 @@ class Mutation:
             fh.write(original)
             fh.flush()
             os.fsync(fh.fileno())
-        _write_state(self.root, {"fault": self.fault.name, "file": self.fault.file,
-                                 "original_sha256": _sha(original), "mutated_sha256": _sha(mutated),
-                                 "pid": os.getpid(), "started": time.time()})
+        _write_state(
+            self.root,
+            {
+                "fault": self.fault.name,
+                "file": self.fault.file,
+                "original_sha256": _sha(original),
+                "mutated_sha256": _sha(mutated),
+                "pid": os.getpid(),
+                "started": time.time(),
+            },
+        )
         self.original, self.mutated = original, mutated
         _atomic_write(self.path, mutated)
 
@@ -444,10 +622,18 @@ def _restore_file(path: Path, original: bytes, mutated: bytes | None, fault: Fau
     # Edited while the fault was in place (a colleague saved over it): never overwrite that edit.
     text = current.decode("utf-8", errors="surrogateescape")
     if fault is not None and text.count(fault.new) == 1 and text.count(fault.old) == 0:
-        _atomic_write(path, text.replace(fault.new, fault.old, 1).encode("utf-8", errors="surrogateescape"))
-        return f"{path}: edited while fault {fault.name} was applied; reversed the fault in the edited text"
-    return (f"{path}: edited while fault {fault.name if fault else '?'} was applied and the fault's text is gone; "
-            "left as it is (check it by hand)")
+        _atomic_write(
+            path, text.replace(fault.new, fault.old, 1).encode("utf-8", errors="surrogateescape")
+        )
+        return (
+            f"{path}: edited while fault {fault.name} was applied; reversed the fault in the "
+            "edited text"
+        )
+    return (
+        f"{path}: edited while fault {fault.name if fault else '?'} was applied and the fault's "
+        "text is gone; "
+        "left as it is (check it by hand)"
+    )
 
 
 def _state_path(root: Path) -> Path:
@@ -468,7 +654,8 @@ def _clear_state(root: Path) -> None:
 
 
 def restore_leftovers(root: Path) -> list[str]:
-    """After a killed run: put every ``*.mutate-orig`` back (reversing only the fault if the file was edited)."""
+    """After a killed run: put every ``*.mutate-orig`` back (reversing only the fault if the file
+    was edited)."""
     state = {}
     if _state_path(root).exists():
         try:
@@ -499,8 +686,10 @@ def restore_leftovers(root: Path) -> list[str]:
             _atomic_write(target, original)
             messages.append(f"restored {target.relative_to(root)} from {backup.name}")
         else:
-            messages.append(_restore_file(target, original, None if mutated is None else mutated, f)
-                            or f"restored {target.relative_to(root)}")
+            messages.append(
+                _restore_file(target, original, None if mutated is None else mutated, f)
+                or f"restored {target.relative_to(root)}"
+            )
         backup.unlink()
     _clear_state(root)
     return messages
@@ -508,10 +697,17 @@ def restore_leftovers(root: Path) -> list[str]:
 
 class SnippetError(Exception):
     def __init__(self, fault: Fault, count: int):
-        where = ("not found" if count == 0 else "behind a link out of the tree" if count < 0
-                 else f"found {count} times")
-        super().__init__(f"fault {fault.name}: its snippet is {where} in {fault.file} "
-                         f"(it must occur exactly once; update FAULTS in tools/mutate.py):\n    {fault.old!r}")
+        where = (
+            "not found"
+            if count == 0
+            else "behind a link out of the tree"
+            if count < 0
+            else f"found {count} times"
+        )
+        super().__init__(
+            f"fault {fault.name}: its snippet is {where} in {fault.file} "
+            f"(it must occur exactly once; update FAULTS in tools/mutate.py):\n    {fault.old!r}"
+        )
         self.fault = fault
 
 
@@ -535,7 +731,8 @@ class Interrupted(Exception):
     pass
 
 
-#: The pytest runs under way (one, or one per job of ``--targeted --jobs``), each in its own session.
+#: The pytest runs under way (one, or one per job of ``--targeted --jobs``), each in its own
+#: session.
 _CHILDREN: set[subprocess.Popen] = set()
 _CHILDREN_LOCK = threading.Lock()
 
@@ -571,8 +768,8 @@ _FAIL_RE = re.compile(r"^(FAILED|ERROR) (.+?)(?: - (.*))?$", re.M)
 
 
 def failure_reason(output: str) -> str:
-    """'FAILED' (an assertion) or 'ERROR' (setup, e.g. the parameter file no longer loads), with pytest's
-    one-line message."""
+    """'FAILED' (an assertion) or 'ERROR' (setup, e.g. the parameter file no longer loads), with
+    pytest's one-line message."""
     m = _FAIL_RE.search(output)
     if not m:
         return ""
@@ -596,8 +793,11 @@ def test_args(root: Path, plain_order: bool) -> list[str]:
     the order of explicit file arguments; given a folder it would sort them)."""
     if plain_order:
         return []
-    files = sorted(str(p.relative_to(root)) for p in (root / "tests").glob("test_*.py")
-                   if p.relative_to(root).as_posix() != SELF_TEST)
+    files = sorted(
+        str(p.relative_to(root))
+        for p in (root / "tests").glob("test_*.py")
+        if p.relative_to(root).as_posix() != SELF_TEST
+    )
     first = [f for f in files if Path(f).name.startswith("test_truth")]
     return first + [f for f in files if f not in first]
 
@@ -609,24 +809,45 @@ def failed_ids(output: str) -> set[str]:
 
 def missed_catchers(catchers: tuple[str, ...], failed: set[str]) -> list[str]:
     """The catchers that did not fail (an id without [...] fails when any of its cases does)."""
-    return [c for c in catchers if not any(f == c or (f.startswith(c + "[") and "[" not in c) for f in failed)]
+    return [
+        c
+        for c in catchers
+        if not any(f == c or (f.startswith(c + "[") and "[" not in c) for f in failed)
+    ]
 
 
-def run_suite(root: Path, timeout_s: float, extra: list[str], python: str, base: list[str] | None = None,
-              tail_chars: int = 3000) -> tuple[str, str, float, str]:
-    """(status: passed/failed/timeout, first failing test, seconds, output tail: the last ``tail_chars``
-    characters). ``base``: pytest's arguments before ``extra`` (default: the fast suite's)."""
+def run_suite(
+    root: Path,
+    timeout_s: float,
+    extra: list[str],
+    python: str,
+    base: list[str] | None = None,
+    tail_chars: int = 3000,
+) -> tuple[str, str, float, str]:
+    """(status: passed/failed/timeout, first failing test, seconds, output tail: the last
+    ``tail_chars`` characters). ``base``: pytest's arguments before ``extra`` (default: the fast
+    suite's)."""
     env = dict(os.environ)
     if base is TARGETED_ARGS:
-        # No third-party plugin (pytest-xdist, ...) is loaded: a second less per fault. The catchers' baseline
-        # runs the same way, so a catcher that needs one fails there, never passes for a fault.
+        # No third-party plugin (pytest-xdist, ...) is loaded: a second less per fault. The
+        # catchers' baseline runs the same way, so a catcher that needs one fails there, never
+        # passes for a fault.
         env["PYTEST_DISABLE_PLUGIN_AUTOLOAD"] = "1"
     env["COLUMNS"] = "250"  # pytest's short summary keeps whole node ids
     env["PYTHONDONTWRITEBYTECODE"] = "1"  # no stale bytecode of a mutated module can outlive it
-    env["PYTHONPATH"] = str(root) + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    env["PYTHONPATH"] = str(root) + (
+        os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else ""
+    )
     t0 = time.monotonic()
-    child = subprocess.Popen([python, *(PYTEST_ARGS if base is None else base), *extra], cwd=root, env=env,
-                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    child = subprocess.Popen(
+        [python, *(PYTEST_ARGS if base is None else base), *extra],
+        cwd=root,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        start_new_session=True,
+    )
     with _CHILDREN_LOCK:
         _CHILDREN.add(child)
     state = _state_path(root)
@@ -652,7 +873,12 @@ def run_suite(root: Path, timeout_s: float, extra: list[str], python: str, base:
     if rc == 5:
         return "failed", "(no tests collected)", dt, tail
     if rc == 4:  # a usage error: in a targeted run, a catcher that does not exist
-        return "failed", "(pytest usage error: " + (out.strip().splitlines() or ["?"])[-1][:200] + ")", dt, tail
+        return (
+            "failed",
+            "(pytest usage error: " + (out.strip().splitlines() or ["?"])[-1][:200] + ")",
+            dt,
+            tail,
+        )
     return "failed", first_failure(out), dt, tail
 
 
@@ -664,9 +890,19 @@ def _python(root: Path) -> str:
 # -- main ---------------------------------------------------------------------------------------
 def _table(rows: list[dict]) -> str:
     heads = ("fault", "file", "result", "first failing test", "s")
-    data = [(r["name"], r["file"], r["result"] + (" (setup error)" if r.get("how", "").startswith("ERROR") else ""),
-             r["first_failure"] or "-", f"{r['seconds']:.0f}") for r in rows]
-    widths = [max(len(h), *(len(d[i]) for d in data)) if data else len(h) for i, h in enumerate(heads)]
+    data = [
+        (
+            r["name"],
+            r["file"],
+            r["result"] + (" (setup error)" if r.get("how", "").startswith("ERROR") else ""),
+            r["first_failure"] or "-",
+            f"{r['seconds']:.0f}",
+        )
+        for r in rows
+    ]
+    widths = [
+        max(len(h), *(len(d[i]) for d in data)) if data else len(h) for i, h in enumerate(heads)
+    ]
     line = "  ".join(h.ljust(w) for h, w in zip(heads, widths))
     out = [line, "  ".join("-" * w for w in widths)]
     out += ["  ".join(c.ljust(w) for c, w in zip(d, widths)) for d in data]
@@ -674,33 +910,76 @@ def _table(rows: list[dict]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--only", action="append", metavar="NAME", help="run only this fault (repeatable)")
-    ap.add_argument("--list", action="store_true", help="list the faults and whether each snippet applies")
-    ap.add_argument("--json", action="store_true", help="print one JSON object instead of the table")
-    ap.add_argument("--restore", action="store_true", help="restore files left mutated by a killed run, then exit")
-    ap.add_argument("--targeted", action="store_true",
-                    help="run each fault against its catchers alone (each must fail), after one run of all the "
-                         "catchers on the unmutated tree (which must pass)")
-    ap.add_argument("--no-baseline", action="store_true", help="--targeted: skip the catchers' unmutated run")
-    ap.add_argument("--jobs", type=int, default=2, metavar="N",
-                    help="--targeted: faults run side by side, each in its own copy of the tree (default 2)")
-    ap.add_argument("--timeout", type=float, default=None,
-                    help="seconds allowed per pytest run (default 900; --targeted: 120)")
-    ap.add_argument("--baseline", action="store_true", help="first run the unmutated suite; stop if it fails")
-    ap.add_argument("--no-confirm", action="store_true",
-                    help="skip re-running a caught fault's failing test on the restored tree")
-    ap.add_argument("--plain-order", action="store_true", help="run the suite in pytest's own file order")
-    ap.add_argument("--root", type=Path, default=ROOT, help="repository to mutate (default: this one)")
-    ap.add_argument("--pytest-arg", action="append", default=[], metavar="ARG",
-                    help="one more argument for pytest, e.g. --pytest-arg=--deselect=tests/test_x.py::test_y")
-    ap.add_argument("-v", "--verbose", action="store_true", help="print pytest's output tail of every run")
+    ap = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    ap.add_argument(
+        "--only", action="append", metavar="NAME", help="run only this fault (repeatable)"
+    )
+    ap.add_argument(
+        "--list", action="store_true", help="list the faults and whether each snippet applies"
+    )
+    ap.add_argument(
+        "--json", action="store_true", help="print one JSON object instead of the table"
+    )
+    ap.add_argument(
+        "--restore",
+        action="store_true",
+        help="restore files left mutated by a killed run, then exit",
+    )
+    ap.add_argument(
+        "--targeted",
+        action="store_true",
+        help="run each fault against its catchers alone (each must fail), after one run of all the "
+        "catchers on the unmutated tree (which must pass)",
+    )
+    ap.add_argument(
+        "--no-baseline", action="store_true", help="--targeted: skip the catchers' unmutated run"
+    )
+    ap.add_argument(
+        "--jobs",
+        type=int,
+        default=2,
+        metavar="N",
+        help="--targeted: faults run side by side, each in its own copy of the tree (default 2)",
+    )
+    ap.add_argument(
+        "--timeout",
+        type=float,
+        default=None,
+        help="seconds allowed per pytest run (default 900; --targeted: 120)",
+    )
+    ap.add_argument(
+        "--baseline", action="store_true", help="first run the unmutated suite; stop if it fails"
+    )
+    ap.add_argument(
+        "--no-confirm",
+        action="store_true",
+        help="skip re-running a caught fault's failing test on the restored tree",
+    )
+    ap.add_argument(
+        "--plain-order", action="store_true", help="run the suite in pytest's own file order"
+    )
+    ap.add_argument(
+        "--root", type=Path, default=ROOT, help="repository to mutate (default: this one)"
+    )
+    ap.add_argument(
+        "--pytest-arg",
+        action="append",
+        default=[],
+        metavar="ARG",
+        help="one more argument for pytest, e.g. --pytest-arg=--deselect=tests/test_x.py::test_y",
+    )
+    ap.add_argument(
+        "-v", "--verbose", action="store_true", help="print pytest's output tail of every run"
+    )
     args = ap.parse_args(argv)
     if args.timeout is None:
         args.timeout = 120.0 if args.targeted else 900.0
     root = args.root.resolve()
-    log = (lambda *a: print(*a, file=sys.stderr, flush=True))
+
+    def log(*a):
+        print(*a, file=sys.stderr, flush=True)
 
     if args.restore:
         msgs = restore_leftovers(root)
@@ -722,7 +1001,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.only:
         unknown = [n for n in args.only if n not in {f.name for f in FAULTS}]
         if unknown:
-            log(f"unknown fault(s): {', '.join(unknown)}; known: {', '.join(f.name for f in FAULTS)}")
+            log(
+                f"unknown fault(s): {', '.join(unknown)}; known: "
+                f"{', '.join(f.name for f in FAULTS)}"
+            )
             return 2
         faults = [f for f in FAULTS if f.name in args.only]
     names = [f.name for f in FAULTS]
@@ -780,18 +1062,29 @@ def main(argv: list[str] | None = None) -> int:
                     warnings.append(w)
                     log("WARNING:", w)
             result = {"failed": "caught", "passed": "SURVIVED", "timeout": "TIMEOUT"}[status]
-            row = {"name": f.name, "file": f.file, "description": f.description, "result": result,
-                   "first_failure": first, "how": failure_reason(tail) if result == "caught" else "",
-                   "seconds": round(dt, 1)}
+            row = {
+                "name": f.name,
+                "file": f.file,
+                "description": f.description,
+                "result": result,
+                "first_failure": first,
+                "how": failure_reason(tail) if result == "caught" else "",
+                "seconds": round(dt, 1),
+            }
             if args.verbose:
                 log(tail)
             if result == "caught" and not args.no_confirm and "::" in first:
-                c_status, c_first, _, c_tail = run_suite(root, args.timeout, list(args.pytest_arg) + [first], python)
+                c_status, c_first, _, c_tail = run_suite(
+                    root, args.timeout, list(args.pytest_arg) + [first], python
+                )
                 row["confirmed"] = c_status == "passed"
                 if c_status != "passed":
                     row["result"] = "UNCONFIRMED"
                     log(f"    {first} fails without the fault too:\n{c_tail}")
-            log(f"    {row['result']} in {dt:.0f} s {first}" + (f"\n      {row['how']}" if row["how"] else ""))
+            log(
+                f"    {row['result']} in {dt:.0f} s {first}"
+                + (f"\n      {row['how']}" if row["how"] else "")
+            )
             rows.append(row)
     except Interrupted as e:
         log(f"interrupted ({e}); every file restored")
@@ -804,12 +1097,22 @@ def main(argv: list[str] | None = None) -> int:
 
 
 #: What a private copy of the tree for ``--targeted`` leaves out (nothing a test reads).
-_COPY_IGNORE = shutil.ignore_patterns(".git", ".venv", "exports", "site", "node_modules", "__pycache__",
-                                      "*.egg-info", "*" + BACKUP_SUFFIX, ".mutate-*")
+_COPY_IGNORE = shutil.ignore_patterns(
+    ".git",
+    ".venv",
+    "exports",
+    "site",
+    "node_modules",
+    "__pycache__",
+    "*.egg-info",
+    "*" + BACKUP_SUFFIX,
+    ".mutate-*",
+)
 
 
 def _private_copies(root: Path, n: int) -> tuple[Path, list[Path]]:
-    """``n`` copies of the working tree in a temporary folder: faults are applied there, never in ``root``."""
+    """``n`` copies of the working tree in a temporary folder: faults are applied there, never in
+    ``root``."""
     top = Path(tempfile.mkdtemp(prefix="bvsr-mutate-"))
     copies = [top / f"tree{i}" for i in range(n)]
     for c in copies:
@@ -818,9 +1121,12 @@ def _private_copies(root: Path, n: int) -> tuple[Path, list[Path]]:
 
 
 def _run_fault_in(copy: Path, f: Fault, args, python: str) -> tuple[str, str, float, str]:
-    """``f`` applied to the private ``copy``, its catchers run there, the file put back for the next fault."""
+    """``f`` applied to the private ``copy``, its catchers run there, the file put back for the next
+    fault."""
     path = copy / f.file
-    if not path.resolve().is_relative_to(copy.resolve()):  # a link out of the copy would mutate the real tree
+    if not path.resolve().is_relative_to(
+        copy.resolve()
+    ):  # a link out of the copy would mutate the real tree
         raise SnippetError(f, -1)
     original = path.read_bytes()
     text = original.decode("utf-8")
@@ -828,18 +1134,25 @@ def _run_fault_in(copy: Path, f: Fault, args, python: str) -> tuple[str, str, fl
         raise SnippetError(f, text.count(f.old))
     path.write_bytes(text.replace(f.old, f.new, 1).encode("utf-8"))
     try:
-        return run_suite(copy, args.timeout, list(args.pytest_arg) + list(f.catchers), python, TARGETED_ARGS,
-                         200_000)  # every line of pytest's short summary
+        return run_suite(
+            copy,
+            args.timeout,
+            list(args.pytest_arg) + list(f.catchers),
+            python,
+            TARGETED_ARGS,
+            200_000,
+        )  # every line of pytest's short summary
     finally:
         path.write_bytes(original)
 
 
 def targeted(args, root: Path, faults: list[Fault], python: str, log) -> int:
-    """Each fault against its own catchers: caught when every catcher fails, PARTIAL when some pass (they no
-    longer catch it), SURVIVED when all pass, BROKEN when a catcher does not exist. First, unless
-    ``--no-baseline``, every catcher runs on the unmutated tree and must pass, so that a failure under a fault
-    is the fault's. The faults are applied in private copies of the tree (``--jobs`` of them, run side by
-    side), so ``root`` is never mutated, and a killed run leaves nothing to restore."""
+    """Each fault against its own catchers: caught when every catcher fails, PARTIAL when some pass
+    (they no longer catch it), SURVIVED when all pass, BROKEN when a catcher does not exist. First,
+    unless ``--no-baseline``, every catcher runs on the unmutated tree and must pass, so that a
+    failure under a fault is the fault's. The faults are applied in private copies of the tree
+    (``--jobs`` of them, run side by side), so ``root`` is never mutated, and a killed run leaves
+    nothing to restore."""
     bare = [f.name for f in faults if not f.catchers]
     if bare:
         log(f"faults without catchers (add them to FAULTS): {', '.join(bare)}")
@@ -867,37 +1180,67 @@ def targeted(args, root: Path, faults: list[Fault], python: str, log) -> int:
         missed = missed_catchers(f.catchers, failed)
         if status == "timeout":
             result = "TIMEOUT"
-        elif first.startswith(("(pytest usage error", "(rotten fault")) or first == "(no tests collected)":
+        elif (
+            first.startswith(("(pytest usage error", "(rotten fault"))
+            or first == "(no tests collected)"
+        ):
             result = "BROKEN"  # a catcher that does not exist: the list has rotted
         elif not missed:
             result = "caught"
         else:
             result = "SURVIVED" if len(missed) == len(f.catchers) else "PARTIAL"
-        rows[i] = {"name": f.name, "file": f.file, "description": f.description, "result": result,
-                   "first_failure": first, "how": failure_reason(tail) if result == "caught" else "",
-                   "seconds": round(dt, 1), "catchers": list(f.catchers), "missed": missed}
+        rows[i] = {
+            "name": f.name,
+            "file": f.file,
+            "description": f.description,
+            "result": result,
+            "first_failure": first,
+            "how": failure_reason(tail) if result == "caught" else "",
+            "seconds": round(dt, 1),
+            "catchers": list(f.catchers),
+            "missed": missed,
+        }
         if args.verbose or result != "caught":
             log(tail[-3000:])
-        log(f"{f.name}: {result} in {dt:.0f} s" + (f"; not failing: {', '.join(missed)}" if missed else ""))
+        log(
+            f"{f.name}: {result} in {dt:.0f} s"
+            + (f"; not failing: {', '.join(missed)}" if missed else "")
+        )
 
     pool = ThreadPoolExecutor(jobs)
     try:
         if not args.no_baseline:
             log(f"baseline: the {len(every)} catchers on the unmutated tree, in {jobs} parts ...")
             parts = [every[k::jobs] for k in range(jobs)]
-            runs = list(pool.map(lambda k: run_suite(copies[k], max(args.timeout, 600.0),
-                                                      list(args.pytest_arg) + parts[k], python,
-                                                      TARGETED_ARGS, 200_000), range(jobs)))
+            runs = list(
+                pool.map(
+                    lambda k: run_suite(
+                        copies[k],
+                        max(args.timeout, 600.0),
+                        list(args.pytest_arg) + parts[k],
+                        python,
+                        TARGETED_ARGS,
+                        200_000,
+                    ),
+                    range(jobs),
+                )
+            )
             status = "passed" if all(r[0] == "passed" for r in runs) else "failed"
             first = next((r[1] for r in runs if r[0] != "passed"), "")
-            baseline = {"result": status, "first_failure": first,
-                        "seconds": round(max(r[2] for r in runs), 1)}
+            baseline = {
+                "result": status,
+                "first_failure": first,
+                "seconds": round(max(r[2] for r in runs), 1),
+            }
             log(f"baseline: {status} in {baseline['seconds']:.0f} s {first}")
             if status != "passed":
                 for r in runs:
                     if r[0] != "passed":
                         log(r[3][-3000:])
-                log("catchers fail without any fault (or do not exist): fix the tree or FAULTS first")
+                log(
+                    "catchers fail without any fault (or do not exist): fix the tree or FAULTS "
+                    "first"
+                )
                 _emit(args, [], baseline, [])
                 return 2
         log(f"{len(faults)} faults, {jobs} at a time, each against its catchers ...")
@@ -917,19 +1260,35 @@ def targeted(args, root: Path, faults: list[Fault], python: str, log) -> int:
     done = [r for r in rows if r]
     _emit(args, done, baseline, [])
     if not args.json:
-        print(f"targeted run: {len(done)} faults, {jobs} at a time, in {time.monotonic() - t_start:.0f} s")
+        print(
+            f"targeted run: {len(done)} faults, {jobs} at a time, in "
+            f"{time.monotonic() - t_start:.0f} s"
+        )
     return 0 if all(r["result"] == "caught" for r in done) else 1
 
 
 def _emit(args, rows, baseline, warnings, interrupted=False) -> None:
     survived = [r["name"] for r in rows if r["result"] != "caught"]
     if args.json:
-        print(json.dumps({"faults": rows, "baseline": baseline, "survived": survived, "warnings": warnings,
-                          "interrupted": interrupted, "all_caught": not survived and not interrupted}, indent=1))
+        print(
+            json.dumps(
+                {
+                    "faults": rows,
+                    "baseline": baseline,
+                    "survived": survived,
+                    "warnings": warnings,
+                    "interrupted": interrupted,
+                    "all_caught": not survived and not interrupted,
+                },
+                indent=1,
+            )
+        )
         return
     print(_table(rows))
-    print(f"\n{len(rows) - len(survived)} of {len(rows)} faults caught"
-          + (f"; not caught: {', '.join(survived)}" if survived else ""))
+    print(
+        f"\n{len(rows) - len(survived)} of {len(rows)} faults caught"
+        + (f"; not caught: {', '.join(survived)}" if survived else "")
+    )
     for w in warnings:
         print("WARNING:", w)
 

@@ -33,12 +33,24 @@ from ..parameters.measurements import Measurement
 from ..parameters.tables import CALIBRATABLE, Calibration, TailSpec
 from .predict import Predictor
 
-UNITS = {"effective_area_mm2": "mm^2", "rod_flexural_rigidity_n_mm2": "N mm^2", "damping_n_s_per_m": "N s/m",
-         "valve_sonic_conductance_l_s_bar": "dm^3/(s bar)", "ramp_time_s": "s"}
+UNITS = {
+    "effective_area_mm2": "mm^2",
+    "rod_flexural_rigidity_n_mm2": "N mm^2",
+    "damping_n_s_per_m": "N s/m",
+    "valve_sonic_conductance_l_s_bar": "dm^3/(s bar)",
+    "ramp_time_s": "s",
+}
 STATIC_QUANTITIES = ("segment_max_angle", "segment_blocked_force", "tip_workspace_radius")
-DYNAMIC_QUANTITIES = ("segment_peak_velocity", "velocity_pressure_exponent", "time_pressure_exponent",
-                      "root_peak_torque", "root_peak_force", "cart_lift", "cart_peak_angle",
-                      "tip_workspace_radius")  # the workspace is recorded in time: both kinds identify it
+DYNAMIC_QUANTITIES = (
+    "segment_peak_velocity",
+    "velocity_pressure_exponent",
+    "time_pressure_exponent",
+    "root_peak_torque",
+    "root_peak_force",
+    "cart_lift",
+    "cart_peak_angle",
+    "tip_workspace_radius",
+)  # the workspace is recorded in time: both kinds identify it
 
 
 class CalibrationError(ValueError):
@@ -55,11 +67,13 @@ def table_value(spec: TailSpec, name: str) -> float:
     from ..models.rod import rod_section
 
     base = uncalibrated(spec)
-    return {"effective_area_mm2": base.actuation.effective_area_mm2,
-            "rod_flexural_rigidity_n_mm2": rod_section(base).flexural_rigidity_n_mm2,
-            "damping_n_s_per_m": base.actuation.damping_n_s_per_m,
-            "valve_sonic_conductance_l_s_bar": base.pneumatics.valve_sonic_conductance_l_s_bar,
-            "ramp_time_s": base.pneumatics.ramp_time_s}[name]
+    return {
+        "effective_area_mm2": base.actuation.effective_area_mm2,
+        "rod_flexural_rigidity_n_mm2": rod_section(base).flexural_rigidity_n_mm2,
+        "damping_n_s_per_m": base.actuation.damping_n_s_per_m,
+        "valve_sonic_conductance_l_s_bar": base.pneumatics.valve_sonic_conductance_l_s_bar,
+        "ramp_time_s": base.pneumatics.ramp_time_s,
+    }[name]
 
 
 def default_parameters(spec: TailSpec, rows: list[Measurement]) -> list[str]:
@@ -67,15 +81,21 @@ def default_parameters(spec: TailSpec, rows: list[Measurement]) -> list[str]:
     fit = [m.quantity for m in rows if m.role == "fit"]
     names = []
     if any(q in STATIC_QUANTITIES for q in fit):
-        names += ["effective_area_mm2"] + (["rod_flexural_rigidity_n_mm2"] if spec.vertebra.has_rod else [])
+        names += ["effective_area_mm2"] + (
+            ["rod_flexural_rigidity_n_mm2"] if spec.vertebra.has_rod else []
+        )
     if any(q in DYNAMIC_QUANTITIES for q in fit):
-        names.append("ramp_time_s" if spec.pneumatics.model == "ramp" else "valve_sonic_conductance_l_s_bar")
+        names.append(
+            "ramp_time_s" if spec.pneumatics.model == "ramp" else "valve_sonic_conductance_l_s_bar"
+        )
     return names
 
 
 def with_values(spec: TailSpec, values: dict[str, float]) -> TailSpec:
     base = uncalibrated(spec)
-    return dataclasses.replace(base, calibration=dataclasses.replace(base.calibration, fitted=dict(values)))
+    return dataclasses.replace(
+        base, calibration=dataclasses.replace(base.calibration, fitted=dict(values))
+    )
 
 
 def _bounds(name: str) -> tuple[float, float]:
@@ -107,26 +127,43 @@ class CalibrationResult:
     message: str
 
     def as_json(self) -> dict:
-        return {"fitted": {k: {"value": v.value, "low": v.low, "high": v.high, "unit": v.unit, "start": v.start}
-                           for k, v in self.fitted.items()},
-                "rows": self.rows, "rms_rel_fit": self.rms_rel_fit, "rms_rel_holdout": self.rms_rel_holdout,
-                "rms_rel_fit_uncalibrated": self.rms_rel_fit_uncalibrated,
-                "rms_rel_holdout_uncalibrated": self.rms_rel_holdout_uncalibrated,
-                "evaluations": self.evaluations, "message": self.message}
+        return {
+            "fitted": {
+                k: {
+                    "value": v.value,
+                    "low": v.low,
+                    "high": v.high,
+                    "unit": v.unit,
+                    "start": v.start,
+                }
+                for k, v in self.fitted.items()
+            },
+            "rows": self.rows,
+            "rms_rel_fit": self.rms_rel_fit,
+            "rms_rel_holdout": self.rms_rel_holdout,
+            "rms_rel_fit_uncalibrated": self.rms_rel_fit_uncalibrated,
+            "rms_rel_holdout_uncalibrated": self.rms_rel_holdout_uncalibrated,
+            "evaluations": self.evaluations,
+            "message": self.message,
+        }
 
 
 def _rms(values: list[float]) -> float:
     v = np.asarray([x for x in values if np.isfinite(x)], float)
-    return float(np.sqrt(np.mean(v ** 2))) if v.size else float("nan")
+    return float(np.sqrt(np.mean(v**2))) if v.size else float("nan")
 
 
 def _relative(predicted: float, reported: float) -> float:
     return (predicted - reported) / abs(reported)
 
 
-def calibrate(spec: TailSpec, rows: list[Measurement], parameters: list[str] | None = None,
-              predictor: Predictor | None = None, progress: Callable[[str], None] | None = None
-              ) -> CalibrationResult:
+def calibrate(
+    spec: TailSpec,
+    rows: list[Measurement],
+    parameters: list[str] | None = None,
+    predictor: Predictor | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> CalibrationResult:
     """Fit ``parameters`` (default: :func:`default_parameters`) to the fit rows; predict every row
     before and after."""
     from scipy.optimize import least_squares
@@ -135,15 +172,23 @@ def calibrate(spec: TailSpec, rows: list[Measurement], parameters: list[str] | N
     names = parameters if parameters is not None else default_parameters(spec, rows)
     unknown = [n for n in names if n not in CALIBRATABLE]
     if unknown:
-        raise CalibrationError(f"--fit {','.join(names)}: cannot fit {', '.join(unknown)}; "
-                               f"allowed: {', '.join(CALIBRATABLE)}")
+        raise CalibrationError(
+            f"--fit {','.join(names)}: cannot fit {', '.join(unknown)}; "
+            f"allowed: {', '.join(CALIBRATABLE)}"
+        )
     fit_rows = [m for m in rows if m.role == "fit"]
     base = uncalibrated(spec)
     pred = predictor.with_spec(base) if predictor is not None else Predictor.from_spec(base)
     start = {n: table_value(spec, n) for n in names}
     lo_hi = [_bounds(n) for n in names]
-    # Unknowns: x = log(value), starting at the tables' values; the Jacobian steps 1 % in each value.
-    x0 = np.array([math.log(min(max(start[n], lo * 1.000001), hi * 0.999999)) for n, (lo, hi) in zip(names, lo_hi)])
+    # Unknowns: x = log(value), starting at the tables' values; the Jacobian steps 1 % in each
+    # value.
+    x0 = np.array(
+        [
+            math.log(min(max(start[n], lo * 1.000001), hi * 0.999999))
+            for n, (lo, hi) in zip(names, lo_hi)
+        ]
+    )
     count = [0]
 
     def residuals(x: np.ndarray) -> np.ndarray:
@@ -154,17 +199,28 @@ def calibrate(spec: TailSpec, rows: list[Measurement], parameters: list[str] | N
         for m in fit_rows:
             try:
                 out.append(_relative(p.predict(m), m.value))
-            except RuntimeError:  # a model that does not converge at these values: a large, finite miss
+            except (
+                RuntimeError
+            ):  # a model that does not converge at these values: a large, finite miss
                 out.append(10.0)
         r = np.nan_to_num(np.array(out), nan=10.0)
-        say(f"calibrate: evaluation {count[0]}: rms {math.sqrt(np.mean(r ** 2)):.4f} at "
-            + ", ".join(f"{n}={v:.4g}" for n, v in values.items()))
+        say(
+            f"calibrate: evaluation {count[0]}: rms {math.sqrt(np.mean(r**2)):.4f} at "
+            + ", ".join(f"{n}={v:.4g}" for n, v in values.items())
+        )
         return r
 
     if names:
-        sol = least_squares(residuals, x0, bounds=([math.log(a) for a, _ in lo_hi], [math.log(b) for _, b in lo_hi]),
-                            x_scale=1.0, diff_step=0.01 / np.maximum(1.0, np.abs(x0)), xtol=1e-4, ftol=1e-6,
-                            max_nfev=60)
+        sol = least_squares(
+            residuals,
+            x0,
+            bounds=([math.log(a) for a, _ in lo_hi], [math.log(b) for _, b in lo_hi]),
+            x_scale=1.0,
+            diff_step=0.01 / np.maximum(1.0, np.abs(x0)),
+            xtol=1e-4,
+            ftol=1e-6,
+            max_nfev=60,
+        )
         x, jac, res, message = sol.x, sol.jac, sol.fun, sol.message
         m, n = len(res), len(x)
         s2 = float(res @ res) / (m - n if m > n else max(m, 1))
@@ -175,8 +231,12 @@ def calibrate(spec: TailSpec, rows: list[Measurement], parameters: list[str] | N
             sd = np.full(n, np.inf)
     else:
         x, sd, message = np.array([]), np.array([]), "nothing to fit"
-    fitted = {name: FittedValue(math.exp(v), math.exp(v - 1.96 * s), math.exp(v + 1.96 * s), UNITS[name], start[name])
-              for name, v, s in zip(names, x, sd)}
+    fitted = {
+        name: FittedValue(
+            math.exp(v), math.exp(v - 1.96 * s), math.exp(v + 1.96 * s), UNITS[name], start[name]
+        )
+        for name, v, s in zip(names, x, sd)
+    }
     calibrated = with_values(spec, {k: v.value for k, v in fitted.items()})
     say("calibrate: every row before and after")
     table = compare_rows(pred.with_spec(base), pred.with_spec(calibrated), rows)
@@ -184,9 +244,17 @@ def calibrate(spec: TailSpec, rows: list[Measurement], parameters: list[str] | N
     def rms(role: str, key: str) -> float:
         return rms_relative(table, role, key)
 
-    return CalibrationResult(fitted, table, rms("fit", "rel_calibrated"), rms("holdout", "rel_calibrated"),
-                             rms("fit", "rel_uncalibrated"), rms("holdout", "rel_uncalibrated"), calibrated,
-                             count[0], str(message))
+    return CalibrationResult(
+        fitted,
+        table,
+        rms("fit", "rel_calibrated"),
+        rms("holdout", "rel_calibrated"),
+        rms("fit", "rel_uncalibrated"),
+        rms("holdout", "rel_uncalibrated"),
+        calibrated,
+        count[0],
+        str(message),
+    )
 
 
 #: Threads predicting a table's rows, at most: the workspace protocol's rows step in MuJoCo without
@@ -194,13 +262,19 @@ def calibrate(spec: TailSpec, rows: list[Measurement], parameters: list[str] | N
 COMPARE_THREADS = 8
 
 
-def compare_rows(before: Predictor, after: Predictor, rows: list[Measurement],
-                 progress: Callable[[str], None] | None = None, threads: int = COMPARE_THREADS) -> list[dict]:
-    """Every row predicted by ``before`` (uncalibrated) and ``after`` (calibrated), with relative errors.
+def compare_rows(
+    before: Predictor,
+    after: Predictor,
+    rows: list[Measurement],
+    progress: Callable[[str], None] | None = None,
+    threads: int = COMPARE_THREADS,
+) -> list[dict]:
+    """Every row predicted by ``before`` (uncalibrated) and ``after`` (calibrated), with relative
+    errors.
 
     The predictions run in up to ``threads`` threads, the slowest quantity (the workspace protocol)
-    first, the others once its geometry and joint limits are made; each is deterministic, so the table
-    is the same for any number of threads."""
+    first, the others once its geometry and joint limits are made; each is deterministic, so the
+    table is the same for any number of threads."""
     say = progress or (lambda _m: None)
 
     def predict(pred: Predictor, m: Measurement) -> float:
@@ -219,9 +293,9 @@ def compare_rows(before: Predictor, after: Predictor, rows: list[Measurement],
     rest = ThreadPoolExecutor(1) if threads > 1 else sims
     try:
         done = {i: sims.submit(predict, *jobs[i]) for i in protocol}
-        # The protocol rows' geometry and joint limits are Python (under the lock) and stand before their
-        # simulation: the other rows start once those are made, instead of sharing the lock with them
-        # (the table is the same; the simulations start sooner).
+        # The protocol rows' geometry and joint limits are Python (under the lock) and stand before
+        # their simulation: the other rows start once those are made, instead of sharing the lock
+        # with them (the table is the same; the simulations start sooner).
         if threads > 1:
             for i in protocol:
                 pred, m = jobs[i]
@@ -236,10 +310,22 @@ def compare_rows(before: Predictor, after: Predictor, rows: list[Measurement],
     table = []
     for n, m in enumerate(rows):
         b, a = done[2 * n].result(), done[2 * n + 1].result()
-        table.append({"row": m.row, "experiment": m.experiment, "quantity": m.quantity, "label": m.label,
-                      "role": m.role, "unit": m.unit, "reported": m.value, "uncalibrated": b,
-                      "calibrated": a, "rel_uncalibrated": _relative(b, m.value),
-                      "rel_calibrated": _relative(a, m.value), "source": m.source})
+        table.append(
+            {
+                "row": m.row,
+                "experiment": m.experiment,
+                "quantity": m.quantity,
+                "label": m.label,
+                "role": m.role,
+                "unit": m.unit,
+                "reported": m.value,
+                "uncalibrated": b,
+                "calibrated": a,
+                "rel_uncalibrated": _relative(b, m.value),
+                "rel_calibrated": _relative(a, m.value),
+                "source": m.source,
+            }
+        )
     return table
 
 
@@ -255,4 +341,14 @@ def _safe(pred: Predictor, m: Measurement) -> float:
         return float("nan")
 
 
-__all__ = ["calibrate", "compare_rows", "rms_relative", "CalibrationError", "CalibrationResult", "FittedValue", "uncalibrated", "default_parameters", "with_values"]
+__all__ = [
+    "calibrate",
+    "compare_rows",
+    "rms_relative",
+    "CalibrationError",
+    "CalibrationResult",
+    "FittedValue",
+    "uncalibrated",
+    "default_parameters",
+    "with_values",
+]

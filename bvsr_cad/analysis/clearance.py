@@ -19,19 +19,16 @@ it the metric is at least diag(1, 1, lambda_min^2) with
     lambda_min = min over the joints the pair spans of 1 - kappa (h_pair(phi) + bulge).
 Hence (valid for theta < L / h, about 1 rad, far beyond the workspace)
     clearance >= d_lambda(rest) >= min(1, lambda_min) x rest clearance,
-where d_lambda is the rest distance after the joint gaps the pair spans are
-shortened by lambda_min along z and the panels are not (the metric is
-identity in a panel: two SOAs stacked on either side of a panel stay at
-least its thickness apart). Stage 1a
-evaluates the right-hand bound for every pose and pair at once; stage 1b
-tightens the candidates below the running minimum with d_lambda, taken
-from a per-pair table on a lambda grid (rest meshes cut at the gap faces
-and shortened, python-fcl, computed on first use: d_lambda grows with
-lambda, so the grid value below is a bound). It is what keeps, for instance, the flanges of two SOAs seated
-side by side in a panel at their rest clearance: their gap is horizontal.
-Stage 2: exact mesh distances (python-fcl) of the posed meshes for the
-lowest bounds confirm the minimum; it is certified when no unconfirmed
-(pose, pair) has a bound below it.
+where d_lambda is the rest distance after the joint gaps the pair spans are shortened by lambda_min
+along z and the panels are not (the metric is identity in a panel: two SOAs stacked on either side
+of a panel stay at least its thickness apart). Stage 1a evaluates the right-hand bound for every
+pose and pair at once; stage 1b tightens the candidates below the running minimum with d_lambda,
+taken from a per-pair table on a lambda grid (rest meshes cut at the gap faces and shortened,
+python-fcl, computed on first use: d_lambda grows with lambda, so the grid value below is a bound).
+It is what keeps, for instance, the flanges of two SOAs seated side by side in a panel at their rest
+clearance: their gap is horizontal. Stage 2: exact mesh distances (python-fcl) of the posed meshes
+for the lowest bounds confirm the minimum; it is certified when no unconfirmed (pose, pair) has a
+bound below it.
 """
 
 from __future__ import annotations
@@ -51,13 +48,40 @@ from ..models.kinematics import TailKinematics, joint_transform_uv, theta_phi_fr
 from ..parts._kernel import fresh_copy, mesh_arrays
 
 Progress = Callable[[str], None]
-#: Longest mesh edge on bending parts, so that deformed triangles follow the arc (chord error < 0.01 mm).
+#: Longest mesh edge on bending parts, so that deformed triangles follow the arc (chord error < 0.01
+#: mm).
 BENDING_EDGE_MM = 2.0
 #: Bending-direction bins of the pairs' support functions.
 SUPPORT_BINS = 72
 #: z-scales of the stage-1b table (ascending; 0 and 1 included).
-LAMBDA_GRID = np.array([0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.55, 0.6, 0.65, 0.7, 0.75, 0.8, 0.84, 0.88, 0.9, 0.92,
-                        0.94, 0.95, 0.96, 0.97, 0.98, 0.99, 0.995, 1.0])
+LAMBDA_GRID = np.array(
+    [
+        0.0,
+        0.1,
+        0.2,
+        0.3,
+        0.4,
+        0.5,
+        0.55,
+        0.6,
+        0.65,
+        0.7,
+        0.75,
+        0.8,
+        0.84,
+        0.88,
+        0.9,
+        0.92,
+        0.94,
+        0.95,
+        0.96,
+        0.97,
+        0.98,
+        0.99,
+        0.995,
+        1.0,
+    ]
+)
 #: Bounds and exact values closer than this are equal: the posed meshes follow the arcs by chords
 #: of at most BENDING_EDGE_MM, so their "exact" distances are good to about 0.01 mm.
 TIE_MM = 0.01
@@ -69,24 +93,36 @@ class PosedTail:
 
     kin: TailKinematics
     names: list[str]
-    meshes: list[trimesh.Trimesh]  # bending parts subdivided so that the posed triangles follow the arcs
+    meshes: list[
+        trimesh.Trimesh
+    ]  # bending parts subdivided so that the posed triangles follow the arcs
     joint_height_mm: float
     pairs: np.ndarray  # (n_pairs, 2) instance indices
     rest_mm: np.ndarray  # (n_pairs,) exact rest clearance
     span: np.ndarray  # (n_pairs, n_joints) bool: joints whose bending the pair feels (contiguous)
     support_mm: np.ndarray  # (n_pairs, SUPPORT_BINS) h_pair over each bin of bending directions
     coarse: list[trimesh.Trimesh]  # the same surfaces, not subdivided (rest distances)
-    cut: list[trimesh.Trimesh]  # the coarse surfaces cut at every gap face (piecewise-affine maps in z)
+    cut: list[
+        trimesh.Trimesh
+    ]  # the coarse surfaces cut at every gap face (piecewise-affine maps in z)
     _aniso: dict = field(default_factory=dict, repr=False)  # (pair, grid index) -> d_lambda
-    _scaled: dict = field(default_factory=dict, repr=False)  # (instance, grid index, span) -> shortened mesh
-    _scaled_fcl: dict = field(default_factory=dict, repr=False)  # the same key -> its BVH, when FCL needs it
-    rest_bvh: dict = field(default_factory=dict, repr=False)  # instance -> BVH of its coarse rest mesh
-    instances: list = field(default_factory=list, repr=False)  # the assembly's Instance of each mesh
+    _scaled: dict = field(
+        default_factory=dict, repr=False
+    )  # (instance, grid index, span) -> shortened mesh
+    _scaled_fcl: dict = field(
+        default_factory=dict, repr=False
+    )  # the same key -> its BVH, when FCL needs it
+    rest_bvh: dict = field(
+        default_factory=dict, repr=False
+    )  # instance -> BVH of its coarse rest mesh
+    instances: list = field(
+        default_factory=list, repr=False
+    )  # the assembly's Instance of each mesh
 
     def __getstate__(self) -> dict:
-        """Pickled without what it keeps as it goes (FCL's objects do not pickle; the caches refill):
-        the build keeps a geometry's posed tail in its cache, so that an edit that moves no solid skips
-        its meshing and its exact rest distances."""
+        """Pickled without what it keeps as it goes (FCL's objects do not pickle; the caches
+        refill): the build keeps a geometry's posed tail in its cache, so that an edit that moves no
+        solid skips its meshing and its exact rest distances."""
         state = dict(self.__dict__)
         state.update(_aniso={}, _scaled={}, _scaled_fcl={}, rest_bvh={})
         return state
@@ -99,15 +135,24 @@ class PosedTail:
             if len(on):
                 groups.setdefault((int(on[0]), int(on[-1])), []).append(p)
         self._groups = [(lo, hi, np.array(ids)) for (lo, hi), ids in sorted(groups.items())]
-        # Each joint's gap starts at its lower panel's upper face and ends at the next panel's lower face.
-        self._gap_lo_mm = np.arange(self.kin.n_joints) * self.joint_height_mm + self.kin.panel_thickness_mm
-        # Per cut mesh, the gaps that start below its top: shortening any other moves none of its vertices.
+        # Each joint's gap starts at its lower panel's upper face and ends at the next panel's lower
+        # face.
+        self._gap_lo_mm = (
+            np.arange(self.kin.n_joints) * self.joint_height_mm + self.kin.panel_thickness_mm
+        )
+        # Per cut mesh, the gaps that start below its top: shortening any other moves none of its
+        # vertices.
         self._gaps_under = [self._gap_lo_mm < m.vertices[:, 2].max() for m in self.cut]
-        # Stage 1b's shortened meshes: an instance that is a turned copy of an earlier one about the tail's
-        # axis (the SOAs of a joint) shortens to the earlier one's turned (shortening acts along z, which
-        # the turn keeps), and pairs that are turned copies of an earlier pair share its d_lambda.
+        # Stage 1b's shortened meshes: an instance that is a turned copy of an earlier one about the
+        # tail's axis (the SOAs of a joint) shortens to the earlier one's turned (shortening acts
+        # along z, which the turn keeps), and pairs that are turned copies of an earlier pair share
+        # its d_lambda.
         n = len(self.cut)
-        self._turn = _axis_turns(self.instances) if len(self.instances) == n else [(i, None) for i in range(n)]
+        self._turn = (
+            _axis_turns(self.instances)
+            if len(self.instances) == n
+            else [(i, None) for i in range(n)]
+        )
         first: dict[tuple, int] = {}
         self._orbit = [first.setdefault(self._orbit_key(p), p) for p in range(len(self.pairs))]
         # Instances that lie inside one panel's thickness move with that panel as a rigid body:
@@ -124,7 +169,9 @@ class PosedTail:
         base, panel = self.kin.frames(w)
         hj, t = self.joint_height_mm, self.kin.panel_thickness_mm
         z = pts[:, 2]
-        k = np.clip(np.floor(z / hj).astype(int), 0, self.kin.n_joints)  # panel below (or containing)
+        k = np.clip(
+            np.floor(z / hj).astype(int), 0, self.kin.n_joints
+        )  # panel below (or containing)
         zr = z - k * hj
         out = np.empty_like(pts)
         in_panel = (zr <= t) | (k == self.kin.n_joints)
@@ -146,11 +193,15 @@ class PosedTail:
         w = np.asarray(w, float)
         theta = np.hypot(w[..., 0], w[..., 1])  # (n, J)
         kappa = theta / self.kin.length_mm
-        bins = (np.floor((np.arctan2(w[..., 1], w[..., 0]) + np.pi) / (2 * np.pi) * SUPPORT_BINS).astype(int)
-                % SUPPORT_BINS)
+        bins = (
+            np.floor(
+                (np.arctan2(w[..., 1], w[..., 0]) + np.pi) / (2 * np.pi) * SUPPORT_BINS
+            ).astype(int)
+            % SUPPORT_BINS
+        )
         lam = np.ones((len(w), len(self.pairs)))
         for lo, hi, ids in self._groups:
-            bulge = self.kin.length_mm * theta[:, lo:hi + 1].sum(axis=1) / 8.0  # (n,)
+            bulge = self.kin.length_mm * theta[:, lo : hi + 1].sum(axis=1) / 8.0  # (n,)
             h = self.support_mm[ids]  # (g, bins)
             worst = np.ones((len(w), len(ids)))
             for j in range(lo, hi + 1):
@@ -160,11 +211,13 @@ class PosedTail:
         return np.clip(lam, 0.0, 1.0)
 
     def lower_bounds(self, w: np.ndarray) -> np.ndarray:
-        """Stage 1a: min(1, lambda_min) x rest clearance of every pair at every pose, (n_poses, n_pairs)."""
+        """Stage 1a: min(1, lambda_min) x rest clearance of every pair at every pose, (n_poses,
+        n_pairs)."""
         return self.stretch(w) * self.rest_mm[None, :]
 
     def shorten_z(self, z: np.ndarray, lam: float, joints: np.ndarray) -> np.ndarray:
-        """z after the gaps of ``joints`` (bool, n_joints) are shortened by ``lam`` (panels unchanged)."""
+        """z after the gaps of ``joints`` (bool, n_joints) are shortened by ``lam`` (panels
+        unchanged)."""
         hj = self.joint_height_mm
         out = np.array(z, float)
         for j in np.flatnonzero(joints):
@@ -173,18 +226,23 @@ class PosedTail:
         return out
 
     def _orbit_key(self, pair: int) -> tuple:
-        """What makes two pairs turned copies of each other (their d_lambda equal): the instances they are
-        turned copies of, the turn between their two instances (degrees, to 1e-6), the joints they span and
-        the gaps under each mesh; a pair with an instance of no known turn is its own."""
+        """What makes two pairs turned copies of each other (their d_lambda equal): the instances
+        they are turned copies of, the turn between their two instances (degrees, to 1e-6), the
+        joints they span and the gaps under each mesh; a pair with an instance of no known turn is
+        its own."""
         a, b = (int(i) for i in self.pairs[pair])
         if self._turn[a][1] is None or self._turn[b][1] is None:
             return ("pair", pair)
-        return (_turned_pair(self._turn, a, b, self._gaps_under[a].tobytes(), self._gaps_under[b].tobytes()),
-                self.span[pair].tobytes())
+        return (
+            _turned_pair(
+                self._turn, a, b, self._gaps_under[a].tobytes(), self._gaps_under[b].tobytes()
+            ),
+            self.span[pair].tobytes(),
+        )
 
     def _shortened(self, i: int, k: int, span: np.ndarray) -> tuple[tuple, np.ndarray | None]:
-        """The key of the shortened mesh that instance ``i``'s is a turned copy of, and the turn (None:
-        none); the mesh is made on first use (its BVH when FCL first needs it)."""
+        """The key of the shortened mesh that instance ``i``'s is a turned copy of, and the turn
+        (None: none); the mesh is made on first use (its BVH when FCL first needs it)."""
         ref, rot = self._turn[i]
         ck = (ref, k, span.tobytes())
         if ck not in self._scaled:
@@ -195,8 +253,8 @@ class PosedTail:
         return ck, None if ref == i else rot
 
     def aniso_rest(self, pair: int, k: int) -> float:
-        """d_lambda of ``pair`` at LAMBDA_GRID[k] (cached; a pair that is a turned copy of an earlier
-        one takes that one's)."""
+        """d_lambda of ``pair`` at LAMBDA_GRID[k] (cached; a pair that is a turned copy of an
+        earlier one takes that one's)."""
         key = (pair, k)
         if key not in self._aniso:
             if LAMBDA_GRID[k] == 1.0 or not self.span[pair].any():
@@ -206,24 +264,38 @@ class PosedTail:
             else:
                 # A gap that starts above the mesh moves none of its vertices (z - 0.0, the same
                 # bits): left out of the key, meshes shortened by different spans share one BVH.
-                made = [self._shortened(int(i), k, self.span[pair] & self._gaps_under[int(i)])
-                        for i in self.pairs[pair]]
-                gap = attained_gap_mm(*(self._scaled[ck] if rot is None else
-                                        trimesh.Trimesh(self._scaled[ck].vertices @ rot.T, self._scaled[ck].faces,
-                                                        process=False) for ck, rot in made))
+                made = [
+                    self._shortened(int(i), k, self.span[pair] & self._gaps_under[int(i)])
+                    for i in self.pairs[pair]
+                ]
+                gap = attained_gap_mm(
+                    *(
+                        self._scaled[ck]
+                        if rot is None
+                        else trimesh.Trimesh(
+                            self._scaled[ck].vertices @ rot.T, self._scaled[ck].faces, process=False
+                        )
+                        for ck, rot in made
+                    )
+                )
                 if gap is None:
                     objs = []
                     for ck, rot in made:
                         if ck not in self._scaled_fcl:
                             self._scaled_fcl[ck] = _bvh(self._scaled[ck])
-                        objs.append(fcl.CollisionObject(self._scaled_fcl[ck], fcl.Transform() if rot is None
-                                                        else fcl.Transform(rot, np.zeros(3))))
+                        objs.append(
+                            fcl.CollisionObject(
+                                self._scaled_fcl[ck],
+                                fcl.Transform() if rot is None else fcl.Transform(rot, np.zeros(3)),
+                            )
+                        )
                     gap = _fcl_distance(*objs)
                 self._aniso[key] = gap
         return self._aniso[key]
 
     def refine(self, lam: np.ndarray, pair_ids: np.ndarray) -> np.ndarray:
-        """Stage 1b: max(lambda x rest, d_lambda at the grid value below lambda) for matching arrays."""
+        """Stage 1b: max(lambda x rest, d_lambda at the grid value below lambda) for matching
+        arrays."""
         lam = np.asarray(lam, float)
         k = np.clip(np.searchsorted(LAMBDA_GRID, lam, side="right") - 1, 0, len(LAMBDA_GRID) - 1)
         if len(k) == 0:
@@ -233,7 +305,8 @@ class PosedTail:
         return np.maximum(lam * self.rest_mm[pair_ids], table)
 
     def exact(self, w: np.ndarray, pair_ids: np.ndarray) -> np.ndarray:
-        """Stage 2: exact clearance of some pairs at one pose (negative: penetration depth unknown, -0)."""
+        """Stage 2: exact clearance of some pairs at one pose (negative: penetration depth unknown,
+        -0)."""
         posed: dict[int, fcl.CollisionObject] = {}
         panel_frames = None
 
@@ -244,15 +317,20 @@ class PosedTail:
                 if k >= 0:  # the same map as deform_points, applied as one rigid transform
                     if panel_frames is None:
                         panel_frames = self.kin.frames(w)[1]
-                    if i not in self.rest_bvh:  # a rigid instance is not subdivided: coarse is its mesh
+                    if (
+                        i not in self.rest_bvh
+                    ):  # a rigid instance is not subdivided: coarse is its mesh
                         self.rest_bvh[i] = _bvh(self.coarse[i])
                     tf = panel_frames[k].copy()
                     tf[:3, 3] -= tf[:3, 2] * (k * self.joint_height_mm)
-                    posed[i] = fcl.CollisionObject(self.rest_bvh[i], fcl.Transform(tf[:3, :3], tf[:3, 3]))
+                    posed[i] = fcl.CollisionObject(
+                        self.rest_bvh[i], fcl.Transform(tf[:3, :3], tf[:3, 3])
+                    )
                 else:
                     m = self.meshes[i]
-                    posed[i] = _fcl_object(trimesh.Trimesh(self.deform_points(m.vertices, w), m.faces,
-                                                           process=False))
+                    posed[i] = _fcl_object(
+                        trimesh.Trimesh(self.deform_points(m.vertices, w), m.faces, process=False)
+                    )
             return posed[i]
 
         out = np.empty(len(pair_ids))
@@ -265,8 +343,8 @@ class PosedTail:
 
 
 def _mesh(solid) -> trimesh.Trimesh:
-    """A copy of ``solid`` meshed (OCCT keeps a finer triangulation than asked: an earlier stage's on
-    ``solid`` itself would change the clearances)."""
+    """A copy of ``solid`` meshed (OCCT keeps a finer triangulation than asked: an earlier stage's
+    on ``solid`` itself would change the clearances)."""
     return trimesh.Trimesh(*mesh_arrays(fresh_copy(solid), 0.02, 0.3), process=True)
 
 
@@ -289,13 +367,16 @@ def _subdivided(m: trimesh.Trimesh) -> trimesh.Trimesh:
 
 def _rod_mesh(diameter_mm: float, length_mm: float, sections: int = 32) -> trimesh.Trimesh:
     """The rod as rings every BENDING_EDGE_MM (a plain cylinder: the vertices must follow the bend).
-    Its 32-gon is inscribed in the circle: distances read up to r (1 - cos(pi/32)) = 0.014 mm long."""
+    Its 32-gon is inscribed in the circle: distances read up to r (1 - cos(pi/32)) = 0.014 mm
+    long."""
     n_ring = max(2, int(np.ceil(length_mm / BENDING_EDGE_MM)) + 1)
     a = np.linspace(0, 2 * np.pi, sections, endpoint=False)
     z = np.linspace(0, length_mm, n_ring)
     r = diameter_mm / 2
     ring = np.stack([r * np.cos(a), r * np.sin(a)], -1)
-    verts = np.concatenate([np.c_[np.tile(ring, (n_ring, 1)), np.repeat(z, sections)], [[0, 0, 0], [0, 0, length_mm]]])
+    verts = np.concatenate(
+        [np.c_[np.tile(ring, (n_ring, 1)), np.repeat(z, sections)], [[0, 0, 0], [0, 0, length_mm]]]
+    )
     faces = []
     for i in range(n_ring - 1):
         for j in range(sections):
@@ -315,26 +396,30 @@ def _fcl_object(m: trimesh.Trimesh) -> fcl.CollisionObject:
 def _bvh(m: trimesh.Trimesh) -> fcl.BVHModel:
     bvh = fcl.BVHModel()
     bvh.beginModel(len(m.vertices), len(m.faces))
-    # Plain arrays: python-fcl reads them row by row, and trimesh's tracked arrays make that 10x slower.
+    # Plain arrays: python-fcl reads them row by row, and trimesh's tracked arrays make that 10x
+    # slower.
     bvh.addSubModel(np.array(m.vertices, dtype=np.float64), np.array(m.faces, dtype=np.int32))
     bvh.endModel()
     return bvh
 
 
-def _fcl_distance(a: trimesh.Trimesh | fcl.CollisionObject, b: trimesh.Trimesh | fcl.CollisionObject) -> float:
+def _fcl_distance(
+    a: trimesh.Trimesh | fcl.CollisionObject, b: trimesh.Trimesh | fcl.CollisionObject
+) -> float:
     objs = [m if isinstance(m, fcl.CollisionObject) else _fcl_object(m) for m in (a, b)]
     return fcl.distance(objs[0], objs[1], fcl.DistanceRequest(), fcl.DistanceResult())
 
 
-#: Two instances of one part whose placements differ by a turn about the tail's axis within this (mm,
-#: and the rotation's entries) are turned copies of each other for stage 1b (the SOAs of a joint: 4e-15).
+#: Two instances of one part whose placements differ by a turn about the tail's axis within this
+#: (mm, and the rotation's entries) are turned copies of each other for stage 1b (the SOAs of a
+#: joint: 4e-15).
 TURN_TOLERANCE = 1e-9
 
 
 def _axis_turns(instances: list) -> list[tuple[int, np.ndarray]]:
-    """For each instance, ``(r, R)``: the first instance ``r`` of the same part whose placement, turned by
-    ``R`` (3 x 3) about the tail's axis, is this one's within :data:`TURN_TOLERANCE`; itself and the
-    identity where there is none."""
+    """For each instance, ``(r, R)``: the first instance ``r`` of the same part whose placement,
+    turned by ``R`` (3 x 3) about the tail's axis, is this one's within :data:`TURN_TOLERANCE`;
+    itself and the identity where there is none."""
     out: list[tuple[int, np.ndarray]] = []
     firsts: dict[str, list[int]] = {}
     for i, inst in enumerate(instances):
@@ -343,7 +428,9 @@ def _axis_turns(instances: list) -> list[tuple[int, np.ndarray]]:
         for r in firsts.get(inst.part, []):
             m = t @ np.linalg.inv(np.asarray(instances[r].transform, float))
             c, s = math.cos(a := math.atan2(m[1, 0], m[0, 0])), math.sin(a)
-            turn = np.array([[c, -s, 0.0, 0.0], [s, c, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+            turn = np.array(
+                [[c, -s, 0.0, 0.0], [s, c, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
+            )
             if np.abs(m - turn).max() <= TURN_TOLERANCE:
                 found = (r, turn[:3, :3])
                 break
@@ -353,11 +440,12 @@ def _axis_turns(instances: list) -> list[tuple[int, np.ndarray]]:
     return out
 
 
-def _turned_pair(turns: list[tuple[int, np.ndarray]], a: int, b: int, tag_a: object = None, tag_b: object = None
-                 ) -> tuple:
-    """What two pairs that are turned copies of each other share (see :func:`_axis_turns`): the instances
-    their two are turned copies of, each with its ``tag``, and the turn between them (degrees, to 1e-6),
-    the same whichever instance comes first."""
+def _turned_pair(
+    turns: list[tuple[int, np.ndarray]], a: int, b: int, tag_a: object = None, tag_b: object = None
+) -> tuple:
+    """What two pairs that are turned copies of each other share (see :func:`_axis_turns`): the
+    instances their two are turned copies of, each with its ``tag``, and the turn between them
+    (degrees, to 1e-6), the same whichever instance comes first."""
     (ra, rot_a), (rb, rot_b) = turns[a], turns[b]
     rel = rot_a.T @ rot_b
     turn = round(math.degrees(math.atan2(rel[1, 0], rel[0, 0])) % 360.0, 6) % 360.0
@@ -365,22 +453,24 @@ def _turned_pair(turns: list[tuple[int, np.ndarray]], a: int, b: int, tag_a: obj
     return min((ends, turn), (ends[::-1], round(-turn % 360.0, 6) % 360.0))
 
 
-#: Candidate points :func:`attained_gap_mm` tries (per side, in batches) before it leaves a pair to FCL.
+#: Candidate points :func:`attained_gap_mm` tries (per side, in batches) before it leaves a pair to
+#: FCL.
 GAP_WITNESSES = 256
 
 
 def attained_gap_mm(a: trimesh.Trimesh, b: trimesh.Trimesh) -> float | None:
     """The distance between two meshes whose bounding boxes are apart along one axis only, when that
-    gap is attained: a point of one mesh on its face of the gap lies over (or under) a triangle of the
-    other that lies in its own face of the gap. Then no two points are closer (the boxes' gap is a lower
-    bound) and the distance is the gap itself, ``upper.min - lower.max`` on that axis, exactly (one
-    rounding). Otherwise None (the boxes overlap, are apart along two axes, or no witness is found
-    among :data:`GAP_WITNESSES` candidates per side).
+    gap is attained: a point of one mesh on its face of the gap lies over (or under) a triangle of
+    the other that lies in its own face of the gap. Then no two points are closer (the boxes' gap is
+    a lower bound) and the distance is the gap itself, ``upper.min - lower.max`` on that axis,
+    exactly (one rounding). Otherwise None (the boxes overlap, are apart along two axes, or no
+    witness is found among :data:`GAP_WITNESSES` candidates per side).
 
-    Two panels face each other across a joint's gap with parallel faces: every triangle pair of the two
-    faces is at the same distance, and FCL's traversal, which prunes a bounding-volume pair only when its
-    bound is not below the distance found, visits them all (0.05-0.15 s a pair, measured; 58 of the
-    default tail's 283 rest pairs are such ties, 0.8 of its 1.0 CPU s of rest distances)."""
+    Two panels face each other across a joint's gap with parallel faces: every triangle pair of the
+    two faces is at the same distance, and FCL's traversal, which prunes a bounding-volume pair only
+    when its bound is not below the distance found, visits them all (0.05-0.15 s a pair, measured;
+    58 of the default tail's 283 rest pairs are such ties, 0.8 of its 1.0 CPU s of rest
+    distances)."""
     va, vb = np.asarray(a.vertices, float), np.asarray(b.vertices, float)
     lo_a, hi_a, lo_b, hi_b = va.min(0), va.max(0), vb.min(0), vb.max(0)
     apart = np.maximum(lo_b - hi_a, lo_a - hi_b)
@@ -388,11 +478,16 @@ def attained_gap_mm(a: trimesh.Trimesh, b: trimesh.Trimesh) -> float | None:
     if len(axes) != 1:
         return None
     k = int(axes[0])
-    (low, v_low, hi), (up, v_up, lo) = ((a, va, hi_a[k]), (b, vb, lo_b[k])) if lo_b[k] > hi_a[k] else \
-        ((b, vb, hi_b[k]), (a, va, lo_a[k]))
+    (low, v_low, hi), (up, v_up, lo) = (
+        ((a, va, hi_a[k]), (b, vb, lo_b[k]))
+        if lo_b[k] > hi_a[k]
+        else ((b, vb, hi_b[k]), (a, va, lo_a[k]))
+    )
     plane = [i for i in range(3) if i != k]
-    for points, mesh, verts, level in ((v_up[v_up[:, k] == lo], low, v_low, hi),
-                                       (v_low[v_low[:, k] == hi], up, v_up, lo)):
+    for points, mesh, verts, level in (
+        (v_up[v_up[:, k] == lo], low, v_low, hi),
+        (v_low[v_low[:, k] == hi], up, v_up, lo),
+    ):
         faces = np.asarray(mesh.faces)
         flat = faces[np.all(verts[faces][:, :, k] == level, axis=1)]
         if not len(flat) or not len(points):
@@ -400,7 +495,7 @@ def attained_gap_mm(a: trimesh.Trimesh, b: trimesh.Trimesh) -> float | None:
         tri = verts[flat][:, :, plane]  # (n, 3, 2): the triangles lying in the gap's face
         pts = points[:GAP_WITNESSES, plane]
         for chunk in range(0, len(pts), 32):
-            if _any_in_triangles(pts[chunk:chunk + 32], tri):
+            if _any_in_triangles(pts[chunk : chunk + 32], tri):
                 return float(lo - hi)
     return None
 
@@ -411,7 +506,9 @@ def _any_in_triangles(points: np.ndarray, tri: np.ndarray) -> bool:
     a, b, c = tri[None, :, 0], tri[None, :, 1], tri[None, :, 2]
 
     def side(u, v):  # the sign of the cross product (v - u) x (p - u)
-        return (v[..., 0] - u[..., 0]) * (p[..., 1] - u[..., 1]) - (v[..., 1] - u[..., 1]) * (p[..., 0] - u[..., 0])
+        return (v[..., 0] - u[..., 0]) * (p[..., 1] - u[..., 1]) - (v[..., 1] - u[..., 1]) * (
+            p[..., 0] - u[..., 0]
+        )
 
     s1, s2, s3 = side(a, b), side(b, c), side(c, a)
     inside = ((s1 >= 0) & (s2 >= 0) & (s3 >= 0)) | ((s1 <= 0) & (s2 <= 0) & (s3 <= 0))
@@ -435,20 +532,35 @@ def must_not_touch(asm: Assembly) -> list[tuple[str, str]]:
             return abs(a.segment - b.segment) == 1
         return False
 
-    return [(a.name, b.name) for a, b in itertools.combinations(asm.instances, 2) if not joined(a, b)]
+    return [
+        (a.name, b.name) for a, b in itertools.combinations(asm.instances, 2) if not joined(a, b)
+    ]
 
 
 def plane_sections(asm: Assembly) -> PosedTail:
-    """The tail's plane-section map alone (:meth:`PosedTail.deform_points`, which reads only the joints'
-    kinematics): no meshes, no pairs. The 3D view and :class:`bvsr_cad.api.Tail` pose with it;
-    :func:`posed_tail` with no pairs gives the same map after meshing every instance for nothing."""
+    """The tail's plane-section map alone (:meth:`PosedTail.deform_points`, which reads only the
+    joints' kinematics): no meshes, no pairs. The 3D view and :class:`bvsr_cad.api.Tail` pose with
+    it; :func:`posed_tail` with no pairs gives the same map after meshing every instance for
+    nothing."""
     spec = asm.spec
-    return PosedTail(TailKinematics.from_spec(spec), [], [], spec.joint.joint_height_mm, np.zeros((0, 2), int),
-                     np.zeros(0), np.zeros((0, spec.joints), bool), np.zeros((0, SUPPORT_BINS)), [], [],
-                     instances=list(asm.instances))
+    return PosedTail(
+        TailKinematics.from_spec(spec),
+        [],
+        [],
+        spec.joint.joint_height_mm,
+        np.zeros((0, 2), int),
+        np.zeros(0),
+        np.zeros((0, spec.joints), bool),
+        np.zeros((0, SUPPORT_BINS)),
+        [],
+        [],
+        instances=list(asm.instances),
+    )
 
 
-def posed_tail(asm: Assembly, progress: Progress | None = None, cutoff_mm: float | None = None) -> PosedTail:
+def posed_tail(
+    asm: Assembly, progress: Progress | None = None, cutoff_mm: float | None = None
+) -> PosedTail:
     """Meshes, pairs and their exact rest clearances. Pairs farther apart at rest
     than one joint pitch (and never spanning a common joint) are dropped: the
     bound above keeps them apart by at least min(1, lambda) x that distance."""
@@ -486,8 +598,8 @@ def posed_tail(asm: Assembly, progress: Progress | None = None, cutoff_mm: float
     dirs = np.c_[np.cos(edges), np.sin(edges)]
     h_edge = {i: (m.vertices[:, :2] @ dirs.T).max(axis=0) for i, m in enumerate(meshes)}
     rest_bvh: dict[int, fcl.BVHModel] = {}
-    # An SOA is a turned copy of its joint's first (see _axis_turns): its rest BVH is that one's under the
-    # turn, and a pair that is a turned copy of an earlier pair is at that one's distance.
+    # An SOA is a turned copy of its joint's first (see _axis_turns): its rest BVH is that one's
+    # under the turn, and a pair that is a turned copy of an earlier pair is at that one's distance.
     turns = _axis_turns(list(asm.instances))
     turned_rest: dict[tuple, float] = {}
     say("clearance: exact rest distances of the candidate pairs")
@@ -509,8 +621,12 @@ def posed_tail(asm: Assembly, progress: Progress | None = None, cutoff_mm: float
                     ref, rot = turns[i]
                     if ref not in rest_bvh:
                         rest_bvh[ref] = _bvh(coarse[ref])
-                    objs.append(fcl.CollisionObject(rest_bvh[ref], fcl.Transform() if ref == i
-                                                    else fcl.Transform(rot, np.zeros(3))))
+                    objs.append(
+                        fcl.CollisionObject(
+                            rest_bvh[ref],
+                            fcl.Transform() if ref == i else fcl.Transform(rot, np.zeros(3)),
+                        )
+                    )
                 turned_rest[key] = _fcl_distance(*objs)
             gap = turned_rest[key]
         rest.append(gap)
@@ -519,9 +635,20 @@ def posed_tail(asm: Assembly, progress: Progress | None = None, cutoff_mm: float
         hb = np.maximum(h[:-1], h[1:])
         support.append(np.where(hb > 0, hb / np.cos(np.pi / SUPPORT_BINS), hb))
     levels = np.sort(gaps.ravel())
-    return PosedTail(kin, names, meshes, hj, np.array(pairs), np.array(rest), np.array(span),
-                     np.array(support), coarse, [_cut_at_z(m, levels) for m in coarse], rest_bvh=rest_bvh,
-                     instances=list(asm.instances))
+    return PosedTail(
+        kin,
+        names,
+        meshes,
+        hj,
+        np.array(pairs),
+        np.array(rest),
+        np.array(span),
+        np.array(support),
+        coarse,
+        [_cut_at_z(m, levels) for m in coarse],
+        rest_bvh=rest_bvh,
+        instances=list(asm.instances),
+    )
 
 
 @dataclass(frozen=True)
@@ -544,14 +671,22 @@ class ClearanceResult:
         return self.poses / self.seconds if self.seconds > 0 else float("inf")
 
     def to_json(self) -> dict:
-        return {"poses": int(self.poses), "min_clearance_mm": float(self.min_clearance_mm), "pair": list(self.pair),
-                "pose": {"theta_rad": self.theta_rad, "phi_rad": self.phi_rad},
-                "lower_bound_mm": float(self.lower_bound_mm), "stage1_min_mm": float(self.stage1_min_mm),
-                "refined_candidates": int(self.refined), "exact_evaluations": int(self.confirmed),
-                "certified": bool(self.certified)}
+        return {
+            "poses": int(self.poses),
+            "min_clearance_mm": float(self.min_clearance_mm),
+            "pair": list(self.pair),
+            "pose": {"theta_rad": self.theta_rad, "phi_rad": self.phi_rad},
+            "lower_bound_mm": float(self.lower_bound_mm),
+            "stage1_min_mm": float(self.stage1_min_mm),
+            "refined_candidates": int(self.refined),
+            "exact_evaluations": int(self.confirmed),
+            "certified": bool(self.certified),
+        }
 
 
-def clearance_over(pt: PosedTail, w: np.ndarray, max_exact: int = 8, seed_candidates: int = 64) -> ClearanceResult:
+def clearance_over(
+    pt: PosedTail, w: np.ndarray, max_exact: int = 8, seed_candidates: int = 64
+) -> ClearanceResult:
     """Two-stage minimum clearance over poses w (n, n_joints, 2).
 
     The smallest stage-1 bounds are refined (stage 1b) and the lowest is
@@ -600,21 +735,35 @@ def clearance_over(pt: PosedTail, w: np.ndarray, max_exact: int = 8, seed_candid
     a, b = pt.pairs[pair]
     seconds = time.perf_counter() - t0
     rest = {f"{pt.names[i]}|{pt.names[j]}": float(r) for (i, j), r in zip(pt.pairs, pt.rest_mm)}
-    return ClearanceResult(len(w), best, (pt.names[a], pt.names[b]), [float(v) for v in theta],
-                           [float(v) for v in phi], lower, float(lb.min()), n_refined, done, certified,
-                           seconds, rest)
+    return ClearanceResult(
+        len(w),
+        best,
+        (pt.names[a], pt.names[b]),
+        [float(v) for v in theta],
+        [float(v) for v in phi],
+        lower,
+        float(lb.min()),
+        n_refined,
+        done,
+        certified,
+        seconds,
+        rest,
+    )
 
 
 def brute_force(pt: PosedTail, w: np.ndarray) -> np.ndarray:
-    """Exact clearance of every pair at every pose: (n_poses,) minimum (the reference of the benchmark)."""
+    """Exact clearance of every pair at every pose: (n_poses,) minimum (the reference of the
+    benchmark)."""
     all_pairs = np.arange(len(pt.pairs))
     return np.array([np.min(pt.exact(wp, all_pairs)) for wp in w])
 
 
-def clearance_map(pt: PosedTail, joint: int, theta_max_rad: float, n_theta: int = 60, n_phi: int = 72
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Stage-1 bound (1a, tightened by 1b) of the minimum clearance over the pairs that feel ``joint``
-    (0-based) when only it bends: (theta, phi, bound). The others keep their rest clearance."""
+def clearance_map(
+    pt: PosedTail, joint: int, theta_max_rad: float, n_theta: int = 60, n_phi: int = 72
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Stage-1 bound (1a, tightened by 1b) of the minimum clearance over the pairs that feel
+    ``joint`` (0-based) when only it bends: (theta, phi, bound). The others keep their rest
+    clearance."""
     th = np.linspace(0, theta_max_rad, n_theta)
     ph = np.linspace(-np.pi, np.pi, n_phi)
     tt, pp = np.meshgrid(th, ph, indexing="ij")

@@ -27,7 +27,8 @@ from ..parameters.measurements import Measurement, MeasurementError, data_sha256
 from .calibrate import COMPARE_THREADS, compare_rows, rms_relative, uncalibrated
 from .predict import Predictor, WorkspaceSim
 
-#: A row "lands" when the calibrated prediction is within this relative error of the reported figure.
+#: A row "lands" when the calibrated prediction is within this relative error of the reported
+#: figure.
 LANDS_WITHIN_REL = 0.30
 
 
@@ -47,80 +48,123 @@ class MeasuredComparison:
         return sum(abs(r["rel_calibrated"]) <= LANDS_WITHIN_REL for r in rows), len(rows)
 
     def to_json(self) -> dict:
-        out = {"data_file": self.data_file, "note": self.note, "fitted": self.fitted, "rows": self.rows,
-               "lands_within_rel": LANDS_WITHIN_REL}
+        out = {
+            "data_file": self.data_file,
+            "note": self.note,
+            "fitted": self.fitted,
+            "rows": self.rows,
+            "lands_within_rel": LANDS_WITHIN_REL,
+        }
         roles = [role for role in ("fit", "holdout") if any(r["role"] == role for r in self.rows)]
-        out |= {f"rms_rel_{role}{suffix}": self.rms(role, key) for role in roles
-                for suffix, key in (("", "rel_calibrated"), ("_uncalibrated", "rel_uncalibrated"))}
+        out |= {
+            f"rms_rel_{role}{suffix}": self.rms(role, key)
+            for role in roles
+            for suffix, key in (("", "rel_calibrated"), ("_uncalibrated", "rel_uncalibrated"))
+        }
         if "holdout" in roles:
             out["holdout_landed"] = list(self.landed("holdout"))
         return out
 
 
-def compare_measurements(asm: Assembly, params_path: str | Path | None,
-                         progress: Callable[[str], None] | None = None,
-                         workspace_sim: WorkspaceSim | None = None,
-                         theta_max_rad: list[float] | Callable[[], list[float]] | None = None,
-                         threads: int = COMPARE_THREADS) -> MeasuredComparison | None:
+def compare_measurements(
+    asm: Assembly,
+    params_path: str | Path | None,
+    progress: Callable[[str], None] | None = None,
+    workspace_sim: WorkspaceSim | None = None,
+    theta_max_rad: list[float] | Callable[[], list[float]] | None = None,
+    threads: int = COMPARE_THREADS,
+) -> MeasuredComparison | None:
     """The comparison for ``asm``'s spec, or None when the file carries no calibration.
 
     ``workspace_sim``: what predicts the measured tip workspace (:class:`Predictor`); the pipeline
-    gives :func:`bvsr_cad.simulation.sim.protocol_radius_mm`. ``theta_max_rad``: the joints' limits of ``asm``
-    where the build has them, or what gives them when first needed (they may still be computing).
-    ``threads``: as in :func:`bvsr_cad.analysis.calibrate.compare_rows`."""
+    gives :func:`bvsr_cad.simulation.sim.protocol_radius_mm`. ``theta_max_rad``: the joints' limits
+    of ``asm`` where the build has them, or what gives them when first needed (they may still be
+    computing). ``threads``: as in :func:`bvsr_cad.analysis.calibrate.compare_rows`."""
     spec = asm.spec
     cal = spec.calibration
     if not cal.fitted:
         return None
     fitted = dict(cal.fitted)
     inherited = bool(cal.measured_tail) and cal.measured_tail != spec.name
-    inherited_note = (f"fitted values inherited from the {cal.measured_tail} tail's calibration; its report "
-                      "compares the rows that measured it")
+    inherited_note = (
+        f"fitted values inherited from the {cal.measured_tail} tail's calibration; its report "
+        "compares the rows that measured it"
+    )
     rod = (spec.vertebra.material, float(spec.vertebra.diameter_mm))
     if cal.rod_material and (cal.rod_material, float(cal.rod_diameter_mm)) != rod:
-        return MeasuredComparison(cal.data_file, f"the data measured a tail with a {cal.rod_material} "
-                                  f"{cal.rod_diameter_mm:g} mm rod and this file's rod is {rod[0]} {rod[1]:g} mm: "
-                                  "another tail, so its rows are not compared (the fitted values carry over, the "
-                                  "rod's E I by the ratio of the tables' values)", fitted=fitted)
+        return MeasuredComparison(
+            cal.data_file,
+            f"the data measured a tail with a {cal.rod_material} "
+            f"{cal.rod_diameter_mm:g} mm rod and this file's rod is {rod[0]} {rod[1]:g} mm: "
+            "another tail, so its rows are not compared (the fitted values carry over, the "
+            "rod's E I by the ratio of the tables' values)",
+            fitted=fitted,
+        )
     if not cal.data_file or params_path is None:
-        return MeasuredComparison(cal.data_file, "the calibration names no data file", fitted=fitted)
-    data = (Path(params_path).resolve().parent / cal.data_file)
+        return MeasuredComparison(
+            cal.data_file, "the calibration names no data file", fitted=fitted
+        )
+    data = Path(params_path).resolve().parent / cal.data_file
     if not data.is_file():
-        return MeasuredComparison(cal.data_file, f"data file {data} not found (it is resolved relative to the "
-                                  "parameter file)", fitted=fitted)
+        return MeasuredComparison(
+            cal.data_file,
+            f"data file {data} not found (it is resolved relative to the parameter file)",
+            fitted=fitted,
+        )
     if cal.data_sha256 and data_sha256(data) != cal.data_sha256:
-        return MeasuredComparison(cal.data_file, "the data file changed since the calibration (SHA-256 differs): "
-                                  "run `bvsr calibrate` again", fitted=fitted)
+        return MeasuredComparison(
+            cal.data_file,
+            "the data file changed since the calibration (SHA-256 differs): "
+            "run `bvsr calibrate` again",
+            fitted=fitted,
+        )
     try:
         rows = load_measurements(data)
     except MeasurementError as exc:
         return MeasuredComparison(cal.data_file, f"data file unreadable: {exc}", fitted=fitted)
     rows, others = rows_of_tail(rows, spec.segments, inherited)
     if not rows:
-        return MeasuredComparison(cal.data_file, inherited_note if inherited else
-                                  f"no row of {cal.data_file} measured this tail", fitted=fitted)
+        return MeasuredComparison(
+            cal.data_file,
+            inherited_note if inherited else f"no row of {cal.data_file} measured this tail",
+            fitted=fitted,
+        )
     pred = Predictor(asm, spec, workspace_sim)
     if theta_max_rad is not None:
         pred.known_limits(theta_max_rad)
-    table = compare_rows(pred.with_spec(uncalibrated(spec)), pred, rows,
-                         None if progress is None else (lambda m: progress(f"measurements: {m}")), threads)
-    what = (f"the rows of {cal.data_file} that measured a {spec.segments}-segment tail" if inherited
-            else f"every row of {cal.data_file} that measured this tail")
+    table = compare_rows(
+        pred.with_spec(uncalibrated(spec)),
+        pred,
+        rows,
+        None if progress is None else (lambda m: progress(f"measurements: {m}")),
+        threads,
+    )
+    what = (
+        f"the rows of {cal.data_file} that measured a {spec.segments}-segment tail"
+        if inherited
+        else f"every row of {cal.data_file} that measured this tail"
+    )
     note = f"{what}, predicted with the tables' values and with the fitted ones"
     if inherited:
         note += f"; {inherited_note} ({len(others)} rows)"
     elif others:
         counts = sorted({int(m.condition("segments")) for m in others})
-        note += (f"; {_rows(others)} measured a {' or '.join(map(str, counts))}-segment tail: the build of such a "
-                 "tail that takes these fitted values compares them (`bvsr calibrate` fits and reports over every row)")
+        note += (
+            f"; {_rows(others)} measured a {' or '.join(map(str, counts))}-segment tail: the build "
+            "of such a "
+            "tail that takes these fitted values compares them (`bvsr calibrate` fits and reports "
+            "over every row)"
+        )
     return MeasuredComparison(cal.data_file, note, table, fitted)
 
 
-def rows_of_tail(rows: list[Measurement], segments: int, inherited: bool
-                 ) -> tuple[list[Measurement], list[Measurement]]:
-    """(the rows a build of a ``segments``-segment tail compares, the others): a row naming a segment count
-    measured a tail with that many segments; one naming none measured the calibration's tail, which
-    the build is unless it ``inherited`` the fitted values."""
+def rows_of_tail(
+    rows: list[Measurement], segments: int, inherited: bool
+) -> tuple[list[Measurement], list[Measurement]]:
+    """(the rows a build of a ``segments``-segment tail compares, the others): a row naming a
+    segment count measured a tail with that many segments; one naming none measured the
+    calibration's tail, which the build is unless it ``inherited`` the fitted values."""
+
     def own(m: Measurement) -> bool:
         named = m.condition("segments")
         return int(named) == segments if named is not None else not inherited

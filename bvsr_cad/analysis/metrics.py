@@ -47,18 +47,29 @@ METRICS: dict[str, dict[str, str]] = {
     "mass": {
         "mass_g": "modelled mass of the tail: panels, SOAs and rods (B-rep volumes x densities)",
         "length_mm": "tail length, root face to tip face",
-        "rod_flexural_rigidity_n_mm2": "the vertebra's E I as the models use it (fitted ratio applied; 0: no rod)",
+        "rod_flexural_rigidity_n_mm2": "the vertebra's E I as the models use it (fitted ratio "
+        "applied; 0: no rod)",
     },
     "statics": {
-        "lateral_stiffness_n_per_mm": "one segment's passive tip stiffness sideways, lines open (Fig. 3 d)",
-        **{f"blocked_force_{m}_n": f"one segment's blocked tip force in {m} at the pressure limits (Fig. 3 e)"
-           for m in MOTIONS},
-        **{f"max_angle_{m}_deg": f"one segment's free bending angle in {m} at the pressure limits (Fig. 3 f)"
-           for m in MOTIONS},
+        "lateral_stiffness_n_per_mm": "one segment's passive tip stiffness sideways, lines open "
+        "(Fig. 3 d)",
+        **{
+            f"blocked_force_{m}_n": f"one segment's blocked tip force in {m} at the pressure "
+            "limits (Fig. 3 e)"
+            for m in MOTIONS
+        },
+        **{
+            f"max_angle_{m}_deg": f"one segment's free bending angle in {m} at the pressure limits "
+            "(Fig. 3 f)"
+            for m in MOTIONS
+        },
     },
     "workspace": {
-        **{f"workspace_{a}_{e}_mm": f"tip workspace, {e} {a} (tail frame, random protocol)"
-           for a in "xy" for e in ("min", "max")},
+        **{
+            f"workspace_{a}_{e}_mm": f"tip workspace, {e} {a} (tail frame, random protocol)"
+            for a in "xy"
+            for e in ("min", "max")
+        },
         "workspace_radius_mm": "largest lateral distance of the tip from its rest point",
     },
     "dynamics": {
@@ -68,11 +79,14 @@ METRICS: dict[str, dict[str, str]] = {
         "root_torque_per_mass_nm_per_kg": "root_peak_torque_nm per kg of tail (needs mass)",
     },
     "clearance": {
-        "min_clearance_mm": "certified minimum clearance between solids that must not touch, over the workspace's poses",
-        "clearance_margin_mm": "min_clearance_mm minus analysis.min_clearance_mm (>= 0: the required clearance holds)",
+        "min_clearance_mm": "certified minimum clearance between solids that must not touch, over "
+        "the workspace's poses",
+        "clearance_margin_mm": "min_clearance_mm minus analysis.min_clearance_mm (>= 0: the "
+        "required clearance holds)",
     },
     "limits": {
-        "joint_limit_min_deg": "smallest theta_max over every joint and bending plane (exact clearance limits)",
+        "joint_limit_min_deg": "smallest theta_max over every joint and bending plane (exact "
+        "clearance limits)",
         "joint_limit_max_deg": "largest theta_max over every joint and bending plane",
     },
 }
@@ -93,8 +107,13 @@ def calibration_metrics(spec: TailSpec) -> dict[str, float]:
     return {f"fitted_{k}": float(v) for k, v in sorted(spec.calibration.fitted.items())}
 
 
-def model_metrics(spec: TailSpec, groups: list[str], conditions: Conditions = Conditions(),
-                  progress: Progress | None = None, asm: Assembly | None = None) -> dict[str, float | bool]:
+def model_metrics(
+    spec: TailSpec,
+    groups: list[str],
+    conditions: Conditions = Conditions(),
+    progress: Progress | None = None,
+    asm: Assembly | None = None,
+) -> dict[str, float | bool]:
     """The metrics of ``groups`` (keys of :data:`METRICS`) for ``spec``, with the seconds each took
     (``seconds_<group>``) and the calibration's fitted values."""
     say = progress or (lambda _m: None)
@@ -116,6 +135,7 @@ def model_metrics(spec: TailSpec, groups: list[str], conditions: Conditions = Co
         if not posed:
             posed.append(posed_tail(asm))
         return posed[0]
+
     for group in wanted:
         t = time.perf_counter()
         say(f"metrics: {group}")
@@ -138,7 +158,9 @@ def model_metrics(spec: TailSpec, groups: list[str], conditions: Conditions = Co
             for i, a in enumerate("xy"):
                 out[f"workspace_{a}_min_mm"] = float(ws.tip_mm[:, i].min())
                 out[f"workspace_{a}_max_mm"] = float(ws.tip_mm[:, i].max())
-            out["workspace_radius_mm"] = float(np.max(np.hypot(ws.tip_mm[:, 0] - rest[0], ws.tip_mm[:, 1] - rest[1])))
+            out["workspace_radius_mm"] = float(
+                np.max(np.hypot(ws.tip_mm[:, 0] - rest[0], ws.tip_mm[:, 1] - rest[1]))
+            )
         elif group == "dynamics":
             c = conditions
             out["peak_velocity_deg_s"] = pred.segment_peak_velocity(c.motion, c.pressure_bar)
@@ -153,7 +175,9 @@ def model_metrics(spec: TailSpec, groups: list[str], conditions: Conditions = Co
             idx = rng.integers(0, ws.samples, spec.analysis.build_clearance_poses)
             res = clearance_over(posed_tail_once(), ws.w[idx])
             out["min_clearance_mm"] = float(res.min_clearance_mm)
-            out["clearance_margin_mm"] = float(res.min_clearance_mm - spec.analysis.min_clearance_mm)
+            out["clearance_margin_mm"] = float(
+                res.min_clearance_mm - spec.analysis.min_clearance_mm
+            )
         elif group == "limits":
             from .limits import build_joint_limits
 

@@ -1,4 +1,5 @@
-"""What the models predict for each measured quantity (:data:`bvsr_cad.parameters.measurements.QUANTITIES`).
+"""What the models predict for each measured quantity
+(:data:`bvsr_cad.parameters.measurements.QUANTITIES`).
 
 One function per quantity, each from the models' one home: the statics
 (Table III), the Eq 6-12 dynamics with the spec's supply (Eq 13 ramp or the
@@ -28,8 +29,16 @@ from ..assembly.bodies import moving_body
 from ..assembly.build import Assembly, build_assembly
 from ..assembly.pneumatic_lines import line_supply
 from ..models.actuator import soa_force_law
-from ..models.dynamics import (G_M_S2, TIP_OVER_COM, VELOCITY_WINDOW_DEG, JointModel, Trajectory, com_position_m,
-                               ramp_pa, simulate_joint)
+from ..models.dynamics import (
+    G_M_S2,
+    TIP_OVER_COM,
+    VELOCITY_WINDOW_DEG,
+    JointModel,
+    Trajectory,
+    com_position_m,
+    ramp_pa,
+    simulate_joint,
+)
 from ..models.kinematics import joint_geometries
 from ..models.platform import Platform, TailOnPlatform, platform_motion
 from ..models.rod import rod_section
@@ -50,9 +59,10 @@ def pulse_places(motion: str) -> tuple[int, ...]:
     return tuple(int(i) + 1 for i in np.nonzero(pattern > 0)[0])
 
 
-#: The workspace protocol run in time: (assembly, spec of the same geometry, the joints' limits in rad)
-#: -> the tip's largest lateral excursion from its rest point, mm. It needs the robot model in a
-#: simulator, so the layers that can build one give it (:func:`bvsr_cad.simulation.sim.protocol_radius_mm`).
+#: The workspace protocol run in time: (assembly, spec of the same geometry, the joints' limits in
+#: rad) -> the tip's largest lateral excursion from its rest point, mm. It needs the robot model in
+#: a simulator, so the layers that can build one give it
+#: (:func:`bvsr_cad.simulation.sim.protocol_radius_mm`).
 WorkspaceSim = Callable[[Assembly, TailSpec, list[float]], float]
 
 
@@ -88,38 +98,52 @@ class Predictor:
     spec: TailSpec
     workspace_sim: WorkspaceSim | None = None
     _other: dict = field(default_factory=dict)  # assemblies of variants (e.g. more segments)
-    _limits: dict = field(default_factory=dict)  # segments -> the joints' limits (geometry only), rad
-    #: Motions already solved for this spec: rows that share one (a root torque and force at the same
-    #: pressure and payload, a peak velocity and both exponents at 6 bar, the cart's lift and angle)
-    #: integrate it once.
+    _limits: dict = field(
+        default_factory=dict
+    )  # segments -> the joints' limits (geometry only), rad
+    #: Motions already solved for this spec: rows that share one (a root torque and force at the
+    #: same pressure and payload, a peak velocity and both exponents at 6 bar, the cart's lift and
+    #: angle) integrate it once.
     _solved: dict = field(default_factory=dict, repr=False)
-    #: Predictions may run in threads (:func:`bvsr_cad.analysis.calibrate.compare_rows`): each memo entry
-    #: is made once, under its own lock; shared with the Predictors of other specs (``with_spec``).
-    _locks: "_Locks" = field(default_factory=lambda: _Locks(), repr=False)
+    #: Predictions may run in threads (:func:`bvsr_cad.analysis.calibrate.compare_rows`): each memo
+    #: entry is made once, under its own lock; shared with the Predictors of other specs
+    #: (``with_spec``).
+    _locks: _Locks = field(default_factory=lambda: _Locks(), repr=False)
 
     @classmethod
-    def from_spec(cls, spec: TailSpec, workspace_sim: WorkspaceSim | None = None) -> "Predictor":
+    def from_spec(cls, spec: TailSpec, workspace_sim: WorkspaceSim | None = None) -> Predictor:
         return cls(build_assembly(spec), spec, workspace_sim)
 
-    def with_spec(self, spec: TailSpec) -> "Predictor":
-        return Predictor(self.asm, spec, self.workspace_sim, self._other, self._limits, _locks=self._locks)
+    def with_spec(self, spec: TailSpec) -> Predictor:
+        return Predictor(
+            self.asm, spec, self.workspace_sim, self._other, self._limits, _locks=self._locks
+        )
 
     def known_limits(self, theta_max_rad: list[float] | Callable[[], list[float]]) -> None:
-        """The joints' limits of this geometry where a build has them (saves a clearance analysis), or
-        what gives them when a prediction first needs them (a build computing them beside)."""
-        self._limits[self.spec.segments] = theta_max_rad if callable(theta_max_rad) else list(theta_max_rad)
+        """The joints' limits of this geometry where a build has them (saves a clearance analysis),
+        or what gives them when a prediction first needs them (a build computing them beside)."""
+        self._limits[self.spec.segments] = (
+            theta_max_rad if callable(theta_max_rad) else list(theta_max_rad)
+        )
 
     # -- building blocks ---------------------------------------------------
     def joint_model(self, first_joint: int, n_joints: int, payload_g: float = 0.0) -> JointModel:
         spec = self.spec
         body = moving_body(self.asm, first_joint, n_joints)
-        body = body.with_tip_mass(units.g_to_kg(payload_g))  # on the arc's end: the last panel's distal face
-        geoms = joint_geometries(spec)[first_joint - 1: first_joint - 1 + n_joints]
+        # on the arc's end: the last panel's distal face
+        body = body.with_tip_mass(units.g_to_kg(payload_g))
+        geoms = joint_geometries(spec)[first_joint - 1 : first_joint - 1 + n_joints]
         rod = rod_section(spec).bending_stiffness_nm_per_rad(spec.joint.gap_mm)
         return JointModel(geoms, soa_force_law(spec), rod, body, GRAVITY_M_S2)
 
-    def pulse(self, model: JointModel, motion: str, pressure_bar: float, seconds: float = PULSE_SECONDS,
-              stop_angle_deg: float | None = None) -> Trajectory:
+    def pulse(
+        self,
+        model: JointModel,
+        motion: str,
+        pressure_bar: float,
+        seconds: float = PULSE_SECONDS,
+        stop_angle_deg: float | None = None,
+    ) -> Trajectory:
         """The model's response to a pulse at ``pressure_bar`` (gauge) through the spec's supply."""
         spec = self.spec
         places = pulse_places(motion)
@@ -128,10 +152,17 @@ class Predictor:
         if spec.pneumatics.model == "ramp":
             t0 = spec.fitted("ramp_time_s", spec.pneumatics.ramp_time_s)
             mask = np.array([i + 1 in places for i in range(5)], float)
-            return simulate_joint(model, lambda t: mask * ramp_pa(t, p0, t0), seconds, phi0_rad=phi,
-                                  stop_angle_deg=stop_angle_deg)
+            return simulate_joint(
+                model,
+                lambda t: mask * ramp_pa(t, p0, t0),
+                seconds,
+                phi0_rad=phi,
+                stop_angle_deg=stop_angle_deg,
+            )
         supply = line_supply(self.asm, 1, places, p0, spec)
-        return simulate_joint(model, None, seconds, phi0_rad=phi, supply=supply, stop_angle_deg=stop_angle_deg)
+        return simulate_joint(
+            model, None, seconds, phi0_rad=phi, supply=supply, stop_angle_deg=stop_angle_deg
+        )
 
     def _once(self, key: tuple, solve: Callable[[], object]):
         return self._locks.once(self._solved, key, solve)
@@ -143,13 +174,16 @@ class Predictor:
 
         return self._once(("segment", motion, float(pressure_bar)), solve)
 
-    def tail_pulse(self, motion: str, pressure_bar: float, payload_g: float, seconds: float = PULSE_SECONDS
-                   ) -> tuple[JointModel, Trajectory]:
+    def tail_pulse(
+        self, motion: str, pressure_bar: float, payload_g: float, seconds: float = PULSE_SECONDS
+    ) -> tuple[JointModel, Trajectory]:
         def solve() -> tuple[JointModel, Trajectory]:
             model = self.joint_model(1, self.spec.joints, payload_g)
             return model, self.pulse(model, motion, pressure_bar, seconds)
 
-        return self._once(("tail", motion, float(pressure_bar), float(payload_g), float(seconds)), solve)
+        return self._once(
+            ("tail", motion, float(pressure_bar), float(payload_g), float(seconds)), solve
+        )
 
     # -- quantities ----------------------------------------------------------
     def segment_max_angle(self, motion: str) -> float:
@@ -168,7 +202,9 @@ class Predictor:
     def segment_peak_velocity(self, motion: str, pressure_bar: float) -> float:
         return self.segment_pulse(motion, pressure_bar).peak_velocity_deg_s()
 
-    def _exponent(self, motion: str, lo: float, hi: float, what: Callable[[Trajectory], float]) -> float:
+    def _exponent(
+        self, motion: str, lo: float, hi: float, what: Callable[[Trajectory], float]
+    ) -> float:
         pressures = [p for p in EXPONENT_PRESSURES_BAR if lo - 1e-9 <= p <= hi + 1e-9]
         values = np.array([what(self.segment_pulse(motion, p)) for p in pressures])
         ok = np.isfinite(values) & (values > 0)
@@ -176,36 +212,66 @@ class Predictor:
             return float("nan")
         return float(np.polyfit(np.log(np.array(pressures)[ok]), np.log(values[ok]), 1)[0])
 
-    def velocity_pressure_exponent(self, motion: str, pressure_min_bar: float, pressure_max_bar: float) -> float:
-        return self._exponent(motion, pressure_min_bar, pressure_max_bar, lambda tr: tr.peak_velocity_deg_s())
+    def velocity_pressure_exponent(
+        self, motion: str, pressure_min_bar: float, pressure_max_bar: float
+    ) -> float:
+        return self._exponent(
+            motion, pressure_min_bar, pressure_max_bar, lambda tr: tr.peak_velocity_deg_s()
+        )
 
-    def time_pressure_exponent(self, motion: str, pressure_min_bar: float, pressure_max_bar: float) -> float:
-        return self._exponent(motion, pressure_min_bar, pressure_max_bar, lambda tr: tr.time_to_deg_s())
+    def time_pressure_exponent(
+        self, motion: str, pressure_min_bar: float, pressure_max_bar: float
+    ) -> float:
+        return self._exponent(
+            motion, pressure_min_bar, pressure_max_bar, lambda tr: tr.time_to_deg_s()
+        )
 
-    def tip_workspace_radius(self, segments: float, pressurised_max_kpa_abs: float,
-                             depressurised_min_kpa_abs: float) -> float:
-        """The paper's workspace experiment (Sec. IV-A-5) run in time: the tail horizontal, a new random
-        pressure per line every ``actuation.workspace_cycle_s``, the tip recorded throughout (its
-        transients included, as motion capture records them); the largest lateral distance from rest."""
+    def tip_workspace_radius(
+        self, segments: float, pressurised_max_kpa_abs: float, depressurised_min_kpa_abs: float
+    ) -> float:
+        """The paper's workspace experiment (Sec. IV-A-5) run in time: the tail horizontal, a new
+        random pressure per line every ``actuation.workspace_cycle_s``, the tip recorded throughout
+        (its transients included, as motion capture records them); the largest lateral distance from
+        rest."""
         if self.workspace_sim is None:
-            raise NeedsSimulator("tip_workspace_radius needs the workspace protocol simulated in time: make the "
-                                 "Predictor with workspace_sim=bvsr_cad.simulation.sim.protocol_radius_mm")
+            raise NeedsSimulator(
+                "tip_workspace_radius needs the workspace protocol simulated in time: make the "
+                "Predictor with workspace_sim=bvsr_cad.simulation.sim.protocol_radius_mm"
+            )
         spec = dataclasses.replace(
-            self.spec, segments=int(segments),
-            actuation=dataclasses.replace(self.spec.actuation,
-                                          workspace_pressurised_max_kpa_abs=pressurised_max_kpa_abs,
-                                          workspace_depressurised_min_kpa_abs=depressurised_min_kpa_abs))
+            self.spec,
+            segments=int(segments),
+            actuation=dataclasses.replace(
+                self.spec.actuation,
+                workspace_pressurised_max_kpa_abs=pressurised_max_kpa_abs,
+                workspace_depressurised_min_kpa_abs=depressurised_min_kpa_abs,
+            ),
+        )
         asm, limits = self.workspace_geometry(int(segments))
-        return self._once(("workspace", int(segments), float(pressurised_max_kpa_abs),
-                           float(depressurised_min_kpa_abs)), lambda: float(self.workspace_sim(asm, spec, limits)))
+        return self._once(
+            (
+                "workspace",
+                int(segments),
+                float(pressurised_max_kpa_abs),
+                float(depressurised_min_kpa_abs),
+            ),
+            lambda: float(self.workspace_sim(asm, spec, limits)),
+        )
 
     def workspace_geometry(self, segments: int) -> tuple[Assembly, list[float]]:
-        """(the assembly, its joints' limits) of this tail with ``segments`` segments: what the workspace
-        protocol is simulated on (made once, by the first thread that asks; limits given by
-        :meth:`known_limits` may still be computing elsewhere, and are waited for)."""
+        """(the assembly, its joints' limits) of this tail with ``segments`` segments: what the
+        workspace protocol is simulated on (made once, by the first thread that asks; limits given
+        by :meth:`known_limits` may still be computing elsewhere, and are waited for)."""
         once = self._locks.once
-        asm = self.asm if segments == self.spec.segments else once(
-            self._other, segments, lambda: build_assembly(dataclasses.replace(self.spec, segments=segments)))
+        asm = (
+            self.asm
+            if segments == self.spec.segments
+            else once(
+                self._other,
+                segments,
+                lambda: build_assembly(dataclasses.replace(self.spec, segments=segments)),
+            )
+        )
         limits = once(self._limits, segments, lambda: theta_max_per_joint_rad(asm))
         if callable(limits):  # given by known_limits, still to come
             limits = list(limits())
@@ -217,8 +283,11 @@ class Predictor:
         if m.quantity == "tip_workspace_radius":
             self.workspace_geometry(int(dict(m.conditions)["segments"]))
 
-    def root_wrench(self, motion: str, pressure_bar: float, payload_g: float) -> tuple[float, float]:
-        """(peak force N, peak torque N m) at the root sensor (the root panel's proximal face), tared."""
+    def root_wrench(
+        self, motion: str, pressure_bar: float, payload_g: float
+    ) -> tuple[float, float]:
+        """(peak force N, peak torque N m) at the root sensor (the root panel's proximal face),
+        tared."""
         model, tr = self.tail_pulse(motion, pressure_bar, payload_g)
         body = model.body
         big = model.n * tr.theta_rad
@@ -230,14 +299,17 @@ class Predictor:
 
         force_body = body.mass_kg * second_derivative(pos)
         force_tip = body.tip_mass_kg * second_derivative(tip)
-        # The sensor sits under the root panel: its face is the panel's thickness below the base face.
+        # The sensor sits under the root panel: its face is the panel's thickness below the base
+        # face.
         face = np.array([0.0, 0.0, units.mm_to_m(self.spec.joint.panel_thickness_mm)])
         ang_acc = np.gradient(np.gradient(big / 2.0, tr.time_s), tr.time_s)
         torque = np.cross(pos + face, force_body) + np.cross(tip + face, force_tip)
         normal = np.stack([-np.sin(tr.phi_rad), np.cos(tr.phi_rad), np.zeros_like(tr.phi_rad)], -1)
         torque = torque + body.inertia_theta_kg_m2 * ang_acc[:, None] * normal
         force = force_body + force_tip
-        return float(np.max(np.linalg.norm(force, axis=1))), float(np.max(np.linalg.norm(torque, axis=1)))
+        return float(np.max(np.linalg.norm(force, axis=1))), float(
+            np.max(np.linalg.norm(torque, axis=1))
+        )
 
     def root_peak_force(self, pressure_bar: float, payload_g: float, motion: str) -> float:
         return self.root_wrench(motion, pressure_bar, payload_g)[0]
@@ -246,19 +318,32 @@ class Predictor:
         return self.root_wrench(motion, pressure_bar, payload_g)[1]
 
     def cart_motion(self, pressure_bar: float, motion: str):
-        return self._once(("cart", float(pressure_bar), motion), lambda: self._cart_motion(pressure_bar, motion))
+        return self._once(
+            ("cart", float(pressure_bar), motion), lambda: self._cart_motion(pressure_bar, motion)
+        )
 
     def _cart_motion(self, pressure_bar: float, motion: str):
         cart = self.spec.cart
         model, tr = self.tail_pulse(motion, pressure_bar, 0.0, seconds=0.5)
         body = model.body
-        tail = TailOnPlatform(body.mass_kg, body.inertia_theta_kg_m2,
-                              cart.tail_mount_behind_hinge_m + body.arc_length_m / 2)
+        tail = TailOnPlatform(
+            body.mass_kg,
+            body.inertia_theta_kg_m2,
+            cart.tail_mount_behind_hinge_m + body.arc_length_m / 2,
+        )
         depth = cart.width_m if motion == "waggle" else 0.0
-        platform = Platform(cart.mass_kg, cart.mass_kg * (cart.length_m ** 2 + depth ** 2) / 12,
-                            cart.length_m / 2, cart.length_m)
-        beta = model.n * tr.theta_rad / 2.0  # the tail's body turns by half its bending angle (Eq 7)
-        return platform, platform_motion(platform, tail, tr.time_s, beta, gravity=motion != "waggle")
+        platform = Platform(
+            cart.mass_kg,
+            cart.mass_kg * (cart.length_m**2 + depth**2) / 12,
+            cart.length_m / 2,
+            cart.length_m,
+        )
+        beta = (
+            model.n * tr.theta_rad / 2.0
+        )  # the tail's body turns by half its bending angle (Eq 7)
+        return platform, platform_motion(
+            platform, tail, tr.time_s, beta, gravity=motion != "waggle"
+        )
 
     def cart_lift(self, pressure_bar: float, motion: str) -> float:
         platform, result = self.cart_motion(pressure_bar, motion)

@@ -5,9 +5,9 @@ certified clearance, the exact joint limits and the tip joint's clearance map;
 :mod:`bvsr_cad.exporters.analysis_files` serialises the result and the robot
 model takes its joint limits from it (nothing reads a file the build wrote).
 
-:func:`from_params` is the build's second process (:mod:`bvsr_cad.build._runtime.worker`,
-started as ``python -m bvsr_cad.build._runtime.worker bvsr_cad.build._runtime.analyses_process``, which gives it the simulator):
-the same analyses from the parameter file, the result pickled back to the build.
+:func:`from_params` is the build's second process (:mod:`bvsr_cad.build._runtime.worker`, started as
+``python -m bvsr_cad.build._runtime.worker bvsr_cad.build._runtime.analyses_process``, which gives
+it the simulator): the same analyses from the parameter file, the result pickled back to the build.
 """
 
 from __future__ import annotations
@@ -22,11 +22,18 @@ import numpy as np
 from ..assembly.build import Assembly
 from ..assembly.inertia import SolidProperties
 from .calibrate import COMPARE_THREADS
+from .clearance import ClearanceResult, PosedTail, clearance_map, clearance_over, posed_tail
+from .limits import (
+    THETA_SEARCH_MAX_RAD,
+    JointLimits,
+    UselessResultError,
+    build_joint_limits,
+    fold_stack,
+    per_joint_rad,
+    stack_limit_rad,
+)
 from .measured import MeasuredComparison, compare_measurements
 from .predict import WorkspaceSim
-from .clearance import ClearanceResult, PosedTail, clearance_map, clearance_over, posed_tail
-from .limits import (THETA_SEARCH_MAX_RAD, JointLimits, UselessResultError, build_joint_limits, fold_stack,
-                     per_joint_rad, stack_limit_rad)
 from .workspace import Workspace, empty_problems, quasi_static_table, run_workspace
 
 
@@ -59,15 +66,15 @@ class GeometryAnalyses:
 @dataclass(frozen=True)
 class RestGeometry:
     """What the analyses read of the tail's solids: the posed tail (every instance's mesh, the pairs
-    that must not touch, their exact rest distances) and each part's mass properties. Geometry alone:
-    the build keeps it beside the cached geometry analyses and hands it back to an edit that moves no
-    solid, whose analyses then make no solid, mesh none and measure no rest distance."""
+    that must not touch, their exact rest distances) and each part's mass properties. Geometry
+    alone: the build keeps it beside the cached geometry analyses and hands it back to an edit that
+    moves no solid, whose analyses then make no solid, mesh none and measure no rest distance."""
 
     posed: PosedTail
     properties: dict[str, SolidProperties]
 
     @classmethod
-    def of(cls, asm: Assembly, posed: PosedTail) -> "RestGeometry":
+    def of(cls, asm: Assembly, posed: PosedTail) -> RestGeometry:
         return cls(posed, {name: asm.solid_properties(name) for name in asm.parts})
 
 
@@ -87,15 +94,18 @@ class AnalysisResults:
 
     @property
     def geometry(self) -> GeometryAnalyses:
-        return GeometryAnalyses(self.limits, self.fold_stack_lambda, self.clearance_map, self.geometry_seconds)
+        return GeometryAnalyses(
+            self.limits, self.fold_stack_lambda, self.clearance_map, self.geometry_seconds
+        )
 
     def theta_max_per_joint(self) -> list[float]:
         """Each joint's limit as one number (:func:`~bvsr_cad.analysis.limits.per_joint_rad`)."""
         return per_joint_rad(self.limits)
 
 
-def geometry_analyses(asm: Assembly, pt: PosedTail, progress: Callable[[str], None] | None = None
-                      ) -> GeometryAnalyses:
+def geometry_analyses(
+    asm: Assembly, pt: PosedTail, progress: Callable[[str], None] | None = None
+) -> GeometryAnalyses:
     """The exact joint limits and the tip joint's clearance map of ``asm``.
 
     Args:
@@ -115,18 +125,31 @@ def geometry_analyses(asm: Assembly, pt: PosedTail, progress: Callable[[str], No
     tip = spec.joints - 1
     th, ph, bound = clearance_map(pt, tip, THETA_SEARCH_MAX_RAD)
     phis = np.asarray(lims[tip].phi_rad)
-    cmap = ClearanceMap(tip + 1, th, ph, bound, phis, np.asarray(lims[tip].theta_max_rad),
-                        stack_limit_rad(pt, tip, phis, *stack))
+    cmap = ClearanceMap(
+        tip + 1,
+        th,
+        ph,
+        bound,
+        phis,
+        np.asarray(lims[tip].theta_max_rad),
+        stack_limit_rad(pt, tip, phis, *stack),
+    )
     return GeometryAnalyses(lims, stack[0], cmap, time.perf_counter() - t0)
 
 
-def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
-                 params_path: str | None = None, workspace_sim: WorkspaceSim | None = None,
-                 geometry: GeometryAnalyses | None = None, threads: int = COMPARE_THREADS,
-                 on_geometry: Callable[[GeometryAnalyses], None] | None = None,
-                 rest: RestGeometry | None = None, on_rest: Callable[[RestGeometry], None] | None = None
-                 ) -> AnalysisResults:
-    """Every analysis of the tail: workspace, clearance, joint limits, the model against measurements.
+def run_analyses(
+    asm: Assembly,
+    progress: Callable[[str], None] | None = None,
+    params_path: str | None = None,
+    workspace_sim: WorkspaceSim | None = None,
+    geometry: GeometryAnalyses | None = None,
+    threads: int = COMPARE_THREADS,
+    on_geometry: Callable[[GeometryAnalyses], None] | None = None,
+    rest: RestGeometry | None = None,
+    on_rest: Callable[[RestGeometry], None] | None = None,
+) -> AnalysisResults:
+    """Every analysis of the tail: workspace, clearance, joint limits, the model against
+    measurements.
 
     Args:
         asm: the tail's assembly.
@@ -155,10 +178,13 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
     if rest is not None:
         asm.remember_properties(rest.properties)  # before anything integrates (or makes) a solid
     # The measurements go on in a thread beside the other analyses (the workspace protocol steps in
-    # MuJoCo without Python's lock); only a workspace row of this geometry waits for its joints' limits.
+    # MuJoCo without Python's lock); only a workspace row of this geometry waits for its joints'
+    # limits.
     limits: Future = Future()
     with ThreadPoolExecutor(1) as pool:
-        measuring = pool.submit(compare_measurements, asm, params_path, say, workspace_sim, limits.result, threads)
+        measuring = pool.submit(
+            compare_measurements, asm, params_path, say, workspace_sim, limits.result, threads
+        )
         try:
             say("analysis: clearance")
             pt = rest.posed if rest is not None else posed_tail(asm, say)
@@ -182,37 +208,54 @@ def run_analyses(asm: Assembly, progress: Callable[[str], None] | None = None,
         measured = measuring.result()
     seconds = time.perf_counter() - t0
     say(f"analysis: {seconds:.1f} s")
-    return AnalysisResults(ws, quasi, clearance, "poses resampled from the build's workspace samples",
-                           cfg.min_clearance_mm, geo.limits, geo.fold_stack_lambda, geo.clearance_map, measured,
-                           seconds, 0.0 if geometry is not None else geo.seconds)
+    return AnalysisResults(
+        ws,
+        quasi,
+        clearance,
+        "poses resampled from the build's workspace samples",
+        cfg.min_clearance_mm,
+        geo.limits,
+        geo.fold_stack_lambda,
+        geo.clearance_map,
+        measured,
+        seconds,
+        0.0 if geometry is not None else geo.seconds,
+    )
 
 
 #: Threads predicting the measured rows in the build's second process: the workspace protocol's
-#: simulations one after the other, beside one thread for the other rows. The build's own stages keep
-#: the other core busy, and the kernel shares the cores by thread: with a thread per simulation (3
-#: threads and this one against the build's one) this process ends its work about 2 s before the build
-#: has written the print files whose checks come next, and a core stands idle between (measured on the
-#: default tail, 2 cores: 32.2 s; with 2 threads 30.7-30.9 s and no idle core until the checks' end).
+#: simulations one after the other, beside one thread for the other rows. The build's own stages
+#: keep the other core busy, and the kernel shares the cores by thread: with a thread per simulation
+#: (3 threads and this one against the build's one) this process ends its work about 2 s before the
+#: build has written the print files whose checks come next, and a core stands idle between
+#: (measured on the default tail, 2 cores: 32.2 s; with 2 threads 30.7-30.9 s and no idle core until
+#: the checks' end).
 BESIDE_BUILD_THREADS = 2
-#: The same where the build's own stages are few (its geometry unchanged: the part files, previews and
-#: drawings come from the cache): the protocol's two simulations side by side, beside one thread for the
-#: other rows, so that both cores work while the build waits for them.
+#: The same where the build's own stages are few (its geometry unchanged: the part files, previews
+#: and drawings come from the cache): the protocol's two simulations side by side, beside one thread
+#: for the other rows, so that both cores work while the build waits for them.
 BESIDE_IDLE_BUILD_THREADS = 3
 
 
-def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = None,
-                geometry: GeometryAnalyses | None = None, asm: Assembly | None = None,
-                threads: int = BESIDE_BUILD_THREADS,
-                on_geometry: Callable[[GeometryAnalyses], None] | None = None,
-                rest: RestGeometry | None = None, on_rest: Callable[[RestGeometry], None] | None = None
-                ) -> AnalysisResults:
+def from_params(
+    params: str,
+    sha256: str,
+    workspace_sim: WorkspaceSim | None = None,
+    geometry: GeometryAnalyses | None = None,
+    asm: Assembly | None = None,
+    threads: int = BESIDE_BUILD_THREADS,
+    on_geometry: Callable[[GeometryAnalyses], None] | None = None,
+    rest: RestGeometry | None = None,
+    on_rest: Callable[[RestGeometry], None] | None = None,
+) -> AnalysisResults:
     """The second process's work: the analyses of the parameter file the build read (``sha256``),
-    progress on stderr (the parent relays it). Its entry point is :mod:`bvsr_cad.build._runtime.analyses_process`'s
-    (which gives ``workspace_sim``, from the build's cache ``geometry``, ``asm`` when it built the
-    assembly of this very file ahead, ``threads``: :data:`BESIDE_BUILD_THREADS` or
-    :data:`BESIDE_IDLE_BUILD_THREADS`, ``on_geometry``, ``rest`` and ``on_rest``: see :func:`run_analyses`; without ``asm`` the
-    assembly's solids are made when first read: none, where ``rest`` and ``geometry`` are given and no
-    measured row needs a robot model)."""
+    progress on stderr (the parent relays it). Its entry point is
+    :mod:`bvsr_cad.build._runtime.analyses_process`'s (which gives ``workspace_sim``, from the
+    build's cache ``geometry``, ``asm`` when it built the assembly of this very file ahead,
+    ``threads``: :data:`BESIDE_BUILD_THREADS` or :data:`BESIDE_IDLE_BUILD_THREADS`, ``on_geometry``,
+    ``rest`` and ``on_rest``: see :func:`run_analyses`; without ``asm`` the assembly's solids are
+    made when first read: none, where ``rest`` and ``geometry`` are given and no measured row needs
+    a robot model)."""
     import sys
 
     from ..assembly.build import build_assembly
@@ -226,4 +269,6 @@ def from_params(params: str, sha256: str, workspace_sim: WorkspaceSim | None = N
 
     if asm is None:
         asm = build_assembly(load_spec(params), solids=False)
-    return run_analyses(asm, say, params, workspace_sim, geometry, threads, on_geometry, rest, on_rest)
+    return run_analyses(
+        asm, say, params, workspace_sim, geometry, threads, on_geometry, rest, on_rest
+    )

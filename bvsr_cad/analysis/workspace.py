@@ -17,8 +17,8 @@ import numpy as np
 from .. import units
 from ..assembly.build import Assembly
 from ..models.rod import rod_section
-from ..parameters.layout import N_SOA
 from ..models.statics import Actuator, LumpedMasses, TailStatics, quasi_static_segment
+from ..parameters.layout import N_SOA
 from ..parameters.tables import TailSpec
 from .limits import UselessResultError
 
@@ -26,13 +26,20 @@ Progress = Callable[[str], None]
 
 
 def lumped_masses(asm: Assembly) -> LumpedMasses:
-    """Panel masses (with the rod inside them) and joint masses (its SOAs and the rod in the gap), kg."""
+    """Panel masses (with the rod inside them) and joint masses (its SOAs and the rod in the gap),
+    kg."""
     spec = asm.spec
     rod = rod_section(spec)
     t = spec.joint.panel_thickness_mm
-    panel_g = np.array([asm.mass_g(asm.instance(f"panel{k}").part) for k in range(spec.panels)]) + rod.mass_g(t)
-    joint_g = np.array([sum(asm.mass_g(i.part) for i in asm.soas_of_joint(k)) + rod.mass_g(spec.joint.gap_mm)
-                        for k in range(1, spec.joints + 1)])
+    panel_g = np.array(
+        [asm.mass_g(asm.instance(f"panel{k}").part) for k in range(spec.panels)]
+    ) + rod.mass_g(t)
+    joint_g = np.array(
+        [
+            sum(asm.mass_g(i.part) for i in asm.soas_of_joint(k)) + rod.mass_g(spec.joint.gap_mm)
+            for k in range(1, spec.joints + 1)
+        ]
+    )
     return LumpedMasses(panel_g / units.G_PER_KG, joint_g / units.G_PER_KG)
 
 
@@ -56,7 +63,10 @@ class Workspace:
     line_kpa: np.ndarray  # (n, n_segments, 5)
 
     def extent_mm(self) -> dict[str, list[float]]:
-        return {ax: [float(self.tip_mm[:, i].min()), float(self.tip_mm[:, i].max())] for i, ax in enumerate("xyz")}
+        return {
+            ax: [float(self.tip_mm[:, i].min()), float(self.tip_mm[:, i].max())]
+            for i, ax in enumerate("xyz")
+        }
 
     @property
     def max_theta_rad(self) -> float:
@@ -64,32 +74,43 @@ class Workspace:
 
 
 def unsolved_problems(spec: TailSpec, line_kpa: np.ndarray, why: str) -> list[str]:
-    """The protocol's pressures for which the forward statics find no equilibrium (Newton's steps do not
-    shrink: the SOAs' force law, k = m_a P + n_a, leaves the straight tail no stiffness under vacuum), with
-    the stiffness at the lowest gauge pressure drawn."""
+    """The protocol's pressures for which the forward statics find no equilibrium (Newton's steps do
+    not shrink: the SOAs' force law, k = m_a P + n_a, leaves the straight tail no stiffness under
+    vacuum), with the stiffness at the lowest gauge pressure drawn."""
     a = spec.actuation
     low = float(np.min(line_kpa))
     k = a.stiffness_slope_n_per_m_per_kpa * low + a.stiffness_offset_n_per_m
-    return [f"actuation.stiffness_slope_n_per_m_per_kpa = {a.stiffness_slope_n_per_m_per_kpa!r}, "
-            f"actuation.stiffness_offset_n_per_m = {a.stiffness_offset_n_per_m!r}: the forward statics find no "
-            f"equilibrium for the workspace protocol's pressures ({why}); an SOA's k = m_a P + n_a is {k:.0f} N/m "
-            f"at the lowest gauge pressure drawn, {low:.1f} kPa (actuation.workspace_depressurised_min_kpa_abs = "
-            f"{a.workspace_depressurised_min_kpa_abs!r}); allowed: a force law stiff enough at that pressure (the "
-            "paper's fit: m_a = 9.4, n_a = 2918) or a shallower vacuum"]
+    return [
+        f"actuation.stiffness_slope_n_per_m_per_kpa = {a.stiffness_slope_n_per_m_per_kpa!r}, "
+        f"actuation.stiffness_offset_n_per_m = {a.stiffness_offset_n_per_m!r}: the forward statics "
+        "find no "
+        f"equilibrium for the workspace protocol's pressures ({why}); an SOA's k = m_a P + n_a is "
+        f"{k:.0f} N/m "
+        f"at the lowest gauge pressure drawn, {low:.1f} kPa "
+        "(actuation.workspace_depressurised_min_kpa_abs = "
+        f"{a.workspace_depressurised_min_kpa_abs!r}); allowed: a force law stiff enough at that "
+        "pressure (the "
+        "paper's fit: m_a = 9.4, n_a = 2918) or a shallower vacuum"
+    ]
 
 
 def empty_problems(ws: Workspace, spec: TailSpec) -> list[str]:
-    """A workspace in which no sample bends any joint (every line at atmospheric, or forces that cannot
-    bend the tail): what the protocol keys that drew it allow (``bvsr_cad.parameters.load`` refuses the
-    protocol that draws no pressure at load)."""
+    """A workspace in which no sample bends any joint (every line at atmospheric, or forces that
+    cannot bend the tail): what the protocol keys that drew it allow (``bvsr_cad.parameters.load``
+    refuses the protocol that draws no pressure at load)."""
     if ws.samples == 0 or ws.max_theta_rad > 0.0:
         return []
     a = spec.actuation
-    return [f"actuation.workspace_pressurised_max_kpa_abs = {a.workspace_pressurised_max_kpa_abs!r}, "
-            f"actuation.workspace_depressurised_min_kpa_abs = {a.workspace_depressurised_min_kpa_abs!r}: none of "
-            f"the {ws.samples} workspace samples bends a joint (the workspace is the straight tail's tip alone); "
-            f"allowed: a protocol that draws pressures other than actuation.atmospheric_kpa = {a.atmospheric_kpa!r} "
-            "and an SOA force that bends the tail"]
+    return [
+        f"actuation.workspace_pressurised_max_kpa_abs = {a.workspace_pressurised_max_kpa_abs!r}, "
+        "actuation.workspace_depressurised_min_kpa_abs = "
+        f"{a.workspace_depressurised_min_kpa_abs!r}: none of "
+        f"the {ws.samples} workspace samples bends a joint (the workspace is the straight tail's "
+        "tip alone); "
+        "allowed: a protocol that draws pressures other than actuation.atmospheric_kpa = "
+        f"{a.atmospheric_kpa!r} "
+        "and an SOA force that bends the tail"
+    ]
 
 
 def tail_statics(asm: Assembly, gravity: bool = True, spec: TailSpec | None = None) -> TailStatics:
@@ -98,9 +119,16 @@ def tail_statics(asm: Assembly, gravity: bool = True, spec: TailSpec | None = No
     return TailStatics.from_spec(spec or asm.spec, lumped_masses(asm) if gravity else None)
 
 
-def run_workspace(asm: Assembly, samples: int, seed: int, progress: Progress | None = None,
-                  chunk: int = 2000, spec: TailSpec | None = None) -> Workspace:
-    """Sample the protocol and solve the forward statics of every sample (``spec``: see :func:`tail_statics`)."""
+def run_workspace(
+    asm: Assembly,
+    samples: int,
+    seed: int,
+    progress: Progress | None = None,
+    chunk: int = 2000,
+    spec: TailSpec | None = None,
+) -> Workspace:
+    """Sample the protocol and solve the forward statics of every sample (``spec``: see
+    :func:`tail_statics`)."""
     say = progress or (lambda _m: None)
     spec = spec or asm.spec
     st = tail_statics(asm, spec=spec)
@@ -110,21 +138,32 @@ def run_workspace(asm: Assembly, samples: int, seed: int, progress: Progress | N
     for i in range(0, samples, chunk):
         say(f"workspace: forward statics {i}..{min(samples, i + chunk)} of {samples}")
         try:
-            ws.append(st.forward(p[i:i + chunk]))
+            ws.append(st.forward(p[i : i + chunk]))
         except RuntimeError as exc:
-            raise UselessResultError(f"tail {spec.name!r}", unsolved_problems(spec, p[i:i + chunk], str(exc))) from exc
+            raise UselessResultError(
+                f"tail {spec.name!r}", unsolved_problems(spec, p[i : i + chunk], str(exc))
+            ) from exc
     w = np.concatenate(ws)
     return Workspace(samples, seed, st.kin.tip_point_mm(w), w, p)
 
 
 def quasi_static_table(asm: Assembly, area_scale: tuple[float, ...] = (1.0,)) -> list[dict]:
-    """Table III from the model: one segment at the pressure limits (with gravity, mounted horizontally)."""
+    """Table III from the model: one segment at the pressure limits (with gravity, mounted
+    horizontally)."""
     rows = []
     for scale in area_scale:
-        st = TailStatics.from_spec(asm.spec, lumped_masses(asm),
-                                   area_mm2=Actuator.from_spec(asm.spec).area_mm2 * scale).first_segment()
+        st = TailStatics.from_spec(
+            asm.spec, lumped_masses(asm), area_mm2=Actuator.from_spec(asm.spec).area_mm2 * scale
+        ).first_segment()
         for motion in ("extension", "flexion", "waggle"):
             q = quasi_static_segment(st, motion)
-            rows.append({"motion": motion, "area_mm2": st.act.area_mm2, "max_angle_deg": q.max_angle_deg,
-                         "blocked_force_n": q.blocked_force_n, "line_kpa": list(q.line_kpa)})
+            rows.append(
+                {
+                    "motion": motion,
+                    "area_mm2": st.act.area_mm2,
+                    "max_angle_deg": q.max_angle_deg,
+                    "blocked_force_n": q.blocked_force_n,
+                    "line_kpa": list(q.line_kpa),
+                }
+            )
     return rows

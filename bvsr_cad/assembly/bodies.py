@@ -21,8 +21,12 @@ from .inertia import Inertial, compose, from_solid
 
 def _inertial(asm: Assembly, inst: Instance) -> Inertial:
     part = asm.part_of(inst)
-    return from_solid(part.solid, asm.spec.material(part.material).density_g_cm3, np.asarray(inst.transform),
-                      asm.solid_properties(inst.part))
+    return from_solid(
+        part.solid,
+        asm.spec.material(part.material).density_g_cm3,
+        np.asarray(inst.transform),
+        asm.solid_properties(inst.part),
+    )
 
 
 def _rod_piece(asm: Assembly, z0_mm: float, z1_mm: float) -> Inertial:
@@ -30,9 +34,10 @@ def _rod_piece(asm: Assembly, z0_mm: float, z1_mm: float) -> Inertial:
     rod = rod_section(asm.spec)
     m = units.g_to_kg(rod.mass_g(z1_mm - z0_mm))
     length_m, r_m = units.mm_to_m(z1_mm - z0_mm), units.mm_to_m(rod.diameter_mm / 2)
-    i_t = m * (3 * r_m ** 2 + length_m ** 2) / 12
-    return Inertial.make(m, (0.0, 0.0, units.mm_to_m((z0_mm + z1_mm) / 2)),
-                         np.diag([i_t, i_t, m * r_m ** 2 / 2]))
+    i_t = m * (3 * r_m**2 + length_m**2) / 12
+    return Inertial.make(
+        m, (0.0, 0.0, units.mm_to_m((z0_mm + z1_mm) / 2)), np.diag([i_t, i_t, m * r_m**2 / 2])
+    )
 
 
 def moving_body(asm: Assembly, first_joint: int, n_joints: int) -> RigidBody:
@@ -55,8 +60,12 @@ def moving_body(asm: Assembly, first_joint: int, n_joints: int) -> RigidBody:
     body = compose(items)
     inertia = body.inertia
     arc_mm = n_joints * h_j if n_joints > 1 else gap
-    return RigidBody(body.mass_kg, float(inertia[2, 2]), float((inertia[0, 0] + inertia[1, 1]) / 2),
-                     units.mm_to_m(arc_mm))
+    return RigidBody(
+        body.mass_kg,
+        float(inertia[2, 2]),
+        float((inertia[0, 0] + inertia[1, 1]) / 2),
+        units.mm_to_m(arc_mm),
+    )
 
 
 __all__ = ["moving_body"]

@@ -18,14 +18,20 @@ import build123d as bd
 import numpy as np
 
 from .. import units
+from ..parameters.layout import (
+    PanelLayout,
+    half_angle_rad,
+    panel_layout,
+    rod_bore_mm,
+    soa_angles_deg,
+    soa_frame,
+)
+from ..parameters.standard_parts import metric
+from ..parameters.tables import TailSpec
 from ..parts._kernel import PrintPosed, brep_bytes, location, solid_from_brep
 from ..parts.panel import panel
 from ..parts.soa import soa_body
 from ..parts.vertebra import rod
-from ..parameters.standard_parts import metric
-from ..parameters.layout import (PanelLayout, half_angle_rad, panel_layout, rod_bore_mm, soa_angles_deg,
-                                 soa_frame)
-from ..parameters.tables import TailSpec
 from .inertia import SolidProperties
 
 Progress = Callable[[str], None]
@@ -46,7 +52,8 @@ class PartDef(PrintPosed):
 
 class _SolidOnUse(PartDef):
     """A :class:`PartDef` whose solid is made the first time it is read (:func:`build_assembly` with
-    ``solids=False``): the same solid as an eager build's, by the same function, made at most once."""
+    ``solids=False``): the same solid as an eager build's, by the same function, made at most
+    once."""
 
     def __init__(self, make: Callable[[], bd.Solid], **fields):
         object.__setattr__(self, "_make", make)
@@ -105,8 +112,8 @@ class Assembly:
     _source: object = field(default=None, init=False, repr=False, compare=False)
 
     def share_solids(self, shared: SolidStore) -> None:
-        """From now on take the parts not yet made from ``shared`` (made here and offered there when it has
-        none), and offer it the parts made already."""
+        """From now on take the parts not yet made from ``shared`` (made here and offered there when
+        it has none), and offer it the parts made already."""
         if self._source is not None:
             self._source.share(shared)
 
@@ -127,17 +134,22 @@ class Assembly:
 
     def soas_of_joint(self, k: int) -> list[Instance]:
         """The SOAs of joint k in pentagon order (soa_index 1..N_SOA)."""
-        return sorted((i for i in self.instances if i.role == "soa" and i.joint == k), key=lambda i: i.soa_index)
+        return sorted(
+            (i for i in self.instances if i.role == "soa" and i.joint == k),
+            key=lambda i: i.soa_index,
+        )
 
     def solid_properties(self, part: str) -> SolidProperties:
-        """The part's volume, centre of mass and inertia (unit density), integrated once per part."""
+        """The part's volume, centre of mass and inertia (unit density), integrated once per
+        part."""
         if part not in self._properties:
             self._properties[part] = SolidProperties.of(self.parts[part].solid)
         return self._properties[part]
 
     def remember_properties(self, properties: dict[str, SolidProperties]) -> None:
-        """Take parts' mass properties computed from the same solids elsewhere (a build's cache): the parts'
-        solids are then not integrated again, nor made (``build_assembly(..., solids=False)``)."""
+        """Take parts' mass properties computed from the same solids elsewhere (a build's cache):
+        the parts' solids are then not integrated again, nor made (``build_assembly(...,
+        solids=False)``)."""
         for part, props in properties.items():
             if part in self.parts:
                 self._properties.setdefault(part, props)
@@ -167,8 +179,14 @@ def _panel_key(lay: PanelLayout) -> tuple:
     def cyl(c) -> tuple:
         return (c.role, tuple(map(r, c.p0)), tuple(map(r, c.p1)), r(c.diameter_mm))
 
-    return (lay.kind, r(lay.rim_radius_lower_mm), r(lay.rim_radius_upper_mm),
-            tuple(map(cyl, lay.cuts)), tuple(map(cyl, lay.bosses)), tuple(map(cyl, lay.passages)))
+    return (
+        lay.kind,
+        r(lay.rim_radius_lower_mm),
+        r(lay.rim_radius_upper_mm),
+        tuple(map(cyl, lay.cuts)),
+        tuple(map(cyl, lay.bosses)),
+        tuple(map(cyl, lay.passages)),
+    )
 
 
 def rod_span_mm(spec: TailSpec, s: int) -> tuple[float, float]:
@@ -202,9 +220,9 @@ class SolidStore(Protocol):
 
 
 class _SolidSource:
-    """Where :func:`build_assembly`'s parts take their solids: the BRep bytes of the solid made here, or
-    of the one a :class:`SolidStore` holds; each part's bytes are kept, to be offered when sharing starts
-    later (:meth:`Assembly.share_solids`)."""
+    """Where :func:`build_assembly`'s parts take their solids: the BRep bytes of the solid made
+    here, or of the one a :class:`SolidStore` holds; each part's bytes are kept, to be offered when
+    sharing starts later (:meth:`Assembly.share_solids`)."""
 
     def __init__(self, shared: SolidStore | None = None):
         self.shared = shared
@@ -222,31 +240,39 @@ class _SolidSource:
             shared.offer(name, data)
 
 
-def build_assembly(spec: TailSpec, progress: Progress | None = None, solids: bool = True,
-                   shared: SolidStore | None = None) -> Assembly:
+def build_assembly(
+    spec: TailSpec,
+    progress: Progress | None = None,
+    solids: bool = True,
+    shared: SolidStore | None = None,
+) -> Assembly:
     """Make every unique part and place every instance of the tail at rest.
 
     Args:
         spec: a validated tail spec.
         progress: called with a short message before each slow step.
-        solids: False makes each part's solid when it is first read, not now (the analyses' process of a
-            build whose geometry analyses, posed tail and parts' mass properties come from the cache reads
-            none: an edit that moves no solid makes none there).
-        shared: where the build's other process leaves the parts it made (and this one leaves its own;
-            :class:`bvsr_cad.build._runtime.analyses_process.SharedSolids`).
+        solids: False makes each part's solid when it is first read, not now (the analyses' process
+            of a build whose geometry analyses, posed tail and parts' mass properties come from the
+            cache reads none: an edit that moves no solid makes none there).
+        shared: where the build's other process leaves the parts it made (and this one leaves its
+            own; :class:`bvsr_cad.build._runtime.analyses_process.SharedSolids`).
 
-    Every part's solid is the one its BRep bytes give back (:func:`bvsr_cad.parts._kernel.brep_bytes`,
-    :func:`~bvsr_cad.parts._kernel.solid_from_brep`): the round trip moves some unit directions in their last
-    bits (OCCT normalises them on reading: a STEP entity's 3.4e-21 becomes 5.1e-21), so a part read from
-    the build's other process (``shared``) is the one made here to the bit, whichever process made it.
+    Every part's solid is the one its BRep bytes give back
+    (:func:`bvsr_cad.parts._kernel.brep_bytes`, :func:`~bvsr_cad.parts._kernel.solid_from_brep`):
+    the round trip moves some unit directions in their last bits (OCCT normalises them on reading: a
+    STEP entity's 3.4e-21 becomes 5.1e-21), so a part read from the build's other process
+    (``shared``) is the one made here to the bit, whichever process made it.
     """
     say = (progress or (lambda _msg: None)) if solids else (lambda _msg: None)
     source = _SolidSource(shared)
 
     def part(*, solid: Callable[[], bd.Solid], **fields) -> PartDef:
         name = fields["name"]
-        return (PartDef(solid=source.make(name, solid), **fields) if solids
-                else _SolidOnUse(lambda: source.make(name, solid), **fields))
+        return (
+            PartDef(solid=source.make(name, solid), **fields)
+            if solids
+            else _SolidOnUse(lambda: source.make(name, solid), **fields)
+        )
 
     beta = half_angle_rad(spec)
     layouts = [panel_layout(spec, k, beta) for k in range(spec.panels)]
@@ -255,14 +281,25 @@ def build_assembly(spec: TailSpec, progress: Progress | None = None, solids: boo
     _add_panels(spec, layouts, part, say, parts, instances)
     _add_soas(spec, layouts, part, say, parts, instances)
     _add_rods(spec, part, parts, instances)
-    asm = Assembly(spec=spec, parts=parts, instances=instances, panel_layouts=layouts,
-                   taper_half_angle_deg=math.degrees(beta))
+    asm = Assembly(
+        spec=spec,
+        parts=parts,
+        instances=instances,
+        panel_layouts=layouts,
+        taper_half_angle_deg=math.degrees(beta),
+    )
     asm._source = source
     return asm
 
 
-def _add_panels(spec: TailSpec, layouts: list[PanelLayout], part: Callable[..., PartDef],
-                say: Progress, parts: dict[str, PartDef], instances: list[Instance]) -> None:
+def _add_panels(
+    spec: TailSpec,
+    layouts: list[PanelLayout],
+    part: Callable[..., PartDef],
+    say: Progress,
+    parts: dict[str, PartDef],
+    instances: list[Instance],
+) -> None:
     """One part per distinct panel (panels alike share it) and every panel's instance."""
     J = spec.joints_per_segment
 
@@ -277,47 +314,99 @@ def _add_panels(spec: TailSpec, layouts: list[PanelLayout], part: Callable[..., 
             say(f"panel {lay.name} ({lay.kind})")
             by_key[key] = lay.name
             parts[lay.name] = part(
-                name=lay.name, kind="panel", material=spec.use.panel, process="MJF",
-                solid=lambda lay=lay: panel(lay), print_transform=_as_tuple(_print_transform_panel(lay)),
-                info={"panel_kind": lay.kind, "thickness_mm": lay.thickness_mm,
-                      "pocket_depth_mm": lay.pocket_depth_mm,
-                      "pocket_faces": [f for f, on in (("lower", lay.lower_pockets),
-                                                       ("upper", lay.upper_pockets)) if on],
-                      "pitch_radius_lower_mm": lay.pitch_radius_lower_mm,
-                      "pitch_radius_upper_mm": lay.pitch_radius_upper_mm,
-                      "pocket_diameter_mm": lay.cuts[0].diameter_mm,
-                      "rod_socket": spec.vertebra.socket,
-                      "rod_bore_mm": rod_bore_mm(spec),
-                      "rod_thread": (f"M{spec.vertebra.diameter_mm:g}x{metric(spec.vertebra.diameter_mm).pitch_mm:g}, "
-                                     "tap after printing" if spec.vertebra.socket == "threaded" else None)},
+                name=lay.name,
+                kind="panel",
+                material=spec.use.panel,
+                process="MJF",
+                solid=lambda lay=lay: panel(lay),
+                print_transform=_as_tuple(_print_transform_panel(lay)),
+                info={
+                    "panel_kind": lay.kind,
+                    "thickness_mm": lay.thickness_mm,
+                    "pocket_depth_mm": lay.pocket_depth_mm,
+                    "pocket_faces": [
+                        f
+                        for f, on in (("lower", lay.lower_pockets), ("upper", lay.upper_pockets))
+                        if on
+                    ],
+                    "pitch_radius_lower_mm": lay.pitch_radius_lower_mm,
+                    "pitch_radius_upper_mm": lay.pitch_radius_upper_mm,
+                    "pocket_diameter_mm": lay.cuts[0].diameter_mm,
+                    "rod_socket": spec.vertebra.socket,
+                    "rod_bore_mm": rod_bore_mm(spec),
+                    "rod_thread": (
+                        f"M{spec.vertebra.diameter_mm:g}"
+                        f"x{metric(spec.vertebra.diameter_mm).pitch_mm:g}, "
+                        "tap after printing"
+                        if spec.vertebra.socket == "threaded"
+                        else None
+                    ),
+                },
             )
         segs = segments_of_panel(lay.index)
-        instances.append(Instance(lay.name, by_key[key], _as_tuple(translation(z=lay.z0_mm)), "panel",
-                                  segs[0] if len(segs) == 1 else None, segs, panel=lay.index))
+        instances.append(
+            Instance(
+                lay.name,
+                by_key[key],
+                _as_tuple(translation(z=lay.z0_mm)),
+                "panel",
+                segs[0] if len(segs) == 1 else None,
+                segs,
+                panel=lay.index,
+            )
+        )
 
 
-def _add_soas(spec: TailSpec, layouts: list[PanelLayout], part: Callable[..., PartDef],
-              say: Progress, parts: dict[str, PartDef], instances: list[Instance]) -> None:
+def _add_soas(
+    spec: TailSpec,
+    layouts: list[PanelLayout],
+    part: Callable[..., PartDef],
+    say: Progress,
+    parts: dict[str, PartDef],
+    instances: list[Instance],
+) -> None:
     """The one SOA part and its five instances in every joint, seated between the joint's panels."""
     say("SOA body")
     parts["soa"] = part(
-        name="soa", kind="soa", material=spec.use.soa, process="cast",
-        solid=lambda: soa_body(spec.soa, spec.joint.base_diameter_mm), print_transform=_as_tuple(np.eye(4)),
-        info={"height_mm": spec.soa.built_height_mm, "fold_residual_mm":
-              spec.soa.built_origami_height_mm - spec.soa.origami_height_mm},
+        name="soa",
+        kind="soa",
+        material=spec.use.soa,
+        process="cast",
+        solid=lambda: soa_body(spec.soa, spec.joint.base_diameter_mm),
+        print_transform=_as_tuple(np.eye(4)),
+        info={
+            "height_mm": spec.soa.built_height_mm,
+            "fold_residual_mm": spec.soa.built_origami_height_mm - spec.soa.origami_height_mm,
+        },
     )
     rot = spec.soa.rotation_deg
     for k in range(1, spec.panels):
         lo, hi = layouts[k - 1], layouts[k]
         s = (k - 1) // spec.joints_per_segment + 1
         for i, a in enumerate(soa_angles_deg(), start=1):
-            instances.append(Instance(f"j{k}_soa{i}", "soa", _as_tuple(soa_frame(lo, hi, a, rot)), "soa", s, (s,),
-                                      joint=k, soa_index=i, pressure_line=i))
+            instances.append(
+                Instance(
+                    f"j{k}_soa{i}",
+                    "soa",
+                    _as_tuple(soa_frame(lo, hi, a, rot)),
+                    "soa",
+                    s,
+                    (s,),
+                    joint=k,
+                    soa_index=i,
+                    pressure_line=i,
+                )
+            )
 
 
-def _add_rods(spec: TailSpec, part: Callable[..., PartDef], parts: dict[str, PartDef],
-              instances: list[Instance]) -> None:
-    """One rod part per distinct cut length and each segment's rod (none where the vertebra has no rod)."""
+def _add_rods(
+    spec: TailSpec,
+    part: Callable[..., PartDef],
+    parts: dict[str, PartDef],
+    instances: list[Instance],
+) -> None:
+    """One rod part per distinct cut length and each segment's rod (none where the vertebra has no
+    rod)."""
     rods: dict[float, str] = {}
     for s in range(1, spec.segments + 1 if spec.vertebra.has_rod else 1):  # "none": sockets, no rod
         z0, z1 = rod_span_mm(spec, s)
@@ -326,11 +415,17 @@ def _add_rods(spec: TailSpec, part: Callable[..., PartDef], parts: dict[str, Par
             name = f"rod_s{s}"
             rods[length] = name
             parts[name] = part(
-                name=name, kind="rod", material=spec.vertebra.material, process="cut",
-                solid=lambda length=length: rod(spec.vertebra.diameter_mm, length), print_transform=_as_tuple(np.eye(4)),
+                name=name,
+                kind="rod",
+                material=spec.vertebra.material,
+                process="cut",
+                solid=lambda length=length: rod(spec.vertebra.diameter_mm, length),
+                print_transform=_as_tuple(np.eye(4)),
                 info={"cut_length_mm": length, "diameter_mm": spec.vertebra.diameter_mm},
             )
-        instances.append(Instance(f"rod_s{s}", rods[length], _as_tuple(translation(z=z0)), "rod", s, (s,)))
+        instances.append(
+            Instance(f"rod_s{s}", rods[length], _as_tuple(translation(z=z0)), "rod", s, (s,))
+        )
 
 
 def instance_solid(asm: Assembly, inst: Instance) -> bd.Solid:

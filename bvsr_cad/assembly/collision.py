@@ -28,7 +28,6 @@ mesh (the exporters write its convex hull) instead of its cylinder.
 from __future__ import annotations
 
 import weakref
-
 from dataclasses import dataclass
 
 import build123d as bd
@@ -36,8 +35,7 @@ import numpy as np
 from scipy.spatial import ConvexHull
 
 from .. import units
-from ..parts._kernel import bounds, location
-from ..parts._kernel import mesh_arrays
+from ..parts._kernel import bounds, location, mesh_arrays
 from ..parts.vertebra import rod
 from .build import Assembly
 
@@ -81,12 +79,12 @@ class CylinderFit:
         return self.z1_mm - self.z0_mm
 
     def volume_mm3(self) -> float:
-        return float(np.pi * self.radius_mm ** 2 * self.length_mm)
+        return float(np.pi * self.radius_mm**2 * self.length_mm)
 
 
 #: piece -> {T_axis_mm bytes: its fit}: a robot model per spec of one geometry (the calibration's
 #: predictions, the workspace protocol) fits each part once.
-_FITS: "weakref.WeakKeyDictionary[bd.Shape, dict[bytes, CylinderFit]]" = weakref.WeakKeyDictionary()
+_FITS: weakref.WeakKeyDictionary[bd.Shape, dict[bytes, CylinderFit]] = weakref.WeakKeyDictionary()
 
 
 def fit_cylinder(piece: bd.Shape, T_axis_mm: np.ndarray) -> CylinderFit:
@@ -104,29 +102,39 @@ FITTED_KINDS = ("panel", "soa")
 
 
 def part_fits(asm: Assembly) -> dict[str, CylinderFit]:
-    """Part name -> the fit about its own axis that :func:`panel_collisions` made of its solid (those it
-    made: call it first). What a build keeps in its cache beside the robot's meshes."""
+    """Part name -> the fit about its own axis that :func:`panel_collisions` made of its solid
+    (those it made: call it first). What a build keeps in its cache beside the robot's meshes."""
     key = np.eye(4).tobytes()
-    return {name: _FITS[part.solid][key] for name, part in asm.parts.items()
-            if part.kind in FITTED_KINDS and key in _FITS.get(part.solid, {})}
+    return {
+        name: _FITS[part.solid][key]
+        for name, part in asm.parts.items()
+        if part.kind in FITTED_KINDS and key in _FITS.get(part.solid, {})
+    }
 
 
 def remember_fits(asm: Assembly, fits: dict[str, CylinderFit]) -> None:
-    """Give ``asm``'s part solids the fits :func:`part_fits` took from a build of the same geometry: the
-    collision shapes are then made without meshing a part."""
+    """Give ``asm``'s part solids the fits :func:`part_fits` took from a build of the same geometry:
+    the collision shapes are then made without meshing a part."""
     key = np.eye(4).tobytes()
     for name, fit in fits.items():
         _FITS.setdefault(asm.parts[name].solid, {})[key] = fit
 
 
 def _fit_cylinder(piece: bd.Shape, T: np.ndarray) -> CylinderFit:
-    # An absolute deflection: the part's print STL triangulation (the same tolerances), whichever stages
-    # ran before (build123d's bounding_box clears a triangulation; OCCT makes the same one again).
+    # An absolute deflection: the part's print STL triangulation (the same tolerances), whichever
+    # stages ran before (build123d's bounding_box clears a triangulation; OCCT makes the same one
+    # again).
     p, _ = mesh_arrays(piece, FIT_TOLERANCE_MM, _ANGULAR_TOLERANCE, relative=False)
     local = (p - T[:3, 3]) @ T[:3, :3]
     r = float(np.max(np.hypot(local[:, 0], local[:, 1])))
-    return CylinderFit(r + FIT_TOLERANCE_MM, float(local[:, 2].min()) - FIT_TOLERANCE_MM,
-                       float(local[:, 2].max()) + FIT_TOLERANCE_MM, T, r, float(ConvexHull(p).volume))
+    return CylinderFit(
+        r + FIT_TOLERANCE_MM,
+        float(local[:, 2].min()) - FIT_TOLERANCE_MM,
+        float(local[:, 2].max()) + FIT_TOLERANCE_MM,
+        T,
+        r,
+        float(ConvexHull(p).volume),
+    )
 
 
 def cylinder_solid(c: Collision) -> bd.Shape:
@@ -135,7 +143,8 @@ def cylinder_solid(c: Collision) -> bd.Shape:
     T = np.array(c.T_link_geom, float)
     T[:3, 3] = units.m_to_mm(T[:3, 3])
     return bd.Solid.make_cylinder(units.m_to_mm(c.radius_m), length).moved(
-        location(T @ _translation_mm(-length / 2)))
+        location(T @ _translation_mm(-length / 2))
+    )
 
 
 def slab(solid: bd.Shape, z0_mm: float, z1_mm: float) -> bd.Shape:
@@ -154,24 +163,36 @@ def _translation_mm(z: float) -> np.ndarray:
     return T
 
 
-def _cylinder(name: str, covers: str, fit: CylinderFit, T_link_axis_mm: np.ndarray, z0_mm: float,
-              z1_mm: float) -> Collision:
+def _cylinder(
+    name: str, covers: str, fit: CylinderFit, T_link_axis_mm: np.ndarray, z0_mm: float, z1_mm: float
+) -> Collision:
     """The cylinder of ``fit``'s radius between z0 and z1 along an axis placed in the link frame."""
-    return Collision(name, "cylinder", covers, units.mm_to_m(fit.radius_mm), units.mm_to_m(z1_mm - z0_mm),
-                     _si(T_link_axis_mm @ _translation_mm((z0_mm + z1_mm) / 2)), None,
-                     fit.radius_mm - fit.max_radius_mm, fit.volume_mm3() / fit.hull_volume_mm3)
+    return Collision(
+        name,
+        "cylinder",
+        covers,
+        units.mm_to_m(fit.radius_mm),
+        units.mm_to_m(z1_mm - z0_mm),
+        _si(T_link_axis_mm @ _translation_mm((z0_mm + z1_mm) / 2)),
+        None,
+        fit.radius_mm - fit.max_radius_mm,
+        fit.volume_mm3() / fit.hull_volume_mm3,
+    )
 
 
 def _mesh(name: str, covers: str, solid: bd.Shape) -> Collision:
     return Collision(name, "mesh", covers, 0.0, 0.0, _si(np.eye(4)), solid)
 
 
-def panel_collisions(asm: Assembly, rod_in_gap: dict[int, list[tuple[float, float]]],
-                     geometry: str = "primitives") -> dict[int, list[Collision]]:
+def panel_collisions(
+    asm: Assembly, rod_in_gap: dict[int, list[tuple[float, float]]], geometry: str = "primitives"
+) -> dict[int, list[Collision]]:
     """Per panel index, its link's collision shapes (see the module docstring); ``rod_in_gap``:
     the tail-frame z ranges of rod in each gap."""
     if geometry not in COLLISION_GEOMETRIES:
-        raise ValueError(f"robot.collision_geometry = {geometry!r}: allowed {', '.join(COLLISION_GEOMETRIES)}")
+        raise ValueError(
+            f"robot.collision_geometry = {geometry!r}: allowed {', '.join(COLLISION_GEOMETRIES)}"
+        )
     convex = geometry == "convex"
     spec = asm.spec
     t = spec.joint.panel_thickness_mm
@@ -179,11 +200,14 @@ def panel_collisions(asm: Assembly, rod_in_gap: dict[int, list[tuple[float, floa
     for lay in asm.panel_layouts:
         solid = asm.part_of(asm.panel(lay.index)).solid
         fit = fit_cylinder(solid, np.eye(4))
-        out[lay.index] = [_mesh(f"panel{lay.index}", "panel", solid) if convex else
-                          _cylinder(f"panel{lay.index}", "panel", fit, np.eye(4), fit.z0_mm, fit.z1_mm)]
+        out[lay.index] = [
+            _mesh(f"panel{lay.index}", "panel", solid)
+            if convex
+            else _cylinder(f"panel{lay.index}", "panel", fit, np.eye(4), fit.z0_mm, fit.z1_mm)
+        ]
     soa_fits: dict[str, CylinderFit] = {}
     r_rod = spec.vertebra.diameter_mm / 2
-    rod_fit = CylinderFit(r_rod, 0.0, 1.0, np.eye(4), r_rod, np.pi * r_rod ** 2)
+    rod_fit = CylinderFit(r_rod, 0.0, 1.0, np.eye(4), r_rod, np.pi * r_rod**2)
     for k in range(1, spec.panels):
         lo, hi = asm.panel_layouts[k - 1], asm.panel_layouts[k]
         g0, g1 = lo.z0_mm + t, hi.z0_mm
@@ -191,21 +215,39 @@ def panel_collisions(asm: Assembly, rod_in_gap: dict[int, list[tuple[float, floa
         halves = ((k - 1, lo.z0_mm, g0, mid, "lower"), (k, hi.z0_mm, mid, g1, "upper"))
         for inst in asm.soas_of_joint(k):
             part = asm.part_of(inst)
-            fit = soa_fits.get(part.name) or soa_fits.setdefault(part.name, fit_cylinder(part.solid, np.eye(4)))
+            fit = soa_fits.get(part.name) or soa_fits.setdefault(
+                part.name, fit_cylinder(part.solid, np.eye(4))
+            )
             T_tail = np.asarray(inst.transform)
             d = T_tail[:3, 2]
-            # Along the SOA's axis, a plane z = c of the tail cuts the column within +-r tan(tilt) of the axis.
+            # Along the SOA's axis, a plane z = c of the tail cuts the column within +-r tan(tilt)
+            # of the axis.
             overhang = fit.radius_mm * float(np.hypot(d[0], d[1]) / d[2])
             for panel, z_panel, a, b, which in halves:
                 name = f"{inst.name}_{which}"
                 T_link = _translation_mm(-z_panel) @ T_tail
                 if convex:
-                    out[panel].append(_mesh(name, "soa", slab(part.solid.moved(location(T_tail)), a, b)
-                                            .moved(bd.Location((0, 0, -z_panel)))))
+                    out[panel].append(
+                        _mesh(
+                            name,
+                            "soa",
+                            slab(part.solid.moved(location(T_tail)), a, b).moved(
+                                bd.Location((0, 0, -z_panel))
+                            ),
+                        )
+                    )
                     continue
                 s0, s1 = ((c - T_tail[2, 3]) / d[2] for c in (a, b))
-                out[panel].append(_cylinder(name, "soa", fit, T_link, max(fit.z0_mm, s0 - overhang),
-                                            min(fit.z1_mm, s1 + overhang)))
+                out[panel].append(
+                    _cylinder(
+                        name,
+                        "soa",
+                        fit,
+                        T_link,
+                        max(fit.z0_mm, s0 - overhang),
+                        min(fit.z1_mm, s1 + overhang),
+                    )
+                )
         for n, (z0, z1) in enumerate(rod_in_gap.get(k, [])):
             for panel, z_panel, a, b, which in halves:
                 lo_z, hi_z = max(z0, a), min(z1, b)
@@ -213,10 +255,17 @@ def panel_collisions(asm: Assembly, rod_in_gap: dict[int, list[tuple[float, floa
                     continue
                 name = f"j{k}_rod{n}_{which}"
                 if convex:
-                    out[panel].append(_mesh(name, "rod", rod(2 * r_rod, hi_z - lo_z)
-                                            .moved(bd.Location((0, 0, lo_z - z_panel)))))
+                    out[panel].append(
+                        _mesh(
+                            name,
+                            "rod",
+                            rod(2 * r_rod, hi_z - lo_z).moved(bd.Location((0, 0, lo_z - z_panel))),
+                        )
+                    )
                 else:
-                    out[panel].append(_cylinder(name, "rod", rod_fit, np.eye(4), lo_z - z_panel, hi_z - z_panel))
+                    out[panel].append(
+                        _cylinder(name, "rod", rod_fit, np.eye(4), lo_z - z_panel, hi_z - z_panel)
+                    )
     return out
 
 
@@ -231,8 +280,15 @@ def margins(collisions: dict[int, list[Collision]]) -> dict[str, dict[str, float
     volume over their B-rep's convex hull (an SOA's: the whole part's), for the manifest."""
     out: dict[str, dict[str, float]] = {}
     for c in (c for cs in collisions.values() for c in cs):
-        row = out.setdefault(c.covers, {"count": 0, "radial_margin_mm_max": 0.0, "volume_ratio_min": np.inf,
-                                        "volume_ratio_max": 0.0})
+        row = out.setdefault(
+            c.covers,
+            {
+                "count": 0,
+                "radial_margin_mm_max": 0.0,
+                "volume_ratio_min": np.inf,
+                "volume_ratio_max": 0.0,
+            },
+        )
         row["count"] += 1
         row["radial_margin_mm_max"] = max(row["radial_margin_mm_max"], c.radial_margin_mm)
         row["volume_ratio_min"] = float(min(row["volume_ratio_min"], c.volume_ratio))

@@ -34,23 +34,57 @@ class MadeItem:
     mass_each_g: float
 
 
-def made_items(asm: Assembly, pieces: Sequence[RigidPiece] = (), mold_set: MoldSet | None = None) -> list[MadeItem]:
+def made_items(
+    asm: Assembly, pieces: Sequence[RigidPiece] = (), mold_set: MoldSet | None = None
+) -> list[MadeItem]:
     spec = asm.spec
     fp = spec.fabrication_package
     items = []
     for name, part in asm.parts.items():
-        items.append(MadeItem("BVSR", name, name, part.kind, part.material, part.process,
-                              len(asm.instances_of(name)), part.solid.volume, asm.mass_g(name)))
+        items.append(
+            MadeItem(
+                "BVSR",
+                name,
+                name,
+                part.kind,
+                part.material,
+                part.process,
+                len(asm.instances_of(name)),
+                part.solid.volume,
+                asm.mass_g(name),
+            )
+        )
     rigid_density = spec.material(RIGID_MATERIAL).density_g_cm3
     for p in pieces:
-        items.append(MadeItem("rigid tail", p.name, p.name, "rigid_tail", RIGID_MATERIAL, "FDM", 1, p.volume_mm3,
-                              units.mass_g(p.volume_mm3, rigid_density)))
+        items.append(
+            MadeItem(
+                "rigid tail",
+                p.name,
+                p.name,
+                "rigid_tail",
+                RIGID_MATERIAL,
+                "FDM",
+                1,
+                p.volume_mm3,
+                units.mass_g(p.volume_mm3, rigid_density),
+            )
+        )
     soa_casts = sum(i.quantity for i in items if i.kind == "soa")
-    for name, mp in (mold_set.parts.items() if mold_set is not None else ()):
+    for name, mp in mold_set.parts.items() if mold_set is not None else ():
         material = fp.core_material if mp.sacrificial else fp.mold_material
-        items.append(MadeItem("molds", f"mold_{name}", name, "mold_core" if mp.sacrificial else "mold", material,
-                              "FDM", soa_casts if mp.sacrificial else fp.mold_sets, mp.solid.volume,
-                              units.mass_g(mp.solid.volume, spec.material(material).density_g_cm3)))
+        items.append(
+            MadeItem(
+                "molds",
+                f"mold_{name}",
+                name,
+                "mold_core" if mp.sacrificial else "mold",
+                material,
+                "FDM",
+                soa_casts if mp.sacrificial else fp.mold_sets,
+                mp.solid.volume,
+                units.mass_g(mp.solid.volume, spec.material(material).density_g_cm3),
+            )
+        )
     return items
 
 

@@ -30,21 +30,24 @@ class Inertial:
     def inertia(self) -> np.ndarray:
         return np.asarray(self.inertia_kg_m2, float)
 
-    def transformed(self, T_frame_self: np.ndarray) -> "Inertial":
+    def transformed(self, T_frame_self: np.ndarray) -> Inertial:
         """The same body expressed in another frame (T maps self-frame points there, metres)."""
         T = np.asarray(T_frame_self, float)
         R, p = T[:3, :3], T[:3, 3]
         return Inertial.make(self.mass_kg, R @ self.com + p, R @ self.inertia @ R.T)
 
     @staticmethod
-    def make(mass_kg: float, com_m, inertia_kg_m2) -> "Inertial":
+    def make(mass_kg: float, com_m, inertia_kg_m2) -> Inertial:
         I = np.asarray(inertia_kg_m2, float)
         I = (I + I.T) / 2.0
-        return Inertial(float(mass_kg), tuple(float(v) for v in com_m),
-                        tuple(tuple(float(v) for v in row) for row in I))
+        return Inertial(
+            float(mass_kg),
+            tuple(float(v) for v in com_m),
+            tuple(tuple(float(v) for v in row) for row in I),
+        )
 
     @staticmethod
-    def point(mass_kg: float, inertia_kg_m2: float) -> "Inertial":
+    def point(mass_kg: float, inertia_kg_m2: float) -> Inertial:
         """A tiny valid inertial at the frame origin (virtual links)."""
         return Inertial.make(mass_kg, (0.0, 0.0, 0.0), np.eye(3) * inertia_kg_m2)
 
@@ -82,22 +85,29 @@ class SolidProperties:
     inertia_mm5: np.ndarray  # (3, 3) about the centre of mass, unit density
 
     @classmethod
-    def of(cls, solid) -> "SolidProperties":
-        """One integration of the B-rep (OCCT's ``BRepGProp::VolumeProperties``) for all three: build123d's
-        ``volume``, ``center(CenterOf.MASS)`` and ``matrix_of_inertia`` each run that same call, so the
-        values are theirs to the bit, from one integration instead of three."""
+    def of(cls, solid) -> SolidProperties:
+        """One integration of the B-rep (OCCT's ``BRepGProp::VolumeProperties``) for all three:
+        build123d's ``volume``, ``center(CenterOf.MASS)`` and ``matrix_of_inertia`` each run that
+        same call, so the values are theirs to the bit, from one integration instead of three."""
         from OCP.BRepGProp import BRepGProp
         from OCP.GProp import GProp_GProps
 
         props = GProp_GProps()
         BRepGProp.VolumeProperties_s(solid.wrapped, props)
         com, inertia = props.CentreOfMass(), props.MatrixOfInertia()
-        return cls(props.Mass(), np.array((com.X(), com.Y(), com.Z())),
-                   np.array([[inertia.Value(i + 1, j + 1) for j in range(3)] for i in range(3)], float))
+        return cls(
+            props.Mass(),
+            np.array((com.X(), com.Y(), com.Z())),
+            np.array([[inertia.Value(i + 1, j + 1) for j in range(3)] for i in range(3)], float),
+        )
 
 
-def from_solid(solid, density_g_cm3: float, T_frame_part_mm: np.ndarray | None = None,
-               props: SolidProperties | None = None) -> Inertial:
+def from_solid(
+    solid,
+    density_g_cm3: float,
+    T_frame_part_mm: np.ndarray | None = None,
+    props: SolidProperties | None = None,
+) -> Inertial:
     """Exact B-rep mass properties of a build123d solid (mm) at a density, in SI.
 
     ``T_frame_part_mm`` places the solid's own frame in the target frame (mm); ``props``: the
@@ -108,8 +118,11 @@ def from_solid(solid, density_g_cm3: float, T_frame_part_mm: np.ndarray | None =
     density_g_mm3 = density_g_cm3 / units.MM3_PER_CM3
     com_mm = props.com_mm
     I_g_mm2 = props.inertia_mm5 * density_g_mm3
-    own = Inertial.make(units.g_to_kg(vol_mm3 * density_g_mm3), com_mm / units.MM_PER_M,
-                        units.g_mm2_to_kg_m2(I_g_mm2))
+    own = Inertial.make(
+        units.g_to_kg(vol_mm3 * density_g_mm3),
+        com_mm / units.MM_PER_M,
+        units.g_mm2_to_kg_m2(I_g_mm2),
+    )
     if T_frame_part_mm is None:
         return own
     T = np.asarray(T_frame_part_mm, float).copy()

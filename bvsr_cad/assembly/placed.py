@@ -1,4 +1,5 @@
-"""Named, coloured shapes placed in the tail frame: where a part's solid meets its instance transform.
+"""Named, coloured shapes placed in the tail frame: where a part's solid meets its instance
+transform.
 
 The STEP writer (:func:`bvsr_cad.exporters.cad.write_assembly_step`) and the
 Python API (:mod:`bvsr_cad.api`) both place the instances through this module,
@@ -49,8 +50,12 @@ class PlacedShape:
         """
         if self.shape.children:
             if not np.allclose(self.transform, IDENTITY):
-                raise ValueError(f"{self.name}: a compound of pieces must already be in the tail frame")
-            out = bd.Compound(children=[_wrapper(c, c.label, self.rgb) for c in self.shape.children])
+                raise ValueError(
+                    f"{self.name}: a compound of pieces must already be in the tail frame"
+                )
+            out = bd.Compound(
+                children=[_wrapper(c, c.label, self.rgb) for c in self.shape.children]
+            )
         else:
             out = bd.Shape.cast(self.shape.wrapped).moved(location(self.transform))
         out.label = self.name

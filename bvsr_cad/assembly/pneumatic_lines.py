@@ -1,4 +1,5 @@
-"""The pressure lines as built: tube routes and lengths, the SOAs' air space, and the supply model of a pulse.
+"""The pressure lines as built: tube routes and lengths, the SOAs' air space, and the supply model
+of a pulse.
 
 The BOM cuts its tubes from :func:`line_tube_lengths_mm`; the dynamics
 (:mod:`bvsr_cad.models.pneumatics`) fill the same tubes and the SOA cavity of
@@ -46,7 +47,9 @@ def tube_routes_mm(asm: Assembly) -> dict[str, float]:
                     elif c.name == f"tube_port_s{s}_{i}":
                         pts.append((c.p1[0], c.p1[1], lay.z0_mm + c.p1[2]))
             p = np.asarray(pts, float)
-            routes[line] = float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) > 1 else 0.0
+            routes[line] = (
+                float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) > 1 else 0.0
+            )
     return routes
 
 
@@ -54,8 +57,10 @@ def line_tube_lengths_mm(asm: Assembly) -> dict[str, float]:
     """Tube cut length per line (mm, to 0.1 mm): the route inside the tail with its bending
     allowance, plus the lead from the root to the valves."""
     fp = asm.spec.fabrication_package
-    return {line: round(inside * (1.0 + fp.tube_bend_allowance) + fp.tube_lead_mm, 1)
-            for line, inside in tube_routes_mm(asm).items()}
+    return {
+        line: round(inside * (1.0 + fp.tube_bend_allowance) + fp.tube_lead_mm, 1)
+        for line, inside in tube_routes_mm(asm).items()
+    }
 
 
 def soa_air_volume_mm3(asm: Assembly) -> float:
@@ -69,8 +74,13 @@ def _soa_air_volume_mm3(soa, base_diameter_mm: float) -> float:
     return float(soa_interior(soa, base_diameter_mm, beyond_ends_mm=0.0).volume)
 
 
-def line_supply(asm: Assembly, segment: int, places: tuple[int, ...], source_gauge_pa: float,
-                spec: TailSpec | None = None) -> LineSupply:
+def line_supply(
+    asm: Assembly,
+    segment: int,
+    places: tuple[int, ...],
+    source_gauge_pa: float,
+    spec: TailSpec | None = None,
+) -> LineSupply:
     """The supply of a pulse on ``places`` (1-based SOA places = the segment's line numbers): each
     line fills its SOAs (one per joint of ``segment``) through its own valve from a source at
     ``source_gauge_pa``; the other lines stay open to the atmosphere. ``spec`` (default the
@@ -80,15 +90,23 @@ def line_supply(asm: Assembly, segment: int, places: tuple[int, ...], source_gau
     atm = units.kpa_to_pa(spec.actuation.atmospheric_kpa)
     lengths = line_tube_lengths_mm(asm)
     bore_m = units.mm_to_m(spec.tubes.inner_diameter_mm)
-    tube = [math.pi * bore_m ** 2 / 4 * units.mm_to_m(lengths[f"s{segment}_line{i}"]) for i in places]
+    tube = [math.pi * bore_m**2 / 4 * units.mm_to_m(lengths[f"s{segment}_line{i}"]) for i in places]
     index = {p: n for n, p in enumerate(places)}
     return LineSupply(
-        valve=Valve.from_catalogue(spec.fitted("valve_sonic_conductance_l_s_bar", pn.valve_sonic_conductance_l_s_bar),
-                                   pn.valve_critical_pressure_ratio),
-        source_pa_abs=atm + source_gauge_pa, atmospheric_pa=atm, tube_volume_m3=tuple(tube),
-        soa_volume_m3=units.mm3_to_m3(soa_air_volume_mm3(asm)), soa_area_m2=soa_force_law(spec).area_m2,
-        soas_per_line=spec.joints_per_segment, lines=tuple(index.get(i, -1) for i in range(1, N_SOA + 1)),
-        polytropic_index=pn.polytropic_index, temperature_k=pn.air_temperature_k)
+        valve=Valve.from_catalogue(
+            spec.fitted("valve_sonic_conductance_l_s_bar", pn.valve_sonic_conductance_l_s_bar),
+            pn.valve_critical_pressure_ratio,
+        ),
+        source_pa_abs=atm + source_gauge_pa,
+        atmospheric_pa=atm,
+        tube_volume_m3=tuple(tube),
+        soa_volume_m3=units.mm3_to_m3(soa_air_volume_mm3(asm)),
+        soa_area_m2=soa_force_law(spec).area_m2,
+        soas_per_line=spec.joints_per_segment,
+        lines=tuple(index.get(i, -1) for i in range(1, N_SOA + 1)),
+        polytropic_index=pn.polytropic_index,
+        temperature_k=pn.air_temperature_k,
+    )
 
 
 __all__ = ["tube_routes_mm", "line_tube_lengths_mm", "soa_air_volume_mm3", "line_supply"]

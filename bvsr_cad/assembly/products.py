@@ -40,7 +40,10 @@ def build_mold_set(asm: Assembly) -> MoldSet:
 
 def build_rigid_twin(asm: Assembly) -> list[RigidPiece]:
     """The rigid twin's pieces (print frames), one per joint and the tip panel."""
-    soa_transforms = {k: [np.asarray(i.transform) for i in asm.soas_of_joint(k)] for k in range(1, asm.spec.panels)}
+    soa_transforms = {
+        k: [np.asarray(i.transform) for i in asm.soas_of_joint(k)]
+        for k in range(1, asm.spec.panels)
+    }
     return rigid_tail_pieces(asm.spec, asm.panel_layouts, soa_transforms)
 
 
@@ -53,7 +56,8 @@ def piece_transform_mm(piece: RigidPiece) -> np.ndarray:
 
 @dataclass(frozen=True)
 class RigidRobot:
-    """The twin as one rigid body fixed to the mount (SI), with its solids in the tail frame (mm)."""
+    """The twin as one rigid body fixed to the mount (SI), with its solids in the tail frame
+    (mm)."""
 
     name: str
     material: str
@@ -62,11 +66,17 @@ class RigidRobot:
     timestep_s: float
 
 
-def rigid_robot_model(asm: Assembly, pieces: list[RigidPiece], props: list[SolidProperties] | None = None
-                      ) -> RigidRobot:
-    """``props``: the pieces' B-rep properties when already measured (:meth:`SolidProperties.of`)."""
+def rigid_robot_model(
+    asm: Assembly, pieces: list[RigidPiece], props: list[SolidProperties] | None = None
+) -> RigidRobot:
+    """``props``: the pieces' B-rep properties when already measured
+    (:meth:`SolidProperties.of`)."""
     density = asm.spec.material(RIGID_MATERIAL).density_g_cm3
     props = props if props is not None else [SolidProperties.of(p.solid) for p in pieces]
-    inertial = compose(from_solid(p.solid, density, piece_transform_mm(p), q) for p, q in zip(pieces, props))
+    inertial = compose(
+        from_solid(p.solid, density, piece_transform_mm(p), q) for p, q in zip(pieces, props)
+    )
     solids = tuple(p.solid.moved(location(piece_transform_mm(p))) for p in pieces)
-    return RigidRobot(f"{asm.spec.name}_rigid", RIGID_MATERIAL, inertial, solids, asm.spec.robot.timestep_s)
+    return RigidRobot(
+        f"{asm.spec.name}_rigid", RIGID_MATERIAL, inertial, solids, asm.spec.robot.timestep_s
+    )

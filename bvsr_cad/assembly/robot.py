@@ -27,14 +27,14 @@ import build123d as bd
 import numpy as np
 
 from .. import units
+from ..colors import rgba
 from ..models.actuator import SoaForceLaw, soa_force_law
 from ..models.dynamics import ramp_pa
-from ..models.pneumatics import first_order_time_constant_s
 from ..models.kinematics import chord_length_mm
+from ..models.pneumatics import first_order_time_constant_s
 from ..models.rod import rod_section
 from ..parameters.layout import N_SOA
 from ..parameters.tables import TailSpec
-from ..colors import rgba
 from ..parts.vertebra import rod
 from .build import Assembly, Instance, rod_span_mm
 from .collision import Collision, panel_collisions
@@ -45,14 +45,14 @@ VIRTUAL_MASS_KG = 1e-7  # 0.1 mg: valid for every simulator, negligible, and cou
 VIRTUAL_INERTIA_KG_M2 = 1e-12
 
 
-
 def chord_m(theta_rad, arc_length_m: float):
     """Chord of an arc of length L (m) bent by theta (models/kinematics, any length unit)."""
     return chord_length_mm(theta_rad, arc_length_m)
 
 
 def chord_joint_value(theta_rad, arc_length_m: float):
-    """Value of the ``jk_chord`` prismatic joint for a bending angle theta: chord - L (0 at rest)."""
+    """Value of the ``jk_chord`` prismatic joint for a bending angle theta: chord - L (0 at
+    rest)."""
     return chord_m(theta_rad, arc_length_m) - arc_length_m
 
 
@@ -85,7 +85,8 @@ class Link:
     inertial: Inertial
     visuals: list[Visual] = field(default_factory=list)
     collisions: list[Collision] = field(default_factory=list)
-    role: str = "rigid"  # rigid (a panel), deformable (half of a joint's SOAs and rod), virtual (massless frame)
+    # rigid (a panel), deformable (half of a joint's SOAs and rod), virtual (massless frame)
+    role: str = "rigid"
 
     @property
     def virtual(self) -> bool:
@@ -160,7 +161,8 @@ class ActuationSI:
 
 
 def actuation_si(spec: TailSpec) -> ActuationSI:
-    """The SOA law (models/actuator), the rod (models/rod) and the pressure range of ``spec`` in SI."""
+    """The SOA law (models/actuator), the rod (models/rod) and the pressure range of ``spec`` in
+    SI."""
     rod = rod_section(spec)
     L_mm = spec.joint.gap_mm
     return ActuationSI(
@@ -196,7 +198,9 @@ def _as_tuple(m: np.ndarray) -> tuple[tuple[float, ...], ...]:
     return tuple(tuple(float(v) for v in row) for row in np.asarray(m))
 
 
-def _rod_pieces(asm: Assembly) -> tuple[dict[int, list[tuple[float, float]]], dict[int, list[tuple[float, float]]]]:
+def _rod_pieces(
+    asm: Assembly,
+) -> tuple[dict[int, list[tuple[float, float]]], dict[int, list[tuple[float, float]]]]:
     """z ranges (tail frame, mm) of rod inside each panel and inside each gap."""
     spec = asm.spec
     in_panel: dict[int, list[tuple[float, float]]] = {k: [] for k in range(spec.panels)}
@@ -216,21 +220,29 @@ def _rod_pieces(asm: Assembly) -> tuple[dict[int, list[tuple[float, float]]], di
     return in_panel, in_gap
 
 
-def _rod_solid(ranges: list[tuple[float, float]], diameter_mm: float, z_frame_mm: float) -> bd.Shape | None:
-    pieces = [rod(diameter_mm, hi - lo).moved(bd.Location((0, 0, lo - z_frame_mm))) for lo, hi in ranges]
+def _rod_solid(
+    ranges: list[tuple[float, float]], diameter_mm: float, z_frame_mm: float
+) -> bd.Shape | None:
+    pieces = [
+        rod(diameter_mm, hi - lo).moved(bd.Location((0, 0, lo - z_frame_mm))) for lo, hi in ranges
+    ]
     if not pieces:
         return None
     return pieces[0] if len(pieces) == 1 else bd.Compound(pieces)
 
 
 def collision_shapes(asm: Assembly) -> dict[int, list[Collision]]:
-    """Per panel index, its link's collision shapes (``robot.collision_geometry``): geometry alone, so a
-    build makes them while its analyses (the joints' limits) are still running."""
+    """Per panel index, its link's collision shapes (``robot.collision_geometry``): geometry alone,
+    so a build makes them while its analyses (the joints' limits) are still running."""
     return panel_collisions(asm, _rod_pieces(asm)[1], asm.spec.robot.collision_geometry)
 
 
-def robot_model(asm: Assembly, theta_max_rad: list[float], collisions: bool = True,
-                shapes: dict[int, list[Collision]] | None = None) -> RobotModel:
+def robot_model(
+    asm: Assembly,
+    theta_max_rad: list[float],
+    collisions: bool = True,
+    shapes: dict[int, list[Collision]] | None = None,
+) -> RobotModel:
     """The robot model of the tail at rest, in SI.
 
     Args:
@@ -251,9 +263,13 @@ def robot_model(asm: Assembly, theta_max_rad: list[float], collisions: bool = Tr
     actuation = actuation_si(spec)
     push_n = N_SOA * float(actuation.law.force_n(actuation.pressure_max_pa, 0.0))
     effort_limit_nm = push_n * units.mm_to_m(spec.joint.pitch_diameter_mm / 2)
-    limits = _JointLimits(effort_limit_nm, push_n, velocity_limit(spec.robot.segment_velocity_deg_s,
-                                                                   spec.robot.velocity_margin,
-                                                                   spec.joints_per_segment))
+    limits = _JointLimits(
+        effort_limit_nm,
+        push_n,
+        velocity_limit(
+            spec.robot.segment_velocity_deg_s, spec.robot.velocity_margin, spec.joints_per_segment
+        ),
+    )
     in_panel, in_gap = _rod_pieces(asm)
     # Every collision shape rides on a panel (assembly/collision): exact at rest whatever the chain.
     if not collisions:
@@ -266,7 +282,9 @@ def robot_model(asm: Assembly, theta_max_rad: list[float], collisions: bool = Tr
     soas: list[SoaActuator] = []
     bending: list[BendingJoint] = []
     for k in range(1, spec.panels):
-        joint_links, joint_chain, bend = _bending_joint(asm, k, float(theta_max_rad[k - 1]), limits, in_gap[k])
+        joint_links, joint_chain, bend = _bending_joint(
+            asm, k, float(theta_max_rad[k - 1]), limits, in_gap[k]
+        )
         links.update(joint_links)
         joints += joint_chain
         bending.append(bend)
@@ -294,21 +312,33 @@ def _panel_links(asm: Assembly, in_panel, shapes: dict[int, list[Collision]]) ->
     for lay in asm.panel_layouts:
         name = f"panel{lay.index}"
         part = asm.part_of(asm.panel(lay.index))
-        visuals = [Visual(part.name, part.material, panel_mat.density_g_cm3, rgba("panel"), part.solid)]
-        inertials = [from_solid(part.solid, panel_mat.density_g_cm3, props=asm.solid_properties(part.name))]
+        visuals = [
+            Visual(part.name, part.material, panel_mat.density_g_cm3, rgba("panel"), part.solid)
+        ]
+        inertials = [
+            from_solid(part.solid, panel_mat.density_g_cm3, props=asm.solid_properties(part.name))
+        ]
         rod_piece = _rod_solid(in_panel[lay.index], spec.vertebra.diameter_mm, lay.z0_mm)
         if rod_piece is not None:
-            visuals.append(Visual(f"rod_in_{name}", spec.vertebra.material, rod_mat.density_g_cm3, rgba("rod"),
-                                  rod_piece))
+            visuals.append(
+                Visual(
+                    f"rod_in_{name}",
+                    spec.vertebra.material,
+                    rod_mat.density_g_cm3,
+                    rgba("rod"),
+                    rod_piece,
+                )
+            )
             inertials.append(from_solid(rod_piece, rod_mat.density_g_cm3))
         links[name] = Link(name, compose(inertials), visuals, shapes[lay.index])
     return links
 
 
-def _bending_joint(asm: Assembly, k: int, th: float, limits: _JointLimits,
-                   rod_in_gap) -> tuple[dict[str, Link], list[Joint], BendingJoint]:
-    """Joint k between panels k-1 and k: its four links (two virtual, the deformable body's two halves),
-    its five joints (phi, theta_a, chord, theta_b, phi_b) and its record."""
+def _bending_joint(
+    asm: Assembly, k: int, th: float, limits: _JointLimits, rod_in_gap
+) -> tuple[dict[str, Link], list[Joint], BendingJoint]:
+    """Joint k between panels k-1 and k: its four links (two virtual, the deformable body's two
+    halves), its five joints (phi, theta_a, chord, theta_b, phi_b) and its record."""
     spec = asm.spec
     j = f"j{k}"
     seg = (k - 1) // spec.joints_per_segment + 1
@@ -326,44 +356,115 @@ def _bending_joint(asm: Assembly, k: int, th: float, limits: _JointLimits,
     for inst in asm.soas_of_joint(k):
         T = T_start_inv @ np.asarray(inst.transform)
         soa_solids.append(asm.part_of(inst).solid.moved(_location(T)))
-        soa_inertials.append(from_solid(asm.part_of(inst).solid, soa_mat.density_g_cm3, T,
-                                        asm.solid_properties(inst.part)))
+        soa_inertials.append(
+            from_solid(
+                asm.part_of(inst).solid, soa_mat.density_g_cm3, T, asm.solid_properties(inst.part)
+            )
+        )
     rod_gap = _rod_solid(rod_in_gap, spec.vertebra.diameter_mm, z_start_mm)
     parts = list(soa_inertials)
-    visuals = [Visual(f"{j}_soas", spec.use.soa, soa_mat.density_g_cm3, rgba("soa"), bd.Compound(soa_solids))]
+    visuals = [
+        Visual(
+            f"{j}_soas", spec.use.soa, soa_mat.density_g_cm3, rgba("soa"), bd.Compound(soa_solids)
+        )
+    ]
     if rod_gap is not None:
         parts.append(from_solid(rod_gap, rod_mat.density_g_cm3))
-        visuals.append(Visual(f"{j}_rod", spec.vertebra.material, rod_mat.density_g_cm3, rgba("rod"), rod_gap))
+        visuals.append(
+            Visual(f"{j}_rod", spec.vertebra.material, rod_mat.density_g_cm3, rgba("rod"), rod_gap)
+        )
     half_a, half_b = split_deformable(compose(parts), L)
     names = (f"{j}_after_phi", f"{j}_after_theta_a", f"{j}_after_chord", f"{j}_after_theta_b")
-    links = {names[0]: Link(names[0], Inertial.point(VIRTUAL_MASS_KG, VIRTUAL_INERTIA_KG_M2), role="virtual"),
-             names[1]: Link(names[1], half_a, visuals, role="deformable"),
-             names[2]: Link(names[2], half_b, role="deformable"),
-             names[3]: Link(names[3], Inertial.point(VIRTUAL_MASS_KG, VIRTUAL_INERTIA_KG_M2), role="virtual")}
+    links = {
+        names[0]: Link(
+            names[0], Inertial.point(VIRTUAL_MASS_KG, VIRTUAL_INERTIA_KG_M2), role="virtual"
+        ),
+        names[1]: Link(names[1], half_a, visuals, role="deformable"),
+        names[2]: Link(names[2], half_b, role="deformable"),
+        names[3]: Link(
+            names[3], Inertial.point(VIRTUAL_MASS_KG, VIRTUAL_INERTIA_KG_M2), role="virtual"
+        ),
+    }
     half_lim = th / 2.0
     velocity_limit_rad_s, effort_limit_nm = limits.velocity_rad_s, limits.effort_nm
     v_half = velocity_limit_rad_s / 2.0
     chord_lo = float(chord_joint_value(th, L))
     joints = [
-        Joint(f"{j}_phi", "continuous", f"panel{k - 1}", names[0], _as_tuple(translation_m(z=t)), (0, 0, 1),
-              velocity=velocity_limit_rad_s * 4, effort=effort_limit_nm),
-        Joint(f"{j}_theta_a", "revolute", names[0], names[1], _as_tuple(np.eye(4)), (0, 1, 0),
-              -half_lim, half_lim, v_half, effort_limit_nm),
-        Joint(f"{j}_chord", "prismatic", names[1], names[2], _as_tuple(translation_m(z=L)), (0, 0, 1),
-              chord_lo - 1e-4, 1e-4, velocity_limit_rad_s * L, limits.chord_effort_n,
-              mimic=Mimic(f"{j}_theta_a", 0.0, 0.0)),
-        Joint(f"{j}_theta_b", "revolute", names[2], names[3], _as_tuple(np.eye(4)), (0, 1, 0),
-              -half_lim, half_lim, v_half, effort_limit_nm, mimic=Mimic(f"{j}_theta_a", 1.0)),
-        Joint(f"{j}_phi_b", "continuous", names[3], f"panel{k}", _as_tuple(np.eye(4)), (0, 0, 1),
-              velocity=velocity_limit_rad_s * 4, effort=effort_limit_nm, mimic=Mimic(f"{j}_phi", -1.0)),
+        Joint(
+            f"{j}_phi",
+            "continuous",
+            f"panel{k - 1}",
+            names[0],
+            _as_tuple(translation_m(z=t)),
+            (0, 0, 1),
+            velocity=velocity_limit_rad_s * 4,
+            effort=effort_limit_nm,
+        ),
+        Joint(
+            f"{j}_theta_a",
+            "revolute",
+            names[0],
+            names[1],
+            _as_tuple(np.eye(4)),
+            (0, 1, 0),
+            -half_lim,
+            half_lim,
+            v_half,
+            effort_limit_nm,
+        ),
+        Joint(
+            f"{j}_chord",
+            "prismatic",
+            names[1],
+            names[2],
+            _as_tuple(translation_m(z=L)),
+            (0, 0, 1),
+            chord_lo - 1e-4,
+            1e-4,
+            velocity_limit_rad_s * L,
+            limits.chord_effort_n,
+            mimic=Mimic(f"{j}_theta_a", 0.0, 0.0),
+        ),
+        Joint(
+            f"{j}_theta_b",
+            "revolute",
+            names[2],
+            names[3],
+            _as_tuple(np.eye(4)),
+            (0, 1, 0),
+            -half_lim,
+            half_lim,
+            v_half,
+            effort_limit_nm,
+            mimic=Mimic(f"{j}_theta_a", 1.0),
+        ),
+        Joint(
+            f"{j}_phi_b",
+            "continuous",
+            names[3],
+            f"panel{k}",
+            _as_tuple(np.eye(4)),
+            (0, 0, 1),
+            velocity=velocity_limit_rad_s * 4,
+            effort=effort_limit_nm,
+            mimic=Mimic(f"{j}_phi", -1.0),
+        ),
     ]
-    bend = BendingJoint(j, L, tuple(f"{j}_{n}" for n in ("phi", "theta_a", "chord", "theta_b", "phi_b")),
-                        f"panel{k - 1}", f"panel{k}", th, seg)
+    bend = BendingJoint(
+        j,
+        L,
+        tuple(f"{j}_{n}" for n in ("phi", "theta_a", "chord", "theta_b", "phi_b")),
+        f"panel{k - 1}",
+        f"panel{k}",
+        th,
+        seg,
+    )
     return links, joints, bend
 
 
 def _soa_sockets(asm: Assembly, k: int) -> tuple[list[Site], list[SoaActuator]]:
-    """Joint k's SOA sockets (the centres of the pocket floors the flanges sit on) and its SOAs between them."""
+    """Joint k's SOA sockets (the centres of the pocket floors the flanges sit on) and its SOAs
+    between them."""
     lo, hi = asm.panel_layouts[k - 1], asm.panel_layouts[k]
     sites: list[Site] = []
     soas: list[SoaActuator] = []
@@ -371,13 +472,23 @@ def _soa_sockets(asm: Assembly, k: int) -> tuple[list[Site], list[SoaActuator]]:
         T = np.asarray(inst.transform)
         bottom_mm = T[:3, 3]
         top_mm = bottom_mm + _top_socket(asm, inst)
-        b_site = Site(f"{inst.name}_bottom", f"panel{k - 1}",
-                      tuple(units.mm_to_m(v) for v in (bottom_mm - [0, 0, lo.z0_mm])))
-        t_site = Site(f"{inst.name}_top", f"panel{k}", tuple(units.mm_to_m(v) for v in (top_mm - [0, 0, hi.z0_mm])))
+        b_site = Site(
+            f"{inst.name}_bottom",
+            f"panel{k - 1}",
+            tuple(units.mm_to_m(v) for v in (bottom_mm - [0, 0, lo.z0_mm])),
+        )
+        t_site = Site(
+            f"{inst.name}_top",
+            f"panel{k}",
+            tuple(units.mm_to_m(v) for v in (top_mm - [0, 0, hi.z0_mm])),
+        )
         sites += [b_site, t_site]
         rest = units.mm_to_m(float(np.linalg.norm(top_mm - bottom_mm)))
-        soas.append(SoaActuator(inst.name, k, inst.line_name, inst.pressure_line, b_site.name,
-                                t_site.name, rest))
+        soas.append(
+            SoaActuator(
+                inst.name, k, inst.line_name, inst.pressure_line, b_site.name, t_site.name, rest
+            )
+        )
     return sites, soas
 
 
@@ -391,9 +502,14 @@ def supply_lags_s(asm: Assembly) -> dict[str, float]:
         t0 = spec.fitted("ramp_time_s", spec.pneumatics.ramp_time_s)
         t = np.linspace(0.0, t0, 20001)
         tau = float(t[np.argmax(ramp_pa(t, 1.0, t0) >= 1.0 - np.exp(-1.0))])  # its 63 % time
-        return {f"s{s}_line{i}": tau for s in range(1, spec.segments + 1) for i in range(1, N_SOA + 1)}
-    return {f"s{s}_line{i}": first_order_time_constant_s(line_supply(asm, s, (i,), p0))
-            for s in range(1, spec.segments + 1) for i in range(1, N_SOA + 1)}
+        return {
+            f"s{s}_line{i}": tau for s in range(1, spec.segments + 1) for i in range(1, N_SOA + 1)
+        }
+    return {
+        f"s{s}_line{i}": first_order_time_constant_s(line_supply(asm, s, (i,), p0))
+        for s in range(1, spec.segments + 1)
+        for i in range(1, N_SOA + 1)
+    }
 
 
 def _top_socket(asm: Assembly, inst: Instance) -> np.ndarray:

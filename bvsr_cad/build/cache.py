@@ -41,15 +41,17 @@ _TMP = ".tmp-"
 _OBJECTS = "objects.pkl"
 
 #: Inside a temporary folder of a build (its export) or of the cache (an entry being written): the
-#: writing process's PID and start time (PID reuse safe), so that a later run removes only dead ones.
+#: writing process's PID and start time (PID reuse safe), so that a later run removes only dead
+#: ones.
 OWNER_FILE = ".bvsr-build-owner"
-#: A replaced export is renamed away and deleted within seconds, and a temporary folder is claimed as
-#: soon as it is made; one older than this without an owner was orphaned.
+#: A replaced export is renamed away and deleted within seconds, and a temporary folder is claimed
+#: as soon as it is made; one older than this without an owner was orphaned.
 ORPHAN_AGE_S = 60.0
 
 
 def process_start(pid: int) -> str | None:
-    """The process's start time in clock ticks (Linux /proc), or None if there is no such process."""
+    """The process's start time in clock ticks (Linux /proc), or None if there is no such
+    process."""
     try:
         stat = Path(f"/proc/{pid}/stat").read_text()
     except OSError:
@@ -72,13 +74,15 @@ def claim(tmp: Path) -> None:
 
 
 def owner_alive(folder: Path) -> bool:
-    """The process that made ``folder`` (:func:`claim`) is still running (or the folder is too new to
-    have been claimed)."""
+    """The process that made ``folder`` (:func:`claim`) is still running (or the folder is too new
+    to have been claimed)."""
     try:
         pid_s, start = (folder / OWNER_FILE).read_text().split()
     except (OSError, ValueError):
         try:
-            return time.time() - folder.stat().st_mtime < ORPHAN_AGE_S  # just created, not yet claimed
+            return (
+                time.time() - folder.stat().st_mtime < ORPHAN_AGE_S
+            )  # just created, not yet claimed
         except OSError:
             return False
     now = process_start(int(pid_s))
@@ -86,23 +90,47 @@ def owner_alive(folder: Path) -> bool:
 
 
 def cache_root() -> Path:
-    """``$BVSR_CACHE/artifacts`` (default ``~/.cache/bvsr_cad/artifacts``), made absolute: a relative
-    ``BVSR_CACHE`` is where the user stands, not the folder a second process works in."""
+    """``$BVSR_CACHE/artifacts`` (default ``~/.cache/bvsr_cad/artifacts``), made absolute: a
+    relative ``BVSR_CACHE`` is where the user stands, not the folder a second process works in."""
     return cache_folder() / "artifacts"
 
 
-#: The installed distributions whose code computes what the stages store: every runtime dependency of
-#: ``pyproject.toml`` (``tests/test_cache.py`` holds the two lists together) and the OCP builds under
-#: build123d and CadQuery (the CAD kernel that tessellates every STL). A new MuJoCo or OCP moves results
-#: that this package's source does not.
-RESULT_DISTRIBUTIONS = ("build123d", "cadquery", "cadquery-ocp", "cadquery-ocp-novtk", "dask", "distributed", "libigl",
-                        "manifold3d", "matplotlib", "mujoco", "networkx", "numpy", "optuna", "pandas", "pyarrow",
-                        "pybullet", "python-fcl", "pyvista", "rtree", "scipy", "shapely", "trimesh", "vtk",
-                        "watchfiles", "yourdfpy")
+#: The installed distributions whose code computes what the stages store: every runtime dependency
+#: of ``pyproject.toml`` (``tests/test_cache.py`` holds the two lists together) and the OCP builds
+#: under build123d and CadQuery (the CAD kernel that tessellates every STL). A new MuJoCo or OCP
+#: moves results that this package's source does not.
+RESULT_DISTRIBUTIONS = (
+    "build123d",
+    "cadquery",
+    "cadquery-ocp",
+    "cadquery-ocp-novtk",
+    "dask",
+    "distributed",
+    "libigl",
+    "manifold3d",
+    "matplotlib",
+    "mujoco",
+    "networkx",
+    "numpy",
+    "optuna",
+    "pandas",
+    "pyarrow",
+    "pybullet",
+    "python-fcl",
+    "pyvista",
+    "rtree",
+    "scipy",
+    "shapely",
+    "trimesh",
+    "vtk",
+    "watchfiles",
+    "yourdfpy",
+)
 
 
 def distribution_versions() -> dict[str, str | None]:
-    """The installed version of each of :data:`RESULT_DISTRIBUTIONS` (None: not installed), and Python's."""
+    """The installed version of each of :data:`RESULT_DISTRIBUTIONS` (None: not installed), and
+    Python's."""
     from importlib import metadata
 
     def version(name: str) -> str | None:
@@ -116,16 +144,20 @@ def distribution_versions() -> dict[str, str | None]:
 
 @lru_cache(maxsize=1)
 def code_fingerprint() -> str:
-    """SHA-256 over this package's source and data files (path and bytes, sorted) and the versions of
-    Python and of the libraries it computes with (:func:`distribution_versions`). The default inputs
-    (``defaults/``, the repository's ``params/``) are inputs, keyed by what a stage reads of them: an edit
-    of ``params/bvsr.toml`` must not move every stage's key."""
+    """SHA-256 over this package's source and data files (path and bytes, sorted) and the versions
+    of Python and of the libraries it computes with (:func:`distribution_versions`). The default
+    inputs (``defaults/``, the repository's ``params/``) are inputs, keyed by what a stage reads of
+    them: an edit of ``params/bvsr.toml`` must not move every stage's key."""
     pkg = Path(__file__).resolve().parents[1]  # bvsr_cad
     h = hashlib.sha256()
     for p in sorted(pkg.rglob("*")):
         rel = p.relative_to(pkg).parts
-        if p.is_file() and p.suffix in (".py", ".toml", ".json", ".csv", ".js", ".mjs") and "__pycache__" not in rel and \
-                not (rel[0] == "defaults" and p.suffix != ".py"):
+        if (
+            p.is_file()
+            and p.suffix in (".py", ".toml", ".json", ".csv", ".js", ".mjs")
+            and "__pycache__" not in rel
+            and not (rel[0] == "defaults" and p.suffix != ".py")
+        ):
             h.update(p.relative_to(pkg).as_posix().encode())
             h.update(p.read_bytes())
     h.update(json.dumps(distribution_versions(), sort_keys=True).encode())
@@ -154,16 +186,21 @@ def stage_key(stage: str, **inputs: Any) -> str:
         **inputs: everything the stage reads (dataclasses, dicts, numbers, strings, bytes).
 
     Returns:
-        A SHA-256 hex digest over the stage, its inputs and :func:`code_fingerprint` (the package's code
-        and the libraries' versions), so an edited model never serves a stale entry.
+        A SHA-256 hex digest over the stage, its inputs and :func:`code_fingerprint` (the package's
+        code and the libraries' versions), so an edited model never serves a stale entry.
     """
-    text = json.dumps({"stage": stage, "code": code_fingerprint(), "inputs": _plain(inputs)}, sort_keys=True,
-                      allow_nan=True, default=repr)
+    text = json.dumps(
+        {"stage": stage, "code": code_fingerprint(), "inputs": _plain(inputs)},
+        sort_keys=True,
+        allow_nan=True,
+        default=repr,
+    )
     return hashlib.sha256(text.encode()).hexdigest()
 
 
 def spec_without(spec: Any, *fields: str) -> dict[str, Any]:
-    """A stage's view of the parameters: every table but ``fields`` (``"table"`` or ``"table.key"``)."""
+    """A stage's view of the parameters: every table but ``fields`` (``"table"`` or
+    ``"table.key"``)."""
     plain = _plain(spec)
     for name in fields:
         table, _, key = name.partition(".")
@@ -198,9 +235,9 @@ class ArtifactCache:
         return entry
 
     def put(self, key: str, fill: Callable[[Path], None], evict: bool = True) -> Path:
-        """Make the entry by ``fill(folder)`` in a temporary folder, then rename it into place. Without
-        ``evict`` the cache is not trimmed now (many small entries in a row: the caller calls
-        :meth:`evict` once after them)."""
+        """Make the entry by ``fill(folder)`` in a temporary folder, then rename it into place.
+        Without ``evict`` the cache is not trimmed now (many small entries in a row: the caller
+        calls :meth:`evict` once after them)."""
         entry = self._entry(key)
         entry.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".{key[:12]}{_TMP}", dir=entry.parent))
@@ -221,8 +258,8 @@ class ArtifactCache:
         return entry
 
     def clean_leftovers(self) -> list[Path]:
-        """Remove the temporary folders of entries whose writing process is gone (a build killed with
-        SIGKILL while it filled one); a live writer's are kept. Returns what was removed."""
+        """Remove the temporary folders of entries whose writing process is gone (a build killed
+        with SIGKILL while it filled one); a live writer's are kept. Returns what was removed."""
         removed = []
         if not self.root.is_dir():
             return removed
@@ -290,7 +327,12 @@ class _Pickler(pickle.Pickler):
     def reducer_override(self, obj: Any) -> Any:
         bd = sys.modules.get("build123d")  # no build123d loaded: no shape to pickle
         if bd is not None and isinstance(obj, bd.Shape):
-            return _shape, (type(obj), obj.wrapped, obj.label, tuple(obj.color) if obj.color is not None else None)
+            return _shape, (
+                type(obj),
+                obj.wrapped,
+                obj.label,
+                tuple(obj.color) if obj.color is not None else None,
+            )
         return NotImplemented
 
 
@@ -300,13 +342,15 @@ def _dumps(objects: Any) -> bytes:
     return buf.getvalue()
 
 
-def object_stage(cache: ArtifactCache | None, key: str, make: Callable[[Path], Any], dst: Path) -> tuple[Any, bool]:
+def object_stage(
+    cache: ArtifactCache | None, key: str, make: Callable[[Path], Any], dst: Path
+) -> tuple[Any, bool]:
     """A stage that writes files and hands objects on to later stages (B-reps, meshes, scenes).
 
     ``make(folder)`` writes the stage's files into ``folder`` and returns its objects (picklable).
     From the cache, the entry's files are copied into ``dst`` and its objects unpickled, as ``make``
-    left them; else ``make`` runs (into a new entry when there is a cache). Either way, and without a
-    cache, the objects handed on are the ones read back from their pickle: a B-rep read back from
+    left them; else ``make`` runs (into a new entry when there is a cache). Either way, and without
+    a cache, the objects handed on are the ones read back from their pickle: a B-rep read back from
     OCCT's binary form is the same geometry, but OCCT's volumes and areas of it can differ from the
     original's in the last bit, and a build from the cache must equal one without, file for file.
     Returns (objects, reused).
@@ -327,10 +371,12 @@ def object_stage(cache: ArtifactCache | None, key: str, make: Callable[[Path], A
     return pickle.loads(made[0]), False
 
 
-def value_stage(cache: ArtifactCache | None, key: str, compute: Callable[[], Any]) -> tuple[Any, bool]:
-    """A stage that writes no file and hands on a picklable value (check verdicts): from the cache, or
-    ``compute()`` stored in a new entry (left for the caller's :meth:`ArtifactCache.evict`). Returns
-    (value, reused)."""
+def value_stage(
+    cache: ArtifactCache | None, key: str, compute: Callable[[], Any]
+) -> tuple[Any, bool]:
+    """A stage that writes no file and hands on a picklable value (check verdicts): from the cache,
+    or ``compute()`` stored in a new entry (left for the caller's :meth:`ArtifactCache.evict`).
+    Returns (value, reused)."""
     hit = cache.get(key) if cache is not None else None
     if hit is not None:
         return pickle.loads((hit / _OBJECTS).read_bytes()), True
@@ -346,5 +392,16 @@ def file_sha256(path: Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-__all__ = ["ArtifactCache", "value_stage", "file_sha256", "stage_key", "spec_without", "code_fingerprint",
-           "distribution_versions", "RESULT_DISTRIBUTIONS", "cache_root", "copy_tree", "object_stage"]
+__all__ = [
+    "ArtifactCache",
+    "value_stage",
+    "file_sha256",
+    "stage_key",
+    "spec_without",
+    "code_fingerprint",
+    "distribution_versions",
+    "RESULT_DISTRIBUTIONS",
+    "cache_root",
+    "copy_tree",
+    "object_stage",
+]

@@ -16,37 +16,45 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from .. import units
 from ..analysis.poses import mold_scene, twin_scene, viewer_scenes
 from ..analysis.run import run_analyses
 from ..assembly.build import Assembly, build_assembly
+from ..assembly.collision import part_fits, remember_fits
 from ..assembly.inertia import SolidProperties
 from ..assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs, rigid_robot_model
-from ..assembly.collision import part_fits, remember_fits
 from ..assembly.robot import collision_shapes, robot_model
-from .analyses import Analyses
-from .stages import Runner, Stage
-from .cache import OWNER_FILE, copy_tree
-from ._runtime.checks_process import finish_checks, start_checks
 from ..checks.run import Checks
 from ..exporters.analysis_files import write_analyses
 from ..exporters.cad import write_assembly_step, write_part_step, write_part_stl
 from ..exporters.drawings import stamp_drawings, write_drawing_sheets
+from ..exporters.fabrication_files import write_fabrication, write_rigid_files
+from ..exporters.gltf import scene_glb, write_scenes
 from ..exporters.manifest import manifest_dict
 from ..exporters.manifest_file import write_manifest
 from ..exporters.mold_files import molds_manifest, write_mold_files
-from ..exporters.fabrication_files import write_fabrication, write_rigid_files
 from ..exporters.render import render_previews
 from ..exporters.report import report_pictures, write_report
 from ..exporters.reproducible import make_reproducible
 from ..exporters.robot_files import write_robot
 from ..exporters.robot_meshes import write_robot_meshes
 from ..exporters.viewer import write_viewer
-from ..exporters.gltf import scene_glb, write_scenes
 from ..parameters.load import params_sha256
-from .publish import BuildResult, OpenedBuild, open_build, publish, reuse_whole, temporary_folder, volatile
 from ..simulation.sim import protocol_radius_mm
-from .. import units
+from ._runtime.checks_process import finish_checks, start_checks
 from ._runtime.worker import SecondProcess
+from .analyses import Analyses
+from .cache import OWNER_FILE, copy_tree
+from .publish import (
+    BuildResult,
+    OpenedBuild,
+    open_build,
+    publish,
+    reuse_whole,
+    temporary_folder,
+    volatile,
+)
+from .stages import Runner, Stage
 
 Progress = Callable[[str], None]
 
@@ -54,15 +62,27 @@ Progress = Callable[[str], None]
 #: What each cached stage does not read (``table`` or ``table.key``); everything else of the
 #: parameters is part of its key. The part files are geometry (the assembly STEP is named after the
 #: tail): no material property, no physics.
-PART_FILES_IGNORE = ("materials", "use", "vertebra.material", "actuation", "analysis", "robot", "casting",
-                     "fabrication_package", "pneumatics", "cart", "calibration")
+PART_FILES_IGNORE = (
+    "materials",
+    "use",
+    "vertebra.material",
+    "actuation",
+    "analysis",
+    "robot",
+    "casting",
+    "fabrication_package",
+    "pneumatics",
+    "cart",
+    "calibration",
+)
 #: The analyses read the whole tail but for the robot description, the molds and the fabrication
 #: package (of which only the tube lengths, for the supply model); the name decides whether the
 #: calibration's measurements are this tail's.
 ANALYSES_IGNORE = ("robot", "casting", "fabrication_package")
-#: The geometry analyses (joint limits, the tip's clearance map: :func:`bvsr_cad.analysis.run.geometry_analyses`)
-#: read the tail's solids and placements (the part files' inputs, not the tail's name), the SOAs' fold stack
-#: (``soa``, in them) and the required clearance (``analysis.min_clearance_mm``, in the key beside them).
+#: The geometry analyses (joint limits, the tip's clearance map:
+#: :func:`bvsr_cad.analysis.run.geometry_analyses`) read the tail's solids and placements (the part
+#: files' inputs, not the tail's name), the SOAs' fold stack (``soa``, in them) and the required
+#: clearance (``analysis.min_clearance_mm``, in the key beside them).
 ANALYSIS_GEOMETRY_IGNORE = PART_FILES_IGNORE + ("name",)
 #: The drawings' views and hole tables are the panels' and the mold set's geometry: the part files'
 #: inputs and the molds' (``casting``); the title block (tail name, materials, processes, the params
@@ -72,9 +92,9 @@ DRAWINGS_IGNORE = tuple(k for k in PART_FILES_IGNORE if k != "casting") + ("name
 #: for (``fabrication_package``); its pieces are named by joint, not after the tail. (The mold set's
 #: key is its arguments, :func:`bvsr_cad.assembly.products.mold_set_inputs`.)
 TWIN_IGNORE = tuple(k for k in PART_FILES_IGNORE if k != "fabrication_package") + ("name",)
-#: The robot's meshes and its collision shapes' fits are the tail's solids and placements (named by part
-#: and joint, not after the tail) and which collision shapes ``robot.collision_geometry`` asks for
-#: (:func:`robot_geometry_key`); no mass, limit or actuator of the robot table.
+#: The robot's meshes and its collision shapes' fits are the tail's solids and placements (named by
+#: part and joint, not after the tail) and which collision shapes ``robot.collision_geometry`` asks
+#: for (:func:`robot_geometry_key`); no mass, limit or actuator of the robot table.
 ROBOT_GEOMETRY_IGNORE = PART_FILES_IGNORE + ("name",)
 
 
@@ -85,21 +105,42 @@ def _rod(spec) -> dict:
 
 # The stages, in the order of the build: each names what it reads, and its cache key is made of that
 # (bvsr_cad.build.stages). Stages without a key run at every build.
-GEOMETRY_ANALYSES = Stage("analysis geometry (joint limits, clearance map)", "analysis_geometry",
-                          ANALYSIS_GEOMETRY_IGNORE,
-                          lambda spec: {**_rod(spec), "min_clearance_mm": spec.analysis.min_clearance_mm})
-ANALYSES = Stage("analyses", "analyses", ANALYSES_IGNORE, data=True, derived=lambda spec: {
-    "tubes": (spec.fabrication_package.tube_lead_mm, spec.fabrication_package.tube_bend_allowance)})
+GEOMETRY_ANALYSES = Stage(
+    "analysis geometry (joint limits, clearance map)",
+    "analysis_geometry",
+    ANALYSIS_GEOMETRY_IGNORE,
+    lambda spec: {**_rod(spec), "min_clearance_mm": spec.analysis.min_clearance_mm},
+)
+ANALYSES = Stage(
+    "analyses",
+    "analyses",
+    ANALYSES_IGNORE,
+    data=True,
+    derived=lambda spec: {
+        "tubes": (
+            spec.fabrication_package.tube_lead_mm,
+            spec.fabrication_package.tube_bend_allowance,
+        )
+    },
+)
 ASSEMBLY = Stage("assembly")
 PART_FILES = Stage("part files", "part_files", PART_FILES_IGNORE, _rod)
-MOLDS = Stage("molds", "molds", derived=lambda spec: {"inputs": mold_set_inputs(spec)}, say="SOA mold set")
+MOLDS = Stage(
+    "molds", "molds", derived=lambda spec: {"inputs": mold_set_inputs(spec)}, say="SOA mold set"
+)
 RIGID_TWIN = Stage("rigid twin", "rigid_twin", TWIN_IGNORE, say="rigid comparison tail")
 FABRICATION = Stage("print jobs, BOM")
-ROBOT_GEOMETRY = Stage("robot meshes, collision fits", "robot_geometry", ROBOT_GEOMETRY_IGNORE,
-                       lambda spec: {**_rod(spec), "collision_geometry": spec.robot.collision_geometry})
+ROBOT_GEOMETRY = Stage(
+    "robot meshes, collision fits",
+    "robot_geometry",
+    ROBOT_GEOMETRY_IGNORE,
+    lambda spec: {**_rod(spec), "collision_geometry": spec.robot.collision_geometry},
+)
 DRAWINGS = Stage("drawings", "drawings", DRAWINGS_IGNORE, say="drawings (SVG sheets)")
 VIEW = Stage("interactive 3D view", say="interactive 3D view")
-PREVIEWS = Stage("previews", "previews", PART_FILES_IGNORE, _rod, say="previews (off-screen renders)")
+PREVIEWS = Stage(
+    "previews", "previews", PART_FILES_IGNORE, _rod, say="previews (off-screen renders)"
+)
 ROBOT_FILES = Stage("analysis files and robot descriptions")
 CHECKS = Stage("checks", say="checks")
 REPORT = Stage("report", say="report")
@@ -110,23 +151,29 @@ def robot_geometry_key(spec) -> str:
     return ROBOT_GEOMETRY.key_for(spec)
 
 
-def build_export(params: str | Path, out_dir: str | Path | None = None,
-                 progress: Progress | None = None, use_cache: bool = True,
-                 standby: SecondProcess | None = None,
-                 on_assembly: Callable[[Assembly], None] | None = None) -> BuildResult:
+def build_export(
+    params: str | Path,
+    out_dir: str | Path | None = None,
+    progress: Progress | None = None,
+    use_cache: bool = True,
+    standby: SecondProcess | None = None,
+    on_assembly: Callable[[Assembly], None] | None = None,
+) -> BuildResult:
     """Build every part of the tail described by ``params`` into ``out_dir``.
 
     With ``use_cache`` the stages whose inputs are unchanged are taken from the artifact cache
     (:mod:`bvsr_cad.build.cache`): the whole export, the analyses, the parts' files and previews.
-    ``standby``: the analyses' second process started ahead (``SecondProcess.standby("bvsr_cad.build._runtime.analyses_process")``,
-    as the command line does before it imports this module, so that the two import side by side), given
-    its work here if the analyses are to be run, else stopped. ``on_assembly``: called with the tail's
-    assembly as soon as it is built, before the rest of the export (``bvsr watch --show``); an export the
-    cache holds whole is published first, then its assembly built for it.
+    ``standby``: the analyses' second process started ahead
+    (``SecondProcess.standby("bvsr_cad.build._runtime.analyses_process")``, as the command line does
+    before it imports this module, so that the two import side by side), given its work here if the
+    analyses are to be run, else stopped. ``on_assembly``: called with the tail's assembly as soon
+    as it is built, before the rest of the export (``bvsr watch --show``); an export the cache holds
+    whole is published first, then its assembly built for it.
 
     Args:
         params: the parameter file.
-        out_dir: the export folder (None: ``exports/<name>``), replaced only when the build succeeds.
+        out_dir: the export folder (None: ``exports/<name>``), replaced only when the build
+            succeeds.
         progress: called with one progress line at a time (None: silent).
         use_cache: take unchanged stages from the artifact cache (False: build everything).
         standby: the analyses' second process started ahead, or None.
@@ -150,13 +197,17 @@ def build_export(params: str | Path, out_dir: str | Path | None = None,
             standby.close()  # a no-op once it gave its result; stops one given no work
 
 
-def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None,
-                 on_assembly: Callable[[Assembly], None] | None = None) -> BuildResult:
-    """Build, stage by stage, the export that :func:`bvsr_cad.build.publish.open_build` prepared and the cache
-    does not hold whole (:func:`bvsr_cad.build.publish.reuse_whole`). ``standby``, ``on_assembly``: as in
-    :func:`build_export`; the caller closes ``standby``. The analyses run beside the CAD stages in a
-    second process; what reads only the CAD files (the checks of the meshes, the molds and the print
-    files, the robot's files once the joint limits exist) starts before they are in.
+def build_opened(
+    opened: OpenedBuild,
+    standby: SecondProcess | None = None,
+    on_assembly: Callable[[Assembly], None] | None = None,
+) -> BuildResult:
+    """Build, stage by stage, the export that :func:`bvsr_cad.build.publish.open_build` prepared and
+    the cache does not hold whole (:func:`bvsr_cad.build.publish.reuse_whole`). ``standby``,
+    ``on_assembly``: as in :func:`build_export`; the caller closes ``standby``. The analyses run
+    beside the CAD stages in a second process; what reads only the CAD files (the checks of the
+    meshes, the molds and the print files, the robot's files once the joint limits exist) starts
+    before they are in.
 
     Raises:
         GeometryError: the CAD kernel failed.
@@ -167,12 +218,19 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None,
     analyses: Analyses | None = None
     checks: Checks | None = None
     try:
-        say(f"building {spec.name}: {spec.segments} segments, {spec.joints} joints, {spec.panels} panels")
+        say(
+            f"building {spec.name}: {spec.segments} segments, {spec.joints} joints, {spec.panels} "
+            "panels"
+        )
         analyses = Analyses.begin(run, ANALYSES, GEOMETRY_ANALYSES, params, standby)
-        asm = run.run(ASSEMBLY, lambda _f: build_assembly(spec, say, shared=analyses.shared_solids()))
+        asm = run.run(
+            ASSEMBLY, lambda _f: build_assembly(spec, say, shared=analyses.shared_solids())
+        )
         if on_assembly is not None:
             on_assembly(asm)
-        files = {name: {"step": f"step/{name}.step", "stl": f"stl/{name}.stl"} for name in asm.parts}
+        files = {
+            name: {"step": f"step/{name}.step", "stl": f"stl/{name}.stl"} for name in asm.parts
+        }
         geometry_cached = run.hit(PART_FILES) is not None or run.hit(ROBOT_GEOMETRY) is not None
         run.run(PART_FILES, lambda folder: _part_files(asm, files, folder, say))
         with run.timed(ROBOT_GEOMETRY):
@@ -180,21 +238,43 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None,
                 collision_shapes(asm)
         shutil.copyfile(params, tmp / "params.toml")
         manifest = manifest_dict(asm, params_sha256(params), files, "step/assembly.step")
-        manifest["previews"] = {}  # rendered once the checks of the print files have started (below)
+        manifest[
+            "previews"
+        ] = {}  # rendered once the checks of the print files have started (below)
         mold_set, mold_entries, mold_view = run.run(MOLDS, lambda folder: _molds(asm, folder, say))
-        pieces, visual, twin_view, twin_props = run.run(RIGID_TWIN, lambda folder: _rigid_twin(asm, folder))
-        manifest.update(run.run(FABRICATION, lambda folder: _fabrication(
-            asm, files, molds_manifest(spec, mold_set, *mold_entries), pieces, visual, twin_props, manifest,
-            mold_set, folder, run)))
+        pieces, visual, twin_view, twin_props = run.run(
+            RIGID_TWIN, lambda folder: _rigid_twin(asm, folder)
+        )
+        manifest.update(
+            run.run(
+                FABRICATION,
+                lambda folder: _fabrication(
+                    asm,
+                    files,
+                    molds_manifest(spec, mold_set, *mold_entries),
+                    pieces,
+                    visual,
+                    twin_props,
+                    manifest,
+                    mold_set,
+                    folder,
+                    run,
+                ),
+            )
+        )
         limits = analyses.limits_ahead()
         with run.timed(ROBOT_FILES):
             robot = _robot_files(run, asm, limits) if limits is not None else None
-        with run.timed(CHECKS):  # they read the files as published: the manifest so far, fixed time stamps
+        with run.timed(
+            CHECKS
+        ):  # they read the files as published: the manifest so far, fixed time stamps
             write_manifest(tmp, {**manifest, **(robot or {})})
             fixed: set[Path] = set()
             make_reproducible(tmp, fixed)
             say("checks of the CAD files")
-            checks = start_checks(tmp, say, cache=opened.cache, meshes_beside=True, robot_beside=robot is not None)
+            checks = start_checks(
+                tmp, say, cache=opened.cache, meshes_beside=True, robot_beside=robot is not None
+            )
         run.run(DRAWINGS, lambda folder: _drawings(asm, mold_set, folder))
         manifest.update(stamp_drawings(tmp, asm, mold_set, params_sha256(params)))
         manifest.update(run.run(VIEW, lambda folder: _view(asm, mold_view, twin_view, folder, say)))
@@ -203,17 +283,32 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None,
             say("report pictures")
             pictures = report_pictures(tmp, manifest, run.memo)
         robot = _robot_before_wait(run, asm, analyses, checks, manifest, robot)
-        results, drawn = analyses.results(lambda geometry: run_analyses(asm, say, str(params), protocol_radius_mm,
-                                                                        geometry))
-        manifest.update(run.run(ROBOT_FILES, lambda folder: {
-            **write_analyses(results, folder, spec.name, pictures=not drawn),
-            **(robot if robot is not None else _robot_files(run, asm, results.theta_max_per_joint()))}))
+        results, drawn = analyses.results(
+            lambda geometry: run_analyses(asm, say, str(params), protocol_radius_mm, geometry)
+        )
+        manifest.update(
+            run.run(
+                ROBOT_FILES,
+                lambda folder: {
+                    **write_analyses(results, folder, spec.name, pictures=not drawn),
+                    **(
+                        robot
+                        if robot is not None
+                        else _robot_files(run, asm, results.theta_max_per_joint())
+                    ),
+                },
+            )
+        )
         write_manifest(tmp, manifest)
-        make_reproducible(tmp, fixed)  # STEP and 3MF time stamps of the files written since the first go
+        make_reproducible(
+            tmp, fixed
+        )  # STEP and 3MF time stamps of the files written since the first go
         verdicts = run.run(CHECKS, lambda _f: finish_checks(checks, opened.cache))
         run.log.process("checks", checks.cpu_s)
         manifest["checks"] = [r.to_json() for r in verdicts]
-        manifest.update(run.run(REPORT, lambda folder: write_report(folder, manifest, run.memo, pictures)))
+        manifest.update(
+            run.run(REPORT, lambda folder: write_report(folder, manifest, run.memo, pictures))
+        )
         _publish(opened, run, manifest)
     except BaseException:
         for running in (analyses, checks):
@@ -224,21 +319,30 @@ def build_opened(opened: OpenedBuild, standby: SecondProcess | None = None,
     finally:
         if analyses is not None:
             analyses.restore()
-    return BuildResult(opened.out, verdicts, time.perf_counter() - opened.t0, run.log.stages,
-                       manifest["volatile"]["cpu_seconds"])
+    return BuildResult(
+        opened.out,
+        verdicts,
+        time.perf_counter() - opened.t0,
+        run.log.stages,
+        manifest["volatile"]["cpu_seconds"],
+    )
 
 
 def _publish(opened: OpenedBuild, run: Runner, manifest: dict) -> None:
-    """The manifest with this build's volatile section, the whole export into the cache (for a rebuild of
-    the same file) and the export moved into place."""
+    """The manifest with this build's volatile section, the whole export into the cache (for a
+    rebuild of the same file) and the export moved into place."""
     manifest["volatile"] = volatile(opened.t0, run.log)
     write_manifest(run.folder, manifest)
     if opened.cache is not None:
-        opened.cache.put(opened.export_key, lambda folder: copy_tree(run.folder, folder, skip=(OWNER_FILE,)))
+        opened.cache.put(
+            opened.export_key, lambda folder: copy_tree(run.folder, folder, skip=(OWNER_FILE,))
+        )
     publish(run.folder, opened.out)
 
 
-def _part_files(asm: Assembly, files: dict[str, dict[str, str]], folder: Path, say: Progress) -> None:
+def _part_files(
+    asm: Assembly, files: dict[str, dict[str, str]], folder: Path, say: Progress
+) -> None:
     """The parts' STEP and STL and the assembly STEP."""
     (folder / "step").mkdir()
     (folder / "stl").mkdir()
@@ -254,40 +358,64 @@ def _molds(asm: Assembly, folder: Path, say: Progress) -> tuple:
     """The SOA's mold set, its files' entries and its viewer scene."""
     made = build_mold_set(asm)
     entries = write_mold_files(made, folder, say)
-    # Its viewer scene now: the mold STLs' triangulation is what the scene shows (OCCT keeps the finest).
+    # Its viewer scene now: the mold STLs' triangulation is what the scene shows (OCCT keeps the
+    # finest).
     return made, entries, mold_scene(made)
 
 
 def _rigid_twin(asm: Assembly, folder: Path) -> tuple:
-    """The rigid twin's pieces, their visual meshes (metres, tail frame), its viewer scene and the pieces'
-    mass properties."""
+    """The rigid twin's pieces, their visual meshes (metres, tail frame), its viewer scene and the
+    pieces' mass properties."""
     made = build_rigid_twin(asm)
     visual = write_rigid_files(made, folder)
     arrays = [(m.vertices.view(np.ndarray), m.faces.view(np.ndarray)) for m in visual]
-    # The 3D view shows the twin's visual meshes rather than meshing it again. Measured on the solids
-    # made here: OCCT's integrals of a B-rep read back differ in the last bit.
-    return (made, arrays, twin_scene(made, [(units.m_to_mm(v), f) for v, f in arrays]),
-            [SolidProperties.of(p.solid) for p in made])
+    # The 3D view shows the twin's visual meshes rather than meshing it again. Measured on the
+    # solids made here: OCCT's integrals of a B-rep read back differ in the last bit.
+    return (
+        made,
+        arrays,
+        twin_scene(made, [(units.m_to_mm(v), f) for v, f in arrays]),
+        [SolidProperties.of(p.solid) for p in made],
+    )
 
 
-def _fabrication(asm: Assembly, files: dict, molds: dict, pieces: list, visual: list, twin_props: list,
-                 manifest: dict, mold_set, folder: Path, run: Runner) -> dict:
-    """The rigid twin's robot description, the print jobs and the BOM; the manifest's mold and fabrication
-    sections (the twin's parts join the manifest's ``parts``)."""
+def _fabrication(
+    asm: Assembly,
+    files: dict,
+    molds: dict,
+    pieces: list,
+    visual: list,
+    twin_props: list,
+    manifest: dict,
+    mold_set,
+    folder: Path,
+    run: Runner,
+) -> dict:
+    """The rigid twin's robot description, the print jobs and the BOM; the manifest's mold and
+    fabrication sections (the twin's parts join the manifest's ``parts``)."""
     mold_files = {e["name"]: e["files"] for e in molds["molds"]["parts"]}
-    fabrication = write_fabrication(asm, pieces, rigid_robot_model(asm, pieces, twin_props),
-                                    [trimesh.Trimesh(v, f, process=False) for v, f in visual], mold_set, files,
-                                    mold_files, folder, run.say, run.memo)
+    fabrication = write_fabrication(
+        asm,
+        pieces,
+        rigid_robot_model(asm, pieces, twin_props),
+        [trimesh.Trimesh(v, f, process=False) for v, f in visual],
+        mold_set,
+        files,
+        mold_files,
+        folder,
+        run.say,
+        run.memo,
+    )
     manifest["parts"] += fabrication.pop("rigid_parts")
     return {**molds, **fabrication}
 
 
 def _robot_files(run: Runner, asm: Assembly, theta_max_rad: list[float]) -> dict:
-    """The robot descriptions for these joint limits. Their meshes and collision fits read the geometry
-    alone (and which shapes: ``robot.collision_geometry``): one cached stage, so that an edit that moves
-    no solid (a material, the robot's limits) neither meshes a part nor fits one. Both mesh the panels and
-    the SOA at the print STLs' tolerances with an absolute deflection: the same triangulation whichever
-    stages ran before (tests/test_robot.py)."""
+    """The robot descriptions for these joint limits. Their meshes and collision fits read the
+    geometry alone (and which shapes: ``robot.collision_geometry``): one cached stage, so that an
+    edit that moves no solid (a material, the robot's limits) neither meshes a part nor fits one.
+    Both mesh the panels and the SOA at the print STLs' tolerances with an absolute deflection: the
+    same triangulation whichever stages ran before (tests/test_robot.py)."""
     made = {}
 
     def make(folder: Path) -> tuple:
@@ -299,15 +427,26 @@ def _robot_files(run: Runner, asm: Assembly, theta_max_rad: list[float]) -> dict
     if "robot" not in made:
         remember_fits(asm, fits)
     run.say("robot model (B-rep inertials)")
-    robot = made["robot"] if "robot" in made else robot_model(asm, theta_max_rad, shapes=collision_shapes(asm))
+    robot = (
+        made["robot"]
+        if "robot" in made
+        else robot_model(asm, theta_max_rad, shapes=collision_shapes(asm))
+    )
     return write_robot(robot, run.folder, run.say, asm.spec.cart, mesh_files)
 
 
-def _robot_before_wait(run: Runner, asm: Assembly, analyses: Analyses, checks: Checks, manifest: dict,
-                       robot: dict | None) -> dict | None:
-    """Before the wait for the analyses: the robot's files if the joint limits have come since the checks
-    started (else the collision fits now, what needs no limits, and the files after the analyses), and
-    their checks here unless the checks' process has begun them (whichever process is free first)."""
+def _robot_before_wait(
+    run: Runner,
+    asm: Assembly,
+    analyses: Analyses,
+    checks: Checks,
+    manifest: dict,
+    robot: dict | None,
+) -> dict | None:
+    """Before the wait for the analyses: the robot's files if the joint limits have come since the
+    checks started (else the collision fits now, what needs no limits, and the files after the
+    analyses), and their checks here unless the checks' process has begun them (whichever process is
+    free first)."""
     late = robot is None
     if late:
         with run.timed(ROBOT_FILES):
@@ -319,7 +458,9 @@ def _robot_before_wait(run: Runner, asm: Assembly, analyses: Analyses, checks: C
             robot = _robot_files(run, asm, limits)
     with run.timed(CHECKS):
         if late:
-            write_manifest(run.folder, {**manifest, **robot})  # written again, in its order, at the end
+            write_manifest(
+                run.folder, {**manifest, **robot}
+            )  # written again, in its order, at the end
         checks.robot_ahead()
     return robot
 

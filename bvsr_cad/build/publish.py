@@ -1,4 +1,5 @@
-"""An export's folder: checked, built beside it, published atomically, or reused whole from the cache.
+"""An export's folder: checked, built beside it, published atomically, or reused whole from the
+cache.
 
 A build writes into a temporary folder beside the output (claimed by its process) and moves it into
 place only when every file was written, so a failure leaves any earlier export untouched and no
@@ -20,13 +21,13 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .cache import OWNER_FILE, ORPHAN_AGE_S, ArtifactCache, claim, copy_tree, owner_alive, stage_key
 from ..checks.environment import environment_state
 from ..checks.result import CheckResult
 from ..exporters.manifest_file import write_manifest
 from ..parameters.load import load_spec
 from ..parameters.tables import TailSpec
 from ._runtime.worker import cpu_seconds
+from .cache import ORPHAN_AGE_S, OWNER_FILE, ArtifactCache, claim, copy_tree, owner_alive, stage_key
 
 Progress = Callable[[str], None]
 
@@ -41,51 +42,71 @@ class BuildResult:
     results: list[CheckResult]
     seconds: float
     stages: list[dict] = field(default_factory=list)  # {"stage", "status": reused|built, "seconds"}
-    #: CPU seconds by process: ``build`` (this one, since the build opened) and each second process that
-    #: gave its result (``analyses``, ``checks``); see :meth:`StageLog.cpu_s`.
+    #: CPU seconds by process: ``build`` (this one, since the build opened) and each second process
+    #: that gave its result (``analyses``, ``checks``); see :meth:`StageLog.cpu_s`.
     cpu_s: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass
 class StageLog:
-    """Per stage: reused from the cache or built, and the seconds it took (``bvsr build`` prints it);
-    and the CPU seconds of the build's processes."""
+    """Per stage: reused from the cache or built, and the seconds it took (``bvsr build`` prints
+    it); and the CPU seconds of the build's processes."""
 
     say: Progress
     stages: list[dict] = field(default_factory=list)
-    cpu0: float = field(default_factory=cpu_seconds)  # this process's CPU seconds when the build opened
+    cpu0: float = field(
+        default_factory=cpu_seconds
+    )  # this process's CPU seconds when the build opened
     processes: dict[str, float] = field(default_factory=dict)
 
     def record(self, stage: str, reused: bool, seconds: float) -> None:
-        self.stages.append({"stage": stage, "status": "reused" if reused else "built", "seconds": round(seconds, 3)})
+        self.stages.append(
+            {
+                "stage": stage,
+                "status": "reused" if reused else "built",
+                "seconds": round(seconds, 3),
+            }
+        )
         self.say(f"stage {stage}: {'reused' if reused else 'built'} in {seconds:.2f} s")
 
     def process(self, name: str, cpu_s: float | None) -> None:
-        """A second process's CPU seconds (None: it gave no result, its work ran here or was not needed)."""
+        """A second process's CPU seconds (None: it gave no result, its work ran here or was not
+        needed)."""
         if cpu_s is not None:
             self.processes[name] = cpu_s
 
     def cpu_s(self) -> dict[str, float]:
-        """CPU seconds so far, by process: ``build``, this one since the build opened (its parameters loaded;
-        the pipeline's imports come after) and the second processes recorded, each from its own start
-        (its imports included). A CPU-bound build on two cores has their sum near twice its seconds."""
-        return {"build": round(cpu_seconds() - self.cpu0, 2), **{k: round(v, 2) for k, v in self.processes.items()}}
+        """CPU seconds so far, by process: ``build``, this one since the build opened (its
+        parameters loaded; the pipeline's imports come after) and the second processes recorded,
+        each from its own start (its imports included). A CPU-bound build on two cores has their sum
+        near twice its seconds."""
+        return {
+            "build": round(cpu_seconds() - self.cpu0, 2),
+            **{k: round(v, 2) for k, v in self.processes.items()},
+        }
 
 
 def volatile(t0: float, log: StageLog) -> dict:
     """The manifest's one place for what changes from build to build of the same file."""
-    return {"built_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "build_seconds": time.perf_counter() - t0,
-            "stages": log.stages, "cpu_seconds": log.cpu_s()}
+    return {
+        "built_at": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "build_seconds": time.perf_counter() - t0,
+        "stages": log.stages,
+        "cpu_seconds": log.cpu_s(),
+    }
 
 
 def check_output(out_dir: Path) -> None:
-    """Raises :class:`OutputError` when ``out_dir`` is a file or a non-empty folder that is not an export."""
+    """Raises :class:`OutputError` when ``out_dir`` is a file or a non-empty folder that is not an
+    export."""
     if out_dir.exists():
         if not out_dir.is_dir():
             raise OutputError(f"{out_dir}: exists and is not a folder; choose another -o")
         if any(out_dir.iterdir()) and not (out_dir / "manifest.json").is_file():
-            raise OutputError(f"{out_dir}: a non-empty folder that is not a bvsr export (no manifest.json); "
-                              "refusing to replace it; choose another -o")
+            raise OutputError(
+                f"{out_dir}: a non-empty folder that is not a bvsr export (no manifest.json); "
+                "refusing to replace it; choose another -o"
+            )
 
 
 def clean_leftovers(out_dir: Path) -> list[Path]:
@@ -102,7 +123,9 @@ def clean_leftovers(out_dir: Path) -> list[Path]:
             removed.append(folder)
     for folder in parent.glob(f".{out_dir.name}.old-*"):
         try:
-            renamed_s = int(folder.name.rsplit("-", 1)[1]) / 1000.0  # publish names it by the time, in ms
+            renamed_s = (
+                int(folder.name.rsplit("-", 1)[1]) / 1000.0
+            )  # publish names it by the time, in ms
         except ValueError:
             continue
         if folder.is_dir() and time.time() - renamed_s > ORPHAN_AGE_S:
@@ -112,11 +135,14 @@ def clean_leftovers(out_dir: Path) -> list[Path]:
 
 
 def publish(tmp: Path, out_dir: Path) -> None:
-    """Move the finished ``tmp`` into place as ``out_dir``, replacing an earlier export (kept on failure).
+    """Move the finished ``tmp`` into place as ``out_dir``, replacing an earlier export (kept on
+    failure).
 
     Args:
-        tmp: the build's temporary folder, beside ``out_dir`` (one rename away, on the same file system).
-        out_dir: the export folder; an earlier export there is replaced only once ``tmp`` is in place.
+        tmp: the build's temporary folder, beside ``out_dir`` (one rename away, on the same file
+            system).
+        out_dir: the export folder; an earlier export there is replaced only once ``tmp`` is in
+            place.
     """
     (tmp / OWNER_FILE).unlink(missing_ok=True)
     old = None
@@ -141,15 +167,20 @@ def temporary_folder(out_dir: Path) -> Path:
 
 
 def data_path(spec: TailSpec, params: Path) -> Path | None:
-    """The calibration's data file (read by the measurement comparison; relative to the parameter file's
-    folder), or None when the file names none."""
-    return (params.resolve().parent / spec.calibration.data_file).resolve() if spec.calibration.data_file else None
+    """The calibration's data file (read by the measurement comparison; relative to the parameter
+    file's folder), or None when the file names none."""
+    return (
+        (params.resolve().parent / spec.calibration.data_file).resolve()
+        if spec.calibration.data_file
+        else None
+    )
 
 
 @dataclass
 class OpenedBuild:
-    """A build's start: its parameters, its output (checked, dead builds' leftovers removed) and the key of
-    the whole export: the parameter file's bytes, the calibration data's and the checks' environment."""
+    """A build's start: its parameters, its output (checked, dead builds' leftovers removed) and the
+    key of the whole export: the parameter file's bytes, the calibration data's and the checks'
+    environment."""
 
     params: Path
     spec: TailSpec
@@ -161,7 +192,9 @@ class OpenedBuild:
     t0: float
 
 
-def open_build(params: str | Path, out_dir: str | Path | None, say: Progress, use_cache: bool) -> OpenedBuild:
+def open_build(
+    params: str | Path, out_dir: str | Path | None, say: Progress, use_cache: bool
+) -> OpenedBuild:
     """Load ``params`` and prepare ``out_dir`` (default ``exports/<name>``) for a build.
 
     Args:
@@ -171,7 +204,8 @@ def open_build(params: str | Path, out_dir: str | Path | None, say: Progress, us
         use_cache: use the artifact cache (False: ``--no-cache``).
 
     Returns:
-        The loaded parameters, the output folder, the cache, the calibration data and the export's key.
+        The loaded parameters, the output folder, the cache, the calibration data and the export's
+        key.
 
     Raises:
         ParamError: the parameter file is unreadable or describes an impossible tail.
@@ -187,13 +221,22 @@ def open_build(params: str | Path, out_dir: str | Path | None, say: Progress, us
         say(f"removed {folder.name}: left by a build that did not finish")
     cache = ArtifactCache() if use_cache else None
     for folder in cache.clean_leftovers() if cache is not None else []:
-        say(f"removed the cache's {folder.parent.name}/{folder.name}: an entry a build did not finish")
+        say(
+            f"removed the cache's {folder.parent.name}/{folder.name}: an entry a build did not "
+            "finish"
+        )
     path = data_path(spec, params)
     data = path.read_bytes() if path is not None and path.is_file() else b""
     if path is not None and not path.is_file():
-        say(f"calibration.data_file = {spec.calibration.data_file!r}: {path} not found (it is relative to the "
-            "parameter file's folder); the export compares no measurements (analysis/measurements.json says why)")
-    key = stage_key("export", params=params.read_bytes(), data=data, environment=environment_state())
+        say(
+            f"calibration.data_file = {spec.calibration.data_file!r}: {path} not found (it is "
+            "relative to the "
+            "parameter file's folder); the export compares no measurements "
+            "(analysis/measurements.json says why)"
+        )
+    key = stage_key(
+        "export", params=params.read_bytes(), data=data, environment=environment_state()
+    )
     return OpenedBuild(params, spec, out, cache, data, key, StageLog(say), t0)
 
 
@@ -221,9 +264,26 @@ def reuse_whole(build: OpenedBuild) -> BuildResult | None:
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    return BuildResult(build.out, [CheckResult(**c) for c in manifest["checks"]],
-                       time.perf_counter() - build.t0, build.log.stages, manifest["volatile"]["cpu_seconds"])
+    return BuildResult(
+        build.out,
+        [CheckResult(**c) for c in manifest["checks"]],
+        time.perf_counter() - build.t0,
+        build.log.stages,
+        manifest["volatile"]["cpu_seconds"],
+    )
 
 
-__all__ = ["BuildResult", "OpenedBuild", "OutputError", "StageLog", "check_output", "clean_leftovers", "data_path",
-           "open_build", "publish", "reuse_whole", "temporary_folder", "volatile"]
+__all__ = [
+    "BuildResult",
+    "OpenedBuild",
+    "OutputError",
+    "StageLog",
+    "check_output",
+    "clean_leftovers",
+    "data_path",
+    "open_build",
+    "publish",
+    "reuse_whole",
+    "temporary_folder",
+    "volatile",
+]

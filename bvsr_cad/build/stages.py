@@ -1,12 +1,13 @@
 """A build's stages and the one runner that caches, times and reports them.
 
-A :class:`Stage` declares what it reads: the parameters less the tables and keys it ignores, values it
-derives from them, the calibration's data file. Its cache key is made from that declaration and nothing
-else (:meth:`Runner.key`), so a stage added to a build's list needs no edit here. The stage's function
-writes its files into a folder and returns its products; :meth:`Runner.run` takes them from the cache,
-or runs the function (into a new cache entry where there is a cache), times it and adds its line to the
-stage report (``bvsr build --json``). Writers and checks never see the cache: a build hands them
-:meth:`Runner.memo` (products of their own steps, keyed by what those read) and :meth:`Runner.verdicts`.
+A :class:`Stage` declares what it reads: the parameters less the tables and keys it ignores, values
+it derives from them, the calibration's data file. Its cache key is made from that declaration and
+nothing else (:meth:`Runner.key`), so a stage added to a build's list needs no edit here. The
+stage's function writes its files into a folder and returns its products; :meth:`Runner.run` takes
+them from the cache, or runs the function (into a new cache entry where there is a cache), times it
+and adds its line to the stage report (``bvsr build --json``). Writers and checks never see the
+cache: a build hands them :meth:`Runner.memo` (products of their own steps, keyed by what those
+read) and :meth:`Runner.verdicts`.
 """
 
 from __future__ import annotations
@@ -34,9 +35,10 @@ class Stage:
     Attributes:
         label: its name in the stage report and the progress lines.
         key: its cache entries' name; None: not cached (it runs at every build).
-        ignore: the parameters it does not read (``"table"`` or ``"table.key"``): the rest are part of its
-            key. None: it reads the parameters only through ``derived``.
-        derived: what it reads of the parameters besides, as named values (a flag, a choice, a sub-table).
+        ignore: the parameters it does not read (``"table"`` or ``"table.key"``): the rest are part
+            of its key. None: it reads the parameters only through ``derived``.
+        derived: what it reads of the parameters besides, as named values (a flag, a choice, a
+            sub-table).
         data: it reads the calibration's data file.
         say: the progress line said before it runs.
     """
@@ -67,10 +69,13 @@ class Stage:
 
 
 class Runner:
-    """Runs a build's stages into its folder from the parameters ``spec`` and the calibration ``data``;
-    ``cache``: the artifact cache (None: every stage runs, ``--no-cache``); ``log``: the stage report."""
+    """Runs a build's stages into its folder from the parameters ``spec`` and the calibration
+    ``data``; ``cache``: the artifact cache (None: every stage runs, ``--no-cache``); ``log``: the
+    stage report."""
 
-    def __init__(self, spec: Any, data: bytes, cache: ArtifactCache | None, folder: Path, log: StageLog):
+    def __init__(
+        self, spec: Any, data: bytes, cache: ArtifactCache | None, folder: Path, log: StageLog
+    ):
         self.spec, self.data, self.cache, self.folder, self.log = spec, data, cache, folder, log
         self.say = log.say
         self._hits: dict[str, Path | None] = {}
@@ -89,17 +94,18 @@ class Runner:
         return self._hits[key]
 
     def put(self, stage: Stage, fill: Callable[[Path], None]) -> None:
-        """Store an entry of ``stage`` that ``fill(folder)`` writes (a stage whose products come from
-        elsewhere, a second process); nothing without a cache."""
+        """Store an entry of ``stage`` that ``fill(folder)`` writes (a stage whose products come
+        from elsewhere, a second process); nothing without a cache."""
         if self.cache is not None:
             self._hits[self.key(stage)] = self.cache.put(self.key(stage), fill)
 
     def run(self, stage: Stage, make: Callable[[Path], T]) -> T:
         """``stage``'s products: ``make(folder)`` writes its files into ``folder`` and returns them
-        (picklable). From the cache, the entry's files are copied into the build's folder and its products
-        read back; else ``make`` runs (into a new entry, when there is a cache). Products handed on are
-        always the ones read back from their pickle (:func:`bvsr_cad.build.cache.object_stage`), so a build from
-        the cache equals one without, file for file."""
+        (picklable). From the cache, the entry's files are copied into the build's folder and its
+        products read back; else ``make`` runs (into a new entry, when there is a cache). Products
+        handed on are always the ones read back from their pickle
+        (:func:`bvsr_cad.build.cache.object_stage`), so a build from the cache equals one without,
+        file for file."""
         if stage.say:
             self.say(stage.say)
         t = time.perf_counter()
@@ -112,31 +118,43 @@ class Runner:
 
     @contextmanager
     def timed(self, stage: Stage) -> Iterator[None]:
-        """Time the block as part of ``stage`` (a stage whose work is spread over the build): its seconds
-        join the stage's line when :meth:`run` or :meth:`record` writes it."""
+        """Time the block as part of ``stage`` (a stage whose work is spread over the build): its
+        seconds join the stage's line when :meth:`run` or :meth:`record` writes it."""
         t = time.perf_counter()
         try:
             yield
         finally:
-            self._pending[stage.label] = self._pending.get(stage.label, 0.0) + time.perf_counter() - t
+            self._pending[stage.label] = (
+                self._pending.get(stage.label, 0.0) + time.perf_counter() - t
+            )
 
     def record(self, stage: Stage, reused: bool, seconds: float = 0.0) -> None:
-        """``stage``'s line in the stage report: ``seconds`` and what :meth:`timed` counted for it."""
+        """``stage``'s line in the stage report: ``seconds`` and what :meth:`timed` counted for
+        it."""
         self.log.record(stage.label, reused, seconds + self._pending.pop(stage.label, 0.0))
 
-    def memo(self, name: str, inputs: dict[str, Any], make: Callable[[Path], T], dst: Path,
-             files: Sequence[Path] = ()) -> T:
-        """A writer's own cached step: ``make(dst)``'s files and products, keyed by ``name``, ``inputs`` and
-        the bytes of ``files`` (hashed only where there is a cache)."""
-        hashes = [hashlib.sha256(Path(f).read_bytes()).hexdigest() for f in files] if self.cache else []
+    def memo(
+        self,
+        name: str,
+        inputs: dict[str, Any],
+        make: Callable[[Path], T],
+        dst: Path,
+        files: Sequence[Path] = (),
+    ) -> T:
+        """A writer's own cached step: ``make(dst)``'s files and products, keyed by ``name``,
+        ``inputs`` and the bytes of ``files`` (hashed only where there is a cache)."""
+        hashes = (
+            [hashlib.sha256(Path(f).read_bytes()).hexdigest() for f in files] if self.cache else []
+        )
         return object_stage(self.cache, stage_key(name, **inputs, files=hashes), make, dst)[0]
 
 
-
-def verdict_store(cache: ArtifactCache | None) -> Callable[[str, dict[str, Any], Callable[[], T]], tuple[T, bool]] | None:
-    """Where check groups keep their verdicts (:class:`bvsr_cad.checks.memo.CheckMemo`): ``store(name, inputs,
-    compute)`` gives the verdicts of ``compute()`` for these ``inputs`` and whether they came from ``cache``
-    (None without a cache: every group runs)."""
+def verdict_store(
+    cache: ArtifactCache | None,
+) -> Callable[[str, dict[str, Any], Callable[[], T]], tuple[T, bool]] | None:
+    """Where check groups keep their verdicts (:class:`bvsr_cad.checks.memo.CheckMemo`):
+    ``store(name, inputs, compute)`` gives the verdicts of ``compute()`` for these ``inputs`` and
+    whether they came from ``cache`` (None without a cache: every group runs)."""
     if cache is None:
         return None
     return lambda name, inputs, compute: value_stage(cache, stage_key(name, **inputs), compute)

@@ -43,8 +43,11 @@ def changed_keys(old: dict[str, Any], new: dict[str, Any], prefix: str = "") -> 
         if isinstance(a, dict) and isinstance(b, dict):
             out += changed_keys(a, b, name + ".")
         elif a != b:
-            out.append(f"{name}: {a!r} -> {b!r}" if key in old and key in new
-                       else f"{name}: {'added' if key in new else 'removed'}")
+            out.append(
+                f"{name}: {a!r} -> {b!r}"
+                if key in old and key in new
+                else f"{name}: {'added' if key in new else 'removed'}"
+            )
     return out
 
 
@@ -70,13 +73,19 @@ def _bytes(path: Path | None) -> bytes | None:
         return None
 
 
-def watch(params: str | Path, out_dir: str | Path | None, say: Callable[[str], None],
-          progress: Callable[[str], None] | None = None, stop: threading.Event | None = None,
-          debounce_ms: int = DEBOUNCE_MS, build: Callable[..., BuildResult] = build_export,
-          on_assembly: Callable[[Assembly], None] | None = None) -> int:
+def watch(
+    params: str | Path,
+    out_dir: str | Path | None,
+    say: Callable[[str], None],
+    progress: Callable[[str], None] | None = None,
+    stop: threading.Event | None = None,
+    debounce_ms: int = DEBOUNCE_MS,
+    build: Callable[..., BuildResult] = build_export,
+    on_assembly: Callable[[Assembly], None] | None = None,
+) -> int:
     """Build once, then after every save; returns 0 when stopped (Ctrl-C or ``stop`` set).
-    ``on_assembly``: given each build's assembly as soon as it is built, before the rest of the export
-    (``bvsr watch --show``: :func:`bvsr_cad.exporters.ocp_viewer.assembly_sender`)."""
+    ``on_assembly``: given each build's assembly as soon as it is built, before the rest of the
+    export (``bvsr watch --show``: :func:`bvsr_cad.exporters.ocp_viewer.assembly_sender`)."""
     from watchfiles import watch as watch_files
 
     params = Path(params).resolve()
@@ -93,12 +102,17 @@ def watch(params: str | Path, out_dir: str | Path | None, say: Callable[[str], N
         failed = [r for r in res.results if r.passed is False]
         reused = [s["stage"] for s in res.stages if s["status"] == "reused"]
         built = [s["stage"] for s in res.stages if s["status"] == "built"]
-        say(f"wrote {res.out_dir}/ in {res.seconds:.1f} s; {len(failed)} failed checks; "
-            f"rebuilt: {', '.join(built) or 'nothing'}; reused: {', '.join(reused) or 'nothing'}")
+        say(
+            f"wrote {res.out_dir}/ in {res.seconds:.1f} s; {len(failed)} failed checks; "
+            f"rebuilt: {', '.join(built) or 'nothing'}; reused: {', '.join(reused) or 'nothing'}"
+        )
 
     data = _data_file(params, last)
     data_bytes = _bytes(data)
-    seen = (_bytes(params), data_bytes)  # the bytes last acted on (read before the build: a save during it is new)
+    seen = (
+        _bytes(params),
+        data_bytes,
+    )  # the bytes last acted on (read before the build: a save during it is new)
     try:
         rebuild()
         say(f"watching {params}" + (f" and {data}" if data else "") + " (Ctrl-C stops)")
@@ -106,17 +120,30 @@ def watch(params: str | Path, out_dir: str | Path | None, say: Callable[[str], N
             files = {params} | ({data} if data else set())
             folders = sorted({f.parent for f in files if f.parent.is_dir()})
             retarget = False
-            for changes in watch_files(*folders, debounce=debounce_ms, stop_event=stop, raise_interrupt=False,
-                                       recursive=False,  # the files sit in these folders, not below
-                                       watch_filter=lambda _change, path: Path(path).resolve() in files,
-                                       rust_timeout=CATCH_UP_MS, yield_on_timeout=True):
+            for changes in watch_files(
+                *folders,
+                debounce=debounce_ms,
+                stop_event=stop,
+                raise_interrupt=False,
+                recursive=False,  # the files sit in these folders, not below
+                watch_filter=lambda _change, path, files=files: Path(path).resolve() in files,
+                rust_timeout=CATCH_UP_MS,
+                yield_on_timeout=True,
+            ):
                 now = (_bytes(params), _bytes(data))
                 if not changes and now == seen:
                     continue  # no event, and the files are as last acted on
                 seen = now
                 new = _read(params)
-                diff = changed_keys(last, new) if new is not None else [
-                    "(the file is not valid TOML yet)" if params.exists() else "(the file is gone)"]
+                diff = (
+                    changed_keys(last, new)
+                    if new is not None
+                    else [
+                        "(the file is not valid TOML yet)"
+                        if params.exists()
+                        else "(the file is gone)"
+                    ]
+                )
                 new_data = _data_file(params, new) if new is not None else data
                 new_bytes = _bytes(new_data)
                 data_changed = new_data == data and new_bytes != data_bytes
@@ -125,8 +152,11 @@ def watch(params: str | Path, out_dir: str | Path | None, say: Callable[[str], N
                 if diff:
                     say(f"{params.name} changed: " + "; ".join(diff))
                 if data_changed:
-                    say(f"{data.name} (calibration data) changed" if new_bytes is not None
-                        else f"{data.name} (calibration data) is gone")
+                    say(
+                        f"{data.name} (calibration data) changed"
+                        if new_bytes is not None
+                        else f"{data.name} (calibration data) is gone"
+                    )
                 if new is not None:
                     last = new
                 data_bytes = new_bytes

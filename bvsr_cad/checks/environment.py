@@ -37,12 +37,15 @@ def slice_cache_path() -> Path:
 
 def environment_state() -> dict[str, Any]:
     """What outside the export the checks' results depend on: the installed slicer and the slice
-    cache, and Debian's ``check_urdf`` (a cached export is reused only while these are unchanged)."""
+    cache, and Debian's ``check_urdf`` (a cached export is reused only while these are
+    unchanged)."""
     exe = slicer_exe()
     cache = slice_cache_path()
-    return {"slicer": slicer_identity(exe) if exe else None,
-            "slice_cache": cache.read_bytes() if cache.is_file() else b"",
-            "check_urdf": shutil.which("check_urdf")}
+    return {
+        "slicer": slicer_identity(exe) if exe else None,
+        "slice_cache": cache.read_bytes() if cache.is_file() else b"",
+        "check_urdf": shutil.which("check_urdf"),
+    }
 
 
 __all__ = ["SLICER", "environment_state", "slice_cache_path", "slicer_exe", "slicer_identity"]

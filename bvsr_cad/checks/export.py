@@ -22,7 +22,7 @@ class Export:
     manifest: dict[str, Any]
 
     @classmethod
-    def open(cls, root: str | Path) -> "Export":
+    def open(cls, root: str | Path) -> Export:
         root = Path(root).resolve()  # checks may change the working folder (MuJoCo logs)
         path = root / "manifest.json"
         if not root.is_dir():

@@ -29,7 +29,7 @@ def pocket_centres(mesh, z_mm: float, pocket_diameter_mm: float) -> np.ndarray:
     to_2d = np.eye(4)
     to_2d[2, 3] = -z_mm
     planar, _ = section.to_2D(to_2D=to_2d, check=False)
-    target = math.pi * pocket_diameter_mm ** 2 / 4
+    target = math.pi * pocket_diameter_mm**2 / 4
     centres = []
     for poly in planar.polygons_full:
         for ring in poly.interiors:
@@ -59,25 +59,63 @@ def check_layout(exp: Export) -> list[CheckResult]:
             where = f"{part['files']['stl']} z={z:.3f}"
             c = pocket_centres(mesh, z, info["pocket_diameter_mm"])
             tag = f"{part['name']}:{face}"
-            out.append(CheckResult(f"pentagon_pockets:{tag}", len(c) == 5, len(c), 5, "pockets", where))
+            out.append(
+                CheckResult(f"pentagon_pockets:{tag}", len(c) == 5, len(c), 5, "pockets", where)
+            )
             if len(c) != 5:
                 continue
             c = _sorted_from_dorsal(c)
             r = np.hypot(c[:, 0], c[:, 1])
             ang = np.degrees(np.arctan2(c[:, 1], c[:, 0]))
             r_err = float(np.max(np.abs(r - expected_r)))
-            out.append(CheckResult(f"pentagon_pitch_circle:{tag}", r_err <= RADIUS_TOL_MM, r_err, RADIUS_TOL_MM,
-                                   "mm", where, f"measured radii {np.round(r, 3).tolist()}, pitch {expected_r:.3f}"))
+            out.append(
+                CheckResult(
+                    f"pentagon_pitch_circle:{tag}",
+                    r_err <= RADIUS_TOL_MM,
+                    r_err,
+                    RADIUS_TOL_MM,
+                    "mm",
+                    where,
+                    f"measured radii {np.round(r, 3).tolist()}, pitch {expected_r:.3f}",
+                )
+            )
             spacing = np.diff(np.append(ang, ang[0] + 360.0)) % 360.0
             s_err = float(np.max(np.abs(spacing - 72.0)))
-            out.append(CheckResult(f"pentagon_spacing:{tag}", s_err <= ANGLE_TOL_DEG, s_err, ANGLE_TOL_DEG, "deg",
-                                   where, f"spacings {np.round(spacing, 3).tolist()}"))
+            out.append(
+                CheckResult(
+                    f"pentagon_spacing:{tag}",
+                    s_err <= ANGLE_TOL_DEG,
+                    s_err,
+                    ANGLE_TOL_DEG,
+                    "deg",
+                    where,
+                    f"spacings {np.round(spacing, 3).tolist()}",
+                )
+            )
             mirrored = c * np.array([-1.0, 1.0])
             d = np.linalg.norm(mirrored[:, None, :] - c[None, :, :], axis=2).min(axis=1)
             m_err = float(d.max())
-            out.append(CheckResult(f"pentagon_mirror_yz:{tag}", m_err <= MIRROR_TOL_MM, m_err, MIRROR_TOL_MM, "mm",
-                                   where, "largest distance from a mirrored pocket to its twin"))
+            out.append(
+                CheckResult(
+                    f"pentagon_mirror_yz:{tag}",
+                    m_err <= MIRROR_TOL_MM,
+                    m_err,
+                    MIRROR_TOL_MM,
+                    "mm",
+                    where,
+                    "largest distance from a mirrored pocket to its twin",
+                )
+            )
             dorsal = float(abs(((ang[0] - 90.0 + 180.0) % 360.0) - 180.0))
-            out.append(CheckResult(f"pentagon_soa1_dorsal:{tag}", dorsal <= ANGLE_TOL_DEG, dorsal, ANGLE_TOL_DEG,
-                                   "deg", where, "angle of the pocket nearest +Y from +Y"))
+            out.append(
+                CheckResult(
+                    f"pentagon_soa1_dorsal:{tag}",
+                    dorsal <= ANGLE_TOL_DEG,
+                    dorsal,
+                    ANGLE_TOL_DEG,
+                    "deg",
+                    where,
+                    "angle of the pocket nearest +Y from +Y",
+                )
+            )
     return out

@@ -20,8 +20,8 @@ from typing import Any
 from .export import Export
 from .result import CheckResult
 
-#: ``store(name, inputs, compute)``: the verdicts of ``compute()`` kept for ``name`` and ``inputs``, and
-#: whether they were kept already.
+#: ``store(name, inputs, compute)``: the verdicts of ``compute()`` kept for ``name`` and ``inputs``,
+#: and whether they were kept already.
 VerdictStore = Callable[[str, dict[str, Any], Callable[[], Any]], tuple[Any, bool]]
 
 
@@ -31,17 +31,22 @@ class CheckMemo:
         self._sha: dict[str, str] = {}
         self.reused = self.run = 0
 
-    def __call__(self, group: str, reads: tuple[list[str], Any],
-                 compute: Callable[[], list[CheckResult]]) -> list[CheckResult]:
-        """``compute()``'s verdicts, or the kept ones of the same ``reads`` (files, manifest values)."""
+    def __call__(
+        self, group: str, reads: tuple[list[str], Any], compute: Callable[[], list[CheckResult]]
+    ) -> list[CheckResult]:
+        """``compute()``'s verdicts, or the kept ones of the same ``reads`` (files, manifest
+        values)."""
         if self.store is None:
             return compute()
         files, values = reads
         for rel in files:
             if rel not in self._sha:
                 self._sha[rel] = hashlib.sha256(Path(self.exp.root / rel).read_bytes()).hexdigest()
-        results, reused = self.store(f"checks:{group}", {"files": [(rel, self._sha[rel]) for rel in files],
-                                                        "values": values}, compute)
+        results, reused = self.store(
+            f"checks:{group}",
+            {"files": [(rel, self._sha[rel]) for rel in files], "values": values},
+            compute,
+        )
         self.reused += reused
         self.run += not reused
         return results

@@ -80,7 +80,8 @@ def _fits(size: np.ndarray, volume: list[float]) -> bool:
 
 
 def overhang_regions(mesh: trimesh.Trimesh, max_overhang_deg: float) -> list[dict[str, Any]]:
-    """Connected regions of downward faces steeper than ``max_overhang_deg`` from vertical (bed excluded)."""
+    """Connected regions of downward faces steeper than ``max_overhang_deg`` from vertical (bed
+    excluded)."""
     n = mesh.face_normals
     zmin = mesh.bounds[0][2]
     on_bed = np.abs(mesh.triangles[:, :, 2] - zmin).max(axis=1) < 1e-4
@@ -95,7 +96,9 @@ def overhang_regions(mesh: trimesh.Trimesh, max_overhang_deg: float) -> list[dic
     adj = adj[steep[adj[:, 0]] & steep[adj[:, 1]]]
     local = np.full(len(n), -1)
     local[idx] = np.arange(len(idx))
-    graph = coo_matrix((np.ones(len(adj)), (local[adj[:, 0]], local[adj[:, 1]])), shape=(len(idx), len(idx)))
+    graph = coo_matrix(
+        (np.ones(len(adj)), (local[adj[:, 0]], local[adj[:, 1]])), shape=(len(idx), len(idx))
+    )
     count, labels = connected_components(graph, directed=False)
     order = np.argsort(labels, kind="stable")
     groups = np.split(idx[order], np.cumsum(np.bincount(labels, minlength=count))[:-1])
@@ -110,13 +113,18 @@ def overhang_regions(mesh: trimesh.Trimesh, max_overhang_deg: float) -> list[dic
             width = float(min(sides[0], sides[1]))
         else:
             width = 0.0
-        c = (mesh.triangles_center[faces] * mesh.area_faces[faces, None]).sum(axis=0) / max(area, 1e-12)
-        regions.append({"area_mm2": area, "width_mm": width, "centre_mm": [round(float(v), 2) for v in c]})
+        c = (mesh.triangles_center[faces] * mesh.area_faces[faces, None]).sum(axis=0) / max(
+            area, 1e-12
+        )
+        regions.append(
+            {"area_mm2": area, "width_mm": width, "centre_mm": [round(float(v), 2) for v in c]}
+        )
     return sorted(regions, key=lambda r: -r["area_mm2"])
 
 
-def min_wall_mm(mesh: trimesh.Trimesh, samples: int = WALL_SAMPLES, seed: int = 0,
-                horizontal: bool = False) -> tuple[float, list[float]]:
+def min_wall_mm(
+    mesh: trimesh.Trimesh, samples: int = WALL_SAMPLES, seed: int = 0, horizontal: bool = False
+) -> tuple[float, list[float]]:
     """Thinnest wall: rays from area-weighted surface samples inwards to an opposite face within
     ``WALL_PARALLEL_DEG`` of parallel."""
     rng = np.random.default_rng(seed)
@@ -136,7 +144,9 @@ def min_wall_mm(mesh: trimesh.Trimesh, samples: int = WALL_SAMPLES, seed: int = 
     d = np.linalg.norm(locs - origins[ray_idx], axis=1)
     # A wall has an opposite face nearly parallel to the one the ray leaves; the tip of a
     # wedge (a sharp edge) is thin by nature and prints as the edge it is.
-    parallel = np.einsum("ij,ij->i", mesh.face_normals[tri_idx], dirs[ray_idx]) >= np.cos(np.radians(WALL_PARALLEL_DEG))
+    parallel = np.einsum("ij,ij->i", mesh.face_normals[tri_idx], dirs[ray_idx]) >= np.cos(
+        np.radians(WALL_PARALLEL_DEG)
+    )
     ok = (d > WALL_GRAZE_MM) & parallel
     if not ok.any():
         return float("inf"), [0.0, 0.0, 0.0]
@@ -155,12 +165,15 @@ def _voids(path) -> list[tuple[float, float, np.ndarray]]:
         for ring in poly.interiors:
             hole = Polygon(ring)
             if hole.length > 0:
-                out.append((hole.area, 4.0 * hole.area / hole.length, np.asarray(hole.centroid.coords[0])))
+                out.append(
+                    (hole.area, 4.0 * hole.area / hole.length, np.asarray(hole.centroid.coords[0]))
+                )
     return out
 
 
 def _ring_voids(rings) -> list[tuple[float, float, np.ndarray]]:
-    """(area, 4 A / P, centroid) of every hole of a manifold3d cross-section: its clockwise contours."""
+    """(area, 4 A / P, centroid) of every hole of a manifold3d cross-section: its clockwise
+    contours."""
     out = []
     for ring in rings:
         r = np.asarray(ring, float)
@@ -178,23 +191,32 @@ def _ring_voids(rings) -> list[tuple[float, float, np.ndarray]]:
     return out
 
 
-#: Rigid maps that turn x (resp. y, z) into z, so that a z section of the mapped solid is an x (y, z) section.
-_AXIS_TO_Z = (np.array([[0.0, 1, 0, 0], [0, 0, 1, 0], [1, 0, 0, 0]]),
-              np.array([[0.0, 0, 1, 0], [1, 0, 0, 0], [0, 1, 0, 0]]),
-              np.array([[1.0, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]]))
+#: Rigid maps that turn x (resp. y, z) into z, so that a z section of the mapped solid is an x (y,
+#: z) section.
+_AXIS_TO_Z = (
+    np.array([[0.0, 1, 0, 0], [0, 0, 1, 0], [1, 0, 0, 0]]),
+    np.array([[0.0, 0, 1, 0], [1, 0, 0, 0], [0, 1, 0, 0]]),
+    np.array([[1.0, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]]),
+)
 
 
 def _manifold(mesh: trimesh.Trimesh) -> manifold3d.Manifold | None:
     """The mesh as a manifold3d solid (double precision), or None if it is not a closed manifold."""
-    solid = manifold3d.Manifold(manifold3d.Mesh64(vert_properties=np.asarray(mesh.vertices, np.float64),
-                                                  tri_verts=np.asarray(mesh.faces, np.uint32)))
+    solid = manifold3d.Manifold(
+        manifold3d.Mesh64(
+            vert_properties=np.asarray(mesh.vertices, np.float64),
+            tri_verts=np.asarray(mesh.faces, np.uint32),
+        )
+    )
     return solid if solid.status() == manifold3d.Error.NoError and not solid.is_empty() else None
 
 
-def _section_voids(mesh: trimesh.Trimesh, solid: manifold3d.Manifold | None, axis: int, offsets: np.ndarray):
-    """Voids of the sections normal to ``axis`` at ``bounds[0][axis] + offsets``: manifold3d's planar
-    sections of ``solid``, or trimesh's sections of the mesh when it is not a closed manifold (None if
-    trimesh cannot cut it)."""
+def _section_voids(
+    mesh: trimesh.Trimesh, solid: manifold3d.Manifold | None, axis: int, offsets: np.ndarray
+):
+    """Voids of the sections normal to ``axis`` at ``bounds[0][axis] + offsets``: manifold3d's
+    planar sections of ``solid``, or trimesh's sections of the mesh when it is not a closed manifold
+    (None if trimesh cannot cut it)."""
     lo = mesh.bounds[0]
     if solid is not None:
         turned = solid.transform(_AXIS_TO_Z[axis])
@@ -202,13 +224,17 @@ def _section_voids(mesh: trimesh.Trimesh, solid: manifold3d.Manifold | None, axi
     normal = np.zeros(3)
     normal[axis] = 1.0
     try:
-        paths = mesh.section_multiplane(plane_origin=lo.copy(), plane_normal=normal, heights=offsets)
+        paths = mesh.section_multiplane(
+            plane_origin=lo.copy(), plane_normal=normal, heights=offsets
+        )
     except (ValueError, IndexError):
         return None
     return [_voids(path) for path in paths]
 
 
-def min_hole_mm(mesh: trimesh.Trimesh, sections: int = SECTIONS_PER_AXIS, step_mm: float = 0.25) -> tuple[float, str]:
+def min_hole_mm(
+    mesh: trimesh.Trimesh, sections: int = SECTIONS_PER_AXIS, step_mm: float = 0.25
+) -> tuple[float, str]:
     """Smallest hole whose axis runs along x, y or z: the hydraulic diameter 4 A / P of an
     enclosed void that appears with the same size and place in two sections ``step_mm`` apart
     (a section grazing a hole across it makes a thin sliver that is not a hole). Of holes equal
@@ -218,7 +244,10 @@ def min_hole_mm(mesh: trimesh.Trimesh, sections: int = SECTIONS_PER_AXIS, step_m
     solid = _manifold(mesh)
     for axis in range(3):
         span = hi[axis] - lo[axis]
-        base = np.linspace(lo[axis] + 0.013 * span, hi[axis] - 0.011 * span - step_mm, sections) - lo[axis]
+        base = (
+            np.linspace(lo[axis] + 0.013 * span, hi[axis] - 0.011 * span - step_mm, sections)
+            - lo[axis]
+        )
         heights = np.sort(np.concatenate([base, base + step_mm]))
         voids = _section_voids(mesh, solid, axis, heights)
         if voids is None:
@@ -226,7 +255,10 @@ def min_hole_mm(mesh: trimesh.Trimesh, sections: int = SECTIONS_PER_AXIS, step_m
         for i in range(0, len(heights) - 1, 2):
             a, b = voids[i], voids[i + 1]
             for area, d, c in a:
-                twin = any(np.linalg.norm(c - c2) < 0.2 and abs(area2 - area) <= 0.15 * area for area2, _d2, c2 in b)
+                twin = any(
+                    np.linalg.norm(c - c2) < 0.2 and abs(area2 - area) <= 0.15 * area
+                    for area2, _d2, c2 in b
+                )
                 if twin and d < best - 1e-6:
                     best, where = d, f"{'xyz'[axis]} = {lo[axis] + heights[i]:.2f} mm"
     return best, where
@@ -238,7 +270,8 @@ class SlicerMissingError(RuntimeError):
 
 @dataclass(frozen=True)
 class SliceItem:
-    """One printed STL of an export: ``name`` is ``<job>/<part>``, ``rel`` its path in the export."""
+    """One printed STL of an export: ``name`` is ``<job>/<part>``, ``rel`` its path in the
+    export."""
 
     name: str
     rel: str
@@ -248,8 +281,16 @@ class SliceItem:
 
 def slice_items(exp: Export) -> list[SliceItem]:
     """Every STL the manifest's ``print_jobs`` name, in their order."""
-    return [SliceItem(f"{job['name']}/{it['part']}", it["stl"], exp.root / it["stl"], list(job["build_volume_mm"]))
-            for job in exp.manifest.get("print_jobs") or [] for it in job["items"]]
+    return [
+        SliceItem(
+            f"{job['name']}/{it['part']}",
+            it["stl"],
+            exp.root / it["stl"],
+            list(job["build_volume_mm"]),
+        )
+        for job in exp.manifest.get("print_jobs") or []
+        for it in job["items"]
+    ]
 
 
 def _slicer_version(exe: str) -> str:
@@ -264,8 +305,8 @@ def _slicer_version(exe: str) -> str:
     return "PrusaSlicer (unknown version)"
 
 
-#: Key of the cache entry that maps an installed slicer (see :func:`slicer_identity`) to its version,
-#: so that the checks find cached results without starting the slicer.
+#: Key of the cache entry that maps an installed slicer (see :func:`slicer_identity`) to its
+#: version, so that the checks find cached results without starting the slicer.
 _CACHE_SLICERS = "slicers"
 
 
@@ -278,7 +319,8 @@ def _read_cache() -> dict[str, Any]:
 
 
 def _update_cache(entries: dict[str, Any], slicers: dict[str, str]) -> None:
-    """Merge into the cache file as it is now (another process may have added to it) and replace it atomically."""
+    """Merge into the cache file as it is now (another process may have added to it) and replace it
+    atomically."""
     path = slice_cache_path()
     cache = _read_cache()
     cache.update(entries)
@@ -303,37 +345,66 @@ def _cache_key(item: SliceItem, version: str) -> str:
 def _slice(stl: Path, volume: list[float], timeout_s: float, exe: str = SLICER) -> dict[str, Any]:
     vx, vy, vz = volume
     with tempfile.TemporaryDirectory() as tmp:
-        cmd = [exe, "--export-gcode", *SLICER_OPTIONS,
-               "--bed-shape", f"0x0,{vx:g}x0,{vx:g}x{vy:g},0x{vy:g}", "--max-print-height", f"{vz:g}",
-               "--center", f"{vx / 2:g},{vy / 2:g}", "--output", str(Path(tmp) / "out.gcode"), str(stl)]
+        cmd = [
+            exe,
+            "--export-gcode",
+            *SLICER_OPTIONS,
+            "--bed-shape",
+            f"0x0,{vx:g}x0,{vx:g}x{vy:g},0x{vy:g}",
+            "--max-print-height",
+            f"{vz:g}",
+            "--center",
+            f"{vx / 2:g},{vy / 2:g}",
+            "--output",
+            str(Path(tmp) / "out.gcode"),
+            str(stl),
+        ]
         t0 = time.perf_counter()
         try:
             res = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s)
         except subprocess.TimeoutExpired:
-            return {"ok": False, "seconds": timeout_s, "layers": 0, "error": f"timed out after {timeout_s:g} s"}
+            return {
+                "ok": False,
+                "seconds": timeout_s,
+                "layers": 0,
+                "error": f"timed out after {timeout_s:g} s",
+            }
         gcode = Path(tmp) / "out.gcode"
         layers = 0
         if gcode.is_file():
             layers = sum(1 for line in gcode.open() if line.startswith(";LAYER_CHANGE"))
-        errors = [l for l in (res.stdout + res.stderr).splitlines() if "error" in l.lower() and "[trace]" not in l]
+        errors = [
+            l
+            for l in (res.stdout + res.stderr).splitlines()
+            if "error" in l.lower() and "[trace]" not in l
+        ]
         ok = res.returncode == 0 and gcode.is_file() and layers > 0
-        return {"ok": ok, "seconds": time.perf_counter() - t0, "layers": layers,
-                "error": "" if ok else (errors[-1] if errors else f"exit code {res.returncode}")}
+        return {
+            "ok": ok,
+            "seconds": time.perf_counter() - t0,
+            "layers": layers,
+            "error": "" if ok else (errors[-1] if errors else f"exit code {res.returncode}"),
+        }
 
 
 def _slice_command(exp: Export) -> str:
-    """The command that slices this export, naming it as ``EXPORT``: the checks' results (kept in the
-    manifest and the report, and reused from the build cache) must not depend on the folder."""
+    """The command that slices this export, naming it as ``EXPORT``: the checks' results (kept in
+    the manifest and the report, and reused from the build cache) must not depend on the folder."""
     return SLICE_COMMAND.format(export="EXPORT")
 
 
-def slice_stls(exp: Export, items: list[SliceItem] | None = None, progress: Callable[[str], None] | None = None,
-               workers: int = SLICE_WORKERS) -> dict[str, dict[str, Any]]:
-    """Slice every STL of ``items`` (default: all of the export's) that the cache does not hold yet, with
-    ``workers`` slicers at a time, and store each result in the cache as soon as it is known.
+def slice_stls(
+    exp: Export,
+    items: list[SliceItem] | None = None,
+    progress: Callable[[str], None] | None = None,
+    workers: int = SLICE_WORKERS,
+) -> dict[str, dict[str, Any]]:
+    """Slice every STL of ``items`` (default: all of the export's) that the cache does not hold yet,
+    with ``workers`` slicers at a time, and store each result in the cache as soon as it is known.
 
     Returns:
-        ``{item name: result}`` for the STLs sliced now (``ok``, ``layers``, ``seconds``, ``error``, ``when``).
+        ``{item name: result}`` for the STLs sliced now (``ok``, ``layers``, ``seconds``, ``error``,
+        ``when``).
 
     Raises:
         SlicerMissingError: PrusaSlicer's command line is not installed.
@@ -341,9 +412,11 @@ def slice_stls(exp: Export, items: list[SliceItem] | None = None, progress: Call
     say = progress or (lambda _m: None)
     exe = slicer_exe()
     if exe is None:
-        raise SlicerMissingError(f"slicing needs PrusaSlicer's command line, `{SLICER}`, which is not on PATH; "
-                                 f"install it with `{SLICER_INSTALL}` (or put a PrusaSlicer 2.5+ `{SLICER}` "
-                                 "on PATH)")
+        raise SlicerMissingError(
+            f"slicing needs PrusaSlicer's command line, `{SLICER}`, which is not on PATH; "
+            f"install it with `{SLICER_INSTALL}` (or put a PrusaSlicer 2.5+ `{SLICER}` "
+            "on PATH)"
+        )
     items = slice_items(exp) if items is None else items
     version = _slicer_version(exe)
     slicers = {slicer_identity(exe): version}
@@ -352,8 +425,10 @@ def slice_stls(exp: Export, items: list[SliceItem] | None = None, progress: Call
     todo = [it for it in items if keys[it.name] not in cache]
     timeout_s = float(exp.manifest["fabrication"]["slicer_timeout_s"])
     n = max(1, min(workers, os.cpu_count() or 1))
-    say(f"slicing {len(todo)} of {len(items)} STLs with {version} ({n} at a time; "
-        f"{len(items) - len(todo)} already in {slice_cache_path()})")
+    say(
+        f"slicing {len(todo)} of {len(items)} STLs with {version} ({n} at a time; "
+        f"{len(items) - len(todo)} already in {slice_cache_path()})"
+    )
     done: dict[str, dict[str, Any]] = {}
     if not todo:
         _update_cache({}, slicers)
@@ -370,12 +445,14 @@ def slice_stls(exp: Export, items: list[SliceItem] | None = None, progress: Call
     return done
 
 
-def check_slicing(exp: Export, items: list[SliceItem] | None = None,
-                  sliced_now: Collection[str] = ()) -> list[CheckResult]:
+def check_slicing(
+    exp: Export, items: list[SliceItem] | None = None, sliced_now: Collection[str] = ()
+) -> list[CheckResult]:
     """One ``slice:<job>/<part>`` result per STL from the slice cache; never starts the slicer.
 
     An STL the cache does not hold (or a slicer :func:`slice_stls` has not run yet) is reported
-    ``passed: None`` with the command that slices it. ``sliced_now`` names the items sliced in this run.
+    ``passed: None`` with the command that slices it. ``sliced_now`` names the items sliced in this
+    run.
     """
     items = slice_items(exp) if items is None else items
     command = _slice_command(exp)
@@ -391,19 +468,37 @@ def check_slicing(exp: Export, items: list[SliceItem] | None = None,
     for it in items:
         r = cache.get(_cache_key(it, version)) if version else None
         if not isinstance(r, dict):
-            why = (f"{SLICER} is not installed ({SLICER_INSTALL}); then `{command}` slices it" if exe is None else
-                   f"not sliced in the build (builds and checks never start the slicer) and not in the slice "
-                   f"cache; `{command}` slices it")
+            why = (
+                f"{SLICER} is not installed ({SLICER_INSTALL}); then `{command}` slices it"
+                if exe is None
+                else "not sliced in the build (builds and checks never start the slicer) and not "
+                "in the slice "
+                f"cache; `{command}` slices it"
+            )
             out.append(CheckResult(f"slice:{it.name}", None, None, 0, "errors", it.rel, why))
             continue
-        how = "sliced now" if it.name in sliced_now else \
-            f"cached result of {r.get('when', '?')} (same STL, slicer and options)"
-        note = (f"{version}, {' '.join(SLICER_OPTIONS)}: {r.get('layers', 0)} layers in "
-                f"{r.get('seconds', 0.0):.1f} s, {how}")
+        how = (
+            "sliced now"
+            if it.name in sliced_now
+            else f"cached result of {r.get('when', '?')} (same STL, slicer and options)"
+        )
+        note = (
+            f"{version}, {' '.join(SLICER_OPTIONS)}: {r.get('layers', 0)} layers in "
+            f"{r.get('seconds', 0.0):.1f} s, {how}"
+        )
         if not r.get("ok"):
             note += f"; {r.get('error', '')}"
-        out.append(CheckResult(f"slice:{it.name}", bool(r.get("ok")), 0 if r.get("ok") else 1, 0, "errors",
-                               it.rel, note))
+        out.append(
+            CheckResult(
+                f"slice:{it.name}",
+                bool(r.get("ok")),
+                0 if r.get("ok") else 1,
+                0,
+                "errors",
+                it.rel,
+                note,
+            )
+        )
     return out
 
 
@@ -418,7 +513,9 @@ def _bvsr_rest_meshes(exp: Export) -> list[trimesh.Trimesh]:
     return out
 
 
-def _in_features(points: np.ndarray, features: list[dict[str, Any]], margin_mm: float) -> np.ndarray:
+def _in_features(
+    points: np.ndarray, features: list[dict[str, Any]], margin_mm: float
+) -> np.ndarray:
     inside = np.zeros(len(points), bool)
     for f in features:
         p0, p1 = np.asarray(f["p0_mm"]), np.asarray(f["p1_mm"])
@@ -428,17 +525,20 @@ def _in_features(points: np.ndarray, features: list[dict[str, Any]], margin_mm: 
         rel = points - p0
         t = rel @ axis
         radial = np.linalg.norm(rel - np.outer(t, axis), axis=1)
-        inside |= (t >= -margin_mm) & (t <= L + margin_mm) & (radial <= f["diameter_mm"] / 2 + margin_mm)
+        inside |= (
+            (t >= -margin_mm) & (t <= L + margin_mm) & (radial <= f["diameter_mm"] / 2 + margin_mm)
+        )
     return inside
 
 
 class _SurfaceIndex:
-    """Closest points on a triangle mesh (the distances ``trimesh.proximity.closest_point`` finds, to
-    rounding: the tests compare the two) from libigl's AABB tree, built once per mesh in C++. On the twin
-    and the BVSR at rest (380 000 and 630 000 triangles) the envelope check takes 2.4 CPU s with it, 3.8
-    with a k-d tree bound and an R-tree search. A point equally near two triangles (an
-    edge, a corner) gets either: :meth:`signed_distance` takes the sign from a triangle's normal only
-    where the point lies over that triangle, which is right for either, and from ``contains`` elsewhere."""
+    """Closest points on a triangle mesh (the distances ``trimesh.proximity.closest_point`` finds,
+    to rounding: the tests compare the two) from libigl's AABB tree, built once per mesh in C++. On
+    the twin and the BVSR at rest (380 000 and 630 000 triangles) the envelope check takes 2.4 CPU s
+    with it, 3.8 with a k-d tree bound and an R-tree search. A point equally near two triangles (an
+    edge, a corner) gets either: :meth:`signed_distance` takes the sign from a triangle's normal
+    only where the point lies over that triangle, which is right for either, and from ``contains``
+    elsewhere."""
 
     def __init__(self, mesh: trimesh.Trimesh):
         import igl
@@ -456,13 +556,18 @@ class _SurfaceIndex:
         if len(pts) == 0:
             return np.zeros((0, 3)), np.zeros(0), np.zeros(0, np.int64)
         d2, tid, close = self.tree.squared_distance(self.vertices, self.faces, pts)
-        return np.asarray(close, np.float64), np.sqrt(np.maximum(np.asarray(d2, np.float64), 0.0)), \
-            np.asarray(tid, np.int64).ravel()
+        return (
+            np.asarray(close, np.float64),
+            np.sqrt(np.maximum(np.asarray(d2, np.float64), 0.0)),
+            np.asarray(tid, np.int64).ravel(),
+        )
 
-    def signed_distance(self, points: np.ndarray, contains: Callable[[np.ndarray], np.ndarray] | None = None
-                        ) -> np.ndarray:
-        """Positive inside, as ``trimesh.proximity.signed_distance``: the sign from the closest face's normal
-        where the point projects into that face, else from ``contains`` (default: a ray test on the mesh)."""
+    def signed_distance(
+        self, points: np.ndarray, contains: Callable[[np.ndarray], np.ndarray] | None = None
+    ) -> np.ndarray:
+        """Positive inside, as ``trimesh.proximity.signed_distance``: the sign from the closest
+        face's normal where the point projects into that face, else from ``contains`` (default: a
+        ray test on the mesh)."""
         from trimesh.constants import tol
         from trimesh.triangles import points_to_barycentric
 
@@ -483,8 +588,11 @@ class _SurfaceIndex:
         return distance
 
 
-def _inside_any(meshes: list[trimesh.Trimesh], points: np.ndarray, skip: np.ndarray | None = None) -> np.ndarray:
-    """Which points lie inside one of ``meshes``; ``skip[i]``: a mesh not to test point i in (its own piece)."""
+def _inside_any(
+    meshes: list[trimesh.Trimesh], points: np.ndarray, skip: np.ndarray | None = None
+) -> np.ndarray:
+    """Which points lie inside one of ``meshes``; ``skip[i]``: a mesh not to test point i in (its
+    own piece)."""
     inside = np.zeros(len(points), bool)
     for k, m in enumerate(meshes):
         lo, hi = m.bounds
@@ -504,19 +612,28 @@ OUTER_PROBE_MM = 1e-3
 
 
 def envelope_reads(exp: Export) -> tuple[list[str], Any]:
-    """What :func:`check_envelope` reads: the twin's pieces and the BVSR's instances (STLs, transforms,
-    features) and the manifest's ``rigid_tail`` tolerance and filled features."""
+    """What :func:`check_envelope` reads: the twin's pieces and the BVSR's instances (STLs,
+    transforms, features) and the manifest's ``rigid_tail`` tolerance and filled features."""
     rt = exp.manifest.get("rigid_tail") or {}
     parts = {p["name"]: p for p in exp.parts}
     pieces = [p for p in exp.parts if p["kind"] == "rigid_tail"]
     instances = exp.manifest["assembly"]["instances"] if rt else []
     used = sorted({i["part"] for i in instances})
     files = [p["files"]["stl"] for p in pieces] + [parts[n]["files"]["stl"] for n in used]
-    return files, {"rigid_tail": [rt.get("envelope_tolerance_mm"), rt.get("filled_features")],
-                   "pieces": [[p["files"]["stl"], p["print_transform"], p["tail_transform"],
-                               p["info"]["print_features"]] for p in pieces],
-                   "parts": [[n, parts[n]["files"]["stl"], parts[n]["print_transform"]] for n in used],
-                   "instances": [[i["part"], i["transform"]] for i in instances]}
+    return files, {
+        "rigid_tail": [rt.get("envelope_tolerance_mm"), rt.get("filled_features")],
+        "pieces": [
+            [
+                p["files"]["stl"],
+                p["print_transform"],
+                p["tail_transform"],
+                p["info"]["print_features"],
+            ]
+            for p in pieces
+        ],
+        "parts": [[n, parts[n]["files"]["stl"], parts[n]["print_transform"]] for n in used],
+        "instances": [[i["part"], i["transform"]] for i in instances],
+    }
 
 
 def check_envelope(exp: Export, samples: int = 6000, seed: int = 1) -> list[CheckResult]:
@@ -528,7 +645,9 @@ def check_envelope(exp: Export, samples: int = 6000, seed: int = 1) -> list[Chec
         return []
     tol = float(rt["envelope_tolerance_mm"])
     pieces = [p for p in exp.parts if p["kind"] == "rigid_tail"]
-    features = [f for p in pieces for f in p["info"]["print_features"]] + list(rt.get("filled_features", []))
+    features = [f for p in pieces for f in p["info"]["print_features"]] + list(
+        rt.get("filled_features", [])
+    )
     rigid_parts = []
     for p in pieces:
         m = exp.part_frame_mesh(p)  # a copy
@@ -541,7 +660,8 @@ def check_envelope(exp: Export, samples: int = 6000, seed: int = 1) -> list[Chec
     rng = np.random.default_rng(seed)
     margin = 0.3
     # Twin -> BVSR: every outer-surface sample of the twin is on the BVSR's surface. Twice as many
-    # samples of the pieces' surfaces as wanted; the first ``samples`` on the outer surface are kept.
+    # samples of the pieces' surfaces as wanted; the first ``samples`` on the outer surface are
+    # kept.
     pts, fid = trimesh.sample.sample_surface(rigid, 2 * samples, seed=int(rng.integers(1 << 31)))
     probe = pts + OUTER_PROBE_MM * rigid.face_normals[fid]
     pts = pts[~_inside_any(rigid_parts, probe, skip=piece_of_face[fid])][:samples]
@@ -551,18 +671,35 @@ def check_envelope(exp: Export, samples: int = 6000, seed: int = 1) -> list[Chec
     # BVSR -> twin: every BVSR surface sample is inside the twin or on its surface.
     bpts, _ = trimesh.sample.sample_surface(bvsr_all, samples, seed=int(rng.integers(1 << 31)))
     bpts = bpts[~_in_features(bpts, features, margin)]
-    sd = _SurfaceIndex(rigid).signed_distance(bpts, lambda q: _inside_any(rigid_parts, q))  # positive inside
+    sd = _SurfaceIndex(rigid).signed_distance(
+        bpts, lambda q: _inside_any(rigid_parts, q)
+    )  # positive inside
     j = int(np.argmin(sd))
     outside = float(max(0.0, -sd[j]))
     where = "rigid_tail/* vs the BVSR at rest"
     return [
-        CheckResult("rigid_tail_envelope_twin_on_bvsr", float(d_out[i]) <= tol, float(d_out[i]), tol, "mm", where,
-                    f"{len(pts)} samples of the twin's surface (pin, tie-rod and nut holes and the filled pneumatic and "
-                    "socket features excluded); farthest from "
-                    f"the BVSR's surface at {np.round(pts[i], 2).tolist()}"),
-        CheckResult("rigid_tail_envelope_bvsr_inside_twin", outside <= tol, outside, tol, "mm", where,
-                    f"{len(bpts)} samples of the BVSR's surface; farthest outside the twin at "
-                    f"{np.round(bpts[j], 2).tolist()}"),
+        CheckResult(
+            "rigid_tail_envelope_twin_on_bvsr",
+            float(d_out[i]) <= tol,
+            float(d_out[i]),
+            tol,
+            "mm",
+            where,
+            f"{len(pts)} samples of the twin's surface (pin, tie-rod and nut holes and the filled "
+            "pneumatic and "
+            "socket features excluded); farthest from "
+            f"the BVSR's surface at {np.round(pts[i], 2).tolist()}",
+        ),
+        CheckResult(
+            "rigid_tail_envelope_bvsr_inside_twin",
+            outside <= tol,
+            outside,
+            tol,
+            "mm",
+            where,
+            f"{len(bpts)} samples of the BVSR's surface; farthest outside the twin at "
+            f"{np.round(bpts[j], 2).tolist()}",
+        ),
     ]
 
 
@@ -581,21 +718,31 @@ def check_rigid_robot(exp: Export) -> list[CheckResult]:
             mujoco.mj_step(model, data)
             mass = float(model.body_mass.sum())
             ok = abs(mass - rt["mass_kg"]) <= 1e-6 * max(1.0, rt["mass_kg"])
-            note = f"MuJoCo {mujoco.__version__}: {model.nbody - 1} body, {model.njnt} joints, mass {mass:.4f} kg"
+            note = (
+                f"MuJoCo {mujoco.__version__}: {model.nbody - 1} body, {model.njnt} joints, "
+                f"mass {mass:.4f} kg"
+            )
         except Exception as exc:  # MuJoCo raises ValueError with its own message
             ok, note = False, f"MuJoCo failed: {exc}"
         out.append(CheckResult(f"rigid_tail_robot_loads:{key}", ok, int(ok), 1, "", rt[key], note))
     return out
 
 
-def print_item_reads(job: dict[str, Any], it: dict[str, Any], fab: dict[str, Any]) -> tuple[list[str], Any]:
+def print_item_reads(
+    job: dict[str, Any], it: dict[str, Any], fab: dict[str, Any]
+) -> tuple[list[str], Any]:
     """What :func:`check_print_item` reads: the item's STL, its name and kind, the job's process and
     build volume, the manifest's ``fabrication`` limits."""
-    return [it["stl"]], {"job": [job["name"], job["process"], job["build_volume_mm"]],
-                         "item": [it["part"], it["kind"], it["stl"]], "fabrication": fab}
+    return [it["stl"]], {
+        "job": [job["name"], job["process"], job["build_volume_mm"]],
+        "item": [it["part"], it["kind"], it["stl"]],
+        "fabrication": fab,
+    }
 
 
-def check_print_item(exp: Export, job: dict[str, Any], it: dict[str, Any], fab: dict[str, Any]) -> list[CheckResult]:
+def check_print_item(
+    exp: Export, job: dict[str, Any], it: dict[str, Any], fab: dict[str, Any]
+) -> list[CheckResult]:
     """The printability checks of one STL of a print job."""
     out: list[CheckResult] = []
     fdm = job["process"] == "FDM"
@@ -603,31 +750,64 @@ def check_print_item(exp: Export, job: dict[str, Any], it: dict[str, Any], fab: 
     mesh = exp.mesh(rel)
     lo, hi = mesh.bounds
     size = hi - lo
-    out.append(CheckResult(f"print_fits_volume:{name}", _fits(size, job["build_volume_mm"]),
-                           [round(float(v), 2) for v in size], job["build_volume_mm"], "mm", rel))
+    out.append(
+        CheckResult(
+            f"print_fits_volume:{name}",
+            _fits(size, job["build_volume_mm"]),
+            [round(float(v), 2) for v in size],
+            job["build_volume_mm"],
+            "mm",
+            rel,
+        )
+    )
     zmin = float(lo[2])
-    down = (mesh.face_normals[:, 2] < -0.9999) & (np.abs(mesh.triangles[:, :, 2] - zmin).max(axis=1) < 1e-6)
+    down = (mesh.face_normals[:, 2] < -0.9999) & (
+        np.abs(mesh.triangles[:, :, 2] - zmin).max(axis=1) < 1e-6
+    )
     base = float(mesh.area_faces[down].sum())
-    out.append(CheckResult(f"print_flat_base:{name}", abs(zmin) < BED_Z_TOL_MM and base >= MIN_BASE_AREA_MM2,
-                           base, MIN_BASE_AREA_MM2, "mm2", rel, f"lowest z {zmin:.6f} mm"))
+    out.append(
+        CheckResult(
+            f"print_flat_base:{name}",
+            abs(zmin) < BED_Z_TOL_MM and base >= MIN_BASE_AREA_MM2,
+            base,
+            MIN_BASE_AREA_MM2,
+            "mm2",
+            rel,
+            f"lowest z {zmin:.6f} mm",
+        )
+    )
     regions = overhang_regions(mesh, fab["max_overhang_deg"])
     down_area = float(mesh.area_faces[mesh.face_normals[:, 2] < 0].sum())
     over = sum(r["area_mm2"] for r in regions)
     support = [r for r in regions if r["width_mm"] > fab["max_bridge_mm"]]
     frac = over / down_area if down_area > 0 else 0.0
-    text = (f"{100 * frac:.2f} % of the downward area is steeper than {fab['max_overhang_deg']:g} deg from "
-            f"vertical in {len(regions)} regions; {len(regions) - len(support)} no wider than "
-            f"{fab['max_bridge_mm']:g} mm (bridges, short ledges)")
+    text = (
+        f"{100 * frac:.2f} % of the downward area is steeper than {fab['max_overhang_deg']:g} deg "
+        "from "
+        f"vertical in {len(regions)} regions; {len(regions) - len(support)} no wider than "
+        f"{fab['max_bridge_mm']:g} mm (bridges, short ledges)"
+    )
     if support:
         text += "; needs support at " + "; ".join(
-            f"{r['centre_mm']} ({r['area_mm2']:.1f} mm2, {r['width_mm']:.1f} mm wide)" for r in support[:5])
+            f"{r['centre_mm']} ({r['area_mm2']:.1f} mm2, {r['width_mm']:.1f} mm wide)"
+            for r in support[:5]
+        )
     elif regions:
         r = max(regions, key=lambda r: r["width_mm"])
         text += f"; widest {r['width_mm']:.2f} mm at {r['centre_mm']}"
     if not fdm:
         text = "powder bed (MJF): no support needed; " + text
-    out.append(CheckResult(f"print_overhang:{name}", (len(support) == 0) if fdm else None,
-                           sum(r["area_mm2"] for r in support), 0.0, "mm2 needing support", rel, text))
+    out.append(
+        CheckResult(
+            f"print_overhang:{name}",
+            (len(support) == 0) if fdm else None,
+            sum(r["area_mm2"] for r in support),
+            0.0,
+            "mm2 needing support",
+            rel,
+            text,
+        )
+    )
     wall, at = min_wall_mm(mesh)
     plate, at_plate = min_wall_mm(mesh, horizontal=True)
     wall_min = fab["fdm_min_wall_mm"] if fdm else fab["mjf_min_wall_mm"]
@@ -635,24 +815,54 @@ def check_print_item(exp: Export, job: dict[str, Any], it: dict[str, Any], fab: 
     if it["kind"] in ("mold", "mold_core"):
         wall_min = plate_min = fab["mold_min_wall_mm"]
     note = "" if fdm else f"; limit {fab.get('mjf_min_wall_note', '')}"
-    out.append(CheckResult(f"print_min_wall:{name}", wall >= wall_min, wall, wall_min, "mm", rel,
-                           f"thinnest wall (faces within 45 deg of vertical) at {at}, rays inwards to a "
-                           f"parallel face{note}"))
-    out.append(CheckResult(f"print_min_plate:{name}", plate >= plate_min, plate, plate_min, "mm", rel,
-                           f"thinnest plate (faces within 45 deg of horizontal) at {at_plate}{note}"))
+    out.append(
+        CheckResult(
+            f"print_min_wall:{name}",
+            wall >= wall_min,
+            wall,
+            wall_min,
+            "mm",
+            rel,
+            f"thinnest wall (faces within 45 deg of vertical) at {at}, rays inwards to a "
+            f"parallel face{note}",
+        )
+    )
+    out.append(
+        CheckResult(
+            f"print_min_plate:{name}",
+            plate >= plate_min,
+            plate,
+            plate_min,
+            "mm",
+            rel,
+            f"thinnest plate (faces within 45 deg of horizontal) at {at_plate}{note}",
+        )
+    )
     hole, where = min_hole_mm(mesh)
     hole_min = fab["fdm_min_hole_mm"] if fdm else fab["mjf_min_hole_mm"]
     ok = hole >= HOLE_POLYGON_FACTOR * hole_min
-    out.append(CheckResult(f"print_min_hole:{name}", ok, hole if np.isfinite(hole) else None, hole_min,
-                           "mm", rel, f"smallest enclosed void (4 A / P) at {where}" if where else
-                           "no enclosed void in any section"))
+    out.append(
+        CheckResult(
+            f"print_min_hole:{name}",
+            ok,
+            hole if np.isfinite(hole) else None,
+            hole_min,
+            "mm",
+            rel,
+            f"smallest enclosed void (4 A / P) at {where}"
+            if where
+            else "no enclosed void in any section",
+        )
+    )
     return out
 
 
-def check_printability(exp: Export, sliced_now: Collection[str] = (), memo: CheckMemo | None = None
-                       ) -> list[CheckResult]:
-    """Every printability check on every STL the manifest's ``print_jobs`` names (slicing results from
-    the cache: see :func:`check_slicing`). ``memo``: verdicts of unchanged inputs from the artifact cache."""
+def check_printability(
+    exp: Export, sliced_now: Collection[str] = (), memo: CheckMemo | None = None
+) -> list[CheckResult]:
+    """Every printability check on every STL the manifest's ``print_jobs`` names (slicing results
+    from the cache: see :func:`check_slicing`). ``memo``: verdicts of unchanged inputs from the
+    artifact cache."""
     jobs = exp.manifest.get("print_jobs")
     if not jobs:
         return []
@@ -661,7 +871,11 @@ def check_printability(exp: Export, sliced_now: Collection[str] = (), memo: Chec
     out: list[CheckResult] = []
     for job in jobs:
         for it in job["items"]:
-            out += memo("print_item", print_item_reads(job, it, fab), lambda: check_print_item(exp, job, it, fab))
+            out += memo(
+                "print_item",
+                print_item_reads(job, it, fab),
+                lambda job=job, it=it: check_print_item(exp, job, it, fab),
+            )
     out += check_slicing(exp, sliced_now=sliced_now)
     out += memo("envelope", envelope_reads(exp), lambda: check_envelope(exp))
     out += check_rigid_robot(exp)

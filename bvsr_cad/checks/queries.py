@@ -10,7 +10,8 @@ _RAY = np.array([0.4395064455, 0.617598629942, 0.652231566745])
 
 
 def contains(mesh: trimesh.Trimesh, points: np.ndarray) -> np.ndarray:
-    """Which points lie inside a closed mesh: the same answer as ``mesh.contains`` at a fraction of its cost.
+    """Which points lie inside a closed mesh: the same answer as ``mesh.contains`` at a fraction of
+    its cost.
 
     trimesh counts every crossing of a ray cast both ways (parity). On a watertight mesh with
     outward normals the first face each ray meets says the same: the point is inside when that

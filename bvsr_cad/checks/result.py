@@ -46,12 +46,14 @@ class CheckResult:
 
     @property
     def skipped(self) -> bool:
-        """True for a check that could not run (its tool or extra is missing): no value, no verdict."""
+        """True for a check that could not run (its tool or extra is missing): no value, no
+        verdict."""
         return self.passed is None and self.value is None
 
     @property
     def group(self) -> str:
-        """The check's family, the part of its name before the first ``:`` or ``_`` (``stl``, ``print``)."""
+        """The check's family, the part of its name before the first ``:`` or ``_`` (``stl``,
+        ``print``)."""
         return self.name.split(":", 1)[0].split("_", 1)[0]
 
     def line(self) -> str:
@@ -72,14 +74,16 @@ def overall(results: list[CheckResult]) -> bool:
     return all(r.passed is not False for r in results)
 
 
-#: Informational groups printed row by row in the short summary: the comparisons with the paper's figures
-#: (mass, length, angles, forces), which a designer reads on every build. Other informational rows are counted.
+#: Informational groups printed row by row in the short summary: the comparisons with the paper's
+#: figures (mass, length, angles, forces), which a designer reads on every build. Other
+#: informational rows are counted.
 SHOWN_INFO_GROUPS = ("paper",)
 
 
 def summary_lines(results: list[CheckResult]) -> list[str]:
     """A passing export at a glance: one line per check group, then every failure in full, the paper
-    comparisons, and each reason for skipped checks once (a missing tool is named once, not per file)."""
+    comparisons, and each reason for skipped checks once (a missing tool is named once, not per
+    file)."""
     groups: dict[str, list[CheckResult]] = {}
     for r in results:
         groups.setdefault(r.group, []).append(r)
@@ -90,14 +94,30 @@ def summary_lines(results: list[CheckResult]) -> list[str]:
         failed = sum(r.passed is False for r in rows)
         skipped = sum(r.skipped for r in rows)
         info = len(rows) - passed - failed - skipped
-        counts = [f"{n} {word}" for n, word in ((passed, "passed"), (failed, "failed"),
-                                                (info, "informational"), (skipped, "skipped")) if n]
-        mark = "FAIL" if failed else ("PASS" if passed else ("SKIP" if skipped == len(rows) else "INFO"))
+        counts = [
+            f"{n} {word}"
+            for n, word in (
+                (passed, "passed"),
+                (failed, "failed"),
+                (info, "informational"),
+                (skipped, "skipped"),
+            )
+            if n
+        ]
+        mark = (
+            "FAIL"
+            if failed
+            else ("PASS" if passed else ("SKIP" if skipped == len(rows) else "INFO"))
+        )
         lines.append(f"{mark}  {name:<{width}}  {', '.join(counts)}")
     failures = [r.line() for r in results if r.passed is False]
     if failures:
         lines += ["", "failed:"] + failures
-    shown = [r.line() for r in results if r.passed is None and not r.skipped and r.group in SHOWN_INFO_GROUPS]
+    shown = [
+        r.line()
+        for r in results
+        if r.passed is None and not r.skipped and r.group in SHOWN_INFO_GROUPS
+    ]
     if shown:
         lines += ["", "compared with the paper:"] + shown
     reasons = list(dict.fromkeys(f"{r.group}: {r.note}" for r in results if r.skipped))

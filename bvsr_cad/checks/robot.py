@@ -20,7 +20,13 @@ import trimesh
 
 from .. import units
 from ..extras import missing, skipped_note
-from ..models.kinematics import TailKinematics, chord_length_mm, joint_transform_prb, prb_angles, uv_from_theta_phi
+from ..models.kinematics import (
+    TailKinematics,
+    chord_length_mm,
+    joint_transform_prb,
+    prb_angles,
+    uv_from_theta_phi,
+)
 from ..parameters.load import load_spec
 from .export import Export
 from .result import CheckResult
@@ -29,13 +35,16 @@ MASS_TOLERANCE = 0.001  # robot mass vs the manifest's tail mass
 INERTIA_TOLERANCE = 0.01  # link inertia vs an independent computation from its meshes
 FK_TOLERANCE_M = 1e-6
 FK_POSES = 200
-SETTLE_QVEL_RAD_S = 0.1  # 1 s after release under gravity the sag has died down (BVSR_L: 0.06 rad/s)
+SETTLE_QVEL_RAD_S = (
+    0.1  # 1 s after release under gravity the sag has died down (BVSR_L: 0.06 rad/s)
+)
 #: Mimic / chord couplings held while stepping (rad or m). MuJoCo's equality
 #: constraints are soft; released under gravity the residual stays below this.
 EQUALITY_TOLERANCE = 1e-3
-#: The default files' reduced chain steps at 1-2 ms, so its equalities (the two pivots of a joint, the
-#: joints of a segment) are as soft as a 2-4 ms time constant: released under gravity, the pivots
-#: of a joint differ by up to 7.5 mrad (0.2 mm of shear over the 24 mm middle link) in the first steps.
+#: The default files' reduced chain steps at 1-2 ms, so its equalities (the two pivots of a joint,
+#: the joints of a segment) are as soft as a 2-4 ms time constant: released under gravity, the
+#: pivots of a joint differ by up to 7.5 mrad (0.2 mm of shear over the 24 mm middle link) in the
+#: first steps.
 EQUALITY_TOLERANCE_REDUCED = 1e-2
 VIRTUAL_MASS_LIMIT_KG = 1e-6
 
@@ -65,14 +74,18 @@ def _mesh_inertial(exp: Export, visuals: list[dict]) -> tuple[float, np.ndarray,
     return m, c, I
 
 
-def _compose_manifest(entries: list[tuple[dict, np.ndarray]]) -> tuple[float, np.ndarray, np.ndarray]:
+def _compose_manifest(
+    entries: list[tuple[dict, np.ndarray]],
+) -> tuple[float, np.ndarray, np.ndarray]:
     """Mass, CoM, inertia of manifest links placed by translations (parallel-axis theorem)."""
     m = sum(e["mass_kg"] for e, _ in entries)
     c = sum(e["mass_kg"] * (np.asarray(e["com_m"]) + off) for e, off in entries) / m
     I = np.zeros((3, 3))
     for e, off in entries:
         d = np.asarray(e["com_m"]) + off - c
-        I += np.asarray(e["inertia_kg_m2"]) + e["mass_kg"] * (np.dot(d, d) * np.eye(3) - np.outer(d, d))
+        I += np.asarray(e["inertia_kg_m2"]) + e["mass_kg"] * (
+            np.dot(d, d) * np.eye(3) - np.outer(d, d)
+        )
     return m, c, I
 
 
@@ -82,16 +95,37 @@ def check_inertias(exp: Export) -> list[CheckResult]:
     out = []
     for link in robot["links"]:
         ok, text = _inertia_problems(link["mass_kg"], np.asarray(link["inertia_kg_m2"]))
-        out.append(CheckResult(f"robot_inertia_valid:{link['name']}", ok, int(ok), 1, "", robot["urdf"], text))
+        out.append(
+            CheckResult(
+                f"robot_inertia_valid:{link['name']}", ok, int(ok), 1, "", robot["urdf"], text
+            )
+        )
         if link["role"] == "virtual":
-            out.append(CheckResult(f"robot_virtual_mass:{link['name']}", link["mass_kg"] < VIRTUAL_MASS_LIMIT_KG,
-                                   link["mass_kg"] * 1e6, VIRTUAL_MASS_LIMIT_KG * 1e6, "mg", robot["urdf"]))
+            out.append(
+                CheckResult(
+                    f"robot_virtual_mass:{link['name']}",
+                    link["mass_kg"] < VIRTUAL_MASS_LIMIT_KG,
+                    link["mass_kg"] * 1e6,
+                    VIRTUAL_MASS_LIMIT_KG * 1e6,
+                    "mg",
+                    robot["urdf"],
+                )
+            )
     total_kg = sum(l["mass_kg"] for l in robot["links"])
     tail_kg = units.g_to_kg(exp.manifest["mass_g"]["tail"])
     rel = abs(total_kg - tail_kg) / tail_kg
-    out.append(CheckResult("robot_mass_matches_tail", rel <= MASS_TOLERANCE, 100 * rel, 100 * MASS_TOLERANCE,
-                           "%", robot["urdf"], f"links {total_kg * units.G_PER_KG:.4f} g (virtual links included), "
-                           f"parts {tail_kg * units.G_PER_KG:.4f} g"))
+    out.append(
+        CheckResult(
+            "robot_mass_matches_tail",
+            rel <= MASS_TOLERANCE,
+            100 * rel,
+            100 * MASS_TOLERANCE,
+            "%",
+            robot["urdf"],
+            f"links {total_kg * units.G_PER_KG:.4f} g (virtual links included), "
+            f"parts {tail_kg * units.G_PER_KG:.4f} g",
+        )
+    )
     # Each link with meshes against its meshes; a joint's two deformable halves together at rest.
     for b in robot["bending_joints"]:
         j = b["name"]
@@ -110,10 +144,22 @@ def _compare(exp: Export, name: str, mine, visuals, where: str) -> CheckResult:
     m1, c1, I1 = _mesh_inertial(exp, visuals)
     # Relative differences; the CoM is judged against the body's radius of gyration.
     gyr = math.sqrt(np.trace(I1) / m1)
-    err = max(abs(m0 - m1) / m1, np.linalg.norm(c0 - c1) / gyr, np.linalg.norm(I0 - I1) / np.linalg.norm(I1))
-    return CheckResult(f"robot_inertia_vs_mesh:{name}", err <= INERTIA_TOLERANCE, 100 * err, 100 * INERTIA_TOLERANCE,
-                       "%", where, f"B-rep {m0 * units.G_PER_KG:.3f} g vs meshes {m1 * units.G_PER_KG:.3f} g; largest relative "
-                       "difference of mass, CoM (per radius of gyration) and inertia tensor")
+    err = max(
+        abs(m0 - m1) / m1,
+        np.linalg.norm(c0 - c1) / gyr,
+        np.linalg.norm(I0 - I1) / np.linalg.norm(I1),
+    )
+    return CheckResult(
+        f"robot_inertia_vs_mesh:{name}",
+        err <= INERTIA_TOLERANCE,
+        100 * err,
+        100 * INERTIA_TOLERANCE,
+        "%",
+        where,
+        f"B-rep {m0 * units.G_PER_KG:.3f} g vs meshes {m1 * units.G_PER_KG:.3f} g; largest "
+        "relative "
+        "difference of mass, CoM (per radius of gyration) and inertia tensor",
+    )
 
 
 def check_urdf_tools(exp: Export) -> list[CheckResult]:
@@ -123,11 +169,29 @@ def check_urdf_tools(exp: Export) -> list[CheckResult]:
     tool = shutil.which("check_urdf")
     if tool:
         res = subprocess.run([tool, str(urdf)], capture_output=True, text=True)
-        out.append(CheckResult("urdf_check_urdf", res.returncode == 0, res.returncode, 0, "exit code", rel,
-                               (res.stderr or res.stdout).strip().splitlines()[-1] if res.returncode else ""))
+        out.append(
+            CheckResult(
+                "urdf_check_urdf",
+                res.returncode == 0,
+                res.returncode,
+                0,
+                "exit code",
+                rel,
+                (res.stderr or res.stdout).strip().splitlines()[-1] if res.returncode else "",
+            )
+        )
     else:
-        out.append(CheckResult("urdf_check_urdf", None, None, 0, "exit code", rel,
-                               "check_urdf not installed (Debian: liburdfdom-tools)"))
+        out.append(
+            CheckResult(
+                "urdf_check_urdf",
+                None,
+                None,
+                0,
+                "exit code",
+                rel,
+                "check_urdf not installed (Debian: liburdfdom-tools)",
+            )
+        )
     if missing("crosscheck"):
         out.append(CheckResult("urdf_yourdfpy", None, None, 1, "", rel, skipped_note("crosscheck")))
         return out
@@ -149,7 +213,9 @@ def _equality_residual(m, d) -> float:
         q1 = d.qpos[m.jnt_qposadr[m.eq_obj1id[e]]] - m.qpos0[m.jnt_qposadr[m.eq_obj1id[e]]]
         q2 = d.qpos[m.jnt_qposadr[m.eq_obj2id[e]]] - m.qpos0[m.jnt_qposadr[m.eq_obj2id[e]]]
         c = m.eq_data[e, :5]
-        worst = max(worst, abs(q1 - (c[0] + c[1] * q2 + c[2] * q2 ** 2 + c[3] * q2 ** 3 + c[4] * q2 ** 4)))
+        worst = max(
+            worst, abs(q1 - (c[0] + c[1] * q2 + c[2] * q2**2 + c[3] * q2**3 + c[4] * q2**4))
+        )
     return float(worst)
 
 
@@ -158,7 +224,9 @@ def _step(m, gravity: bool, seconds: float = 1.0, self_contacts: bool = True):
     import mujoco
 
     if not self_contacts:
-        m.geom_conaffinity[:] = 0  # every geom keeps its contype: the MJCF's rule, the world's geoms excepted
+        m.geom_conaffinity[:] = (
+            0  # every geom keeps its contype: the MJCF's rule, the world's geoms excepted
+        )
     if not gravity:
         m.opt.gravity[:] = 0.0
     d = mujoco.MjData(m)
@@ -176,7 +244,8 @@ def _step(m, gravity: bool, seconds: float = 1.0, self_contacts: bool = True):
             lo, hi = m.jnt_range[j]
             if q <= lo + 1e-9 or q >= hi - 1e-9:
                 at_limit.append(mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j))
-    # The reduced chains bound each joint's bend by limited fixed tendons (the hinges have no range).
+    # The reduced chains bound each joint's bend by limited fixed tendons (the hinges have no
+    # range).
     for t in range(m.ntendon):
         if m.tendon_limited[t]:
             lo, hi = m.tendon_range[t]
@@ -188,7 +257,8 @@ def _step(m, gravity: bool, seconds: float = 1.0, self_contacts: bool = True):
 
 @contextlib.contextmanager
 def _quiet_cwd(path: Path):
-    """MuJoCo writes MUJOCO_LOG.TXT into the working folder on a warning: keep it out of the user's."""
+    """MuJoCo writes MUJOCO_LOG.TXT into the working folder on a warning: keep it out of the
+    user's."""
     old = os.getcwd()
     os.chdir(path)
     try:
@@ -202,7 +272,8 @@ MUJOCO_FILES = ("urdf", "mjcf", "mjcf_per_segment", "mjcf_exact")
 
 
 def check_mujoco(exp: Export, keys: tuple[str, ...] = MUJOCO_FILES) -> list[CheckResult]:
-    """Each robot description file of ``keys`` (:data:`MUJOCO_FILES`) compiled and stepped for 1 s in MuJoCo."""
+    """Each robot description file of ``keys`` (:data:`MUJOCO_FILES`) compiled and stepped for 1 s
+    in MuJoCo."""
     robot = exp.manifest["robot"]
     out = []
     with _quiet_cwd(exp.root):
@@ -218,49 +289,117 @@ def check_mujoco(exp: Export, keys: tuple[str, ...] = MUJOCO_FILES) -> list[Chec
                 import mujoco
 
                 compiled = mujoco.MjModel.from_xml_path(str(path))
-                if key == "urdf":  # its contacts at rest, before it is stepped (which changes the model)
+                if (
+                    key == "urdf"
+                ):  # its contacts at rest, before it is stepped (which changes the model)
                     out.append(_urdf_self_contacts(compiled, rel))
-                # MuJoCo's URDF import collides every two links but a parent and its child: the exact chain
-                # puts four links between neighbouring panels, whose SOA and rod halves meet (and overlap by
-                # their tilt) at mid-gap in every pose. The MJCF turns the tail's self-contacts off
-                # (conaffinity 0); the URDF cannot say so to MuJoCo, so it is stepped with the same rule.
-                m, d, warn, eq, at_limit, drift = _step(compiled, gravity=gravity, self_contacts=key != "urdf")
+                # MuJoCo's URDF import collides every two links but a parent and its child: the
+                # exact chain puts four links between neighbouring panels, whose SOA and rod halves
+                # meet (and overlap by their tilt) at mid-gap in every pose. The MJCF turns the
+                # tail's self-contacts off (conaffinity 0); the URDF cannot say so to MuJoCo, so it
+                # is stepped with the same rule.
+                m, d, warn, eq, at_limit, drift = _step(
+                    compiled, gravity=gravity, self_contacts=key != "urdf"
+                )
             except Exception as exc:  # noqa: BLE001 - the compiler's message is the result
                 out.append(CheckResult(f"mujoco_compile:{key}", False, 0, 1, "", rel, str(exc)))
                 continue
-            out.append(CheckResult(f"mujoco_compile:{key}", True, 1, 1, "", rel,
-                                   f"{m.nbody} bodies, {m.njnt} joints, {m.neq} equalities, {m.nu} actuators"))
-            out.append(CheckResult(f"mujoco_warnings_1s:{key}", warn == 0, warn, 0, "warnings", rel,
-                                   "1 s from rest " + ("under gravity" if gravity else "without gravity")))
-            tol = EQUALITY_TOLERANCE if key in ("urdf", "mjcf_exact") else EQUALITY_TOLERANCE_REDUCED
-            out.append(CheckResult(f"mujoco_couplings_held:{key}", eq <= tol, eq, tol,
-                                   "rad or m", rel, "largest mimic/chord equality residual while stepping"))
-            out.append(CheckResult(f"mujoco_no_joint_at_limit:{key}", not at_limit, len(at_limit), 0,
-                                   "joints or bend-limit tendons", rel, ", ".join(at_limit)))
+            out.append(
+                CheckResult(
+                    f"mujoco_compile:{key}",
+                    True,
+                    1,
+                    1,
+                    "",
+                    rel,
+                    f"{m.nbody} bodies, {m.njnt} joints, {m.neq} equalities, {m.nu} actuators",
+                )
+            )
+            out.append(
+                CheckResult(
+                    f"mujoco_warnings_1s:{key}",
+                    warn == 0,
+                    warn,
+                    0,
+                    "warnings",
+                    rel,
+                    "1 s from rest " + ("under gravity" if gravity else "without gravity"),
+                )
+            )
+            tol = (
+                EQUALITY_TOLERANCE if key in ("urdf", "mjcf_exact") else EQUALITY_TOLERANCE_REDUCED
+            )
+            out.append(
+                CheckResult(
+                    f"mujoco_couplings_held:{key}",
+                    eq <= tol,
+                    eq,
+                    tol,
+                    "rad or m",
+                    rel,
+                    "largest mimic/chord equality residual while stepping",
+                )
+            )
+            out.append(
+                CheckResult(
+                    f"mujoco_no_joint_at_limit:{key}",
+                    not at_limit,
+                    len(at_limit),
+                    0,
+                    "joints or bend-limit tendons",
+                    rel,
+                    ", ".join(at_limit),
+                )
+            )
             if not gravity:
-                out.append(CheckResult(f"mujoco_no_drift:{key}", drift <= 1e-9, drift, 1e-9, "rad or m", rel,
-                                       "largest joint displacement after 1 s at rest without gravity"))
+                out.append(
+                    CheckResult(
+                        f"mujoco_no_drift:{key}",
+                        drift <= 1e-9,
+                        drift,
+                        1e-9,
+                        "rad or m",
+                        rel,
+                        "largest joint displacement after 1 s at rest without gravity",
+                    )
+                )
             else:
                 qvel = float(np.max(np.abs(d.qvel)))
-                out.append(CheckResult(f"mujoco_settled_1s:{key}", qvel <= SETTLE_QVEL_RAD_S, qvel, SETTLE_QVEL_RAD_S,
-                                       "rad/s or m/s", rel, "largest joint speed 1 s after release under gravity"))
+                out.append(
+                    CheckResult(
+                        f"mujoco_settled_1s:{key}",
+                        qvel <= SETTLE_QVEL_RAD_S,
+                        qvel,
+                        SETTLE_QVEL_RAD_S,
+                        "rad/s or m/s",
+                        rel,
+                        "largest joint speed 1 s after release under gravity",
+                    )
+                )
     return out
 
 
 def _urdf_self_contacts(m, rel: str) -> CheckResult:
-    """MuJoCo's import of the URDF (``m``, compiled) at rest: its links touch only where neighbouring panels'
-    halves of a column meet (the contacts :func:`check_mujoco` turns off); any other pair would be shapes
-    that overlap."""
+    """MuJoCo's import of the URDF (``m``, compiled) at rest: its links touch only where
+    neighbouring panels' halves of a column meet (the contacts :func:`check_mujoco` turns off); any
+    other pair would be shapes that overlap."""
     import mujoco
 
     d = mujoco.MjData(m)
     mujoco.mj_forward(m, d)
-    bodies = m.geom_bodyid[d.contact.geom[:d.ncon]]
+    bodies = m.geom_bodyid[d.contact.geom[: d.ncon]]
     pairs = {tuple(sorted(m.body(int(b)).name for b in pair)) for pair in bodies}
     neighbours = {tuple(sorted((f"panel{k}", f"panel{k + 1}"))) for k in range(m.nbody)}
     others = sorted(f"{a}-{b}" for a, b in pairs if (a, b) not in neighbours)
-    return CheckResult("mujoco_self_contacts_only_neighbours:urdf", not others, len(others), 0, "link pairs", rel,
-                       ", ".join(others) or f"{len(pairs)} neighbouring panel pairs touch at rest (column halves)")
+    return CheckResult(
+        "mujoco_self_contacts_only_neighbours:urdf",
+        not others,
+        len(others),
+        0,
+        "link pairs",
+        rel,
+        ", ".join(others) or f"{len(pairs)} neighbouring panel pairs touch at rest (column halves)",
+    )
 
 
 def _import_pybullet():
@@ -283,8 +422,17 @@ def _import_pybullet():
 
 def check_pybullet(exp: Export) -> list[CheckResult]:
     if missing("crosscheck"):
-        return [CheckResult("pybullet_masses", None, None, 1e-6, "relative", exp.manifest["robot"]["urdf"],
-                            skipped_note("crosscheck"))]
+        return [
+            CheckResult(
+                "pybullet_masses",
+                None,
+                None,
+                1e-6,
+                "relative",
+                exp.manifest["robot"]["urdf"],
+                skipped_note("crosscheck"),
+            )
+        ]
     pb = _import_pybullet()
 
     urdf = exp.root / exp.manifest["robot"]["urdf"]
@@ -293,17 +441,31 @@ def check_pybullet(exp: Export) -> list[CheckResult]:
         cid = pb.connect(pb.DIRECT)
     try:
         # A fixed base would report the root's mass as 0: load it free to read every mass.
-        body = pb.loadURDF(str(urdf), useFixedBase=False, flags=pb.URDF_USE_INERTIA_FROM_FILE, physicsClientId=cid)
-        masses = {pb.getBodyInfo(body, physicsClientId=cid)[0].decode(): pb.getDynamicsInfo(body, -1,
-                                                                                             physicsClientId=cid)[0]}
+        body = pb.loadURDF(
+            str(urdf), useFixedBase=False, flags=pb.URDF_USE_INERTIA_FROM_FILE, physicsClientId=cid
+        )
+        masses = {
+            pb.getBodyInfo(body, physicsClientId=cid)[0].decode(): pb.getDynamicsInfo(
+                body, -1, physicsClientId=cid
+            )[0]
+        }
         for j in range(pb.getNumJoints(body, physicsClientId=cid)):
             name = pb.getJointInfo(body, j, physicsClientId=cid)[12].decode()
             masses[name] = pb.getDynamicsInfo(body, j, physicsClientId=cid)[0]
     finally:
         pb.disconnect(cid)
     worst = max(abs(masses.get(n, -1.0) - m) / max(m, 1e-12) for n, m in expected.items())
-    return [CheckResult("pybullet_masses", worst <= 1e-6, worst, 1e-6, "relative", exp.manifest["robot"]["urdf"],
-                        f"{len(masses)} links loaded with URDF_USE_INERTIA_FROM_FILE")]
+    return [
+        CheckResult(
+            "pybullet_masses",
+            worst <= 1e-6,
+            worst,
+            1e-6,
+            "relative",
+            exp.manifest["robot"]["urdf"],
+            f"{len(masses)} links loaded with URDF_USE_INERTIA_FROM_FILE",
+        )
+    ]
 
 
 def check_fk(exp: Export) -> list[CheckResult]:
@@ -344,8 +506,10 @@ def check_fk(exp: Export) -> list[CheckResult]:
             d.joint(f"j{k + 1}_{pivot}y").qpos = b[p, k]
 
     out = []
-    for key, name, pose, ref in (("mjcf_exact", "fk_mujoco_vs_kinematics", exact_pose, frames),
-                                 ("mjcf", "fk_mujoco_reduced_vs_kinematics", reduced_pose, reduced)):
+    for key, name, pose, ref in (
+        ("mjcf_exact", "fk_mujoco_vs_kinematics", exact_pose, frames),
+        ("mjcf", "fk_mujoco_reduced_vs_kinematics", reduced_pose, reduced),
+    ):
         if key not in robot:
             continue
         with _quiet_cwd(exp.root):
@@ -361,20 +525,36 @@ def check_fk(exp: Export) -> list[CheckResult]:
             R0, p0 = d.xmat[mount].reshape(3, 3), d.xpos[mount]
             for k in range(1, n + 1):
                 pos_tail_m = R0.T @ (d.xpos[m.body(f"panel{k}").id] - p0)
-                worst = max(worst, float(np.linalg.norm(pos_tail_m - ref[p, k, :3, 3] / units.MM_PER_M)))
-        out.append(CheckResult(name, worst <= FK_TOLERANCE_M, worst, FK_TOLERANCE_M, "m", robot[key],
-                               f"{FK_POSES} random poses within the joint limits, every panel origin"))
+                worst = max(
+                    worst, float(np.linalg.norm(pos_tail_m - ref[p, k, :3, 3] / units.MM_PER_M))
+                )
+        out.append(
+            CheckResult(
+                name,
+                worst <= FK_TOLERANCE_M,
+                worst,
+                FK_TOLERANCE_M,
+                "m",
+                robot[key],
+                f"{FK_POSES} random poses within the joint limits, every panel origin",
+            )
+        )
     return out
 
 
 def robot_reads(exp: Export) -> tuple[list[str], object]:
-    """What :func:`check_robot` reads: every file under ``robot/`` and the parameter file, the manifest's
-    ``robot`` section, the tail's mass and the parameter file's name."""
+    """What :func:`check_robot` reads: every file under ``robot/`` and the parameter file, the
+    manifest's ``robot`` section, the tail's mass and the parameter file's name."""
     root = exp.root
-    files = sorted(p.relative_to(root).as_posix() for p in (root / "robot").rglob("*") if p.is_file())
+    files = sorted(
+        p.relative_to(root).as_posix() for p in (root / "robot").rglob("*") if p.is_file()
+    )
     params = exp.manifest.get("params_file")
     return files + ([params] if params else []), {
-        "robot": exp.manifest.get("robot"), "mass_g": exp.manifest.get("mass_g"), "params_file": params}
+        "robot": exp.manifest.get("robot"),
+        "mass_g": exp.manifest.get("mass_g"),
+        "params_file": params,
+    }
 
 
 def _robot_first(exp: Export) -> list[CheckResult]:
@@ -385,11 +565,14 @@ def _robot_second(exp: Export) -> list[CheckResult]:
     return [*check_mujoco(exp, MUJOCO_FILES[2:]), *check_pybullet(exp), *check_fk(exp)]
 
 
-#: :func:`check_robot` in two parts of about the same time (1.0 and 1.2 CPU s on the default tail), in its
-#: order: a build's two processes each take one when they are free (``checks.run.claim_robot_checks``),
-#: where the whole took its last 2 s on one core while the other stood idle (an edit that moves no solid).
-ROBOT_PARTS = ((_robot_first, "robot descriptions (inertias, URDF tools, MuJoCo: URDF, MJCF)"),
-               (_robot_second, "robot descriptions (MuJoCo: per-segment, exact chain; PyBullet, FK)"))
+#: :func:`check_robot` in two parts of about the same time (1.0 and 1.2 CPU s on the default tail),
+#: in its order: a build's two processes each take one when they are free
+#: (``checks.run.claim_robot_checks``), where the whole took its last 2 s on one core while the
+#: other stood idle (an edit that moves no solid).
+ROBOT_PARTS = (
+    (_robot_first, "robot descriptions (inertias, URDF tools, MuJoCo: URDF, MJCF)"),
+    (_robot_second, "robot descriptions (MuJoCo: per-segment, exact chain; PyBullet, FK)"),
+)
 
 
 def check_robot(exp: Export) -> list[CheckResult]:

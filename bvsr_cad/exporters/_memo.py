@@ -1,7 +1,8 @@
 """A writer's own steps that a build caches: the build hands the writer a memo
-(:meth:`bvsr_cad.build.stages.Runner.memo`), ``memo(name, inputs, make, dst, files=())``, which gives
-``make(dst)``'s products (its files written under ``dst``) for these ``inputs`` and the bytes of ``files``.
-A writer called without one runs each step now (:func:`now`): writers never see the cache.
+(:meth:`bvsr_cad.build.stages.Runner.memo`), ``memo(name, inputs, make, dst, files=())``, which
+gives ``make(dst)``'s products (its files written under ``dst``) for these ``inputs`` and the bytes
+of ``files``. A writer called without one runs each step now (:func:`now`): writers never see the
+cache.
 """
 
 from __future__ import annotations
@@ -15,6 +16,12 @@ T = TypeVar("T")
 Memo = Callable[..., Any]
 
 
-def now(name: str, inputs: dict[str, Any], make: Callable[[Path], T], dst: Path, files: Sequence[Path] = ()) -> T:
+def now(
+    name: str,
+    inputs: dict[str, Any],
+    make: Callable[[Path], T],
+    dst: Path,
+    files: Sequence[Path] = (),
+) -> T:
     """The memo of a writer called alone: ``make(dst)``, run now."""
     return make(dst)

@@ -1,12 +1,11 @@
 """Bill of materials: ``bom.csv`` and ``bom.md`` with a quantity column.
 
-Every row is computed from the typed products (the assembly, the rigid
-twin's pieces, the mold set; quantities from
-:func:`bvsr_cad.assembly.fabrication.made_items`, the list the print jobs
-read too): parts with their counts, materials, processes and masses; rods with cut lengths; fasteners by
-standard designation; pneumatic items with the tube length of every line
-from the panel layout (the tube rings) and the tail length; valves per the
-paper's system (pressure and vacuum per line); totals per product.
+Every row is computed from the typed products (the assembly, the rigid twin's pieces, the mold set;
+quantities from :func:`bvsr_cad.assembly.fabrication.made_items`, the list the print jobs read too):
+parts with their counts, materials, processes and masses; rods with cut lengths; fasteners by
+standard designation; pneumatic items with the tube length of every line from the panel layout (the
+tube rings) and the tail length; valves per the paper's system (pressure and vacuum per line);
+totals per product.
 """
 
 from __future__ import annotations
@@ -30,8 +29,19 @@ from ..parts.rigid_tail import RigidPiece
 #: Preferred lengths of ISO 4762 socket head cap screws, mm.
 ISO_4762_LENGTHS_MM = (6, 8, 10, 12, 16, 20, 25, 30, 35, 40, 45, 50, 55, 60, 65, 70, 80, 90, 100)
 
-FIELDS = ("product", "category", "item", "designation", "quantity", "unit", "material", "process",
-          "mass_each_g", "mass_total_g", "notes")
+FIELDS = (
+    "product",
+    "category",
+    "item",
+    "designation",
+    "quantity",
+    "unit",
+    "material",
+    "process",
+    "mass_each_g",
+    "mass_total_g",
+    "notes",
+)
 
 
 @dataclass(frozen=True)
@@ -59,7 +69,9 @@ def _mold_bolt_length_mm(mold_set: MoldSet, thread: float) -> tuple[int, float]:
     return int(math.ceil(need / 5.0) * 5), grip
 
 
-def bom_rows(asm: Assembly, pieces: Sequence[RigidPiece] = (), mold_set: MoldSet | None = None) -> list[BomRow]:
+def bom_rows(
+    asm: Assembly, pieces: Sequence[RigidPiece] = (), mold_set: MoldSet | None = None
+) -> list[BomRow]:
     """Every BOM row of the three products (parts, rods, fasteners, pneumatics, totals)."""
     spec = asm.spec
     items = made_items(asm, pieces, mold_set)
@@ -74,16 +86,68 @@ def bom_rows(asm: Assembly, pieces: Sequence[RigidPiece] = (), mold_set: MoldSet
     rows = [*bvsr, *_bvsr_fastener_rows(asm, roles), *pneumatics, *rigid, *molds]
 
     d_tube = spec.tubes.outer_diameter_mm
-    rows.append(BomRow("BVSR", "total", "BVSR modelled mass", "panels + SOAs + rods", 1, "", "", "", bvsr_mass,
-                       bvsr_mass, "fittings, tubes, adhesive and inserts not weighed"))
+    rows.append(
+        BomRow(
+            "BVSR",
+            "total",
+            "BVSR modelled mass",
+            "panels + SOAs + rods",
+            1,
+            "",
+            "",
+            "",
+            bvsr_mass,
+            bvsr_mass,
+            "fittings, tubes, adhesive and inserts not weighed",
+        )
+    )
     if pieces:
-        rows.append(BomRow("rigid tail", "total", "rigid tail mass", "all pieces, solid PLA", 1, "", RIGID_MATERIAL, "FDM",
-                           rigid_mass, rigid_mass, "infill lowers it"))
+        rows.append(
+            BomRow(
+                "rigid tail",
+                "total",
+                "rigid tail mass",
+                "all pieces, solid PLA",
+                1,
+                "",
+                RIGID_MATERIAL,
+                "FDM",
+                rigid_mass,
+                rigid_mass,
+                "infill lowers it",
+            )
+        )
     if mold_set is not None and mold_set.parts:
-        rows.append(BomRow("molds", "total", "mold material", "rigid sets + cores", 1, "", "", "FDM", mold_mass,
-                           mold_mass, ""))
-    rows.append(BomRow("pneumatics", "total", "tube", f"PU tube {d_tube:g} mm, all lines", round(total_tube, 1),
-                       "mm", "PU", "cut", None, None, f"{lines} lines"))
+        rows.append(
+            BomRow(
+                "molds",
+                "total",
+                "mold material",
+                "rigid sets + cores",
+                1,
+                "",
+                "",
+                "FDM",
+                mold_mass,
+                mold_mass,
+                "",
+            )
+        )
+    rows.append(
+        BomRow(
+            "pneumatics",
+            "total",
+            "tube",
+            f"PU tube {d_tube:g} mm, all lines",
+            round(total_tube, 1),
+            "mm",
+            "PU",
+            "cut",
+            None,
+            None,
+            f"{lines} lines",
+        )
+    )
     return rows
 
 
@@ -97,18 +161,41 @@ def _bvsr_part_rows(asm: Assembly, items) -> tuple[list[BomRow], float]:
         bvsr_mass += it.quantity * it.mass_each_g
         if it.kind == "rod":
             info = part.info
-            rows.append(BomRow("BVSR", "rod", it.label, f"{spec.material(it.material).name} rod, D "
-                               f"{info['diameter_mm']:g} mm, cut to {info['cut_length_mm']:.2f} mm", it.quantity, "pcs",
-                               it.material, "cut", it.mass_each_g, it.quantity * it.mass_each_g,
-                               "thread both ends to match the panel sockets" if spec.vertebra.socket == "threaded"
-                               else "held by set screws"))
+            rows.append(
+                BomRow(
+                    "BVSR",
+                    "rod",
+                    it.label,
+                    f"{spec.material(it.material).name} rod, D "
+                    f"{info['diameter_mm']:g} mm, cut to {info['cut_length_mm']:.2f} mm",
+                    it.quantity,
+                    "pcs",
+                    it.material,
+                    "cut",
+                    it.mass_each_g,
+                    it.quantity * it.mass_each_g,
+                    "thread both ends to match the panel sockets"
+                    if spec.vertebra.socket == "threaded"
+                    else "held by set screws",
+                )
+            )
         else:
             names = [i.name for i in asm.instances_of(it.source)]
-            rows.append(BomRow("BVSR", "part", it.label, it.kind + (f" ({part.info['panel_kind']})"
-                                                                     if it.kind == "panel" else ""),
-                               it.quantity, "pcs", it.material, it.process, it.mass_each_g,
-                               it.quantity * it.mass_each_g,
-                               ", ".join(names[:3]) + (" ..." if len(names) > 3 else "")))
+            rows.append(
+                BomRow(
+                    "BVSR",
+                    "part",
+                    it.label,
+                    it.kind + (f" ({part.info['panel_kind']})" if it.kind == "panel" else ""),
+                    it.quantity,
+                    "pcs",
+                    it.material,
+                    it.process,
+                    it.mass_each_g,
+                    it.quantity * it.mass_each_g,
+                    ", ".join(names[:3]) + (" ..." if len(names) > 3 else ""),
+                )
+            )
     return rows, bvsr_mass
 
 
@@ -116,52 +203,155 @@ def _bvsr_fastener_rows(asm: Assembly, roles: dict[str, int]) -> list[BomRow]:
     """The BVSR's inserts and set screws, counted from the panel layouts."""
     spec = asm.spec
     rows: list[BomRow] = []
-    mount_inserts = sum(1 for lay in asm.panel_layouts for c in lay.cuts if c.name.startswith("mount_insert"))
-    payload_inserts = sum(1 for lay in asm.panel_layouts for c in lay.cuts if c.name.startswith("payload_insert"))
+    mount_inserts = sum(
+        1 for lay in asm.panel_layouts for c in lay.cuts if c.name.startswith("mount_insert")
+    )
+    payload_inserts = sum(
+        1 for lay in asm.panel_layouts for c in lay.cuts if c.name.startswith("payload_insert")
+    )
     if mount_inserts:
-        rows.append(BomRow("BVSR", "fastener", "mount insert", f"M3 heat-set insert, {spec.mount.insert_diameter_mm:g} "
-                           f"mm bore, {spec.mount.insert_depth_mm:g} mm long", mount_inserts, "pcs", "brass",
-                           "bought", None, None, "root mount to the robot (plus M3 screws of the robot's length)"))
+        rows.append(
+            BomRow(
+                "BVSR",
+                "fastener",
+                "mount insert",
+                f"M3 heat-set insert, {spec.mount.insert_diameter_mm:g} "
+                f"mm bore, {spec.mount.insert_depth_mm:g} mm long",
+                mount_inserts,
+                "pcs",
+                "brass",
+                "bought",
+                None,
+                None,
+                "root mount to the robot (plus M3 screws of the robot's length)",
+            )
+        )
     if payload_inserts:
-        rows.append(BomRow("BVSR", "fastener", "payload insert", f"M3 heat-set insert, "
-                           f"{spec.payload.insert_diameter_mm:g} mm bore, {spec.payload.insert_depth_mm:g} mm long",
-                           payload_inserts, "pcs", "brass", "bought", None, None, "tip payload mount"))
+        rows.append(
+            BomRow(
+                "BVSR",
+                "fastener",
+                "payload insert",
+                f"M3 heat-set insert, "
+                f"{spec.payload.insert_diameter_mm:g} mm bore, {spec.payload.insert_depth_mm:g} mm "
+                "long",
+                payload_inserts,
+                "pcs",
+                "brass",
+                "bought",
+                None,
+                None,
+                "tip payload mount",
+            )
+        )
     if spec.vertebra.socket == "set_screw":
         size = size_for_tap_drill(spec.socket.set_screw_tap_drill_mm).diameter_mm
-        rows.append(BomRow("BVSR", "fastener", "rod set screw", f"ISO 4026 M{size:g} x 4 set screw, flat point",
-                           roles.get("setscrew", 0), "pcs", "steel", "bought", None, None,
-                           "one per panel socket"))
+        rows.append(
+            BomRow(
+                "BVSR",
+                "fastener",
+                "rod set screw",
+                f"ISO 4026 M{size:g} x 4 set screw, flat point",
+                roles.get("setscrew", 0),
+                "pcs",
+                "steel",
+                "bought",
+                None,
+                None,
+                "one per panel socket",
+            )
+        )
     return rows
 
 
 def _pneumatic_rows(asm: Assembly, roles: dict[str, int]) -> tuple[list[BomRow], float, int]:
-    """The fittings, each line's tube, tees or manifolds and valves; the tubes' total length, mm, and the
-    number of lines."""
+    """The fittings, each line's tube, tees or manifolds and valves; the tubes' total length, mm,
+    and the number of lines."""
     spec = asm.spec
     fp = spec.fabrication_package
     lines = spec.segments * 5
     d_tube = spec.tubes.outer_diameter_mm
-    rows = [BomRow("pneumatics", "pneumatic", "root fitting", f"push-in fitting M5 x tube {d_tube:g} mm, straight",
-                   roles.get("port", 0), "pcs", "", "bought", None, None,
-                   "segment 1's five lines, in the root mount's tapped ports")]
+    rows = [
+        BomRow(
+            "pneumatics",
+            "pneumatic",
+            "root fitting",
+            f"push-in fitting M5 x tube {d_tube:g} mm, straight",
+            roles.get("port", 0),
+            "pcs",
+            "",
+            "bought",
+            None,
+            None,
+            "segment 1's five lines, in the root mount's tapped ports",
+        )
+    ]
     routes = tube_routes_mm(asm)
     cut = line_tube_lengths_mm(asm)
     total_tube = 0.0
     for line, inside in routes.items():
         length = cut[line]
         total_tube += length
-        rows.append(BomRow("pneumatics", "pneumatic", f"tube {line}", f"PU tube {d_tube:g} x "
-                           f"{spec.tubes.inner_diameter_mm:g} mm, cut to {length:.1f} mm", length, "mm", "PU", "cut",
-                           None, None, f"{inside:.1f} mm inside the tail (+{100 * fp.tube_bend_allowance:.0f} % for "
-                           f"bending) + {fp.tube_lead_mm:g} mm lead to the valves"))
-    rows.append(BomRow("pneumatics", "pneumatic", "tee", f"push-in tee, tube {d_tube:g} mm", lines, "pcs", "",
-                       "bought", None, None, "joins each line to its pressure and its vacuum valve")
-                if fp.valves_per_line == 2 else
-                BomRow("pneumatics", "pneumatic", "manifold", f"push-in manifold 1 x {fp.valves_per_line}",
-                       lines, "pcs", "", "bought", None, None, "joins each line to its valves"))
-    rows.append(BomRow("pneumatics", "pneumatic", "solenoid valve", "2/2-way solenoid valve, 24 V DC",
-                       lines * fp.valves_per_line, "pcs", "", "bought", None, None,
-                       f"{fp.valves_per_line} per line x {lines} lines (paper: 20 valves for 10 channels)"))
+        rows.append(
+            BomRow(
+                "pneumatics",
+                "pneumatic",
+                f"tube {line}",
+                f"PU tube {d_tube:g} x {spec.tubes.inner_diameter_mm:g} mm, cut to {length:.1f} mm",
+                length,
+                "mm",
+                "PU",
+                "cut",
+                None,
+                None,
+                f"{inside:.1f} mm inside the tail (+{100 * fp.tube_bend_allowance:.0f} % for "
+                f"bending) + {fp.tube_lead_mm:g} mm lead to the valves",
+            )
+        )
+    rows.append(
+        BomRow(
+            "pneumatics",
+            "pneumatic",
+            "tee",
+            f"push-in tee, tube {d_tube:g} mm",
+            lines,
+            "pcs",
+            "",
+            "bought",
+            None,
+            None,
+            "joins each line to its pressure and its vacuum valve",
+        )
+        if fp.valves_per_line == 2
+        else BomRow(
+            "pneumatics",
+            "pneumatic",
+            "manifold",
+            f"push-in manifold 1 x {fp.valves_per_line}",
+            lines,
+            "pcs",
+            "",
+            "bought",
+            None,
+            None,
+            "joins each line to its valves",
+        )
+    )
+    rows.append(
+        BomRow(
+            "pneumatics",
+            "pneumatic",
+            "solenoid valve",
+            "2/2-way solenoid valve, 24 V DC",
+            lines * fp.valves_per_line,
+            "pcs",
+            "",
+            "bought",
+            None,
+            None,
+            f"{fp.valves_per_line} per line x {lines} lines (paper: 20 valves for 10 channels)",
+        )
+    )
     return rows, total_tube, lines
 
 
@@ -175,17 +365,67 @@ def _rigid_tail_rows(spec, items, pieces: Sequence[RigidPiece]) -> tuple[list[Bo
     for it in (i for i in items if i.product == "rigid tail"):
         rigid_mass += it.mass_each_g
         sx, sy, sz = size[it.source]
-        rows.append(BomRow("rigid tail", "part", it.label, f"rigid tail piece {sx:.1f} x {sy:.1f} x {sz:.1f} mm",
-                           it.quantity, "pcs", it.material, it.process, it.mass_each_g, it.mass_each_g,
-                           "mass at solid density; infill lowers it"))
+        rows.append(
+            BomRow(
+                "rigid tail",
+                "part",
+                it.label,
+                f"rigid tail piece {sx:.1f} x {sy:.1f} x {sz:.1f} mm",
+                it.quantity,
+                "pcs",
+                it.material,
+                it.process,
+                it.mass_each_g,
+                it.mass_each_g,
+                "mass at solid density; infill lowers it",
+            )
+        )
     j = rigid_joining(spec)
-    rows.append(BomRow("rigid tail", "fastener", "dowel pin", j.pin_designation, j.pin_count,
-                       "pcs", "steel", "bought", None, None, "one per SOA column end"))
-    rows.append(BomRow("rigid tail", "fastener", "tie rod", f"{j.tie_rod_designation} threaded rod, cut to "
-                       f"{j.tie_rod_cut_length_mm:.1f} mm", 1, "pcs", "steel", "cut", None, None,
-                       "through the rod column, clamps every piece"))
-    rows.append(BomRow("rigid tail", "fastener", "tie rod nut", j.nut_designation + " hex nut",
-                       j.nut_count, "pcs", "steel", "bought", None, None, "in the root and tip nut pockets"))
+    rows.append(
+        BomRow(
+            "rigid tail",
+            "fastener",
+            "dowel pin",
+            j.pin_designation,
+            j.pin_count,
+            "pcs",
+            "steel",
+            "bought",
+            None,
+            None,
+            "one per SOA column end",
+        )
+    )
+    rows.append(
+        BomRow(
+            "rigid tail",
+            "fastener",
+            "tie rod",
+            f"{j.tie_rod_designation} threaded rod, cut to {j.tie_rod_cut_length_mm:.1f} mm",
+            1,
+            "pcs",
+            "steel",
+            "cut",
+            None,
+            None,
+            "through the rod column, clamps every piece",
+        )
+    )
+    rows.append(
+        BomRow(
+            "rigid tail",
+            "fastener",
+            "tie rod nut",
+            j.nut_designation + " hex nut",
+            j.nut_count,
+            "pcs",
+            "steel",
+            "bought",
+            None,
+            None,
+            "in the root and tip nut pockets",
+        )
+    )
     return rows, rigid_mass
 
 
@@ -197,18 +437,56 @@ def _mold_rows(spec, items, mold_set: MoldSet | None) -> tuple[list[BomRow], flo
     for it in (i for i in items if i.product == "molds"):
         sac = it.kind == "mold_core"
         mold_mass += it.quantity * it.mass_each_g
-        rows.append(BomRow("molds", "part", it.label, "sacrificial core (dissolve after casting)" if sac
-                           else f"mold {mold_set.parts[it.source].role}", it.quantity, "pcs", it.material, "FDM",
-                           it.mass_each_g, it.quantity * it.mass_each_g,
-                           "one per SOA cast" if sac else f"{fp.mold_sets} mold sets"))
+        rows.append(
+            BomRow(
+                "molds",
+                "part",
+                it.label,
+                "sacrificial core (dissolve after casting)"
+                if sac
+                else f"mold {mold_set.parts[it.source].role}",
+                it.quantity,
+                "pcs",
+                it.material,
+                "FDM",
+                it.mass_each_g,
+                it.quantity * it.mass_each_g,
+                "one per SOA cast" if sac else f"{fp.mold_sets} mold sets",
+            )
+        )
     if mold_set is not None and mold_set.parts:
         thread = size_for_clearance_hole(spec.casting.bolt_hole_diameter_mm).diameter_mm
         length, grip = _mold_bolt_length_mm(mold_set, thread)
-        rows.append(BomRow("molds", "fastener", "mold bolt", f"ISO 4762 M{thread:g} x {length}", 4 * fp.mold_sets,
-                           "pcs", "steel", "bought", None, None, f"four per set through lid, halves and plate "
-                           f"(grip {grip:.1f} mm)"))
-        rows.append(BomRow("molds", "fastener", "mold nut", f"ISO 4032 M{thread:g} hex nut", 4 * fp.mold_sets, "pcs",
-                           "steel", "bought", None, None, "four per set"))
+        rows.append(
+            BomRow(
+                "molds",
+                "fastener",
+                "mold bolt",
+                f"ISO 4762 M{thread:g} x {length}",
+                4 * fp.mold_sets,
+                "pcs",
+                "steel",
+                "bought",
+                None,
+                None,
+                f"four per set through lid, halves and plate (grip {grip:.1f} mm)",
+            )
+        )
+        rows.append(
+            BomRow(
+                "molds",
+                "fastener",
+                "mold nut",
+                f"ISO 4032 M{thread:g} hex nut",
+                4 * fp.mold_sets,
+                "pcs",
+                "steel",
+                "bought",
+                None,
+                None,
+                "four per set",
+            )
+        )
     return rows, mold_mass
 
 
@@ -227,22 +505,41 @@ def write_bom(root: Path, rows: list[BomRow]) -> dict[str, Any]:
         w.writeheader()
         for r in rows:
             w.writerow({k: _fmt(v) for k, v in asdict(r).items()})
-    lines = ["# Bill of materials", "",
-             "Counts from the assembly; masses from the B-rep volumes and the densities in the parameter file.", ""]
+    lines = [
+        "# Bill of materials",
+        "",
+        "Counts from the assembly; masses from the B-rep volumes and the densities in the "
+        "parameter file.",
+        "",
+    ]
     for product in dict.fromkeys(r.product for r in rows):
-        lines += [f"## {product}", "", "| item | designation | qty | unit | material | process | mass each (g) "
-                  "| mass total (g) | notes |", "|---|---|---:|---|---|---|---:|---:|---|"]
+        lines += [
+            f"## {product}",
+            "",
+            "| item | designation | qty | unit | material | process | mass each (g) "
+            "| mass total (g) | notes |",
+            "|---|---|---:|---|---|---|---:|---:|---|",
+        ]
         for r in rows:
             if r.product == product:
                 item = f"**{r.item}**" if r.category == "total" else r.item
-                lines.append(f"| {item} | {r.designation} | {_fmt(r.quantity)} | {r.unit} | {r.material} | "
-                             f"{r.process} | {_fmt(r.mass_each_g)} | {_fmt(r.mass_total_g)} | {r.notes} |")
+                lines.append(
+                    f"| {item} | {r.designation} | {_fmt(r.quantity)} | {r.unit} | {r.material} | "
+                    f"{r.process} | {_fmt(r.mass_each_g)} | {_fmt(r.mass_total_g)} | {r.notes} |"
+                )
         lines.append("")
     (root / "bom.md").write_text("\n".join(lines))
-    totals = {r.item: {"quantity": r.quantity, "unit": r.unit, "mass_g": r.mass_total_g}
-              for r in rows if r.category == "total"}
-    counts = {"printed_parts": sum(r.quantity for r in rows if r.category == "part" and r.process in ("MJF", "FDM")),
-              "cast_parts": sum(r.quantity for r in rows if r.process == "cast"),
-              "fasteners": sum(r.quantity for r in rows if r.category == "fastener" and r.unit == "pcs"),
-              "valves": sum(r.quantity for r in rows if r.item == "solenoid valve")}
+    totals = {
+        r.item: {"quantity": r.quantity, "unit": r.unit, "mass_g": r.mass_total_g}
+        for r in rows
+        if r.category == "total"
+    }
+    counts = {
+        "printed_parts": sum(
+            r.quantity for r in rows if r.category == "part" and r.process in ("MJF", "FDM")
+        ),
+        "cast_parts": sum(r.quantity for r in rows if r.process == "cast"),
+        "fasteners": sum(r.quantity for r in rows if r.category == "fastener" and r.unit == "pcs"),
+        "valves": sum(r.quantity for r in rows if r.item == "solenoid valve"),
+    }
     return {"csv": "bom.csv", "md": "bom.md", "rows": len(rows), "totals": totals, "counts": counts}

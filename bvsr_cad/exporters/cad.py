@@ -13,10 +13,10 @@ from ..colors import rgb
 from ..parts._kernel import mesh_absolute
 
 #: Tessellation for print STLs, absolute: no facet strays more than 0.01 mm from the surface (ten
-#: times finer than the printers' resolution) nor turns more than 0.1 rad; the mesh volume stays within
-#: 0.05 % of the B-rep volume on every part (checked by `bvsr check`). Absolute, because a deflection
-#: relative to each edge's size meshed the large flat panels far finer than any printer resolves:
-#: about three times the meshing time and twice the facets for nothing a print shows.
+#: times finer than the printers' resolution) nor turns more than 0.1 rad; the mesh volume stays
+#: within 0.05 % of the B-rep volume on every part (checked by `bvsr check`). Absolute, because a
+#: deflection relative to each edge's size meshed the large flat panels far finer than any printer
+#: resolves: about three times the meshing time and twice the facets for nothing a print shows.
 STL_LINEAR_TOLERANCE_MM = 0.01
 STL_ANGULAR_TOLERANCE_RAD = 0.1
 
@@ -29,12 +29,17 @@ def write_step(solid: bd.Shape, label: str, rgb: tuple[float, float, float], pat
         raise OSError(f"STEP export failed: {path}")
 
 
-def write_stl(shape: bd.Shape, path: Path, tolerance_mm: float = STL_LINEAR_TOLERANCE_MM,
-              angular_tolerance_rad: float = STL_ANGULAR_TOLERANCE_RAD, scale: float = 1.0,
-              relative: bool = False) -> None:
+def write_stl(
+    shape: bd.Shape,
+    path: Path,
+    tolerance_mm: float = STL_LINEAR_TOLERANCE_MM,
+    angular_tolerance_rad: float = STL_ANGULAR_TOLERANCE_RAD,
+    scale: float = 1.0,
+    relative: bool = False,
+) -> None:
     """The one STL writer: binary STL of a shape tessellated by OCCT in millimetres (``relative``:
-    ``tolerance_mm`` is a fraction of each edge's size), optionally scaled afterwards (``scale = 1e-3``:
-    metres, for robot descriptions)."""
+    ``tolerance_mm`` is a fraction of each edge's size), optionally scaled afterwards (``scale =
+    1e-3``: metres, for robot descriptions)."""
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
     from OCP.StlAPI import StlAPI_Writer
 
@@ -42,7 +47,7 @@ def write_stl(shape: bd.Shape, path: Path, tolerance_mm: float = STL_LINEAR_TOLE
     target = path if scale == 1.0 else path.with_suffix(".mm.stl")
     if relative:
         BRepMesh_IncrementalMesh(shape.wrapped, tolerance_mm, True, angular_tolerance_rad, True)
-    else:  # the one absolute meshing, which the robot's collision fits share (parts._kernel.mesh_arrays)
+    else:  # the one absolute meshing, shared with the robot's collision fits (_kernel.mesh_arrays)
         mesh_absolute(shape, tolerance_mm, angular_tolerance_rad)
     writer = StlAPI_Writer()
     writer.ASCIIMode = False
@@ -92,5 +97,6 @@ def _own_copy(node: bd.Shape) -> bd.Shape:
 
 
 def write_assembly_step(asm: Assembly, path: Path) -> None:
-    """The tail at rest as one STEP assembly: every instance a named, coloured product at its place."""
+    """The tail at rest as one STEP assembly: every instance a named, coloured product at its
+    place."""
     write_labelled_step(labelled_compound(placed_instances(asm), asm.spec.name), path)

@@ -45,7 +45,8 @@ TITLE_H_MM = 46.0  # title block height, bottom right
 ROW_MM = 3.6
 FONT_MM = 2.2
 SCALES = (5.0, 4.0, 2.5, 2.0, 1.5, 1.0, 0.5, 0.25)
-#: Dimensions (sheet mm): the line's distance from the outline, arrowheads, text height and its lift off the line.
+#: Dimensions (sheet mm): the line's distance from the outline, arrowheads, text height and its lift
+#: off the line.
 DIM_GAP_MM = 8.0
 DIM_ARROW_MM = 2.5
 DIM_ARROW_WIDTH_MM = 0.9
@@ -55,15 +56,31 @@ DIM_LINE_MM = 0.18
 DIM_DECIMALS = 2
 #: What each declared role is, in a workshop's words.
 ROLE_TEXT = {
-    "pocket": "SOA flange pocket (bonded)", "channel": "air channel", "port": "push-in fitting port",
-    "tube": "tube pass-through", "tube_port": "tube port (bonded)", "feed": "feed into the pocket",
-    "passage": "internal passage", "rod": "rod socket", "setscrew": "set screw", "insert": "heat-set insert bore",
-    "lightening": "lightening hole", "bolt": "clamping bolt", "pin": "registration pin (printed)",
-    "pin_socket": "pin socket", "gate": "pour gate", "vent": "vent", "flange_pocket": "flange cavity",
+    "pocket": "SOA flange pocket (bonded)",
+    "channel": "air channel",
+    "port": "push-in fitting port",
+    "tube": "tube pass-through",
+    "tube_port": "tube port (bonded)",
+    "feed": "feed into the pocket",
+    "passage": "internal passage",
+    "rod": "rod socket",
+    "setscrew": "set screw",
+    "insert": "heat-set insert bore",
+    "lightening": "lightening hole",
+    "bolt": "clamping bolt",
+    "pin": "registration pin (printed)",
+    "pin_socket": "pin socket",
+    "gate": "pour gate",
+    "vent": "vent",
+    "flange_pocket": "flange cavity",
 }
-#: Views (name, direction towards the viewer, up); the sheet coordinates follow the camera's own axes.
-VIEWS = {"top": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)), "front": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)),
-         "right": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0))}
+#: Views (name, direction towards the viewer, up); the sheet coordinates follow the camera's own
+#: axes.
+VIEWS = {
+    "top": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
+    "front": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)),
+    "right": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+}
 
 
 @dataclass(frozen=True)
@@ -87,8 +104,9 @@ class HoleRow:
 
     def cells(self) -> list[str]:
         x, y, z = self.start_mm
-        ax = "".join(f"{'+' if v > 0 else '-'}{n}" for v, n in zip(self.axis, "XYZ") if abs(v) > 0.5) or \
-            "({:.2f}, {:.2f}, {:.2f})".format(*self.axis)
+        ax = "".join(
+            f"{'+' if v > 0 else '-'}{n}" for v, n in zip(self.axis, "XYZ") if abs(v) > 0.5
+        ) or "({:.2f}, {:.2f}, {:.2f})".format(*self.axis)
         if self.is_pin:
             kind = f"pin, {self.length_mm:.2f} long"
         elif self.role == "passage":
@@ -101,8 +119,17 @@ class HoleRow:
             note = f"clearance {size_for_clearance_hole(self.diameter_mm).designation}"
         else:
             note = ROLE_TEXT.get(self.role, self.role)
-        return [self.label, " + ".join(self.names), f"{x:.2f}", f"{y:.2f}", f"{z:.2f}", ax,
-                f"{self.diameter_mm:.2f}", kind, note]
+        return [
+            self.label,
+            " + ".join(self.names),
+            f"{x:.2f}",
+            f"{y:.2f}",
+            f"{z:.2f}",
+            ax,
+            f"{self.diameter_mm:.2f}",
+            kind,
+            note,
+        ]
 
 
 HEADER = ["id", "feature", "x", "y", "z", "axis", "dia", "through / blind", "thread / note"]
@@ -124,12 +151,13 @@ def _cyl_faces(solid: bd.Solid) -> list[tuple[bd.Face, np.ndarray, np.ndarray, f
 
 
 class _PlaneFace:
-    """A plane face of a solid with what :func:`_end_is_closed` asks of it: its point, normal and bounding
-    box, and whether points of its plane lie on it, by a 2D classifier in the plane's (u, v) made once
-    for the face (build123d's ``Face.is_inside`` builds OCCT's 3D solid classifier at every call: a
-    third of the drawings' time). When this replaced it, both answered all 5,921 queries of the hole
-    tables of ``params/bvsr.toml`` and ``params/bvsr_l.toml`` alike (``is_inside`` with the tolerance
-    :data:`ON_FACE_TOLERANCE_MM`), and the sheets stayed byte-identical."""
+    """A plane face of a solid with what :func:`_end_is_closed` asks of it: its point, normal and
+    bounding box, and whether points of its plane lie on it, by a 2D classifier in the plane's (u,
+    v) made once for the face (build123d's ``Face.is_inside`` builds OCCT's 3D solid classifier at
+    every call: a third of the drawings' time). When this replaced it, both answered all 5,921
+    queries of the hole tables of ``params/bvsr.toml`` and ``params/bvsr_l.toml`` alike
+    (``is_inside`` with the tolerance :data:`ON_FACE_TOLERANCE_MM`), and the sheets stayed
+    byte-identical."""
 
     def __init__(self, face: bd.Face):
         from OCP.BRep import BRep_Tool
@@ -148,27 +176,40 @@ class _PlaneFace:
         from OCP.TopAbs import TopAbs_State
 
         u, v = ElSLib.Parameters_s(self._plane, gp_Pnt(*map(float, point)))
-        return self._classifier.Perform(gp_Pnt2d(u, v)) in (TopAbs_State.TopAbs_IN, TopAbs_State.TopAbs_ON)
+        return self._classifier.Perform(gp_Pnt2d(u, v)) in (
+            TopAbs_State.TopAbs_IN,
+            TopAbs_State.TopAbs_ON,
+        )
 
 
 #: How near a face a point counts as on it (:class:`_PlaneFace`), mm.
 ON_FACE_TOLERANCE_MM = 1e-4
 
 
-def _end_is_closed(solid_planes: list[_PlaneFace], point: np.ndarray, axis: np.ndarray, radius: float) -> bool:
-    """A floor: a plane face across the bore's end (perpendicular to it, through ``point``) that holds
-    points of the bore's disc. At an open end the face there surrounds the bore instead. Only the faces
-    whose bounding box holds a point of the disc are asked (the classifier is the slow part)."""
+def _end_is_closed(
+    solid_planes: list[_PlaneFace], point: np.ndarray, axis: np.ndarray, radius: float
+) -> bool:
+    """A floor: a plane face across the bore's end (perpendicular to it, through ``point``) that
+    holds points of the bore's disc. At an open end the face there surrounds the bore instead. Only
+    the faces whose bounding box holds a point of the disc are asked (the classifier is the slow
+    part)."""
     helper = np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0])
     helper /= np.linalg.norm(helper)
     other = np.cross(axis, helper)
-    ring = [point + 0.7 * radius * (math.cos(a) * helper + math.sin(a) * other) for a in np.linspace(0, 2 * math.pi, 8,
-                                                                                                    endpoint=False)]
+    ring = [
+        point + 0.7 * radius * (math.cos(a) * helper + math.sin(a) * other)
+        for a in np.linspace(0, 2 * math.pi, 8, endpoint=False)
+    ]
     tol = ON_FACE_TOLERANCE_MM
     for face in solid_planes:
-        if abs(abs(float(face.normal @ axis)) - 1.0) > 1e-6 or abs(float(face.normal @ (point - face.origin))) > tol:
+        if (
+            abs(abs(float(face.normal @ axis)) - 1.0) > 1e-6
+            or abs(float(face.normal @ (point - face.origin))) > tol
+        ):
             continue
-        if any(face.holds(p) for p in ring if np.all(p >= face.lo - tol) and np.all(p <= face.hi + tol)):
+        if any(
+            face.holds(p) for p in ring if np.all(p >= face.lo - tol) and np.all(p <= face.hi + tol)
+        ):
             return True
     return False
 
@@ -177,7 +218,8 @@ def hole_table(solid: bd.Solid, features: list[Cyl]) -> list[HoleRow]:
     """The declared round features of ``solid`` as hole-table rows, measured on its B-rep.
 
     A feature's bore is the set of cylindrical faces of its radius on its axis within its span;
-    coaxial features whose faces are the same bore (a rod bore through panel and collar) are one row.
+    coaxial features whose faces are the same bore (a rod bore through panel and collar) are one
+    row.
     """
     cyls = _cyl_faces(solid)
     planes = [_PlaneFace(f) for f in solid.faces() if f.geom_type == bd.GeomType.PLANE]
@@ -200,8 +242,10 @@ def hole_table(solid: bd.Solid, features: list[Cyl]) -> list[HoleRow]:
             lo, hi = min(lo, min(s)), max(hi, max(s))
             ids.append(i)
         if not ids:
-            raise ValueError(f"{feat.name}: declared but not in the solid (no cylindrical face of "
-                             f"diameter {feat.diameter_mm:g} mm on its axis)")
+            raise ValueError(
+                f"{feat.name}: declared but not in the solid (no cylindrical face of "
+                f"diameter {feat.diameter_mm:g} mm on its axis)"
+            )
         key = tuple(sorted(ids))
         if key in rows:
             rows[key]["names"].append(feat.name)
@@ -211,17 +255,31 @@ def hole_table(solid: bd.Solid, features: list[Cyl]) -> list[HoleRow]:
         through = feat.role != "pin" and not (start_closed or _end_is_closed(planes, end, axis, r))
         if start_closed:
             start, end, axis = end, start, -axis  # the table gives a blind bore from its opening
-        rows[key] = {"names": [feat.name], "feat": feat, "start": start, "axis": axis, "length": hi - lo,
-                     "through": through}
+        rows[key] = {
+            "names": [feat.name],
+            "feat": feat,
+            "start": start,
+            "axis": axis,
+            "length": hi - lo,
+            "through": through,
+        }
     out = []
     for n, row in enumerate(rows.values(), start=1):
         feat = row["feat"]
-        out.append(HoleRow(f"{'P' if feat.role == 'pin' else 'H'}{n}", tuple(row["names"]), feat.role,
-                           tuple(round(float(v), 6) + 0.0 for v in row["start"]),
-                           tuple(round(float(v), 9) + 0.0 for v in row["axis"]), feat.diameter_mm,
-                           float(row["length"]), bool(row["through"]),
-                           feat.thread.designation if feat.thread else None,
-                           feat.thread.drill_mm if feat.thread else None))
+        out.append(
+            HoleRow(
+                f"{'P' if feat.role == 'pin' else 'H'}{n}",
+                tuple(row["names"]),
+                feat.role,
+                tuple(round(float(v), 6) + 0.0 for v in row["start"]),
+                tuple(round(float(v), 9) + 0.0 for v in row["axis"]),
+                feat.diameter_mm,
+                float(row["length"]),
+                bool(row["through"]),
+                feat.thread.designation if feat.thread else None,
+                feat.thread.drill_mm if feat.thread else None,
+            )
+        )
     return out
 
 
@@ -241,12 +299,19 @@ def _view_box(edges: list[bd.Edge]) -> tuple[float, float, float, float]:
     return box.min.X, box.min.Y, box.max.X, box.max.Y
 
 
-def _layout(boxes: dict[str, tuple[float, float, float, float]], views: list[list[str]],
-            region: tuple[float, float, float, float], gap_mm: float) -> tuple[float, dict[str, tuple[float, float]]]:
+def _layout(
+    boxes: dict[str, tuple[float, float, float, float]],
+    views: list[list[str]],
+    region: tuple[float, float, float, float],
+    gap_mm: float,
+) -> tuple[float, dict[str, tuple[float, float]]]:
     """Largest listed scale at which the rows of views fit the region; each view's sheet offset."""
     x0, y0, x1, y1 = region
     for scale in SCALES:
-        widths = [sum((boxes[v][2] - boxes[v][0]) * scale for v in row) + gap_mm * (len(row) - 1) for row in views]
+        widths = [
+            sum((boxes[v][2] - boxes[v][0]) * scale for v in row) + gap_mm * (len(row) - 1)
+            for row in views
+        ]
         heights = [max((boxes[v][3] - boxes[v][1]) * scale for v in row) for row in views]
         if max(widths) <= x1 - x0 and sum(heights) + gap_mm * (len(views) - 1) <= y1 - y0:
             break
@@ -263,8 +328,9 @@ def _layout(boxes: dict[str, tuple[float, float, float, float]], views: list[lis
 
 
 def _placed(edges: list[bd.Edge], scale: float, offset: tuple[float, float]) -> list[bd.Edge]:
-    """View edges (model mm) on the sheet: scaled about the view's origin, then moved by ``offset``; one
-    OCCT transform per edge (build123d's ``scale`` and ``Pos *`` each deep-copy the edge in Python first)."""
+    """View edges (model mm) on the sheet: scaled about the view's origin, then moved by ``offset``;
+    one OCCT transform per edge (build123d's ``scale`` and ``Pos *`` each deep-copy the edge in
+    Python first)."""
     from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
     from OCP.gp import gp_Pnt, gp_Trsf, gp_Vec
 
@@ -275,15 +341,18 @@ def _placed(edges: list[bd.Edge], scale: float, offset: tuple[float, float]) -> 
     return [bd.Edge(BRepBuilderAPI_Transform(e.wrapped, trsf, True).Shape()) for e in edges]
 
 
-def _sheet(p: tuple[float, float], scale: float, offset: tuple[float, float]) -> tuple[float, float]:
+def _sheet(
+    p: tuple[float, float], scale: float, offset: tuple[float, float]
+) -> tuple[float, float]:
     """A view point (model mm) on the sheet (mm, y up)."""
     return offset[0] + scale * p[0], offset[1] + scale * p[1]
 
 
 @dataclass(frozen=True)
 class Dimension:
-    """A linear dimension on the sheet: its line from ``a`` to ``b`` (sheet mm, y up), arrows at both ends
-    pointing out to the extension lines, and the measured model length written above the line."""
+    """A linear dimension on the sheet: its line from ``a`` to ``b`` (sheet mm, y up), arrows at
+    both ends pointing out to the extension lines, and the measured model length written above the
+    line."""
 
     a: tuple[float, float]
     b: tuple[float, float]
@@ -294,38 +363,74 @@ class Dimension:
 
 
 def _dimensions(parent: ET.Element, dims: list[Dimension]) -> None:
-    """Each dimension as plain SVG (a line, two filled arrowheads, a text): a reader can pick the value
-    out of the ``dim`` group's text, and nothing is a glyph outline."""
-    g = ET.SubElement(parent, f"{{{SVG_NS}}}g", {"id": "dimensions", "font-family": "DejaVu Sans",
-                                                 "stroke": "black", "stroke-width": f"{DIM_LINE_MM:g}"})
+    """Each dimension as plain SVG (a line, two filled arrowheads, a text): a reader can pick the
+    value out of the ``dim`` group's text, and nothing is a glyph outline."""
+    g = ET.SubElement(
+        parent,
+        f"{{{SVG_NS}}}g",
+        {
+            "id": "dimensions",
+            "font-family": "DejaVu Sans",
+            "stroke": "black",
+            "stroke-width": f"{DIM_LINE_MM:g}",
+        },
+    )
     for d in dims:
         a, b = np.array(d.a), np.array(d.b)
         u = (b - a) / max(float(np.linalg.norm(b - a)), 1e-12)
         n = np.array([-u[1], u[0]])
         el = ET.SubElement(g, f"{{{SVG_NS}}}g", {"class": "dim"})
-        ET.SubElement(el, f"{{{SVG_NS}}}line", {"x1": f"{a[0]:.3f}", "y1": f"{-a[1]:.3f}",
-                                                "x2": f"{b[0]:.3f}", "y2": f"{-b[1]:.3f}"})
+        ET.SubElement(
+            el,
+            f"{{{SVG_NS}}}line",
+            {"x1": f"{a[0]:.3f}", "y1": f"{-a[1]:.3f}", "x2": f"{b[0]:.3f}", "y2": f"{-b[1]:.3f}"},
+        )
         for tip, inward in ((a, u), (b, -u)):
             base = tip + DIM_ARROW_MM * inward
             pts = [tip, base + 0.5 * DIM_ARROW_WIDTH_MM * n, base - 0.5 * DIM_ARROW_WIDTH_MM * n]
-            ET.SubElement(el, f"{{{SVG_NS}}}polygon", {"points": " ".join(f"{x:.3f},{-y:.3f}" for x, y in pts),
-                                                       "fill": "black", "stroke": "none"})
-        # Read from below or from the right (ISO 129): left to right, or bottom to top; the text stands on
-        # the line's side its letters point to.
+            ET.SubElement(
+                el,
+                f"{{{SVG_NS}}}polygon",
+                {
+                    "points": " ".join(f"{x:.3f},{-y:.3f}" for x, y in pts),
+                    "fill": "black",
+                    "stroke": "none",
+                },
+            )
+        # Read from below or from the right (ISO 129): left to right, or bottom to top; the text
+        # stands on the line's side its letters point to.
         read = u if u[0] > 1e-9 or (abs(u[0]) <= 1e-9 and u[1] > 0) else -u
         up = np.array([-read[1], read[0]])
         mid = (a + b) / 2 + DIM_TEXT_LIFT_MM * up
-        angle = -math.degrees(math.atan2(read[1], read[0])) + 0.0  # SVG turns clockwise (its y runs down)
+        angle = (
+            -math.degrees(math.atan2(read[1], read[0])) + 0.0
+        )  # SVG turns clockwise (its y runs down)
         t = _text(el, float(mid[0]), float(mid[1]), d.text(), DIM_FONT_MM, "middle", stroke="none")
         if abs(angle) > 1e-9:
             t.set("transform", f"rotate({angle:.3f} {mid[0]:.3f} {-mid[1]:.3f})")
 
 
-def _text(parent: ET.Element, x: float, y: float, text: str, size: float = FONT_MM, anchor: str = "start",
-          **attrs: str) -> ET.Element:
+def _text(
+    parent: ET.Element,
+    x: float,
+    y: float,
+    text: str,
+    size: float = FONT_MM,
+    anchor: str = "start",
+    **attrs: str,
+) -> ET.Element:
     """Text at sheet point (x, y) mm (y up); the SVG root runs y down."""
-    el = ET.SubElement(parent, f"{{{SVG_NS}}}text", {"x": f"{x:.3f}", "y": f"{-y:.3f}", "font-size": f"{size:g}",
-                                                     "text-anchor": anchor, **attrs})
+    el = ET.SubElement(
+        parent,
+        f"{{{SVG_NS}}}text",
+        {
+            "x": f"{x:.3f}",
+            "y": f"{-y:.3f}",
+            "font-size": f"{size:g}",
+            "text-anchor": anchor,
+            **attrs,
+        },
+    )
     el.text = text
     return el
 
@@ -337,9 +442,9 @@ def _rect(x0: float, y0: float, x1: float, y1: float) -> list[bd.Edge]:
 
 class _SheetSVG(bd.ExportSVG):
     """build123d's SVG export with one change: a Bezier arc's poles are read by index. Iterating
-    OCCT's pole array from Python (what build123d 0.12 does) ends in an exception pybind11 translates,
-    about a millisecond per arc and most of a cold build's drawing time; the points, and the sheet's
-    bytes, are the same."""
+    OCCT's pole array from Python (what build123d 0.12 does) ends in an exception pybind11
+    translates, about a millisecond per arc and most of a cold build's drawing time; the points, and
+    the sheet's bytes, are the same."""
 
     def _bspline_segments(self, edge: bd.Edge, reverse: bool) -> list:
         import svgpathtools as PT
@@ -352,7 +457,9 @@ class _SheetSVG(bd.ExportSVG):
         if not edge or edge.location is None:
             raise ValueError(f"Edge is empty {edge}.")
         spline.Transform(edge.location.wrapped.Transformation())
-        converter = GeomConvert_BSplineCurveToBezierCurve(spline, u1, u2, bd.Export2D.PARAMETRIC_TOLERANCE)
+        converter = GeomConvert_BSplineCurveToBezierCurve(
+            spline, u1, u2, bd.Export2D.PARAMETRIC_TOLERANCE
+        )
         kinds = {2: PT.Line, 3: PT.QuadraticBezier, 4: PT.CubicBezier}
         result = []
         for i in range(1, converter.NbArcs() + 1):
@@ -368,21 +475,30 @@ class _SheetSVG(bd.ExportSVG):
         return result
 
 
-def draw_sheet(name: str, solid: bd.Solid, features: list[Cyl], views: list[list[str]]) -> tuple[bytes, int]:
+def draw_sheet(
+    name: str, solid: bd.Solid, features: list[Cyl], views: list[list[str]]
+) -> tuple[bytes, int]:
     """The sheet without its title block (SVG bytes) and its number of hole-table rows."""
     rows = hole_table(solid, features)
     projected = {v: _project(solid, v) for row in views for v in row}
     boxes = {v: _view_box(vis + hid) for v, (vis, hid) in projected.items()}
     w, h = SHEET_MM
-    # Room left of the views for a side view's height dimension and its text (it stood on the frame once).
-    region = (MARGIN_MM + DIM_GAP_MM + DIM_FONT_MM + 2.0 * DIM_TEXT_LIFT_MM + 1.0, MARGIN_MM + 14.0,
-              TABLE_X_MM - 8.0, h - MARGIN_MM - 12.0)
+    # Room left of the views for a side view's height dimension and its text (it stood on the frame
+    # once).
+    region = (
+        MARGIN_MM + DIM_GAP_MM + DIM_FONT_MM + 2.0 * DIM_TEXT_LIFT_MM + 1.0,
+        MARGIN_MM + 14.0,
+        TABLE_X_MM - 8.0,
+        h - MARGIN_MM - 12.0,
+    )
     scale, offsets = _layout(boxes, views, region, 22.0)
     svg = _SheetSVG(unit=bd.Unit.MM, margin=0.0, fit_to_stroke=False)
     svg.add_layer("frame", line_weight=0.5)
     svg.add_layer("grid", line_weight=0.18)
     svg.add_layer("visible", line_weight=0.35)
-    svg.add_layer("hidden", line_color=(0.43, 0.43, 0.43), line_weight=0.18, line_type=bd.LineType.ISO_DASH)
+    svg.add_layer(
+        "hidden", line_color=(0.43, 0.43, 0.43), line_weight=0.18, line_type=bd.LineType.ISO_DASH
+    )
     svg.add_shape(_rect(0.0, 0.0, w, h), "grid")
     svg.add_shape(_rect(MARGIN_MM, MARGIN_MM, w - MARGIN_MM, h - MARGIN_MM), "frame")
     dims: list[Dimension] = []
@@ -392,8 +508,8 @@ def draw_sheet(name: str, solid: bd.Solid, features: list[Cyl], views: list[list
         if hid:
             svg.add_shape(_placed(hid, scale, off), "hidden")
         bx0, by0, bx1, by1 = boxes[view]
-        # Overall width below the view, and height left of the side views, measured on the projected outline;
-        # their extension lines from the outline's corners to just past the dimension line.
+        # Overall width below the view, and height left of the side views, measured on the projected
+        # outline; their extension lines from the outline's corners to just past the dimension line.
         gap = DIM_GAP_MM / scale
         spans = [((bx0, by0), (bx1, by0), (0.0, -gap))]
         if view != "top":
@@ -408,8 +524,10 @@ def draw_sheet(name: str, solid: bd.Solid, features: list[Cyl], views: list[list
     x_cols = np.cumsum([TABLE_X_MM, *COLUMNS_MM])
     bottom = top - ROW_MM * (len(rows) + 1)
     grid = _rect(TABLE_X_MM, bottom, x_cols[-1], top)
-    grid += [bd.Edge.make_line((TABLE_X_MM, top - ROW_MM * i), (x_cols[-1], top - ROW_MM * i))
-             for i in range(1, len(rows) + 1)]
+    grid += [
+        bd.Edge.make_line((TABLE_X_MM, top - ROW_MM * i), (x_cols[-1], top - ROW_MM * i))
+        for i in range(1, len(rows) + 1)
+    ]
     grid += [bd.Edge.make_line((x, bottom), (x, top)) for x in x_cols[1:-1]]
     svg.add_shape(grid, "grid")
     buf = io.BytesIO()
@@ -418,23 +536,51 @@ def draw_sheet(name: str, solid: bd.Solid, features: list[Cyl], views: list[list
     root = ET.fromstring(buf.getvalue())
     root.set("id", f"drawing-{name}")
     labels = ET.SubElement(root, f"{{{SVG_NS}}}g", {"id": "views", "font-family": "DejaVu Sans"})
-    for view, (vis, hid) in projected.items():
+    for view in projected:
         off = offsets[view]
         bx0, by0, bx1, by1 = boxes[view]
-        _text(labels, off[0] + scale * (bx0 + bx1) / 2, off[1] + scale * by1 + 4.0,
-              f"{view} ({'looking along ' + _towards(view)}), scale {_scale_text(scale)}", 2.5, "middle")
+        _text(
+            labels,
+            off[0] + scale * (bx0 + bx1) / 2,
+            off[1] + scale * by1 + 4.0,
+            f"{view} ({'looking along ' + _towards(view)}), scale {_scale_text(scale)}",
+            2.5,
+            "middle",
+        )
         if view == "top":  # each row's id where its bore begins
             for row in rows:
                 u, v = _uv(view, np.array(row.start_mm))
-                _text(labels, off[0] + scale * u + 0.8, off[1] + scale * v + 0.8, row.label, 1.8, fill="#0645ad")
+                _text(
+                    labels,
+                    off[0] + scale * u + 0.8,
+                    off[1] + scale * v + 0.8,
+                    row.label,
+                    1.8,
+                    fill="#0645ad",
+                )
     _dimensions(root, dims)
-    table = ET.SubElement(root, f"{{{SVG_NS}}}g", {"id": "hole-table", "font-family": "DejaVu Sans"})
-    _text(table, TABLE_X_MM, top + 3.0, f"Hole table: {len(rows)} features, mm, part frame "
-          "(positions where each bore begins; B-rep lengths)", 2.5)
+    table = ET.SubElement(
+        root, f"{{{SVG_NS}}}g", {"id": "hole-table", "font-family": "DejaVu Sans"}
+    )
+    _text(
+        table,
+        TABLE_X_MM,
+        top + 3.0,
+        f"Hole table: {len(rows)} features, mm, part frame "
+        "(positions where each bore begins; B-rep lengths)",
+        2.5,
+    )
     for i, cells in enumerate([HEADER] + [r.cells() for r in rows]):
         g = ET.SubElement(table, f"{{{SVG_NS}}}g", {"class": "hole-head" if i == 0 else "hole-row"})
         for x, cell in zip(x_cols, cells):
-            _text(g, x + 0.8, top - ROW_MM * (i + 1) + 1.0, cell, FONT_MM, **({"font-weight": "bold"} if i == 0 else {}))
+            _text(
+                g,
+                x + 0.8,
+                top - ROW_MM * (i + 1) + 1.0,
+                cell,
+                FONT_MM,
+                **({"font-weight": "bold"} if i == 0 else {}),
+            )
     ET.indent(root, "  ")
     return ET.tostring(root, encoding="unicode").encode() + b"\n", len(rows)
 
@@ -449,8 +595,11 @@ def _scale_text(scale: float) -> str:
     return f"{scale:g}:1" if scale >= 1 else f"1:{1 / scale:g}"
 
 
-def _sheets(asm: Assembly, molds: MoldSet) -> list[tuple[str, bd.Solid, list[Cyl], list[list[str]]]]:
-    """(item name, solid, declared features, rows of views) of every sheet: panels, then the mold set."""
+def _sheets(
+    asm: Assembly, molds: MoldSet
+) -> list[tuple[str, bd.Solid, list[Cyl], list[list[str]]]]:
+    """(item name, solid, declared features, rows of views) of every sheet: panels, then the mold
+    set."""
     out = []
     layouts = {lay.name: lay for lay in asm.panel_layouts}
     for name, part in asm.parts.items():
@@ -463,8 +612,9 @@ def _sheets(asm: Assembly, molds: MoldSet) -> list[tuple[str, bd.Solid, list[Cyl
 
 
 def write_drawing_sheets(asm: Assembly, molds: MoldSet, root: Path) -> None:
-    """The sheets' geometry (``drawings/<item>.svg``) and their hole counts (``drawings/holes.json``):
-    what depends on the geometry alone (the cached part of the drawings)."""
+    """The sheets' geometry (``drawings/<item>.svg``) and their hole counts
+    (``drawings/holes.json``): what depends on the geometry alone (the cached part of the
+    drawings)."""
     out = root / "drawings"
     out.mkdir(parents=True, exist_ok=True)
     holes = {}
@@ -482,14 +632,29 @@ def _title_block(name: str, item, spec, params_sha256: str) -> bytes:
     w, _ = SHEET_MM
     x0, y0 = w - MARGIN_MM - 178.0, MARGIN_MM
     g = ET.Element(f"{{{SVG_NS}}}g", {"id": "title-block", "font-family": "DejaVu Sans"})
-    ET.SubElement(g, f"{{{SVG_NS}}}rect", {"x": f"{x0:g}", "y": f"{-(y0 + TITLE_H_MM):g}", "width": "178",
-                                            "height": f"{TITLE_H_MM:g}", "fill": "white", "stroke": "black",
-                                            "stroke-width": "0.5"})
+    ET.SubElement(
+        g,
+        f"{{{SVG_NS}}}rect",
+        {
+            "x": f"{x0:g}",
+            "y": f"{-(y0 + TITLE_H_MM):g}",
+            "width": "178",
+            "height": f"{TITLE_H_MM:g}",
+            "fill": "white",
+            "stroke": "black",
+            "stroke-width": "0.5",
+        },
+    )
     mat = spec.material(item.material)
-    lines = [("part", name, 4.0), ("tail", spec.name, 2.6),
-             ("material", f"{item.material}: {mat.name}", 2.6), ("process", item.process, 2.6),
-             ("quantity", str(item.quantity), 2.6), ("units", "mm; each view named by its direction", 2.6),
-             ("params SHA-256", params_sha256, 2.3)]
+    lines = [
+        ("part", name, 4.0),
+        ("tail", spec.name, 2.6),
+        ("material", f"{item.material}: {mat.name}", 2.6),
+        ("process", item.process, 2.6),
+        ("quantity", str(item.quantity), 2.6),
+        ("units", "mm; each view named by its direction", 2.6),
+        ("params SHA-256", params_sha256, 2.3),
+    ]
     y = y0 + TITLE_H_MM - 6.0
     for key, value, size in lines:
         _text(g, x0 + 3.0, y, key, 2.0, fill="#555")
@@ -499,7 +664,8 @@ def _title_block(name: str, item, spec, params_sha256: str) -> bytes:
 
 
 def stamp_drawings(root: Path, asm: Assembly, molds: MoldSet, params_sha256: str) -> dict[str, Any]:
-    """Add the title block to every sheet in ``root/drawings`` and list the sheets for the manifest."""
+    """Add the title block to every sheet in ``root/drawings`` and list the sheets for the
+    manifest."""
     items = {i.label: i for i in made_items(asm, (), molds)}
     holes = json.loads((root / "drawings" / "holes.json").read_text())
     (root / "drawings" / "holes.json").unlink()
@@ -508,10 +674,19 @@ def stamp_drawings(root: Path, asm: Assembly, molds: MoldSet, params_sha256: str
         path = root / "drawings" / f"{name}.svg"
         data = path.read_bytes()
         i = data.rindex(b"</svg>")
-        data = data[:i] + _title_block(name, items[name], asm.spec, params_sha256) + b"\n" + data[i:]
+        data = (
+            data[:i] + _title_block(name, items[name], asm.spec, params_sha256) + b"\n" + data[i:]
+        )
         path.write_bytes(data)
-        sheets.append({"item": name, "kind": items[name].kind, "svg": f"drawings/{name}.svg", "holes": count,
-                       "sha256": hashlib.sha256(data).hexdigest()})
+        sheets.append(
+            {
+                "item": name,
+                "kind": items[name].kind,
+                "svg": f"drawings/{name}.svg",
+                "holes": count,
+                "sha256": hashlib.sha256(data).hexdigest(),
+            }
+        )
     return {"drawings": {"format": "SVG, A3 landscape, mm", "sheets": sheets}}
 
 

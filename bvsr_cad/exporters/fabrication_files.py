@@ -28,13 +28,13 @@ import numpy as np
 import trimesh
 
 from .. import units
-from ..colors import rgb, rgba
 from ..assembly.build import Assembly, rod_span_mm
 from ..assembly.fabrication import MadeItem, made_items
 from ..assembly.products import RIGID_MATERIAL, RigidRobot, piece_transform_mm
+from ..colors import rgb, rgba
 from ..parameters.twin import rigid_joining
-from ..parts.mold import MoldSet
 from ..parts._kernel import location, mesh_arrays
+from ..parts.mold import MoldSet
 from ..parts.rigid_tail import KEPT_ROLES, RigidPiece
 from ._memo import Memo, now
 from .bom import bom_rows, write_bom
@@ -50,27 +50,43 @@ ROBOT_MESH_TOLERANCE_MM = 0.3
 
 
 def _filled_features(asm: Assembly) -> list[dict[str, Any]]:
-    """The BVSR panel features the twin fills (tail frame), excluded from the envelope comparison."""
+    """The BVSR panel features the twin fills (tail frame), excluded from the envelope
+    comparison."""
     out = []
     for lay in asm.panel_layouts:
         for c in (*lay.cuts, *lay.passages):
             if c.role in KEPT_ROLES:
                 continue
-            out.append({"name": f"{lay.name}:{c.name}", "kind": c.role, "diameter_mm": c.diameter_mm,
-                        "p0_mm": [c.p0[0], c.p0[1], c.p0[2] + lay.z0_mm],
-                        "p1_mm": [c.p1[0], c.p1[1], c.p1[2] + lay.z0_mm]})
+            out.append(
+                {
+                    "name": f"{lay.name}:{c.name}",
+                    "kind": c.role,
+                    "diameter_mm": c.diameter_mm,
+                    "p0_mm": [c.p0[0], c.p0[1], c.p0[2] + lay.z0_mm],
+                    "p1_mm": [c.p1[0], c.p1[1], c.p1[2] + lay.z0_mm],
+                }
+            )
     spec = asm.spec
-    if not spec.vertebra.has_rod:  # no vertebra: the twin's solid rod column stands where the BVSR has none
+    if (
+        not spec.vertebra.has_rod
+    ):  # no vertebra: the twin's solid rod column stands where the BVSR has none
         for s in range(1, spec.segments + 1):
             z0, z1 = rod_span_mm(spec, s)
-            out.append({"name": f"rod_column_s{s}", "kind": "rod column (no vertebra)",
-                        "diameter_mm": spec.vertebra.diameter_mm, "p0_mm": [0.0, 0.0, z0], "p1_mm": [0.0, 0.0, z1]})
+            out.append(
+                {
+                    "name": f"rod_column_s{s}",
+                    "kind": "rod column (no vertebra)",
+                    "diameter_mm": spec.vertebra.diameter_mm,
+                    "p0_mm": [0.0, 0.0, z0],
+                    "p1_mm": [0.0, 0.0, z1],
+                }
+            )
     return out
 
 
 def write_rigid_files(pieces: list[RigidPiece], root: Path) -> list[trimesh.Trimesh]:
-    """Every twin piece's ``step/<piece>.step`` and ``stl/<piece>.stl`` (print frame); returns the twin's
-    visual meshes for its robot description (tail frame, metres), tessellated first (see
+    """Every twin piece's ``step/<piece>.step`` and ``stl/<piece>.stl`` (print frame); returns the
+    twin's visual meshes for its robot description (tail frame, metres), tessellated first (see
     :func:`_visual_meshes`). What depends on the twin's geometry alone: the build caches it."""
     visual = _visual_meshes([p.solid.moved(location(piece_transform_mm(p))) for p in pieces])
     (root / "step").mkdir(parents=True, exist_ok=True)
@@ -81,25 +97,48 @@ def write_rigid_files(pieces: list[RigidPiece], root: Path) -> list[trimesh.Trim
 
 
 def _rigid_parts(asm: Assembly, pieces: list[RigidPiece]) -> list[dict[str, Any]]:
-    """The twin's entries of the manifest's parts (its files written by :func:`write_rigid_files`)."""
+    """The twin's entries of the manifest's parts (its files written by
+    :func:`write_rigid_files`)."""
     spec = asm.spec
     mat = spec.material(RIGID_MATERIAL)
     entries = []
     for p in pieces:
         files = {"step": f"step/{p.name}.step", "stl": f"stl/{p.name}.stl"}
         transform = piece_transform_mm(p)
-        entries.append({
-            "name": p.name, "kind": "rigid_tail", "material": RIGID_MATERIAL, "material_name": mat.name,
-            "density_g_cm3": mat.density_g_cm3, "process": "FDM", "count": 1,
-            "volume_mm3": p.volume_mm3, "mass_g": units.mass_g(p.volume_mm3, mat.density_g_cm3),
-            "instances": [p.name], "files": files,
-            # The part frame is the print frame; the instance sits at the piece's bed face in the tail.
-            "print_transform": np.eye(4).tolist(), "tail_transform": transform.tolist(),
-            "info": {"size_mm": list(p.size_mm), "z0_mm": p.z0_mm,
-                     "joint": p.index if p.name != "rigid_tip" else None,
-                     "print_features": [{"name": f.name, "kind": f.kind, "p0_mm": list(f.p0), "p1_mm": list(f.p1),
-                                         "diameter_mm": f.diameter_mm} for f in p.features]},
-        })
+        entries.append(
+            {
+                "name": p.name,
+                "kind": "rigid_tail",
+                "material": RIGID_MATERIAL,
+                "material_name": mat.name,
+                "density_g_cm3": mat.density_g_cm3,
+                "process": "FDM",
+                "count": 1,
+                "volume_mm3": p.volume_mm3,
+                "mass_g": units.mass_g(p.volume_mm3, mat.density_g_cm3),
+                "instances": [p.name],
+                "files": files,
+                # The part frame is the print frame; the instance sits at the piece's bed face in
+                # the tail.
+                "print_transform": np.eye(4).tolist(),
+                "tail_transform": transform.tolist(),
+                "info": {
+                    "size_mm": list(p.size_mm),
+                    "z0_mm": p.z0_mm,
+                    "joint": p.index if p.name != "rigid_tip" else None,
+                    "print_features": [
+                        {
+                            "name": f.name,
+                            "kind": f.kind,
+                            "p0_mm": list(f.p0),
+                            "p1_mm": list(f.p1),
+                            "diameter_mm": f.diameter_mm,
+                        }
+                        for f in p.features
+                    ],
+                },
+            }
+        )
     return entries
 
 
@@ -125,15 +164,22 @@ def _rigid_robot(rigid: RigidRobot, root: Path, visual: list[trimesh.Trimesh]) -
     folder = root / "robot"
     (folder / "meshes").mkdir(parents=True, exist_ok=True)
     mesh_rel = f"meshes/{name}.stl"
-    # The visual mesh is coarse (MuJoCo takes at most 200000 faces); the inertia above is from the print STLs.
+    # The visual mesh is coarse (MuJoCo takes at most 200000 faces); the inertia above is from the
+    # print STLs.
     trimesh.util.concatenate(visual).export(folder / mesh_rel)
 
     robot = ET.Element("robot", name=name)
-    # MuJoCo makes a URDF's root link its world: the twin hangs from a massless "mount" by a fixed joint,
-    # kept as its own body (fusestatic off) so simulators see the twin's mass and inertia.
+    # MuJoCo makes a URDF's root link its world: the twin hangs from a massless "mount" by a fixed
+    # joint, kept as its own body (fusestatic off) so simulators see the twin's mass and inertia.
     mj_ext = ET.SubElement(robot, "mujoco")
-    ET.SubElement(mj_ext, "compiler", balanceinertia="false", discardvisual="false", fusestatic="false",
-                  strippath="false")
+    ET.SubElement(
+        mj_ext,
+        "compiler",
+        balanceinertia="false",
+        discardvisual="false",
+        fusestatic="false",
+        strippath="false",
+    )
     ET.SubElement(robot, "link", name="mount")
     m = ET.SubElement(robot, "material", name=rigid.material)
     ET.SubElement(m, "color", rgba=_vec(rgba("rigid_tail")))
@@ -141,8 +187,16 @@ def _rigid_robot(rigid: RigidRobot, root: Path, visual: list[trimesh.Trimesh]) -
     inertial = ET.SubElement(link, "inertial")
     ET.SubElement(inertial, "origin", xyz=_vec(com), rpy="0 0 0")
     ET.SubElement(inertial, "mass", value=_f(mass_kg))
-    ET.SubElement(inertial, "inertia", ixx=_f(inertia[0, 0]), ixy=_f(inertia[0, 1]), ixz=_f(inertia[0, 2]),
-                  iyy=_f(inertia[1, 1]), iyz=_f(inertia[1, 2]), izz=_f(inertia[2, 2]))
+    ET.SubElement(
+        inertial,
+        "inertia",
+        ixx=_f(inertia[0, 0]),
+        ixy=_f(inertia[0, 1]),
+        ixz=_f(inertia[0, 2]),
+        iyy=_f(inertia[1, 1]),
+        iyz=_f(inertia[1, 2]),
+        izz=_f(inertia[2, 2]),
+    )
     for tag in ("visual", "collision"):
         el = ET.SubElement(link, tag, name=f"rigid_tail_{tag}")
         ET.SubElement(el, "origin", xyz="0 0 0", rpy="0 0 0")
@@ -165,19 +219,48 @@ def _rigid_robot(rigid: RigidRobot, root: Path, visual: list[trimesh.Trimesh]) -
     ET.SubElement(asset, "mesh", name="rigid_tail", file=f"{name}.stl")
     world = ET.SubElement(mj, "worldbody")
     ET.SubElement(world, "light", pos="0 0.5 0.3", dir="0 -1 0")
-    body = ET.SubElement(world, "body", name="rigid_tail", pos="0 0 0")  # no joint: welded to the mount
-    ET.SubElement(body, "inertial", pos=_vec(com), mass=_f(mass_kg),
-                  fullinertia=_vec((inertia[0, 0], inertia[1, 1], inertia[2, 2],
-                                    inertia[0, 1], inertia[0, 2], inertia[1, 2])))
-    ET.SubElement(body, "geom", type="mesh", mesh="rigid_tail", rgba=_vec(rgba("rigid_tail")),
-                  contype="0", conaffinity="0")
+    body = ET.SubElement(
+        world, "body", name="rigid_tail", pos="0 0 0"
+    )  # no joint: welded to the mount
+    ET.SubElement(
+        body,
+        "inertial",
+        pos=_vec(com),
+        mass=_f(mass_kg),
+        fullinertia=_vec(
+            (
+                inertia[0, 0],
+                inertia[1, 1],
+                inertia[2, 2],
+                inertia[0, 1],
+                inertia[0, 2],
+                inertia[1, 2],
+            )
+        ),
+    )
+    ET.SubElement(
+        body,
+        "geom",
+        type="mesh",
+        mesh="rigid_tail",
+        rgba=_vec(rgba("rigid_tail")),
+        contype="0",
+        conaffinity="0",
+    )
     ET.indent(mj)
     mjcf_rel = f"robot/{name}.xml"
     ET.ElementTree(mj).write(root / mjcf_rel, encoding="utf-8", xml_declaration=True)
-    return {"urdf": urdf_rel, "mjcf": mjcf_rel, "mesh": f"robot/{mesh_rel}", "mass_kg": mass_kg,
-            "com_m": com.tolist(), "inertia_kg_m2": inertia.tolist(),
-            "note": "one rigid body fixed to the mount; solid PLA density (the printed infill lowers the mass: "
-                    "weigh the print and scale)"}
+    return {
+        "urdf": urdf_rel,
+        "mjcf": mjcf_rel,
+        "mesh": f"robot/{mesh_rel}",
+        "mass_kg": mass_kg,
+        "com_m": com.tolist(),
+        "inertia_kg_m2": inertia.tolist(),
+        "note": "one rigid body fixed to the mount; solid PLA density (the printed infill lowers "
+        "the mass: "
+        "weigh the print and scale)",
+    }
 
 
 def _layout_3mf(items: list[tuple[str, Path]], path: Path) -> list[list[float]]:
@@ -202,22 +285,32 @@ def _layout_3mf(items: list[tuple[str, Path]], path: Path) -> list[list[float]]:
     return sizes
 
 
-def _print_jobs(asm: Assembly, root: Path, items: list[MadeItem], stl_of: dict[str, str],
-                memo: Memo = now) -> list[dict]:
+def _print_jobs(
+    asm: Assembly, root: Path, items: list[MadeItem], stl_of: dict[str, str], memo: Memo = now
+) -> list[dict]:
     """One job per (process, material) of the printed items (MJF and FDM); ``stl_of`` maps an item's
-    label to the STL its writer wrote. A job's 3MF and its items' sizes are a step of ``memo`` read by the
-    job's name and its items' names and STL bytes (a rod-material edit changes none)."""
+    label to the STL its writer wrote. A job's 3MF and its items' sizes are a step of ``memo`` read
+    by the job's name and its items' names and STL bytes (a rod-material edit changes none)."""
     spec = asm.spec
     fp = spec.fabrication_package
     jobs: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for it in items:
         if it.process in ("MJF", "FDM"):
             jobs.setdefault((it.process, it.material), []).append(
-                {"part": it.label, "kind": it.kind, "source": stl_of[it.label], "quantity": it.quantity,
-                 "volume_mm3": it.volume_mm3, "mass_g": it.mass_each_g})
+                {
+                    "part": it.label,
+                    "kind": it.kind,
+                    "source": stl_of[it.label],
+                    "quantity": it.quantity,
+                    "volume_mm3": it.volume_mm3,
+                    "mass_g": it.mass_each_g,
+                }
+            )
     out = []
-    volumes = {"FDM": (fp.printer_x_mm, fp.printer_y_mm, fp.printer_z_mm),
-               "MJF": (fp.mjf_x_mm, fp.mjf_y_mm, fp.mjf_z_mm)}
+    volumes = {
+        "FDM": (fp.printer_x_mm, fp.printer_y_mm, fp.printer_z_mm),
+        "MJF": (fp.mjf_x_mm, fp.mjf_y_mm, fp.mjf_z_mm),
+    }
     for (process, material), items in jobs.items():
         job = f"{process}_{material.split('_')[0]}"
         folder = root / "print" / job
@@ -228,37 +321,62 @@ def _print_jobs(asm: Assembly, root: Path, items: list[MadeItem], stl_of: dict[s
             it["stl"] = rel
         three_mf = f"print/{job}/{job}.3mf"
 
-        def layout(dst: Path, items: list[dict[str, Any]] = items, three_mf: str = three_mf) -> list[list[float]]:
+        def layout(
+            dst: Path, items: list[dict[str, Any]] = items, three_mf: str = three_mf
+        ) -> list[list[float]]:
             (dst / three_mf).parent.mkdir(parents=True, exist_ok=True)
             return _layout_3mf([(it["part"], root / it["stl"]) for it in items], dst / three_mf)
 
-        sizes = memo("print_job_layout", {"job": job, "items": [(it["part"], it["stl"]) for it in items]}, layout,
-                     root, files=[root / it["stl"] for it in items])
+        sizes = memo(
+            "print_job_layout",
+            {"job": job, "items": [(it["part"], it["stl"]) for it in items]},
+            layout,
+            root,
+            files=[root / it["stl"] for it in items],
+        )
         for it, size in zip(items, sizes):
             it["size_mm"] = size
         with (root / f"print/{job}/quantities.csv").open("w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(["part", "quantity", "stl", "mass_each_g"])
             for it in items:
-                w.writerow([it["part"], it["quantity"], Path(it["stl"]).name, f"{it['mass_g']:.2f}"])
-        out.append({"name": job, "process": process, "material": material,
-                    "material_name": spec.material(material).name, "build_volume_mm": list(volumes[process]),
-                    "files": {"3mf": three_mf, "quantities": f"print/{job}/quantities.csv"},
-                    "items": items,
-                    "total_parts": sum(it["quantity"] for it in items),
-                    "total_mass_g": sum(it["quantity"] * it["mass_g"] for it in items)})
+                w.writerow(
+                    [it["part"], it["quantity"], Path(it["stl"]).name, f"{it['mass_g']:.2f}"]
+                )
+        out.append(
+            {
+                "name": job,
+                "process": process,
+                "material": material,
+                "material_name": spec.material(material).name,
+                "build_volume_mm": list(volumes[process]),
+                "files": {"3mf": three_mf, "quantities": f"print/{job}/quantities.csv"},
+                "items": items,
+                "total_parts": sum(it["quantity"] for it in items),
+                "total_mass_g": sum(it["quantity"] * it["mass_g"] for it in items),
+            }
+        )
     return out
 
 
-def write_fabrication(asm: Assembly, pieces: list[RigidPiece], rigid_robot: RigidRobot,
-                      visual: list[trimesh.Trimesh], mold_set: MoldSet | None,
-                      part_files: dict[str, dict[str, str]], mold_files: dict[str, dict[str, str]], root: Path,
-                      progress: Callable[[str], None], memo: Memo = now) -> dict[str, Any]:
+def write_fabrication(
+    asm: Assembly,
+    pieces: list[RigidPiece],
+    rigid_robot: RigidRobot,
+    visual: list[trimesh.Trimesh],
+    mold_set: MoldSet | None,
+    part_files: dict[str, dict[str, str]],
+    mold_files: dict[str, dict[str, str]],
+    root: Path,
+    progress: Callable[[str], None],
+    memo: Memo = now,
+) -> dict[str, Any]:
     """Write the rigid tail's robot description, print files and the BOM under ``root``, beside the
     twin's pieces (built by :mod:`bvsr_cad.assembly.products`) and their files and ``visual`` meshes
     (:func:`write_rigid_files`). ``part_files`` and ``mold_files`` name the files the part and mold
-    writers wrote (by part and mold-part name); ``memo``: the print jobs' layouts (:func:`_print_jobs`). Returns keys to merge into the manifest
-    (``rigid_parts``: the twin's entries of the manifest's ``parts``)."""
+    writers wrote (by part and mold-part name); ``memo``: the print jobs' layouts
+    (:func:`_print_jobs`). Returns keys to merge into the manifest (``rigid_parts``: the twin's
+    entries of the manifest's ``parts``)."""
     spec = asm.spec
     fp = spec.fabrication_package
     rigid = _rigid_parts(asm, pieces)
@@ -274,16 +392,29 @@ def write_fabrication(asm: Assembly, pieces: list[RigidPiece], rigid_robot: Rigi
     rigid_section = {
         "pieces": [p["name"] for p in rigid],
         "printer_volume_mm": [fp.printer_x_mm, fp.printer_y_mm, fp.printer_z_mm],
-        "split": "one piece per joint at each panel's lower face (panel on the bed, SOA columns and rod on it); "
-                 "the tip panel alone",
-        "joining": {"pins": {"designation": joining.pin_designation, "count": joining.pin_count,
-                             "hole_mm": joining.pin_hole_mm},
-                    "tie_rod": {"designation": joining.tie_rod_designation,
-                                "cut_length_mm": joining.tie_rod_cut_length_mm, "hole_mm": joining.tie_rod_hole_mm},
-                    "nuts": {"designation": joining.nut_designation, "count": joining.nut_count,
-                             "pocket_depth_mm": joining.nut_pocket_depth_mm}},
-        "simplified": "SOA pockets, air channels, fitting and tube ports, feed passages and the rod socket are "
-                      "filled; lightening holes, tube pass-throughs and mount/payload insert bores are kept",
+        "split": "one piece per joint at each panel's lower face (panel on the bed, SOA columns "
+        "and rod on it); "
+        "the tip panel alone",
+        "joining": {
+            "pins": {
+                "designation": joining.pin_designation,
+                "count": joining.pin_count,
+                "hole_mm": joining.pin_hole_mm,
+            },
+            "tie_rod": {
+                "designation": joining.tie_rod_designation,
+                "cut_length_mm": joining.tie_rod_cut_length_mm,
+                "hole_mm": joining.tie_rod_hole_mm,
+            },
+            "nuts": {
+                "designation": joining.nut_designation,
+                "count": joining.nut_count,
+                "pocket_depth_mm": joining.nut_pocket_depth_mm,
+            },
+        },
+        "simplified": "SOA pockets, air channels, fitting and tube ports, feed passages and the "
+        "rod socket are "
+        "filled; lightening holes, tube pass-throughs and mount/payload insert bores are kept",
         "envelope_tolerance_mm": fp.envelope_tolerance_mm,
         "filled_features": _filled_features(asm),
         "mass_g_solid": sum(p["mass_g"] for p in rigid),
@@ -293,16 +424,23 @@ def write_fabrication(asm: Assembly, pieces: list[RigidPiece], rigid_robot: Rigi
         "rigid_parts": rigid,
         "rigid_tail": rigid_section,
         "print_jobs": jobs,
-        "fabrication": {"max_overhang_deg": fp.max_overhang_deg, "max_bridge_mm": fp.max_bridge_mm,
-                        "fdm_min_wall_mm": fp.fdm_min_wall_mm, "fdm_min_plate_mm": fp.fdm_min_plate_mm, "fdm_min_hole_mm": fp.fdm_min_hole_mm,
-                        "mjf_min_hole_mm": fp.mjf_min_hole_mm, # The pocket rim lips are allowed thinner than other webs by the
-                        # layout rules (fabrication.min_rim_lip_mm): they only locate a flange.
-                        "mjf_min_wall_mm": min(spec.fabrication.min_wall_mm, spec.fabrication.min_rim_lip_mm),
-                        "mjf_min_wall_note": f"fabrication.min_rim_lip_mm = {spec.fabrication.min_rim_lip_mm:g} "
-                                             f"(pocket rim lips); other webs >= {spec.fabrication.min_wall_mm:g} "
-                                             "by the layout validation",
-                        "mold_min_wall_mm": spec.casting.min_print_wall_mm,
-                        "slicer_timeout_s": fp.slicer_timeout_s},
+        "fabrication": {
+            "max_overhang_deg": fp.max_overhang_deg,
+            "max_bridge_mm": fp.max_bridge_mm,
+            "fdm_min_wall_mm": fp.fdm_min_wall_mm,
+            "fdm_min_plate_mm": fp.fdm_min_plate_mm,
+            "fdm_min_hole_mm": fp.fdm_min_hole_mm,
+            "mjf_min_hole_mm": fp.mjf_min_hole_mm,
+            # The pocket rim lips are allowed thinner than other webs by the layout rules
+            # (fabrication.min_rim_lip_mm): they only locate a flange.
+            "mjf_min_wall_mm": min(spec.fabrication.min_wall_mm, spec.fabrication.min_rim_lip_mm),
+            "mjf_min_wall_note": "fabrication.min_rim_lip_mm = "
+            f"{spec.fabrication.min_rim_lip_mm:g} "
+            f"(pocket rim lips); other webs >= {spec.fabrication.min_wall_mm:g} "
+            "by the layout validation",
+            "mold_min_wall_mm": spec.casting.min_print_wall_mm,
+            "slicer_timeout_s": fp.slicer_timeout_s,
+        },
     }
     progress("bill of materials")
     rows = bom_rows(asm, pieces, mold_set)

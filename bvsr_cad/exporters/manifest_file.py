@@ -1,5 +1,5 @@
-"""Writing an export's manifest.json (without :mod:`bvsr_cad.exporters.manifest`'s CAD imports: a rebuild
-that reuses the whole export from the cache rewrites only its volatile section)."""
+"""Writing an export's manifest.json (without :mod:`bvsr_cad.exporters.manifest`'s CAD imports: a
+rebuild that reuses the whole export from the cache rewrites only its volatile section)."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ from typing import Any
 
 def write_manifest(root: Path, manifest: dict[str, Any]) -> None:
     """``root/manifest.json``, indented; a non-finite number is written as null."""
+
     def default(o: Any) -> Any:
         if isinstance(o, float) and not math.isfinite(o):
             return None

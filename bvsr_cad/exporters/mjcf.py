@@ -10,16 +10,15 @@ rotation is Eq 2's exactly, the end point within 3.5e-4 L theta^4). Each hinge c
 (the two pivots' energies add up to (1/2)(E I / L) theta^2). The pivots turning opposite ways (a
 shear the exact chain does not have) are held by the equalities alone, and the SOAs' thrust pushes
 them over: stepped at 2 ms with the links' own inertia that mode grows. A fixed tendon per axis,
-``jk_shear_x`` = ``jk_ax`` - ``jk_bx`` (zero whenever the equalities hold), damps it with the
-SOAs' own bending damping c N r^2 / 2 and resists it with what resists it in the real joint, the
-rod's and SOAs' bending as fixed-guided columns (:func:`shear_stiffness_nm_rad`), so it adds nothing
-to the constant-curvature motion and holds with a soft rod or none. The per-segment model's series
-SOA tendons lose the SOAs' resistance to a segment's joints bending unalike: fixed ``spread`` tendons
+``jk_shear_x`` = ``jk_ax`` - ``jk_bx`` (zero whenever the equalities hold), damps it with the SOAs'
+own bending damping c N r^2 / 2 and resists it with what resists it in the real joint, the rod's and
+SOAs' bending as fixed-guided columns (:func:`shear_stiffness_nm_rad`), so it adds nothing to the
+constant-curvature motion and holds with a soft rod or none. The per-segment model's series SOA
+tendons lose the SOAs' resistance to a segment's joints bending unalike: fixed ``spread`` tendons
 put it back (:func:`_segment_spread_tendons`). The hinges carry no limits: each joint's bend limit
 theta <= theta_max holds in every bending direction through fixed tendons on the two pivots' summed
-angles, a polygon circumscribing the exact limit (:func:`_bend_limit_tendons`).
-The *exact* chain (``robot/bvsr_exact.xml``) is the URDF's,
-stepped at ``robot.timestep_s``.
+angles, a polygon circumscribing the exact limit (:func:`_bend_limit_tendons`). The *exact* chain
+(``robot/bvsr_exact.xml``) is the URDF's, stepped at ``robot.timestep_s``.
 
 The exact chain of every bending joint is the URDF's, with equality constraints:
 ``jk_theta_b`` = ``jk_theta_a``, ``jk_phi_b`` = -``jk_phi``, and ``jk_chord``
@@ -84,67 +83,82 @@ PHI_DAMPING_NMS = 1e-4
 #: motions, start without passing the singularity.
 PHI_REST_RAD = 1.5707963267948966
 #: The reduced chain's step: the largest of a legged robot's steps (1, 2, 3, 4 ms) at which, after
-#: 0.3 s of a held pressure pattern from rest, its tip stays within 2 mm of the same model stepped at
-#: 0.05 ms (tests/test_robot.py measures it; at 4 ms it stays within 5 mm). The exact chain keeps
+#: 0.3 s of a held pressure pattern from rest, its tip stays within 2 mm of the same model stepped
+#: at 0.05 ms (tests/test_robot.py measures it; at 4 ms it stays within 5 mm). The exact chain keeps
 #: ``robot.timestep_s``: its chord slide and 0.1 mg virtual links need 0.2 ms (at 1 ms its tip ends
-#: 41 mm off, at 2 ms it explodes). The per-segment model's couplings between the joints
-#: of a segment are soft too: it meets the 2 mm at 1 ms (1.5 mm; 3.3 mm at 2 ms).
+#: 41 mm off, at 2 ms it explodes). The per-segment model's couplings between the joints of a
+#: segment are soft too: it meets the 2 mm at 1 ms (1.5 mm; 3.3 mm at 2 ms).
 REDUCED_CHAIN_TIMESTEP_S = 2e-3
 REDUCED_PER_SEGMENT_TIMESTEP_S = 1e-3
 #: The equalities' impedance (MuJoCo's solimp): its dmax 0.96 is the share of the coupling force the
 #: two-step time constant (the least MuJoCo allows) leaves unregularised. 0.97 moves the 4 ms tip
 #: 5.4 mm off the 0.05 ms one (over 5 mm; 0.99: 2.8 mm at 2 ms). With the shear and spread tendons
-#: it holds a tail with a soft rod or none (largest residual under gravity, no rod: 7.1 mrad per joint
-#: against 10.3 at dmax 0.95, 5.7 per segment against 11.9; checks/robot.py's limit is 10).
+#: it holds a tail with a soft rod or none (largest residual under gravity, no rod: 7.1 mrad per
+#: joint against 10.3 at dmax 0.95, 5.7 per segment against 11.9; checks/robot.py's limit is 10).
 EQUALITY_SOLIMP = (0.9, 0.96, 0.001, 0.5, 2.0)
 #: The reduced chain's bend limit: fixed tendons along this many directions per joint (twice as many
-#: faces), a polygon circumscribing the exact limit theta <= theta_max (:func:`_bend_limit_tendons`).
-#: 8 (16 faces): a bend reaches at most 2.1 % past theta_max between faces (4 directions: 8.1 %,
-#: 6: 3.6 %, 12: 0.9 %; the hinges' own limits before: 39 %). Measured, 8 is where the polygon stops
-#: mattering: under a large moment the soft limits themselves give 2.6-6.9 % (:data:`LIMIT_SOLIMP`), so
-#: more directions add rows (MJX allocates one per limit, Warp's buffers reserve one) for nothing seen;
-#: with 8, CPU MuJoCo steps the default scene as fast as with the hinge limits (32,900 steps/s against
-#: 32,300) and MJX compiles its step as fast (29-31 s of CPU against 32-34 s).
+#: faces), a polygon circumscribing the exact limit theta <= theta_max
+#: (:func:`_bend_limit_tendons`). 8 (16 faces): a bend reaches at most 2.1 % past theta_max between
+#: faces (4 directions: 8.1 %, 6: 3.6 %, 12: 0.9 %; the hinges' own limits before: 39 %). Measured,
+#: 8 is where the polygon stops mattering: under a large moment the soft limits themselves give
+#: 2.6-6.9 % (:data:`LIMIT_SOLIMP`), so more directions add rows (MJX allocates one per limit,
+#: Warp's buffers reserve one) for nothing seen; with 8, CPU MuJoCo steps the default scene as fast
+#: as with the hinge limits (32,900 steps/s against 32,300) and MJX compiles its step as fast (29-31
+#: s of CPU against 32-34 s).
 BEND_LIMIT_DIRECTIONS = 8
-#: The bend limits' impedance (solimplimit; their solreflimit is the equalities', two steps). With MuJoCo's
-#: defaults (0.9, 0.95, 0.001, 0.5, 2; 0.02 s) a tip moment 1.5 times the rod's own at theta_max (the SOAs'
-#: stiffness off) pushed the default tail's joints 38-49 % past their limits (the exact chain's: 32-47 %);
-#: with these, 1.1-3.2 % at the exported 2 ms (3.8-9.2 % at 4 ms). With the SOAs, a tip moment 1.2 times
-#: the one that bends the tail to its limits (5.4 Nm) stops every joint 2.6-6.9 % past theta_max in any
-#: direction, where the hinges' limits folded the tail (123 % past) or went unstable. (0.99, 0.999) is no
-#: tighter under larger moments (14 %) and rattles (joint speeds of 1-6 rad/s against the limit).
+#: The bend limits' impedance (solimplimit; their solreflimit is the equalities', two steps). With
+#: MuJoCo's defaults (0.9, 0.95, 0.001, 0.5, 2; 0.02 s) a tip moment 1.5 times the rod's own at
+#: theta_max (the SOAs' stiffness off) pushed the default tail's joints 38-49 % past their limits
+#: (the exact chain's: 32-47 %); with these, 1.1-3.2 % at the exported 2 ms (3.8-9.2 % at 4 ms).
+#: With the SOAs, a tip moment 1.2 times the one that bends the tail to its limits (5.4 Nm) stops
+#: every joint 2.6-6.9 % past theta_max in any direction, where the hinges' limits folded the tail
+#: (123 % past) or went unstable. (0.99, 0.999) is no tighter under larger moments (14 %) and
+#: rattles (joint speeds of 1-6 rad/s against the limit).
 LIMIT_SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)
 #: The chains an MJCF file can carry (``chain`` of :func:`mjcf_tree`).
 CHAINS = ("reduced", "exact")
 #: Per-segment model: the joints of a segment follow its first joint's (joint suffix, equality tag).
-SEGMENT_COUPLED = {"reduced": (("ax", "ay"), ("x", "y")), "exact": (("theta_a", "phi"), ("theta", "phi"))}
+SEGMENT_COUPLED = {
+    "reduced": (("ax", "ay"), ("x", "y")),
+    "exact": (("theta_a", "phi"), ("theta", "phi")),
+}
 _AXES = {"x": "1 0 0", "y": "0 1 0"}
 #: Contact bits of the tail's collision shapes (their ``contype``; their ``conaffinity`` is 0, see
-#: :func:`collision_geom`). A geom with MuJoCo's default conaffinity 1 (a floor, a wall, a robot's legs)
-#: meets the panels only. Straight, the panels' rims stand out beyond the SOA and rod halves (a plane on
-#: two rims clears them by 0.08 mm); bent, the halves on the convex side pass a plane resting on the rims
-#: (measured on the default tail: 1.9 mm at a quarter of the joint limits, 8 mm at the limits), so a
-#: floor pressed by a bent tail sinks into its SOAs by that much. A geom that must reach between the
-#: panels (the impact scene's ball) adds :data:`COLUMN_CONTACT_BIT` to its conaffinity. It keeps the
-#: default scene's contact set to the seven panels against the floor: MJX's compile of the step took
-#: 253 s of CPU with all 79 shapes against the floor, 57 s with the panels only (a shared 2-core machine).
+#: :func:`collision_geom`). A geom with MuJoCo's default conaffinity 1 (a floor, a wall, a robot's
+#: legs) meets the panels only. Straight, the panels' rims stand out beyond the SOA and rod halves
+#: (a plane on two rims clears them by 0.08 mm); bent, the halves on the convex side pass a plane
+#: resting on the rims (measured on the default tail: 1.9 mm at a quarter of the joint limits, 8 mm
+#: at the limits), so a floor pressed by a bent tail sinks into its SOAs by that much. A geom that
+#: must reach between the panels (the impact scene's ball) adds :data:`COLUMN_CONTACT_BIT` to its
+#: conaffinity. It keeps the default scene's contact set to the seven panels against the floor:
+#: MJX's compile of the step took 253 s of CPU with all 79 shapes against the floor, 57 s with the
+#: panels only (a shared 2-core machine).
 COLUMN_CONTACT_BIT = 2
-CONTACT_TYPE = {"panel": 1 | COLUMN_CONTACT_BIT, "soa": COLUMN_CONTACT_BIT, "rod": COLUMN_CONTACT_BIT}
+CONTACT_TYPE = {
+    "panel": 1 | COLUMN_CONTACT_BIT,
+    "soa": COLUMN_CONTACT_BIT,
+    "rod": COLUMN_CONTACT_BIT,
+}
 
 
 def chord_polynomial(arc_length_m: float, theta_a_max_rad: float) -> tuple[np.ndarray, float]:
     """Even quartic in theta_a fitted to the chord joint value; (polycoef[5], max |error| m)."""
     x = np.linspace(-theta_a_max_rad, theta_a_max_rad, 2001)
     y = chord_joint_value(2.0 * x, arc_length_m)
-    A = np.stack([x ** 2, x ** 4], axis=1)
+    A = np.stack([x**2, x**4], axis=1)
     (a2, a4), *_ = np.linalg.lstsq(A, y, rcond=None)
     coef = np.array([0.0, 0.0, a2, 0.0, a4])
     err = float(np.max(np.abs(A @ np.array([a2, a4]) - y)))
     return coef, err
 
 
-def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
-              mesh_dir: str = "meshes", chain: str = "reduced") -> tuple[ET.ElementTree, dict]:
+def mjcf_tree(
+    robot: RobotModel,
+    mesh_files: dict[str, str],
+    per_segment: bool,
+    mesh_dir: str = "meshes",
+    chain: str = "reduced",
+) -> tuple[ET.ElementTree, dict]:
     """The model as an element tree, and facts to record (chord error, counts).
 
     ``chain``: ``reduced``, the pseudo-rigid-body chain of the default files (see
@@ -155,11 +169,17 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
         raise ValueError(f"chain {chain!r}: allowed {', '.join(CHAINS)}")
     act = robot.actuation
     model = f"{robot.name}_segments" if per_segment else robot.name
-    root = ET.Element("mujoco", model=f"{robot.name}{'_per_segment' if per_segment else ''}"
-                                      f"{'_exact' if chain == 'exact' else ''}")
+    root = ET.Element(
+        "mujoco",
+        model=f"{robot.name}{'_per_segment' if per_segment else ''}"
+        f"{'_exact' if chain == 'exact' else ''}",
+    )
     ET.SubElement(root, "compiler", angle="radian", meshdir=mesh_dir, autolimits="true")
-    timestep_s = act.timestep_s if chain == "exact" else (REDUCED_PER_SEGMENT_TIMESTEP_S if per_segment
-                                                          else REDUCED_CHAIN_TIMESTEP_S)
+    timestep_s = (
+        act.timestep_s
+        if chain == "exact"
+        else (REDUCED_PER_SEGMENT_TIMESTEP_S if per_segment else REDUCED_CHAIN_TIMESTEP_S)
+    )
     ET.SubElement(root, "option", timestep=_f(timestep_s), integrator="implicitfast")
     _mjcf_defaults(root, model)
     _mjcf_assets(root, robot, mesh_files)
@@ -168,18 +188,33 @@ def mjcf_tree(robot: RobotModel, mesh_files: dict[str, str], per_segment: bool,
     solref = _vec((2.0 * timestep_s, 1.0))
     chord_err = _mjcf_equalities(root, robot, chain, per_segment, solref)
     tendon = ET.SubElement(root, "tendon")
-    bend_overshoot = _mjcf_joint_tendons(tendon, robot, per_segment, solref) if chain == "reduced" else None
+    bend_overshoot = (
+        _mjcf_joint_tendons(tendon, robot, per_segment, solref) if chain == "reduced" else None
+    )
     actuators = _mjcf_actuators(root, tendon, robot, per_segment)
     ET.indent(root)
     lags = sorted(set(robot.supply_lag_s.values()))
-    facts = {"chord_polynomial_max_error_m": chord_err, "actuators": actuators,
-             "actuator_control": "commanded (supply) gauge pressure, Pa; the chamber pressure is the "
-                                 "actuator's activation, a first-order lag of it" if lags else "gauge pressure, Pa",
-             "supply_lag_s": [lags[0], lags[-1]] if lags else None, "per_segment": per_segment,
-             "chain": chain, "timestep_s": timestep_s, "bend_limit": None if bend_overshoot is None else {
-                 "faces": 2 * BEND_LIMIT_DIRECTIONS, "max_overshoot": bend_overshoot,
-                 "tendons": "jk_bend_limit_<i>: cos(phi_i) (jk_ax + jk_bx) + sin(phi_i) (jk_ay + jk_by), "
-                            f"phi_i = 180 i / {BEND_LIMIT_DIRECTIONS} deg"}}
+    facts = {
+        "chord_polynomial_max_error_m": chord_err,
+        "actuators": actuators,
+        "actuator_control": "commanded (supply) gauge pressure, Pa; the chamber pressure is the "
+        "actuator's activation, a first-order lag of it"
+        if lags
+        else "gauge pressure, Pa",
+        "supply_lag_s": [lags[0], lags[-1]] if lags else None,
+        "per_segment": per_segment,
+        "chain": chain,
+        "timestep_s": timestep_s,
+        "bend_limit": None
+        if bend_overshoot is None
+        else {
+            "faces": 2 * BEND_LIMIT_DIRECTIONS,
+            "max_overshoot": bend_overshoot,
+            "tendons": "jk_bend_limit_<i>: cos(phi_i) (jk_ax + jk_bx) + sin(phi_i) (jk_ay + "
+            "jk_by), "
+            f"phi_i = 180 i / {BEND_LIMIT_DIRECTIONS} deg",
+        },
+    }
     return ET.ElementTree(root), facts
 
 
@@ -197,7 +232,8 @@ def _mjcf_defaults(root: ET.Element, model: str) -> None:
 
 
 def _mjcf_assets(root: ET.Element, robot: RobotModel, mesh_files: dict[str, str]) -> None:
-    """The ``asset`` section: each visual and collision mesh once, then one material per colour name."""
+    """The ``asset`` section: each visual and collision mesh once, then one material per colour
+    name."""
     asset = ET.SubElement(root, "asset")
     mats = {}
     for link in robot.links.values():
@@ -207,7 +243,12 @@ def _mjcf_assets(root: ET.Element, robot: RobotModel, mesh_files: dict[str, str]
                 ET.SubElement(asset, "mesh", name=v.name, file=mesh_files[v.name])
         for c in link.collisions:
             if c.kind == "mesh":
-                ET.SubElement(asset, "mesh", name=collision_mesh_name(c), file=mesh_files[collision_mesh_name(c)])
+                ET.SubElement(
+                    asset,
+                    "mesh",
+                    name=collision_mesh_name(c),
+                    file=mesh_files[collision_mesh_name(c)],
+                )
     for name, rgba in mats.items():
         ET.SubElement(asset, "material", name=name, rgba=_vec(rgba))
 
@@ -215,8 +256,14 @@ def _mjcf_assets(root: ET.Element, robot: RobotModel, mesh_files: dict[str, str]
 def _mjcf_worldbody(root: ET.Element, robot: RobotModel, model: str, chain: str) -> None:
     """The ``worldbody`` section: the mount, then the tail's bodies as the chain nests them."""
     world = ET.SubElement(root, "worldbody")
-    mount = ET.SubElement(world, "body", name="bvsr_mount", pos=_vec((0, 0, MOUNT_HEIGHT_M)),
-                          quat=_quat(R_WORLD_TAIL), childclass=model)
+    mount = ET.SubElement(
+        world,
+        "body",
+        name="bvsr_mount",
+        pos=_vec((0, 0, MOUNT_HEIGHT_M)),
+        quat=_quat(R_WORLD_TAIL),
+        childclass=model,
+    )
     sites_by_link: dict[str, list] = {}
     for s in robot.sites:
         sites_by_link.setdefault(s.link, []).append(s)
@@ -231,23 +278,44 @@ def _mjcf_worldbody(root: ET.Element, robot: RobotModel, model: str, chain: str)
         _reduced_bodies(root_body, robot, 1, sites_by_link)
 
 
-def _link_contents(body: ET.Element, link, sites_by_link: dict[str, list], offset_m: float = 0.0) -> None:
+def _link_contents(
+    body: ET.Element, link, sites_by_link: dict[str, list], offset_m: float = 0.0
+) -> None:
     """A link's inertial, visuals, collisions and sites, ``offset_m`` along the body's Z."""
     shift = np.array([0.0, 0.0, offset_m])
     I = link.inertial.inertia
-    ET.SubElement(body, "inertial", pos=_vec(link.inertial.com + shift), mass=_f(link.inertial.mass_kg),
-                  fullinertia=_vec((I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])))
+    ET.SubElement(
+        body,
+        "inertial",
+        pos=_vec(link.inertial.com + shift),
+        mass=_f(link.inertial.mass_kg),
+        fullinertia=_vec((I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])),
+    )
     for v in link.visuals:
-        ET.SubElement(body, "geom", {"class": "visual", "mesh": v.name, "material": v.material,
-                                     "name": f"{link.name}_{v.name}_visual"})
+        ET.SubElement(
+            body,
+            "geom",
+            {
+                "class": "visual",
+                "mesh": v.name,
+                "material": v.material,
+                "name": f"{link.name}_{v.name}_visual",
+            },
+        )
     for c in link.collisions:
         collision_geom(body, c, shift)
     for s in sites_by_link.get(link.name, []):
         ET.SubElement(body, "site", name=s.name, pos=_vec(s.pos_m))
 
 
-def _exact_body(parent_el: ET.Element, robot: RobotModel, link_name: str, joint, children: dict[str, list],
-                sites_by_link: dict[str, list]) -> None:
+def _exact_body(
+    parent_el: ET.Element,
+    robot: RobotModel,
+    link_name: str,
+    joint,
+    children: dict[str, list],
+    sites_by_link: dict[str, list],
+) -> None:
     """The exact chain: ``link_name``'s body with the joint that moves it, then its children's."""
     act = robot.actuation
     link = robot.links[link_name]
@@ -266,9 +334,14 @@ def _exact_body(parent_el: ET.Element, robot: RobotModel, link_name: str, joint,
         bj = joint.name.split("_", 1)
         kind = bj[1]
         if joint.type == "prismatic":
-            # The rod's axial stiffness carries the SOAs' thrust; the equality only bends it to the arc.
-            jattrs.update(type="slide", range=_vec((joint.lower, joint.upper)),
-                          stiffness=_f(act.rod_axial_stiffness_n_m), armature=_f(CHORD_ARMATURE_KG))
+            # The rod's axial stiffness carries the SOAs' thrust; the equality only bends it to the
+            # arc.
+            jattrs.update(
+                type="slide",
+                range=_vec((joint.lower, joint.upper)),
+                stiffness=_f(act.rod_axial_stiffness_n_m),
+                armature=_f(CHORD_ARMATURE_KG),
+            )
         else:
             jattrs["type"] = "hinge"
             if kind == "phi":
@@ -277,59 +350,115 @@ def _exact_body(parent_el: ET.Element, robot: RobotModel, link_name: str, joint,
                 jattrs.update(ref=_f(-PHI_REST_RAD))
             if kind in ("theta_a", "theta_b"):
                 lim = next(b.theta_max_rad / 2 for b in robot.bending if b.name == bj[0])
-                jattrs.update(range=_vec((-lim, lim)), stiffness=_f(2.0 * act.rod_bending_stiffness_nm_rad))
+                jattrs.update(
+                    range=_vec((-lim, lim)), stiffness=_f(2.0 * act.rod_bending_stiffness_nm_rad)
+                )
         ET.SubElement(body, "joint", jattrs)
     _link_contents(body, link, sites_by_link)
     for j in children.get(link_name, []):
         _exact_body(body, robot, j.child, j, children, sites_by_link)
 
 
-def _reduced_bodies(parent_el: ET.Element, robot: RobotModel, k: int, sites_by_link: dict[str, list]) -> None:
-    """The reduced chain from joint k on: its middle link (the whole deformable body) and panel k on it,
-    then the rest."""
+def _reduced_bodies(
+    parent_el: ET.Element, robot: RobotModel, k: int, sites_by_link: dict[str, list]
+) -> None:
+    """The reduced chain from joint k on: its middle link (the whole deformable body) and panel k on
+    it, then the rest."""
     stiff_half = 2.0 * robot.actuation.rod_bending_stiffness_nm_rad
     b = robot.bending[k - 1]
     d = PRB_PIVOT_FRACTION * b.arc_length_m
-    t_m = np.asarray(next(j for j in robot.joints if j.child == f"{b.name}_after_phi").T_parent_joint)[2, 3]
+    t_m = np.asarray(
+        next(j for j in robot.joints if j.child == f"{b.name}_after_phi").T_parent_joint
+    )[2, 3]
     half_a, half_b = robot.links[f"{b.name}_after_theta_a"], robot.links[f"{b.name}_after_chord"]
-    soft = dataclasses.replace(half_a, name=f"{b.name}_soft",
-                               inertial=rest_pair(half_a.inertial, half_b.inertial, b.arc_length_m))
+    soft = dataclasses.replace(
+        half_a,
+        name=f"{b.name}_soft",
+        inertial=rest_pair(half_a.inertial, half_b.inertial, b.arc_length_m),
+    )
     body = ET.SubElement(parent_el, "body", name=soft.name, pos=_vec((0, 0, t_m)))
-    for axis in "xy":  # no range: the joint's bend limit is the fixed tendons of _bend_limit_tendons
-        ET.SubElement(body, "joint", name=f"{b.name}_a{axis}", type="hinge", axis=_AXES[axis],
-                      pos=_vec((0, 0, d)), stiffness=_f(stiff_half))
+    for (
+        axis
+    ) in "xy":  # no range: the joint's bend limit is the fixed tendons of _bend_limit_tendons
+        ET.SubElement(
+            body,
+            "joint",
+            name=f"{b.name}_a{axis}",
+            type="hinge",
+            axis=_AXES[axis],
+            pos=_vec((0, 0, d)),
+            stiffness=_f(stiff_half),
+        )
     _link_contents(body, soft, sites_by_link)
     panel = ET.SubElement(body, "body", name=b.tip_link, pos=_vec((0, 0, b.arc_length_m)))
     for axis in "yx":
-        ET.SubElement(panel, "joint", name=f"{b.name}_b{axis}", type="hinge", axis=_AXES[axis],
-                      pos=_vec((0, 0, -d)), stiffness=_f(stiff_half))
+        ET.SubElement(
+            panel,
+            "joint",
+            name=f"{b.name}_b{axis}",
+            type="hinge",
+            axis=_AXES[axis],
+            pos=_vec((0, 0, -d)),
+            stiffness=_f(stiff_half),
+        )
     _link_contents(panel, robot.links[b.tip_link], sites_by_link)
     if k < len(robot.bending):
         _reduced_bodies(panel, robot, k + 1, sites_by_link)
 
 
-def _mjcf_equalities(root: ET.Element, robot: RobotModel, chain: str, per_segment: bool, solref: str) -> float:
-    """The ``equality`` section: each joint's couplings (the reduced chain's two halves; the exact chain's
-    theta_b, phi_b and chord), then a segment's joints to its first. Returns the chord polynomial's largest
-    error, m (0 for the reduced chain)."""
+def _mjcf_equalities(
+    root: ET.Element, robot: RobotModel, chain: str, per_segment: bool, solref: str
+) -> float:
+    """The ``equality`` section: each joint's couplings (the reduced chain's two halves; the exact
+    chain's theta_b, phi_b and chord), then a segment's joints to its first. Returns the chord
+    polynomial's largest error, m (0 for the reduced chain)."""
     eq = ET.SubElement(root, "equality")
     solimp = _vec(EQUALITY_SOLIMP)
     chord_err = 0.0
     for b in robot.bending:
         if chain == "reduced":
             for axis in "xy":
-                ET.SubElement(eq, "joint", name=f"{b.name}_b{axis}_eq", joint1=f"{b.name}_b{axis}",
-                              joint2=f"{b.name}_a{axis}", polycoef="0 1 0 0 0", solref=solref, solimp=solimp)
+                ET.SubElement(
+                    eq,
+                    "joint",
+                    name=f"{b.name}_b{axis}_eq",
+                    joint1=f"{b.name}_b{axis}",
+                    joint2=f"{b.name}_a{axis}",
+                    polycoef="0 1 0 0 0",
+                    solref=solref,
+                    solimp=solimp,
+                )
             continue
         phi, tha, chord, thb, phib = b.urdf_joints
         coef, err = chord_polynomial(b.arc_length_m, b.theta_max_rad / 2)
         chord_err = max(chord_err, err)
-        ET.SubElement(eq, "joint", name=f"{b.name}_theta_b_eq", joint1=thb, joint2=tha, polycoef="0 1 0 0 0",
-                      solref=solref)
-        ET.SubElement(eq, "joint", name=f"{b.name}_phi_b_eq", joint1=phib, joint2=phi, polycoef="0 -1 0 0 0",
-                      solref=solref)
-        ET.SubElement(eq, "joint", name=f"{b.name}_chord_eq", joint1=chord, joint2=tha, polycoef=_vec(coef),
-                      solref=solref)
+        ET.SubElement(
+            eq,
+            "joint",
+            name=f"{b.name}_theta_b_eq",
+            joint1=thb,
+            joint2=tha,
+            polycoef="0 1 0 0 0",
+            solref=solref,
+        )
+        ET.SubElement(
+            eq,
+            "joint",
+            name=f"{b.name}_phi_b_eq",
+            joint1=phib,
+            joint2=phi,
+            polycoef="0 -1 0 0 0",
+            solref=solref,
+        )
+        ET.SubElement(
+            eq,
+            "joint",
+            name=f"{b.name}_chord_eq",
+            joint1=chord,
+            joint2=tha,
+            polycoef=_vec(coef),
+            solref=solref,
+        )
     if per_segment:
         first: dict[int, str] = {}
         for b in robot.bending:
@@ -338,20 +467,36 @@ def _mjcf_equalities(root: ET.Element, robot: RobotModel, chain: str, per_segmen
                 continue
             lead = first[b.segment]
             for kind, tag in zip(*(SEGMENT_COUPLED[chain])):
-                ET.SubElement(eq, "joint", name=f"{b.name}_{tag}_seg", joint1=f"{b.name}_{kind}",
-                              joint2=f"{lead}_{kind}", polycoef="0 1 0 0 0", solref=solref, solimp=solimp)
+                ET.SubElement(
+                    eq,
+                    "joint",
+                    name=f"{b.name}_{tag}_seg",
+                    joint1=f"{b.name}_{kind}",
+                    joint2=f"{lead}_{kind}",
+                    polycoef="0 1 0 0 0",
+                    solref=solref,
+                    solimp=solimp,
+                )
     return chord_err
 
 
-def _mjcf_joint_tendons(tendon: ET.Element, robot: RobotModel, per_segment: bool, solref: str) -> float:
-    """The reduced chain's fixed tendons: each joint's shear between its halves, a segment's spread and the
-    bend limits. Returns the bend limit polygon's largest overshoot (:func:`_bend_limit_tendons`)."""
+def _mjcf_joint_tendons(
+    tendon: ET.Element, robot: RobotModel, per_segment: bool, solref: str
+) -> float:
+    """The reduced chain's fixed tendons: each joint's shear between its halves, a segment's spread
+    and the bend limits. Returns the bend limit polygon's largest overshoot
+    (:func:`_bend_limit_tendons`)."""
     shear_damping = _f(_soa_bending_damping(robot))
     shear_stiffness = _f(shear_stiffness_nm_rad(robot))
     for b in robot.bending:
         for axis in "xy":
-            fixed = ET.SubElement(tendon, "fixed", name=f"{b.name}_shear_{axis}", damping=shear_damping,
-                                  stiffness=shear_stiffness)
+            fixed = ET.SubElement(
+                tendon,
+                "fixed",
+                name=f"{b.name}_shear_{axis}",
+                damping=shear_damping,
+                stiffness=shear_stiffness,
+            )
             ET.SubElement(fixed, "joint", joint=f"{b.name}_a{axis}", coef="1")
             ET.SubElement(fixed, "joint", joint=f"{b.name}_b{axis}", coef="-1")
     if per_segment:
@@ -359,7 +504,9 @@ def _mjcf_joint_tendons(tendon: ET.Element, robot: RobotModel, per_segment: bool
     return _bend_limit_tendons(tendon, robot, solref)
 
 
-def _mjcf_actuators(root: ET.Element, tendon: ET.Element, robot: RobotModel, per_segment: bool) -> int:
+def _mjcf_actuators(
+    root: ET.Element, tendon: ET.Element, robot: RobotModel, per_segment: bool
+) -> int:
     """The ``actuator`` section: one pressure actuator per SOA (per line with ``per_segment``) on a
     spatial tendon through its SOAs' sockets. Returns the number of actuators."""
     act = robot.actuation
@@ -383,9 +530,19 @@ def _mjcf_actuators(root: ET.Element, tendon: ET.Element, robot: RobotModel, per
         c = law.damping_n_s_per_m * k_share
         lag = robot.supply_lag_s.get(soas[0].line)
         dyn = {"dyntype": "filterexact", "dynprm": _vec((lag,))} if lag else {}
-        ET.SubElement(actuator, "general", name=name, tendon=f"{name}_tendon", ctrllimited="true", ctrlrange=ctrl,
-                      **dyn, gaintype="affine", gainprm=_vec((law.area_m2 + m_a * l0, -m_a, 0.0)),
-                      biastype="affine", biasprm=_vec((n_a * l0, -n_a, -c)))
+        ET.SubElement(
+            actuator,
+            "general",
+            name=name,
+            tendon=f"{name}_tendon",
+            ctrllimited="true",
+            ctrlrange=ctrl,
+            **dyn,
+            gaintype="affine",
+            gainprm=_vec((law.area_m2 + m_a * l0, -m_a, 0.0)),
+            biastype="affine",
+            biasprm=_vec((n_a * l0, -n_a, -c)),
+        )
     return len(groups)
 
 
@@ -400,12 +557,16 @@ def collision_geom(body: ET.Element, c: Collision, shift=(0.0, 0.0, 0.0), **attr
     The tail's shapes never collide with one another: those of neighbouring panels meet in every
     pose (the two halves of each SOA and rod column, at mid-gap), and the clearance analysis's joint
     limits keep all others apart; so the tail's contacts are with the world only, which also keeps
-    the scene's contact set (and MJX's compile) small. Which of the world's geoms reach which shapes:
-    :data:`CONTACT_TYPE`.
+    the scene's contact set (and MJX's compile) small. Which of the world's geoms reach which
+    shapes: :data:`CONTACT_TYPE`.
     """
     T = np.asarray(c.T_link_geom)
-    geom = {"class": "collision", "name": f"{c.name}_collision", "pos": _vec(T[:3, 3] + np.asarray(shift)),
-            "contype": str(CONTACT_TYPE[c.covers])}
+    geom = {
+        "class": "collision",
+        "name": f"{c.name}_collision",
+        "pos": _vec(T[:3, 3] + np.asarray(shift)),
+        "contype": str(CONTACT_TYPE[c.covers]),
+    }
     if c.kind == "mesh":
         geom.update(type="mesh", mesh=collision_mesh_name(c))
     else:
@@ -415,15 +576,17 @@ def collision_geom(body: ET.Element, c: Collision, shift=(0.0, 0.0, 0.0), **attr
 
 
 def shear_stiffness_nm_rad(robot: RobotModel) -> float:
-    """Stiffness (N m/rad) on a reduced joint's shear tendon ``a - b`` (s): the real joint's resistance to it.
+    """Stiffness (N m/rad) on a reduced joint's shear tendon ``a - b`` (s): the real joint's
+    resistance to it.
 
-    In that mode the panel slides sideways by (1 - 2 f) L s / 2 (f = :data:`PRB_PIVOT_FRACTION`) without
-    turning, and every column between the panels (the rod and the N SOAs) bends as a fixed-guided beam of
-    lateral stiffness 12 E I / L^3: energy (1/2) 3 (1 - 2 f)^2 (E I / L) s^2 per column. An SOA's own
-    E I / L is its axial spring n_a spread on a thin wall round its effective area A (a ring of radius
-    sqrt(A / pi): I / A = A / (2 pi)). The two hinges' 2 E I / L already give the rod (1/2) (E I / L) s^2,
-    so the tendon carries the rest. It is zero whenever the equalities hold: it adds nothing to the
-    constant-curvature motion, and it holds the mode where the rod is soft or absent.
+    In that mode the panel slides sideways by (1 - 2 f) L s / 2 (f = :data:`PRB_PIVOT_FRACTION`)
+    without turning, and every column between the panels (the rod and the N SOAs) bends as a
+    fixed-guided beam of lateral stiffness 12 E I / L^3: energy (1/2) 3 (1 - 2 f)^2 (E I / L) s^2
+    per column. An SOA's own E I / L is its axial spring n_a spread on a thin wall round its
+    effective area A (a ring of radius sqrt(A / pi): I / A = A / (2 pi)). The two hinges' 2 E I / L
+    already give the rod (1/2) (E I / L) s^2, so the tendon carries the rest. It is zero whenever
+    the equalities hold: it adds nothing to the constant-curvature motion, and it holds the mode
+    where the rod is soft or absent.
     """
     law, act = robot.actuation.law, robot.actuation
     n_soas = sum(1 for s in robot.soas if s.joint == 1)
@@ -433,31 +596,40 @@ def shear_stiffness_nm_rad(robot: RobotModel) -> float:
 
 
 def _bend_limit_tendons(tendon: ET.Element, robot: RobotModel, solref: str) -> float:
-    """Each reduced joint's bend limit theta <= theta_max, for every bending direction: fixed tendons
-    ``jk_bend_limit_i`` = cos(phi_i) (``jk_ax`` + ``jk_bx``) + sin(phi_i) (``jk_ay`` + ``jk_by``) (twice a
-    pivot's angle along phi_i while the equalities hold) limited to twice the faces of
-    :class:`~bvsr_cad.models.kinematics.PrbLimitPolygon`: a polygon of 2 :data:`BEND_LIMIT_DIRECTIONS`
-    faces circumscribing the exact limit. Limits on the pivots' hinges instead (a square) let a diagonal
-    bend reach 1.39 theta_max, and they act on one pivot, whose light shear mode lets it through. Returns
-    the largest overshoot over the joints (theta / theta_max - 1 at a vertex)."""
+    """Each reduced joint's bend limit theta <= theta_max, for every bending direction: fixed
+    tendons ``jk_bend_limit_i`` = cos(phi_i) (``jk_ax`` + ``jk_bx``) + sin(phi_i) (``jk_ay`` +
+    ``jk_by``) (twice a pivot's angle along phi_i while the equalities hold) limited to twice the
+    faces of :class:`~bvsr_cad.models.kinematics.PrbLimitPolygon`: a polygon of 2
+    :data:`BEND_LIMIT_DIRECTIONS` faces circumscribing the exact limit. Limits on the pivots' hinges
+    instead (a square) let a diagonal bend reach 1.39 theta_max, and they act on one pivot, whose
+    light shear mode lets it through. Returns the largest overshoot over the joints (theta /
+    theta_max - 1 at a vertex)."""
     solimp = _vec(LIMIT_SOLIMP)
     worst = 0.0
     for b in robot.bending:
         poly = PrbLimitPolygon.make(b.theta_max_rad, BEND_LIMIT_DIRECTIONS)
         worst = max(worst, poly.overshoot)
         for i, (phi, half) in enumerate(zip(poly.direction_rad, poly.half_width_rad)):
-            fixed = ET.SubElement(tendon, "fixed", name=f"{b.name}_bend_limit_{i}", range=_vec((-2 * half, 2 * half)),
-                                  solreflimit=solref, solimplimit=solimp)
+            fixed = ET.SubElement(
+                tendon,
+                "fixed",
+                name=f"{b.name}_bend_limit_{i}",
+                range=_vec((-2 * half, 2 * half)),
+                solreflimit=solref,
+                solimplimit=solimp,
+            )
             for axis, coef in (("x", np.cos(phi)), ("y", np.sin(phi))):
                 if abs(coef) > 1e-12:
                     for pivot in "ab":
-                        ET.SubElement(fixed, "joint", joint=f"{b.name}_{pivot}{axis}", coef=_f(coef))
+                        ET.SubElement(
+                            fixed, "joint", joint=f"{b.name}_{pivot}{axis}", coef=_f(coef)
+                        )
     return worst
 
 
 def _soa_bending(robot: RobotModel, per_soa: float) -> float:
-    """``per_soa`` N r^2 / 2: a joint's N SOAs (each a spring n_a or damper c along it) against bending
-    about either axis, r the sockets' mean radius."""
+    """``per_soa`` N r^2 / 2: a joint's N SOAs (each a spring n_a or damper c along it) against
+    bending about either axis, r the sockets' mean radius."""
     pos = {s.name: np.asarray(s.pos_m) for s in robot.sites}
     joint1 = [s for s in robot.soas if s.joint == 1]
     r2 = float(np.mean([np.sum(pos[s.bottom_site][:2] ** 2) for s in joint1]))
@@ -470,13 +642,15 @@ def _soa_bending_damping(robot: RobotModel) -> float:
 
 
 def _segment_spread_tendons(tendon: ET.Element, robot: RobotModel) -> None:
-    """What the per-segment model's series tendons lose: the SOAs resisting a segment's joints bending unalike.
+    """What the per-segment model's series tendons lose: the SOAs resisting a segment's joints
+    bending unalike.
 
-    n joints bending theta_i (per axis, theta = a + b) against their own SOAs store (1/2) K sum theta_i^2,
-    K = n_a N r^2 / 2; one series tendon of stiffness n_a / n per line stores (1/2) (K / n) (sum theta_i)^2.
-    The difference, (1/2) K sum (theta_i - mean)^2 = (1/2) (K / n) sum over pairs (theta_i - theta_j)^2,
-    is a fixed tendon per pair of stiffness K / n (and damping c N r^2 / (2 n) likewise). It is zero
-    whenever the segment's equalities hold, so it adds nothing to the coupled motion.
+    n joints bending theta_i (per axis, theta = a + b) against their own SOAs store (1/2) K sum
+    theta_i^2, K = n_a N r^2 / 2; one series tendon of stiffness n_a / n per line stores (1/2) (K /
+    n) (sum theta_i)^2. The difference, (1/2) K sum (theta_i - mean)^2 = (1/2) (K / n) sum over
+    pairs (theta_i - theta_j)^2, is a fixed tendon per pair of stiffness K / n (and damping c N r^2
+    / (2 n) likewise). It is zero whenever the segment's equalities hold, so it adds nothing to the
+    coupled motion.
     """
     law = robot.actuation.law
     segments: dict[int, list] = {}
@@ -487,10 +661,15 @@ def _segment_spread_tendons(tendon: ET.Element, robot: RobotModel) -> None:
         stiffness = _f(_soa_bending(robot, law.stiffness_offset_n_per_m) / n)
         damping = _f(_soa_bending(robot, law.damping_n_s_per_m) / n)
         for i, first in enumerate(names):
-            for second in names[i + 1:]:
+            for second in names[i + 1 :]:
                 for axis in "xy":
-                    fixed = ET.SubElement(tendon, "fixed", name=f"{first}_{second}_spread_{axis}",
-                                          stiffness=stiffness, damping=damping)
+                    fixed = ET.SubElement(
+                        tendon,
+                        "fixed",
+                        name=f"{first}_{second}_spread_{axis}",
+                        stiffness=stiffness,
+                        damping=damping,
+                    )
                     for name, coef in ((first, "1"), (second, "-1")):
                         for half in "ab":
                             ET.SubElement(fixed, "joint", joint=f"{name}_{half}{axis}", coef=coef)
@@ -510,13 +689,35 @@ def _panel_spans(robot: RobotModel, soas) -> float:
 
 def _dress(visual: ET.Element, asset: ET.Element, world: ET.Element) -> None:
     """A scene's headlight, checker floor and overhead light."""
-    ET.SubElement(visual, "headlight", diffuse="0.6 0.6 0.6", ambient="0.3 0.3 0.3", specular="0 0 0")
-    ET.SubElement(asset, "texture", type="2d", name="groundplane", builtin="checker", mark="edge",
-                  rgb1="0.2 0.3 0.4", rgb2="0.1 0.2 0.3", markrgb="0.8 0.8 0.8", width="300", height="300")
-    ET.SubElement(asset, "material", name="groundplane", texture="groundplane", texuniform="true",
-                  texrepeat="5 5", reflectance="0.2")
+    ET.SubElement(
+        visual, "headlight", diffuse="0.6 0.6 0.6", ambient="0.3 0.3 0.3", specular="0 0 0"
+    )
+    ET.SubElement(
+        asset,
+        "texture",
+        type="2d",
+        name="groundplane",
+        builtin="checker",
+        mark="edge",
+        rgb1="0.2 0.3 0.4",
+        rgb2="0.1 0.2 0.3",
+        markrgb="0.8 0.8 0.8",
+        width="300",
+        height="300",
+    )
+    ET.SubElement(
+        asset,
+        "material",
+        name="groundplane",
+        texture="groundplane",
+        texuniform="true",
+        texrepeat="5 5",
+        reflectance="0.2",
+    )
     ET.SubElement(world, "light", pos="0 0 1.5", dir="0 0 -1", directional="true")
-    ET.SubElement(world, "geom", name="floor", size="0 0 0.05", type="plane", material="groundplane")
+    ET.SubElement(
+        world, "geom", name="floor", size="0 0 0.05", type="plane", material="groundplane"
+    )
 
 
 def scene_tree(model_file: str, name: str) -> ET.ElementTree:
@@ -529,8 +730,17 @@ def scene_tree(model_file: str, name: str) -> ET.ElementTree:
     world = ET.SubElement(root, "worldbody")
     _dress(visual, asset, world)
     ET.SubElement(visual, "global", azimuth="120", elevation="-20")
-    ET.SubElement(world, "geom", name="mount_block", type="box", size="0.03 0.05 0.225",
-                  pos=_vec((-0.03, 0.0, MOUNT_HEIGHT_M / 2)), rgba="0.3 0.3 0.3 1", contype="0", conaffinity="0")
+    ET.SubElement(
+        world,
+        "geom",
+        name="mount_block",
+        type="box",
+        size="0.03 0.05 0.225",
+        pos=_vec((-0.03, 0.0, MOUNT_HEIGHT_M / 2)),
+        rgba="0.3 0.3 0.3 1",
+        contype="0",
+        conaffinity="0",
+    )
     ET.indent(root)
     return ET.ElementTree(root)
 
@@ -541,8 +751,9 @@ CART_WHEEL_RADIUS_M = 0.02
 CART_DECK_THICKNESS_M = 0.015
 
 
-def cart_scene_tree(robot: RobotModel, mesh_files: dict[str, str], cart, mesh_dir: str = "meshes"
-                    ) -> ET.ElementTree:
+def cart_scene_tree(
+    robot: RobotModel, mesh_files: dict[str, str], cart, mesh_dir: str = "meshes"
+) -> ET.ElementTree:
     """The paper's hinged-cart experiment (Sec. IV-B, V-B; Eq 20-22) as one MJCF file.
 
     The cart (``cart``: :class:`bvsr_cad.parameters.tables.CartPlatform`) turns about its rear axle
@@ -552,8 +763,8 @@ def cart_scene_tree(robot: RobotModel, mesh_files: dict[str, str], cart, mesh_di
     The per-segment tail is mounted ``tail_mount_behind_hinge_m`` behind the axle, pointing away
     from the cart, high enough that no panel touches the floor at rest.
     """
-    # The exact chain: on the reduced one the waggle turns the cart 12.8 deg, not 16.1, against Eq 20-22's
-    # 20.3 deg: the paper comparisons stay on the chain they were validated with.
+    # The exact chain: on the reduced one the waggle turns the cart 12.8 deg, not 16.1, against Eq
+    # 20-22's 20.3 deg: the paper comparisons stay on the chain they were validated with.
     tree, _ = mjcf_tree(robot, mesh_files, per_segment=True, mesh_dir=mesh_dir, chain="exact")
     root = tree.getroot()
     root.set("model", f"{robot.name}_cart")
@@ -568,20 +779,54 @@ def cart_scene_tree(robot: RobotModel, mesh_files: dict[str, str], cart, mesh_di
     body = ET.SubElement(world, "body", name="cart", pos=_vec((0.0, 0.0, r)))
     ET.SubElement(body, "joint", name="cart_pitch", type="hinge", axis="0 1 0", damping="0")
     ET.SubElement(body, "joint", name="cart_yaw", type="hinge", axis="0 0 1", damping="0")
-    ET.SubElement(body, "inertial", pos=_vec((-length / 2, 0.0, 0.0)), mass=_f(m),
-                  diaginertia=_vec((m * width ** 2 / 12, m * length ** 2 / 12, m * (length ** 2 + width ** 2) / 12)))
-    ET.SubElement(body, "geom", name="cart_deck", type="box", size=_vec((length / 2, width / 2, t / 2)),
-                  pos=_vec((-length / 2, 0.0, r + t / 2)), density="0", contype="0", conaffinity="0",
-                  rgba="0.8 0.55 0.2 1")
+    ET.SubElement(
+        body,
+        "inertial",
+        pos=_vec((-length / 2, 0.0, 0.0)),
+        mass=_f(m),
+        diaginertia=_vec((m * width**2 / 12, m * length**2 / 12, m * (length**2 + width**2) / 12)),
+    )
+    ET.SubElement(
+        body,
+        "geom",
+        name="cart_deck",
+        type="box",
+        size=_vec((length / 2, width / 2, t / 2)),
+        pos=_vec((-length / 2, 0.0, r + t / 2)),
+        density="0",
+        contype="0",
+        conaffinity="0",
+        rgba="0.8 0.55 0.2 1",
+    )
     # A hard wheel on a hard floor: the stiffest contact the step allows (time constant two steps).
-    ET.SubElement(body, "geom", name="cart_front_wheel", type="sphere", size=_f(r), pos=_vec((-length, 0.0, 0.0)),
-                  density="0", rgba="0.15 0.15 0.15 1",
-                  solref=_vec((2.0 * float(root.find("option").get("timestep")), 1.0)))
+    ET.SubElement(
+        body,
+        "geom",
+        name="cart_front_wheel",
+        type="sphere",
+        size=_f(r),
+        pos=_vec((-length, 0.0, 0.0)),
+        density="0",
+        rgba="0.15 0.15 0.15 1",
+        solref=_vec((2.0 * float(root.find("option").get("timestep")), 1.0)),
+    )
     for side in (-1.0, 1.0):
-        ET.SubElement(body, "geom", name=f"cart_rear_wheel_{'lr'[side > 0]}", type="cylinder", size=_vec((r, 0.004)),
-                      pos=_vec((0.0, side * width / 2, 0.0)), euler="1.5707963 0 0", density="0",
-                      contype="0", conaffinity="0", rgba="0.15 0.15 0.15 1")
-    rim_m = max((c.radius_m for link in robot.links.values() for c in link.collisions), default=0.03)
+        ET.SubElement(
+            body,
+            "geom",
+            name=f"cart_rear_wheel_{'lr'[side > 0]}",
+            type="cylinder",
+            size=_vec((r, 0.004)),
+            pos=_vec((0.0, side * width / 2, 0.0)),
+            euler="1.5707963 0 0",
+            density="0",
+            contype="0",
+            conaffinity="0",
+            rgba="0.15 0.15 0.15 1",
+        )
+    rim_m = max(
+        (c.radius_m for link in robot.links.values() for c in link.collisions), default=0.03
+    )
     mount.set("pos", _vec((cart.tail_mount_behind_hinge_m, 0.0, rim_m + 0.005)))
     body.append(mount)
     ET.indent(root)

@@ -24,38 +24,44 @@ if TYPE_CHECKING:  # the CAD imports take seconds: `bvsr show` refuses a missing
 
 #: The port the viewer listens on unless told otherwise (ocp_vscode's and ocp_viewer's default).
 DEFAULT_PORT = 3939
-HOW_TO_START = ("install the viewer extra (pip install 'bvsr_cad[viewer]') and start one: "
-                "`python -m ocp_viewer` (standalone, then open http://127.0.0.1:{port} in a browser), or "
-                "the OCP CAD Viewer extension in VS Code")
+HOW_TO_START = (
+    "install the viewer extra (pip install 'bvsr_cad[viewer]') and start one: "
+    "`python -m ocp_viewer` (standalone, then open http://127.0.0.1:{port} in a browser), or "
+    "the OCP CAD Viewer extension in VS Code"
+)
 
 
-#: Tessellation of a quick look: ocp_vscode's deviation (relative to each object's size; its default 0.1)
-#: and angular tolerance (rad; its default 0.2), as coarse as the report's view (0.6 rad). The default tail
-#: sent from fresh copies of its parts: 0.85-1.1 s against 2.0-2.2 s at the viewer's defaults (measured,
-#: one send per process, on two shared cores).
+#: Tessellation of a quick look: ocp_vscode's deviation (relative to each object's size; its default
+#: 0.1) and angular tolerance (rad; its default 0.2), as coarse as the report's view (0.6 rad). The
+#: default tail sent from fresh copies of its parts: 0.85-1.1 s against 2.0-2.2 s at the viewer's
+#: defaults (measured, one send per process, on two shared cores).
 COARSE = {"deviation": 0.5, "angular_tolerance": 0.6}
 
 
 class ViewerUnavailable(RuntimeError):
-    """No OCP CAD Viewer to send to: the client (``ocp_vscode``) is not installed, or nothing listens on
-    the port."""
+    """No OCP CAD Viewer to send to: the client (``ocp_vscode``) is not installed, or nothing
+    listens on the port."""
 
 
 def viewer_port(port: int | None = None) -> int:
     """The port of a listening viewer: ``port``, else ``$OCP_PORT``, else 3939.
 
     Raises:
-        ViewerUnavailable: ``ocp_vscode`` is not installed, or no viewer listens there (the message says
-            how to start one).
+        ViewerUnavailable: ``ocp_vscode`` is not installed, or no viewer listens there (the message
+            says how to start one).
     """
     if port is None:
         env = os.environ.get("OCP_PORT", "")
         port = int(env) if env.isdigit() and int(env) > 0 else DEFAULT_PORT
     if importlib.util.find_spec("ocp_vscode") is None:
-        raise ViewerUnavailable("showing a tail needs OCP CAD Viewer's client (ocp_vscode is not installed): "
-                                + HOW_TO_START.format(port=port))
+        raise ViewerUnavailable(
+            "showing a tail needs OCP CAD Viewer's client (ocp_vscode is not installed): "
+            + HOW_TO_START.format(port=port)
+        )
     if not _listening(port):
-        raise ViewerUnavailable(f"no OCP CAD Viewer listens on port {port}: " + HOW_TO_START.format(port=port))
+        raise ViewerUnavailable(
+            f"no OCP CAD Viewer listens on port {port}: " + HOW_TO_START.format(port=port)
+        )
     return port
 
 
@@ -65,8 +71,13 @@ def _listening(port: int, host: str = "127.0.0.1") -> bool:
         return s.connect_ex((host, port)) == 0
 
 
-def show_compound(compound: "bd.Compound", kinds: dict[str, str], port: int | None = None,
-                  keep_camera: bool = False, coarse: bool = False) -> list[str]:
+def show_compound(
+    compound: bd.Compound,
+    kinds: dict[str, str],
+    port: int | None = None,
+    keep_camera: bool = False,
+    coarse: bool = False,
+) -> list[str]:
     """Send ``compound``'s children (labelled, coloured: :meth:`bvsr_cad.api.Tail.assembly` or
     :meth:`~bvsr_cad.api.Tail.posed`) to the viewer on ``port``, one object per child.
 
@@ -74,7 +85,8 @@ def show_compound(compound: "bd.Compound", kinds: dict[str, str], port: int | No
         compound: the tail.
         kinds: instance name -> part kind (the opacity's key in :data:`bvsr_cad.colors.ALPHA`).
         port: as :func:`viewer_port`.
-        keep_camera: leave the viewer's camera where it is (a re-send of the same tail), else frame it.
+        keep_camera: leave the viewer's camera where it is (a re-send of the same tail), else frame
+            it.
         coarse: tessellate at :data:`COARSE` (``bvsr watch --show``: seconds count) instead of the
             viewer's own settings.
 
@@ -89,34 +101,50 @@ def show_compound(compound: "bd.Compound", kinds: dict[str, str], port: int | No
 
     set_port(port)
     if keep_camera:
-        ignore_camera_warnings()  # its warning that KEEP may leave the objects out of view: the same tail
+        # its warning that KEEP may leave the objects out of view: the tail is the same one
+        ignore_camera_warnings()
     children = list(compound.children)
     names = [c.label for c in children]
     quality = COARSE if coarse else {}
-    show(*children, names=names, colors=[tuple(c.color)[:3] for c in children],
-         alphas=[ALPHA.get(kinds.get(n, ""), 1.0) for n in names], progress="",
-         reset_camera=Camera.KEEP if keep_camera else Camera.RESET, **quality)
+    show(
+        *children,
+        names=names,
+        colors=[tuple(c.color)[:3] for c in children],
+        alphas=[ALPHA.get(kinds.get(n, ""), 1.0) for n in names],
+        progress="",
+        reset_camera=Camera.KEEP if keep_camera else Camera.RESET,
+        **quality,
+    )
     return names
 
 
-def assembly_sender(port: int | None = None, say: Callable[[str], None] | None = None
-                    ) -> Callable[["Assembly"], None]:
-    """A callback for :func:`bvsr_cad.build.pipeline.build_export` (``on_assembly``): sends the tail at rest as
-    soon as its assembly is built. It tessellates copies of the parts, not the build's solids (OCCT keeps
-    the finest triangulation a solid was given, and the build's meshes must not depend on what was
-    shown); a viewer gone away is said, not raised (the build goes on)."""
+def assembly_sender(
+    port: int | None = None, say: Callable[[str], None] | None = None
+) -> Callable[[Assembly], None]:
+    """A callback for :func:`bvsr_cad.build.pipeline.build_export` (``on_assembly``): sends the tail
+    at rest as soon as its assembly is built. It tessellates copies of the parts, not the build's
+    solids (OCCT keeps the finest triangulation a solid was given, and the build's meshes must not
+    depend on what was shown); a viewer gone away is said, not raised (the build goes on)."""
     from ..assembly.placed import PlacedShape, labelled_compound
     from ..parts._kernel import fresh_copy
 
     say = say or (lambda _m: None)
     sent = []
 
-    def send(asm: "Assembly") -> None:
+    def send(asm: Assembly) -> None:
         copies = {name: fresh_copy(part.solid) for name, part in asm.parts.items()}
-        placed = [PlacedShape(i.name, asm.part_of(i).kind, copies[i.part], i.transform) for i in asm.instances]
+        placed = [
+            PlacedShape(i.name, asm.part_of(i).kind, copies[i.part], i.transform)
+            for i in asm.instances
+        ]
         try:
-            names = show_compound(labelled_compound(placed, asm.spec.name), {p.name: p.kind for p in placed}, port,
-                                  keep_camera=bool(sent), coarse=True)
+            names = show_compound(
+                labelled_compound(placed, asm.spec.name),
+                {p.name: p.kind for p in placed},
+                port,
+                keep_camera=bool(sent),
+                coarse=True,
+            )
         except ViewerUnavailable as exc:
             say(f"not shown: {exc}")
             return

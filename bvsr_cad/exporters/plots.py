@@ -4,9 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -30,9 +29,16 @@ def plot_workspace(ws, path, title: str) -> None:
     plt.close(fig)
 
 
-def plot_clearance_map(th: np.ndarray, ph: np.ndarray, bound: np.ndarray, path, title: str,
-                       workspace_theta_rad: float, min_clearance_mm: float,
-                       curves: dict[str, tuple[np.ndarray, np.ndarray]] | None = None) -> None:
+def plot_clearance_map(
+    th: np.ndarray,
+    ph: np.ndarray,
+    bound: np.ndarray,
+    path,
+    title: str,
+    workspace_theta_rad: float,
+    min_clearance_mm: float,
+    curves: dict[str, tuple[np.ndarray, np.ndarray]] | None = None,
+) -> None:
     """The map, the required clearance as a red contour and optional (phi, theta) curves (rad)."""
     fig, ax = plt.subplots(figsize=(7, 4.6))
     cs = ax.pcolormesh(np.degrees(ph), np.degrees(th), bound, shading="auto", cmap="viridis")
@@ -41,8 +47,20 @@ def plot_clearance_map(th: np.ndarray, ph: np.ndarray, bound: np.ndarray, path, 
     ax.plot([], [], color="r", label=f"clearance bound = {min_clearance_mm:g} mm (required)")
     for (label, (cp, ct)), style in zip((curves or {}).items(), ("w-", "m:", "c-.")):
         order = np.argsort(cp)
-        ax.plot(np.degrees(np.asarray(cp)[order]), np.degrees(np.asarray(ct)[order]), style, lw=1.5, label=label)
-    ax.axhline(np.degrees(workspace_theta_rad), color="w", ls="--", lw=1, label="largest theta in the workspace")
+        ax.plot(
+            np.degrees(np.asarray(cp)[order]),
+            np.degrees(np.asarray(ct)[order]),
+            style,
+            lw=1.5,
+            label=label,
+        )
+    ax.axhline(
+        np.degrees(workspace_theta_rad),
+        color="w",
+        ls="--",
+        lw=1,
+        label="largest theta in the workspace",
+    )
     ax.set_xlabel("phi (deg)")
     ax.set_ylabel("theta (deg)")
     ax.set_title(title)
@@ -58,19 +76,33 @@ def plot_simulation(res, path: Path, title: str) -> None:
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
     ax = axes[0]
     ax.plot(res.time_s * 1000, res.segment_angle_deg, color="tab:orange")
-    ax.axhline(VELOCITY_WINDOW_DEG, color="grey", lw=0.8, ls="--", label=f"{VELOCITY_WINDOW_DEG:g} deg window")
+    ax.axhline(
+        VELOCITY_WINDOW_DEG,
+        color="grey",
+        lw=0.8,
+        ls="--",
+        label=f"{VELOCITY_WINDOW_DEG:g} deg window",
+    )
     ax.set(xlabel="time [ms]", ylabel="segment bending angle [deg]", title="one segment, extension")
     ax.legend(loc="lower right")
     ax = axes[1]
     ax.plot(res.time_s * 1000, res.segment_rate_deg_s, color="tab:red", label="simulated")
-    ax.axhline(paper.SEGMENT_PEAK_VELOCITY_EXTENSION.value, color="k", lw=0.8, ls=":",
-               label=f"paper at 6 bar ({paper.SEGMENT_PEAK_VELOCITY_EXTENSION.value} deg/s)")
-    ax.set(xlabel="time [ms]", ylabel="angular velocity [deg/s]",
-           title=f"peak {res.peak_velocity_deg_s:.0f} deg/s up to 38 deg")
+    ax.axhline(
+        paper.SEGMENT_PEAK_VELOCITY_EXTENSION.value,
+        color="k",
+        lw=0.8,
+        ls=":",
+        label=f"paper at 6 bar ({paper.SEGMENT_PEAK_VELOCITY_EXTENSION.value} deg/s)",
+    )
+    ax.set(
+        xlabel="time [ms]",
+        ylabel="angular velocity [deg/s]",
+        title=f"peak {res.peak_velocity_deg_s:.0f} deg/s up to 38 deg",
+    )
     ax.legend(loc="upper right")
     ax = axes[2]
-    ax.plot(res.tail_time_s * 1000, (res.root_force_n ** 2).sum(1) ** 0.5, label="|force| [N]")
-    ax.plot(res.tail_time_s * 1000, (res.root_torque_nm ** 2).sum(1) ** 0.5, label="|torque| [N m]")
+    ax.plot(res.tail_time_s * 1000, (res.root_force_n**2).sum(1) ** 0.5, label="|force| [N]")
+    ax.plot(res.tail_time_s * 1000, (res.root_torque_nm**2).sum(1) ** 0.5, label="|torque| [N m]")
     ax.set(xlabel="time [ms]", title=f"whole tail at the root, payload {res.payload_g:g} g")
     ax.legend(loc="upper right")
     fig.suptitle(title)
@@ -84,12 +116,21 @@ def plot_measurements(rows: list[dict], path: Path, title: str, band_rel: float)
     exponents to newtons per metre), the tables' values hollow, the fitted ones filled, fit rows
     blue and holdout rows orange; the grey band is +/- ``band_rel``."""
     fig, ax = plt.subplots(figsize=(7.2, 6.4))
-    values = [abs(v) for r in rows for v in (r["reported"], r["uncalibrated"], r["calibrated"])
-              if np.isfinite(v) and v != 0]
+    values = [
+        abs(v)
+        for r in rows
+        for v in (r["reported"], r["uncalibrated"], r["calibrated"])
+        if np.isfinite(v) and v != 0
+    ]
     lo, hi = min(values) / 2, max(values) * 2
     line = np.geomspace(lo, hi, 50)
-    ax.fill_between(line, line * (1 - band_rel), line * (1 + band_rel), color="0.85",
-                    label=f"within +/-{100 * band_rel:.0f} %")
+    ax.fill_between(
+        line,
+        line * (1 - band_rel),
+        line * (1 + band_rel),
+        color="0.85",
+        label=f"within +/-{100 * band_rel:.0f} %",
+    )
     ax.plot(line, line, color="0.4", lw=0.8)
     for role, color in (("fit", "tab:blue"), ("holdout", "tab:orange")):
         for r in (r for r in rows if r["role"] == role):
@@ -100,10 +141,14 @@ def plot_measurements(rows: list[dict], path: Path, title: str, band_rel: float)
                 ax.scatter([x], [u], facecolors="none", edgecolors=color, s=28)
             if np.isfinite(c) and c > 0:
                 ax.scatter([x], [c], color=color, s=28)
-                ax.annotate(str(r["row"]), (x, c), fontsize=7, xytext=(3, 2), textcoords="offset points")
+                ax.annotate(
+                    str(r["row"]), (x, c), fontsize=7, xytext=(3, 2), textcoords="offset points"
+                )
     ax.scatter([], [], color="tab:blue", s=28, label="fit row, calibrated")
     ax.scatter([], [], color="tab:orange", s=28, label="holdout row, calibrated")
-    ax.scatter([], [], facecolors="none", edgecolors="0.3", s=28, label="uncalibrated (tables' values)")
+    ax.scatter(
+        [], [], facecolors="none", edgecolors="0.3", s=28, label="uncalibrated (tables' values)"
+    )
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlim(lo, hi)

@@ -22,18 +22,20 @@ def offscreen_pyvista():
     import pyvista as pv
     from vtkmodules.vtkCommonCore import vtkLogger
 
-    vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_OFF)  # no "bad X server" noise without a display
+    vtkLogger.SetStderrVerbosity(
+        vtkLogger.VERBOSITY_OFF
+    )  # no "bad X server" noise without a display
     pv.OFF_SCREEN = True
     return pv
 
 
-
 @contextmanager
 def composing(plotter) -> Iterator[None]:
-    """Set up a scene without drawing it: once a plotter has drawn a frame, pyvista draws another at every
-    actor added and every camera move (five frames per picture of the report's parts, 36 ms each in
-    software OpenGL), and its screenshot reads the last frame drawn. The block ends with the one frame
-    the picture needs (before a plotter's first frame pyvista draws nothing, and its screenshot draws)."""
+    """Set up a scene without drawing it: once a plotter has drawn a frame, pyvista draws another at
+    every actor added and every camera move (five frames per picture of the report's parts, 36 ms
+    each in software OpenGL), and its screenshot reads the last frame drawn. The block ends with the
+    one frame the picture needs (before a plotter's first frame pyvista draws nothing, and its
+    screenshot draws)."""
     plotter.suppress_rendering = True
     try:
         yield
@@ -48,8 +50,8 @@ def _polydata(pv, vertices: np.ndarray, faces: np.ndarray):
 
 
 def _tessellate(solid, tolerance_mm: float = 0.05):
-    """A picture's mesh, from a copy: the part files' writer meshed ``solid`` for print first (0.01 mm), and
-    OCCT would hand that mesh back, several times the triangles a picture shows."""
+    """A picture's mesh, from a copy: the part files' writer meshed ``solid`` for print first (0.01
+    mm), and OCCT would hand that mesh back, several times the triangles a picture shows."""
     return mesh_arrays(fresh_copy(solid), tolerance_mm, 0.3)
 
 
@@ -66,13 +68,20 @@ def render_previews(asm: Assembly, root: Path) -> dict[str, str]:
         t = np.asarray(inst.transform)
         placed = v @ t[:3, :3].T + t[:3, 3]
         kind = asm.part_of(inst).kind
-        plotter.add_mesh(_polydata(pv, placed, f), color=rgb(kind), smooth_shading=False,
-                         opacity=0.55 if kind == "soa" else 1.0)
+        plotter.add_mesh(
+            _polydata(pv, placed, f),
+            color=rgb(kind),
+            smooth_shading=False,
+            opacity=0.55 if kind == "soa" else 1.0,
+        )
     plotter.add_axes()
     plotter.camera_position = [(-260.0, 170.0, -60.0), (0.0, 0.0, 130.0), (0.0, 1.0, 0.0)]
     plotter.camera.zoom(1.0)
-    plotter.add_text(f"{asm.spec.name}: {asm.spec.segments} segments, {asm.spec.joints} joints, "
-                     f"taper {asm.taper_half_angle_deg:.3f} deg", font_size=10)
+    plotter.add_text(
+        f"{asm.spec.name}: {asm.spec.segments} segments, {asm.spec.joints} joints, "
+        f"taper {asm.taper_half_angle_deg:.3f} deg",
+        font_size=10,
+    )
     plotter.screenshot(str(out / "assembly.png"))
     plotter.close()
 

@@ -26,7 +26,9 @@ FIXED_ZIP_TIME = (1980, 1, 1, 0, 0, 0)
 _STEP_STAMP = re.compile(rb"(FILE_NAME\('(?:[^']|'')*',\s*')[^']*(')")
 
 
-_NAUO = re.compile(rb"(NEXT_ASSEMBLY_USAGE_OCCURRENCE\(')([^']*)(',')((?:[^']|'')*)(')((?:'(?:[^']|'')*'|[^';])*;)")
+_NAUO = re.compile(
+    rb"(NEXT_ASSEMBLY_USAGE_OCCURRENCE\(')([^']*)(',')((?:[^']|'')*)(')((?:'(?:[^']|'')*'|[^';])*;)"
+)
 _LINE_BREAK = re.compile(rb"\s*\n\s*")
 _REF = re.compile(rb"#(\d+)")
 
@@ -50,28 +52,40 @@ def _references(body: bytes) -> list[int]:
 
 
 def _unwrapped(text: bytes) -> bytes:
-    """``text`` (outside strings) without OCCT's line breaks: removed, or one space between two words."""
+    """``text`` (outside strings) without OCCT's line breaks: removed, or one space between two
+    words."""
+
     def join(m: re.Match) -> bytes:
-        a, b = text[m.start() - 1:m.start()], text[m.end():m.end() + 1]
+        a, b = text[m.start() - 1 : m.start()], text[m.end() : m.end() + 1]
         return b" " if a.isalnum() and b.isalnum() else b""
 
     return _LINE_BREAK.sub(join, text)
 
 
 def _fixed_nauo_ids(data: bytes) -> bytes:
-    """OCCT numbers assembly usages with a counter that runs on across a process's STEP writes; number
-    them by their instance names' order instead (unique names: 1..n), so the id follows the file. Each
-    usage is written on one line: OCCT breaks the line where the counter's digits pushed it past its
-    width, which would otherwise depend on how many files the process wrote before."""
+    """OCCT numbers assembly usages with a counter that runs on across a process's STEP writes;
+    number them by their instance names' order instead (unique names: 1..n), so the id follows the
+    file. Each usage is written on one line: OCCT breaks the line where the counter's digits pushed
+    it past its width, which would otherwise depend on how many files the process wrote before."""
     names = [m.group(4) for m in _NAUO.finditer(data)]
     if len(set(names)) != len(names):
         return data
     order = {name: i + 1 for i, name in enumerate(sorted(names))}
-    return _NAUO.sub(lambda m: m.group(1) + str(order[m.group(4)]).encode() + m.group(3) + m.group(4) + m.group(5)
-                     + _outside_strings(m.group(6), _unwrapped), data)
+    return _NAUO.sub(
+        lambda m: (
+            m.group(1)
+            + str(order[m.group(4)]).encode()
+            + m.group(3)
+            + m.group(4)
+            + m.group(5)
+            + _outside_strings(m.group(6), _unwrapped)
+        ),
+        data,
+    )
 
 
-#: The first entity of the presentation section OCCT writes after the geometry: one per coloured shape.
+#: The first entity of the presentation section OCCT writes after the geometry: one per coloured
+#: shape.
 _PRESENTATION = b"MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION"
 _ENTITY_START = re.compile(rb"^#(\d+)\s*=\s*", re.M)
 
@@ -82,14 +96,14 @@ def _canonical_presentation(data: bytes) -> bytes:
     that follows the file's content, not the writer's memory.
 
     OCCT writes one presentation block per coloured shape in the order of an in-memory map, which
-    changed from run to run (measured), and defines each colour in the first block that uses it. Here every entity of the
-    section is named by a digest of its text, with its references into the section replaced by their
-    digests (references to the geometry before it kept as numbers, which are reproducible); the
-    blocks are then written in the order of their digests, each entity numbered, from the section's
-    first number on, where a depth-first walk first reaches it, and on one line. The entities, their
-    references and what they mean are unchanged. A file without such a section, one whose section has
-    a cycle of references, or one whose entities before it refer into it (never seen: renumbering
-    would break them), is returned as it is."""
+    changed from run to run (measured), and defines each colour in the first block that uses it.
+    Here every entity of the section is named by a digest of its text, with its references into the
+    section replaced by their digests (references to the geometry before it kept as numbers, which
+    are reproducible); the blocks are then written in the order of their digests, each entity
+    numbered, from the section's first number on, where a depth-first walk first reaches it, and on
+    one line. The entities, their references and what they mean are unchanged. A file without such a
+    section, one whose section has a cycle of references, or one whose entities before it refer into
+    it (never seen: renumbering would break them), is returned as it is."""
     import hashlib
 
     start = data.find(_PRESENTATION)
@@ -99,13 +113,13 @@ def _canonical_presentation(data: bytes) -> bytes:
     end = data.find(b"\nENDSEC;", start)
     if end < 0:
         return data
-    section = data[start:end + 1]
+    section = data[start : end + 1]
     heads = list(_ENTITY_START.finditer(section))
     if not heads or heads[0].start() != 0:
         return data
     bodies: dict[int, bytes] = {}
     for head, nxt in zip(heads, heads[1:] + [None]):
-        body = section[head.end():nxt.start() if nxt else len(section)].rstrip()
+        body = section[head.end() : nxt.start() if nxt else len(section)].rstrip()
         if not body.endswith(b";"):
             return data
         bodies[int(head.group(1))] = _outside_strings(body, _unwrapped)
@@ -125,8 +139,15 @@ def _canonical_presentation(data: bytes) -> bytes:
             if number in walking:
                 raise ValueError("a cycle of references")
             walking.add(number)
-            text = _outside_strings(bodies[number], lambda t: _REF.sub(
-                lambda m: b"@" + digest(int(m.group(1))) if int(m.group(1)) in bodies else m.group(0), t))
+            text = _outside_strings(
+                bodies[number],
+                lambda t: _REF.sub(
+                    lambda m: (
+                        b"@" + digest(int(m.group(1))) if int(m.group(1)) in bodies else m.group(0)
+                    ),
+                    t,
+                ),
+            )
             walking.discard(number)
             digests[number] = hashlib.sha256(text).hexdigest().encode()
         return digests[number]
@@ -151,10 +172,15 @@ def _canonical_presentation(data: bytes) -> bytes:
         walk(root)
     if len(new) != len(bodies):
         return data
-    renumbered = {new[n]: _outside_strings(body, lambda t: _REF.sub(
-        lambda m: b"#%d" % new.get(int(m.group(1)), int(m.group(1))), t)) for n, body in bodies.items()}
+    renumbered = {
+        new[n]: _outside_strings(
+            body,
+            lambda t: _REF.sub(lambda m: b"#%d" % new.get(int(m.group(1)), int(m.group(1))), t),
+        )
+        for n, body in bodies.items()
+    }
     out = b"".join(b"#%d = %s\n" % (n, renumbered[n]) for n in sorted(renumbered))
-    return data[:start] + out + data[end + 1:]
+    return data[:start] + out + data[end + 1 :]
 
 
 def fix_step(path: Path) -> bool:
@@ -173,43 +199,59 @@ _UUID = re.compile(rb'(p:UUID=")[0-9a-fA-F-]{36}(")')
 
 def _fixed_uuids(name: str, data: bytes) -> bytes:
     count = iter(range(1 << 30))
-    return _UUID.sub(lambda m: m.group(1) + str(uuid.uuid5(uuid.NAMESPACE_URL, f"bvsr_cad/{name}/{next(count)}"))
-                     .encode() + m.group(2), data)
+    return _UUID.sub(
+        lambda m: (
+            m.group(1)
+            + str(uuid.uuid5(uuid.NAMESPACE_URL, f"bvsr_cad/{name}/{next(count)}")).encode()
+            + m.group(2)
+        ),
+        data,
+    )
 
 
-def _fixed_entries(name: str, zin: zipfile.ZipFile) -> tuple[list[tuple[zipfile.ZipInfo, bytes]], bool]:
+def _fixed_entries(
+    name: str, zin: zipfile.ZipFile
+) -> tuple[list[tuple[zipfile.ZipInfo, bytes]], bool]:
     """The zip's entries with fixed UUIDs, and whether they and the dates were fixed already."""
     entries, same = [], True
     for info in zin.infolist():
         data = zin.read(info.filename)
-        fixed = _fixed_uuids(f"{name}/{info.filename}", data) if info.filename.endswith(".model") else data
+        fixed = (
+            _fixed_uuids(f"{name}/{info.filename}", data)
+            if info.filename.endswith(".model")
+            else data
+        )
         same = same and info.date_time == FIXED_ZIP_TIME and fixed == data
         entries.append((info, fixed))
     return entries, same
 
 
 #: Deflate's level for the 3MF files: 1, the fastest. The print jobs' 3MFs are meshes as XML; zlib's
-#: default level (6) wrote them 21 % smaller (FDM_PLA 6.7 MB against 8.4) for 3.5 times the CPU (0.85 s
-#: against 0.24 for the three jobs, on a cold build's critical path); the format is the same deflate
-#: stream, so every reader takes it as before.
+#: default level (6) wrote them 21 % smaller (FDM_PLA 6.7 MB against 8.4) for 3.5 times the CPU
+#: (0.85 s against 0.24 for the three jobs, on a cold build's critical path); the format is the same
+#: deflate stream, so every reader takes it as before.
 ZIP_COMPRESSLEVEL = 1
 
 
-def _write_zip(path: Path, entries: list[tuple[zipfile.ZipInfo, bytes]], compress_type: int | None = None) -> None:
+def _write_zip(
+    path: Path, entries: list[tuple[zipfile.ZipInfo, bytes]], compress_type: int | None = None
+) -> None:
     tmp = path.with_name(path.name + ".tmp")
     with zipfile.ZipFile(tmp, "w") as zout:
         for info, data in entries:
             fixed = zipfile.ZipInfo(info.filename, date_time=FIXED_ZIP_TIME)
             fixed.compress_type = info.compress_type if compress_type is None else compress_type
             fixed.external_attr = info.external_attr
-            zout.writestr(fixed, data, compresslevel=ZIP_COMPRESSLEVEL)  # a ZipInfo ignores the file's level
+            zout.writestr(
+                fixed, data, compresslevel=ZIP_COMPRESSLEVEL
+            )  # a ZipInfo ignores the file's level
     tmp.replace(path)
 
 
 def write_reproducible_bytes(path: Path, data: bytes) -> None:
-    """``data`` as the whole of ``path``, written beside it and renamed into place: a reader sees the old
-    file or the new one, never a part. For writers whose bytes follow their input alone (no time stamp,
-    no chance), such as the GLB scenes."""
+    """``data`` as the whole of ``path``, written beside it and renamed into place: a reader sees
+    the old file or the new one, never a part. For writers whose bytes follow their input alone (no
+    time stamp, no chance), such as the GLB scenes."""
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_bytes(data)
     tmp.replace(path)
@@ -226,25 +268,40 @@ def fix_zip(path: Path) -> bool:
 
 def write_reproducible_3mf(scene, path: Path) -> None:
     """A trimesh scene as a 3MF file as :func:`fix_zip` leaves it (fixed dates and UUIDs, deflated),
-    compressed once: trimesh writes it stored, not deflated, and only the fixed entries are compressed."""
+    compressed once: trimesh writes it stored, not deflated, and only the fixed entries are
+    compressed."""
     import io
 
-    with zipfile.ZipFile(io.BytesIO(scene.export(file_type="3mf", compression=zipfile.ZIP_STORED))) as zin:
+    with zipfile.ZipFile(
+        io.BytesIO(scene.export(file_type="3mf", compression=zipfile.ZIP_STORED))
+    ) as zin:
         entries, _same = _fixed_entries(path.name, zin)
     _write_zip(path, entries, zipfile.ZIP_DEFLATED)
 
 
 def make_reproducible(root: Path, done: set[Path] | None = None) -> dict[str, int]:
-    """Fix the time stamps of every STEP and 3MF file under ``root``; returns how many of each changed.
+    """Fix the time stamps of every STEP and 3MF file under ``root``; returns how many of each
+    changed.
 
-    ``done``: the files fixed by an earlier call (skipped; the files fixed now are added), for a build
-    that fixes its files in two goes."""
+    ``done``: the files fixed by an earlier call (skipped; the files fixed now are added), for a
+    build that fixes its files in two goes."""
     done = set() if done is None else done
-    steps = [p for p in sorted(root.rglob("*")) if p.suffix.lower() in (".step", ".stp") and p not in done]
+    steps = [
+        p
+        for p in sorted(root.rglob("*"))
+        if p.suffix.lower() in (".step", ".stp") and p not in done
+    ]
     zips = [p for p in sorted(root.rglob("*.3mf")) if p not in done]
     out = {"step": sum(fix_step(p) for p in steps), "3mf": sum(fix_zip(p) for p in zips)}
     done.update(steps + zips)
     return out
 
 
-__all__ = ["make_reproducible", "fix_step", "fix_zip", "write_reproducible_3mf", "write_reproducible_bytes", "FIXED_STEP_TIME"]
+__all__ = [
+    "make_reproducible",
+    "fix_step",
+    "fix_zip",
+    "write_reproducible_3mf",
+    "write_reproducible_bytes",
+    "FIXED_STEP_TIME",
+]

@@ -1,13 +1,18 @@
 """Writes the robot descriptions of a tail into an export (``robot/``).
 
-``robot/bvsr.urdf``            URDF (mimic joints; MuJoCo reads its <mujoco> block)
-``robot/bvsr.xml``             MJCF, reduced chain (two universal joints per bending joint), one actuator per SOA
-``robot/bvsr_segments.xml``    MJCF, reduced chain, the joints of a segment bend alike, one actuator per line
-``robot/scene.xml``, ``robot/scene_segments.xml``   menagerie-style scenes that include them
-``robot/bvsr_exact.xml``, ``robot/scene_exact.xml``   MJCF with the URDF's exact chain (a 0.2 ms step)
-``robot/scene_cart.xml``       the per-segment tail on the paper's hinged cart (Eq 20-22's experiment)
-``robot/meshes/*.stl``         visual meshes in metres, in their link's frame
-``robot/ros2/<name>_description/``  the URDF and meshes as a ROS 2 (ament) package with a display launch
+- ``robot/bvsr.urdf``: URDF (mimic joints; MuJoCo reads its <mujoco> block);
+- ``robot/bvsr.xml``: MJCF, reduced chain (two universal joints per bending joint), one actuator
+  per SOA;
+- ``robot/bvsr_segments.xml``: MJCF, reduced chain, the joints of a segment bend alike, one
+  actuator per line;
+- ``robot/scene.xml``, ``robot/scene_segments.xml``: menagerie-style scenes that include them;
+- ``robot/bvsr_exact.xml``, ``robot/scene_exact.xml``: MJCF with the URDF's exact chain (a 0.2 ms
+  step);
+- ``robot/scene_cart.xml``: the per-segment tail on the paper's hinged cart (Eq 20-22's
+  experiment);
+- ``robot/meshes/*.stl``: visual meshes in metres, in their link's frame;
+- ``robot/ros2/<name>_description/``: the URDF and meshes as a ROS 2 (ament) package with a
+  display launch.
 """
 
 from __future__ import annotations
@@ -25,8 +30,13 @@ from .ros2_package import write_ros2_package
 from .urdf import write_urdf
 
 
-def write_robot(robot: RobotModel, root: Path, progress: Callable[[str], None], cart=None,
-                mesh_files: dict[str, str] | None = None) -> dict[str, Any]:
+def write_robot(
+    robot: RobotModel,
+    root: Path,
+    progress: Callable[[str], None],
+    cart=None,
+    mesh_files: dict[str, str] | None = None,
+) -> dict[str, Any]:
     """Write the robot model's URDF, MJCF and scenes (with ``cart``, a
     :class:`~bvsr_cad.parameters.tables.CartPlatform`, also ``scene_cart.xml``); returns the
     manifest's ``robot`` section. ``mesh_files``: what :func:`write_robot_meshes` returned where the
@@ -42,56 +52,115 @@ def write_robot(robot: RobotModel, root: Path, progress: Callable[[str], None], 
     ros2 = write_ros2_package(folder / f"{name}.urdf", folder / "meshes", folder / "ros2", name)
     act = robot.actuation
     facts = {}
-    for per_segment, stem, scene, chain in ((False, name, "scene.xml", "reduced"),
-                                            (True, f"{name}_segments", "scene_segments.xml", "reduced"),
-                                            (False, f"{name}_exact", "scene_exact.xml", "exact")):
+    for per_segment, stem, scene, chain in (
+        (False, name, "scene.xml", "reduced"),
+        (True, f"{name}_segments", "scene_segments.xml", "reduced"),
+        (False, f"{name}_exact", "scene_exact.xml", "exact"),
+    ):
         tree, facts[stem] = mjcf_tree(robot, mesh_files, per_segment, chain=chain)
         write_mjcf(folder / f"{stem}.xml", tree)
         write_mjcf(folder / scene, scene_tree(f"{stem}.xml", stem))
     error_mm = chain_errors_mm(robot)
     if cart is not None:
         write_mjcf(folder / "scene_cart.xml", cart_scene_tree(robot, mesh_files, cart))
-    urdf_chord_err = max(float(-chord_joint_value(b.theta_max_rad, b.arc_length_m)) for b in robot.bending)
+    urdf_chord_err = max(
+        float(-chord_joint_value(b.theta_max_rad, b.arc_length_m)) for b in robot.bending
+    )
     links = []
     for link in robot.links.values():
         I = link.inertial.inertia
-        links.append({
-            "name": link.name, "role": link.role, "mass_kg": link.inertial.mass_kg,
-            "com_m": list(link.inertial.com_m), "inertia_kg_m2": I.tolist(),
-            "visuals": [{"mesh": f"robot/meshes/{mesh_files[v.name]}", "material": v.material,
-                         "density_g_cm3": v.density_g_cm3} for v in link.visuals],
-        })
-    return {"robot": {
-        "urdf": f"robot/{name}.urdf", "mjcf": "robot/scene.xml", "mjcf_model": f"robot/{name}.xml",
-        "ros2_package": {"path": f"robot/ros2/{ros2['name']}", "urdf": ros2["urdf"], "meshes": ros2["meshes"]},
-        "mjcf_per_segment": "robot/scene_segments.xml", "mjcf_exact": "robot/scene_exact.xml",
-        "mjcf_exact_model": f"robot/{name}_exact.xml",
-        # Each model file's chain, its step and its tip's largest distance from Eq 2 over the joint range;
-        # a reduced chain's bend limit (a polygon of fixed tendons, its largest overshoot past theta_max).
-        "chains": {f"robot/{name}.urdf": {"chain": "exact", "tip_error_vs_eq2_mm": error_mm["exact"]},
-                   **{f"robot/{stem}.xml": {"chain": f["chain"], "timestep_s": f["timestep_s"],
-                                            "tip_error_vs_eq2_mm": error_mm[f["chain"]],
-                                            **({"bend_limit": f["bend_limit"]} if f["bend_limit"] else {})}
-                      for stem, f in facts.items()}}, "mjcf_cart": None if cart is None else "robot/scene_cart.xml", "mjcf_per_segment_model": f"robot/{name}_segments.xml",
-        "units": "SI (m, kg, s, rad); actuator control: commanded gauge pressure in Pa (the chamber "
-                 "pressure lags it by supply_lag_s)",
-        "supply_lag_s": robot.supply_lag_s,
-        "mass_kg": robot.mass_kg,
-        "virtual_link_mass_kg": sum(l.inertial.mass_kg for l in robot.links.values() if l.virtual),
-        "bending_joints": [{"name": b.name, "arc_length_m": b.arc_length_m, "urdf_joints": list(b.urdf_joints),
-                            "base_link": b.base_link, "tip_link": b.tip_link, "theta_max_rad": b.theta_max_rad,
-                            "segment": b.segment, "chord_joint": "value = chord - L (0 at rest); "
-                            "bvsr_cad.assembly.robot.chord_joint_value(theta, L)"} for b in robot.bending],
-        "joint_limits": {j.name: {"lower": j.lower, "upper": j.upper, "velocity": j.velocity, "effort": j.effort}
-                         for j in robot.joints},
-        "urdf_chord_max_error_m": urdf_chord_err,
-        "mjcf_chord_polynomial_max_error_m": max(f["chord_polynomial_max_error_m"] for f in facts.values()),
-        "mjcf_actuators": {stem: f["actuators"] for stem, f in facts.items()},
-        "rod_bending_stiffness_nm_rad": act.rod_bending_stiffness_nm_rad,
-        "half_angle_hinge_stiffness_nm_rad": 2 * act.rod_bending_stiffness_nm_rad,
-        "links": links,
-        "soa_actuators": [{"name": s.name, "line": s.line, "rest_length_m": s.rest_length_m} for s in robot.soas],
-    }}
+        links.append(
+            {
+                "name": link.name,
+                "role": link.role,
+                "mass_kg": link.inertial.mass_kg,
+                "com_m": list(link.inertial.com_m),
+                "inertia_kg_m2": I.tolist(),
+                "visuals": [
+                    {
+                        "mesh": f"robot/meshes/{mesh_files[v.name]}",
+                        "material": v.material,
+                        "density_g_cm3": v.density_g_cm3,
+                    }
+                    for v in link.visuals
+                ],
+            }
+        )
+    return {
+        "robot": {
+            "urdf": f"robot/{name}.urdf",
+            "mjcf": "robot/scene.xml",
+            "mjcf_model": f"robot/{name}.xml",
+            "ros2_package": {
+                "path": f"robot/ros2/{ros2['name']}",
+                "urdf": ros2["urdf"],
+                "meshes": ros2["meshes"],
+            },
+            "mjcf_per_segment": "robot/scene_segments.xml",
+            "mjcf_exact": "robot/scene_exact.xml",
+            "mjcf_exact_model": f"robot/{name}_exact.xml",
+            # Each model file's chain, its step and its tip's largest distance from Eq 2 over the
+            # joint range; a reduced chain's bend limit (a polygon of fixed tendons, its largest
+            # overshoot past theta_max).
+            "chains": {
+                f"robot/{name}.urdf": {"chain": "exact", "tip_error_vs_eq2_mm": error_mm["exact"]},
+                **{
+                    f"robot/{stem}.xml": {
+                        "chain": f["chain"],
+                        "timestep_s": f["timestep_s"],
+                        "tip_error_vs_eq2_mm": error_mm[f["chain"]],
+                        **({"bend_limit": f["bend_limit"]} if f["bend_limit"] else {}),
+                    }
+                    for stem, f in facts.items()
+                },
+            },
+            "mjcf_cart": None if cart is None else "robot/scene_cart.xml",
+            "mjcf_per_segment_model": f"robot/{name}_segments.xml",
+            "units": "SI (m, kg, s, rad); actuator control: commanded gauge pressure in Pa (the "
+            "chamber "
+            "pressure lags it by supply_lag_s)",
+            "supply_lag_s": robot.supply_lag_s,
+            "mass_kg": robot.mass_kg,
+            "virtual_link_mass_kg": sum(
+                l.inertial.mass_kg for l in robot.links.values() if l.virtual
+            ),
+            "bending_joints": [
+                {
+                    "name": b.name,
+                    "arc_length_m": b.arc_length_m,
+                    "urdf_joints": list(b.urdf_joints),
+                    "base_link": b.base_link,
+                    "tip_link": b.tip_link,
+                    "theta_max_rad": b.theta_max_rad,
+                    "segment": b.segment,
+                    "chord_joint": "value = chord - L (0 at rest); "
+                    "bvsr_cad.assembly.robot.chord_joint_value(theta, L)",
+                }
+                for b in robot.bending
+            ],
+            "joint_limits": {
+                j.name: {
+                    "lower": j.lower,
+                    "upper": j.upper,
+                    "velocity": j.velocity,
+                    "effort": j.effort,
+                }
+                for j in robot.joints
+            },
+            "urdf_chord_max_error_m": urdf_chord_err,
+            "mjcf_chord_polynomial_max_error_m": max(
+                f["chord_polynomial_max_error_m"] for f in facts.values()
+            ),
+            "mjcf_actuators": {stem: f["actuators"] for stem, f in facts.items()},
+            "rod_bending_stiffness_nm_rad": act.rod_bending_stiffness_nm_rad,
+            "half_angle_hinge_stiffness_nm_rad": 2 * act.rod_bending_stiffness_nm_rad,
+            "links": links,
+            "soa_actuators": [
+                {"name": s.name, "line": s.line, "rest_length_m": s.rest_length_m}
+                for s in robot.soas
+            ],
+        }
+    }
 
 
 def chain_errors_mm(robot: RobotModel) -> dict[str, float]:
@@ -101,5 +170,7 @@ def chain_errors_mm(robot: RobotModel) -> dict[str, float]:
     lengths_mm = [units.m_to_mm(b.arc_length_m) for b in robot.bending]
     thickness_mm = units.m_to_mm(robot.joints[0].T_parent_joint[2][3])
     limits = [b.theta_max_rad for b in robot.bending]
-    return {chain: chain_tip_error_mm(fn, lengths_mm, thickness_mm, limits)
-            for chain, fn in (("reduced", joint_transform_prb), ("exact", joint_transform_chain))}
+    return {
+        chain: chain_tip_error_mm(fn, lengths_mm, thickness_mm, limits)
+        for chain, fn in (("reduced", joint_transform_prb), ("exact", joint_transform_chain))
+    }

@@ -9,7 +9,7 @@
     urdf/<name>.urdf            the URDF, every mesh as package://<name>_description/meshes/<file>
     meshes/                     exactly the meshes the URDF references
     launch/display.launch.py    robot_state_publisher + joint_state_publisher_gui + rviz2
-    rviz/display.rviz           Grid and RobotModel (/robot_description), fixed frame = the root link
+    rviz/display.rviz           Grid and RobotModel (/robot_description), fixed frame: root link
     README.md
 
 Use it by copying (or symlinking) the folder into a colcon workspace's ``src/``::
@@ -48,11 +48,12 @@ def write_ros2_package(urdf_file: Path, mesh_dir: Path, out_dir: Path, name: str
     """Write the ROS 2 description package ``out_dir/<name>_description/``.
 
     Args:
-        urdf_file: an existing URDF whose ``<mesh filename>`` are relative paths (``meshes/panel0.stl``);
-            a mesh is looked up in ``mesh_dir`` by its file name.
+        urdf_file: an existing URDF whose ``<mesh filename>`` are relative paths
+            (``meshes/panel0.stl``); a mesh is looked up in ``mesh_dir`` by its file name.
         mesh_dir: the folder holding the mesh files.
         out_dir: the folder that receives the package (created if missing).
-        name: the robot name; the package is ``<name>_description`` and its URDF ``urdf/<name>.urdf``.
+        name: the robot name; the package is ``<name>_description`` and its URDF
+            ``urdf/<name>.urdf``.
 
     Returns:
         A manifest fragment: ``name``, ``path`` (the package folder), ``urdf`` (relative to the
@@ -67,7 +68,9 @@ def write_ros2_package(urdf_file: Path, mesh_dir: Path, out_dir: Path, name: str
     urdf_file, mesh_dir, out_dir = Path(urdf_file), Path(mesh_dir), Path(out_dir)
     package = f"{name}_description"
     if not _PACKAGE_NAME.match(package):
-        raise ValueError(f"{package!r} is not a valid ROS package name (lower case letters, digits, '_')")
+        raise ValueError(
+            f"{package!r} is not a valid ROS package name (lower case letters, digits, '_')"
+        )
 
     # Read and check everything before creating anything.
     tree = _parse_keeping_comments(urdf_file)
@@ -84,8 +87,13 @@ def write_ros2_package(urdf_file: Path, mesh_dir: Path, out_dir: Path, name: str
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    return {"name": package, "path": str(package_dir), "urdf": f"urdf/{name}.urdf",
-            "meshes": len(meshes), "files": files}
+    return {
+        "name": package,
+        "path": str(package_dir),
+        "urdf": f"urdf/{name}.urdf",
+        "meshes": len(meshes),
+        "files": files,
+    }
 
 
 def _parse_keeping_comments(path: Path) -> ET.ElementTree:
@@ -103,30 +111,47 @@ def _root_link(robot: ET.Element, urdf_file: Path) -> str:
     return str(roots[0])
 
 
-def _rewrite_meshes(robot: ET.Element, mesh_dir: Path, package: str, urdf_file: Path) -> dict[str, Path]:
-    """Point every ``<mesh filename>`` at ``package://<package>/meshes/<file>``; returns file -> source."""
+def _rewrite_meshes(
+    robot: ET.Element, mesh_dir: Path, package: str, urdf_file: Path
+) -> dict[str, Path]:
+    """Point every ``<mesh filename>`` at ``package://<package>/meshes/<file>``; returns file ->
+    source."""
     meshes: dict[str, Path] = {}
     origin: dict[str, str] = {}
     for link in robot.iter("link"):
         for mesh in link.iter("mesh"):
             ref = mesh.get("filename", "")
-            file = PurePosixPath(ref.split("://", 1)[-1]).name  # also accepts package:// and file:// URIs
+            file = PurePosixPath(
+                ref.split("://", 1)[-1]
+            ).name  # also accepts package:// and file:// URIs
             if not file:
-                raise ValueError(f"{urdf_file}: link {link.get('name')!r} has a mesh without a filename")
+                raise ValueError(
+                    f"{urdf_file}: link {link.get('name')!r} has a mesh without a filename"
+                )
             if file in origin and origin[file] != ref:
-                raise ValueError(f"{urdf_file}: meshes {origin[file]!r} and {ref!r} share the file name {file!r}")
+                raise ValueError(
+                    f"{urdf_file}: meshes {origin[file]!r} and {ref!r} share the file name {file!r}"
+                )
             source = mesh_dir / file
             if not source.is_file():
-                raise FileNotFoundError(f"{urdf_file}: link {link.get('name')!r} references mesh {ref!r}, "
-                                        f"but {file!r} is not in {mesh_dir}")
+                raise FileNotFoundError(
+                    f"{urdf_file}: link {link.get('name')!r} references mesh {ref!r}, "
+                    f"but {file!r} is not in {mesh_dir}"
+                )
             origin[file] = ref
             meshes[file] = source
             mesh.set("filename", f"package://{package}/meshes/{file}")
     return meshes
 
 
-def _write_contents(folder: Path, tree: ET.ElementTree, meshes: dict[str, Path], package: str, name: str,
-                    root_link: str) -> None:
+def _write_contents(
+    folder: Path,
+    tree: ET.ElementTree,
+    meshes: dict[str, Path],
+    package: str,
+    name: str,
+    root_link: str,
+) -> None:
     for sub in ("urdf", "meshes", "launch", "rviz"):
         (folder / sub).mkdir()
     tree.write(folder / "urdf" / f"{name}.urdf", encoding="utf-8", xml_declaration=True)
@@ -134,13 +159,16 @@ def _write_contents(folder: Path, tree: ET.ElementTree, meshes: dict[str, Path],
         shutil.copyfile(source, folder / "meshes" / file)
     (folder / "package.xml").write_text(_package_xml(package, name), encoding="utf-8")
     (folder / "CMakeLists.txt").write_text(_cmakelists(package), encoding="utf-8")
-    (folder / "launch" / "display.launch.py").write_text(_launch_py(package, name), encoding="utf-8")
+    (folder / "launch" / "display.launch.py").write_text(
+        _launch_py(package, name), encoding="utf-8"
+    )
     (folder / "rviz" / "display.rviz").write_text(_rviz(root_link), encoding="utf-8")
     (folder / "README.md").write_text(_readme(package, name), encoding="utf-8")
 
 
 def _replace_dir(new: Path, target: Path) -> None:
-    """Rename ``new`` to ``target``; an existing ``target`` is renamed away first and deleted last."""
+    """Rename ``new`` to ``target``; an existing ``target`` is renamed away first and deleted
+    last."""
     if not target.exists():
         new.rename(target)
         return
@@ -162,17 +190,26 @@ def _package_xml(package: str, name: str) -> str:
     ET.SubElement(root, "version").text = version
     ET.SubElement(root, "description").text = (
         f"URDF description of the {name} Biomimetic Vertebraic Soft Robotic (BVSR) tail: meshes, "
-        "an RViz configuration and a display launch file. Generated by bvsr_cad.")
+        "an RViz configuration and a display launch file. Generated by bvsr_cad."
+    )
     ET.SubElement(root, "maintainer", email=_MAINTAINER_EMAIL).text = _MAINTAINER
     ET.SubElement(root, "license").text = "MIT"
     ET.SubElement(root, "buildtool_depend").text = "ament_cmake"
-    for dep in ("ament_index_python", "launch", "launch_ros", "robot_state_publisher",
-                "joint_state_publisher_gui", "rviz2"):
+    for dep in (
+        "ament_index_python",
+        "launch",
+        "launch_ros",
+        "robot_state_publisher",
+        "joint_state_publisher_gui",
+        "rviz2",
+    ):
         ET.SubElement(root, "exec_depend").text = dep
     ET.SubElement(ET.SubElement(root, "export"), "build_type").text = "ament_cmake"
     ET.indent(root)
-    schema = ('<?xml-model href="http://download.ros.org/schema/package_format3.xsd" '
-              'schematypens="http://www.w3.org/2001/XMLSchema"?>\n')
+    schema = (
+        '<?xml-model href="http://download.ros.org/schema/package_format3.xsd" '
+        'schematypens="http://www.w3.org/2001/XMLSchema"?>\n'
+    )
     return '<?xml version="1.0"?>\n' + schema + ET.tostring(root, encoding="unicode") + "\n"
 
 
@@ -226,8 +263,8 @@ def generate_launch_description():
 '''
 
 
-#: The RViz 2 configuration: a grid and the robot model from ``/robot_description``, seen from an orbit
-#: ``{distance_m}`` away, in the fixed frame ``{frame}`` (a YAML scalar).
+#: The RViz 2 configuration: a grid and the robot model from ``/robot_description``, seen from an
+#: orbit ``{distance_m}`` away, in the fixed frame ``{frame}`` (a YAML scalar).
 _RVIZ_CONFIG = """Panels:
   - Class: rviz_common/Displays
     Name: Displays
@@ -331,6 +368,7 @@ source install/setup.bash
 ros2 launch {package} display.launch.py
 ```
 
-RViz shows the tail with `robot_state_publisher`; move the joints with the `joint_state_publisher_gui`
-sliders (mimic joints follow their leaders). Regenerate the package with bvsr_cad rather than editing it.
+RViz shows the tail with `robot_state_publisher`; move the joints with the
+`joint_state_publisher_gui` sliders (mimic joints follow their leaders). Regenerate the package with
+bvsr_cad rather than editing it.
 """

@@ -1,6 +1,6 @@
-"""``bvsr init``: editable copies of the default inputs (:mod:`bvsr_cad.defaults`), in the folders their
-relative paths expect, so that a copied study still finds its base parameter file and a copied parameter
-file its measurements."""
+"""``bvsr init``: editable copies of the default inputs (:mod:`bvsr_cad.defaults`), in the folders
+their relative paths expect, so that a copied study still finds its base parameter file and a copied
+parameter file its measurements."""
 
 from __future__ import annotations
 
@@ -15,15 +15,19 @@ class StarterExistsError(FileExistsError):
 
     def __init__(self, paths: list[Path]):
         self.paths = paths
-        super().__init__(f"{', '.join(map(str, paths))} already exist{'s' if len(paths) == 1 else ''}; nothing "
-                         "was written (--force overwrites)")
+        super().__init__(
+            f"{', '.join(map(str, paths))} already exist{'s' if len(paths) == 1 else ''}; nothing "
+            "was written (--force overwrites)"
+        )
 
 
 def write_starter(folder: str | Path, force: bool = False) -> list[Path]:
-    """Write every default file under ``folder`` (``params/``, ``data/``, ``studies/``); returns their paths.
+    """Write every default file under ``folder`` (``params/``, ``data/``, ``studies/``); returns
+    their paths.
 
     Raises:
-        StarterExistsError: one or more of the files exist and ``force`` is false; nothing is written then.
+        StarterExistsError: one or more of the files exist and ``force`` is false; nothing is
+            written then.
     """
     root = Path(folder)
     targets = {rel: root / rel for rel in defaults.files()}

@@ -79,11 +79,18 @@ def _frame(study, rows: list[dict[str, Any]]):
         first.insert(1, "trial")
     rest = [c for c in df.columns if c not in first]
     df = df[[c for c in first if c in df.columns] + rest]
-    for col in df.columns:  # one type per column (Parquet): a column mixing text and numbers becomes text
+    for (
+        col
+    ) in df.columns:  # one type per column (Parquet): a column mixing text and numbers becomes text
         values = df[col].dropna()
-        if df[col].dtype == object and values.map(lambda v: isinstance(v, str)).any() \
-                and not values.map(lambda v: isinstance(v, str)).all():
-            df[col] = df[col].map(lambda v: None if v is None or (isinstance(v, float) and math.isnan(v)) else str(v))
+        if (
+            df[col].dtype == object
+            and values.map(lambda v: isinstance(v, str)).any()
+            and not values.map(lambda v: isinstance(v, str)).all()
+        ):
+            df[col] = df[col].map(
+                lambda v: None if v is None or (isinstance(v, float) and math.isnan(v)) else str(v)
+            )
     return df
 
 
@@ -91,8 +98,10 @@ def write_outputs(study, rows: list[dict[str, Any]], out: Path) -> dict[str, str
     """``results.parquet``, ``results.csv``, ``plots/*.png`` and ``report.html`` in ``out``."""
     df = _frame(study, rows)
     files = {}
-    for name, write in (("results.parquet", lambda p: df.to_parquet(p, index=False)),
-                        ("results.csv", lambda p: df.to_csv(p, index=False))):
+    for name, write in (
+        ("results.parquet", lambda p: df.to_parquet(p, index=False)),
+        ("results.csv", lambda p: df.to_csv(p, index=False)),
+    ):
         _atomic(out / name, write)
         files[name] = str(out / name)
     plots = out / "plots"
@@ -101,7 +110,10 @@ def write_outputs(study, rows: list[dict[str, Any]], out: Path) -> dict[str, str
     if study.kind == "optuna":
         images += _optuna_plots(study, df, plots)
     trends = expectations(study, df)
-    _atomic(out / "report.html", lambda p: Path(p).write_text(_html(study, df, images, trends), encoding="utf-8"))
+    _atomic(
+        out / "report.html",
+        lambda p: Path(p).write_text(_html(study, df, images, trends), encoding="utf-8"),
+    )
     files["report.html"] = str(out / "report.html")
     return files
 
@@ -109,12 +121,23 @@ def write_outputs(study, rows: list[dict[str, Any]], out: Path) -> dict[str, str
 def _numeric(df, col) -> bool:
     import pandas as pd
 
-    return col in df.columns and pd.api.types.is_numeric_dtype(df[col]) and not pd.api.types.is_bool_dtype(df[col])
+    return (
+        col in df.columns
+        and pd.api.types.is_numeric_dtype(df[col])
+        and not pd.api.types.is_bool_dtype(df[col])
+    )
 
 
 def _metrics(study, df) -> list[str]:
-    return [c for c in df.columns if c not in SKIP and c not in study.axes and not c.startswith(("seconds", "fitted_"))
-            and _numeric(df, c) and df[c].notna().any()]
+    return [
+        c
+        for c in df.columns
+        if c not in SKIP
+        and c not in study.axes
+        and not c.startswith(("seconds", "fitted_"))
+        and _numeric(df, c)
+        and df[c].notna().any()
+    ]
 
 
 def _metric_plots(study, df, folder: Path) -> list[tuple[str, str]]:
@@ -128,8 +151,11 @@ def _metric_plots(study, df, folder: Path) -> list[tuple[str, str]]:
         for ax, axis in zip(subplots[0], axes):
             others = [a for a in axes if a != axis]
             numeric = _numeric(ok, axis)
-            order = sorted(ok[axis].dropna().unique(), key=lambda v: (isinstance(v, str), v)) if numeric else \
-                list(dict.fromkeys(ok[axis].dropna()))
+            order = (
+                sorted(ok[axis].dropna().unique(), key=lambda v: (isinstance(v, str), v))
+                if numeric
+                else list(dict.fromkeys(ok[axis].dropna()))
+            )
             pos = {v: i for i, v in enumerate(order)}
             groups = ok.groupby(others, dropna=False) if others else [((), ok)]
             for name, g in groups:
@@ -138,7 +164,9 @@ def _metric_plots(study, df, folder: Path) -> list[tuple[str, str]]:
                     continue
                 x = g[axis].astype(float).to_numpy() if numeric else g[axis].map(pos).to_numpy()
                 idx = np.argsort(x)
-                label = ", ".join(f"{o}={v}" for o, v in zip(others, name if isinstance(name, tuple) else (name,)))
+                label = ", ".join(
+                    f"{o}={v}" for o, v in zip(others, name if isinstance(name, tuple) else (name,))
+                )
                 ax.plot(x[idx], g[metric].to_numpy()[idx], "o-", ms=4, label=label or None)
             if not numeric:
                 ax.set_xticks(range(len(order)), [str(v) for v in order], rotation=20)
@@ -150,14 +178,15 @@ def _metric_plots(study, df, folder: Path) -> list[tuple[str, str]]:
         fig.suptitle(f"{study.name}: {metric}")
         fig.tight_layout()
         path = folder / f"{metric}.png"
-        _atomic(path, lambda p: fig.savefig(p, dpi=90, format="png"))
+        _atomic(path, lambda p, fig=fig: fig.savefig(p, dpi=90, format="png"))
         plt.close(fig)
         out.append((metric, f"plots/{path.name}"))
     return out
 
 
 def pareto_mask(points: np.ndarray, maximize: tuple[bool, ...]) -> np.ndarray:
-    """Rows of ``points`` that no other row dominates (better or equal everywhere, better somewhere)."""
+    """Rows of ``points`` that no other row dominates (better or equal everywhere, better
+    somewhere)."""
     p = np.where(np.array(maximize), -points, points)  # minimise everything
     keep = np.ones(len(p), bool)
     for i in range(len(p)):
@@ -170,7 +199,7 @@ def _feasible(study, df):
     ok = df["status"] == "ok"
     for c in study.constraints:
         if c.metric in df.columns:
-            ok &= df[c.metric].map(lambda v: c.violation(v) <= 0)
+            ok &= df[c.metric].map(lambda v, c=c: c.violation(v) <= 0)
         else:
             ok &= False
     return ok
@@ -182,7 +211,7 @@ def _save(fig, ax, title: str, path: Path) -> str:
     ax.legend(fontsize=8)
     fig.suptitle(title)
     fig.tight_layout()
-    _atomic(path, lambda p: fig.savefig(p, dpi=90, format="png"))
+    _atomic(path, lambda p, fig=fig: fig.savefig(p, dpi=90, format="png"))
     plt.close(fig)
     return f"plots/{path.name}"
 
@@ -203,8 +232,17 @@ def _optuna_plots(study, df, folder: Path) -> list[tuple[str, str]]:
     ax.step(d["trial"], best, where="post", color="C1", label="best feasible so far")
     ax.set_xlabel("trial")
     ax.set_ylabel(obj.metric)
-    out.append(("optimisation history", _save(fig, ax, f"{study.name}: optimisation history ({obj.direction})",
-                                               folder / "optuna_history.png")))
+    out.append(
+        (
+            "optimisation history",
+            _save(
+                fig,
+                ax,
+                f"{study.name}: optimisation history ({obj.direction})",
+                folder / "optuna_history.png",
+            ),
+        )
+    )
     pair = [o.metric for o in study.objectives][:2]
     directions = [o.direction == "maximize" for o in study.objectives][:2]
     if len(pair) < 2:  # one objective: its trade-off against the tail's mass
@@ -224,7 +262,12 @@ def _optuna_plots(study, df, folder: Path) -> list[tuple[str, str]]:
                 ax.plot(base[pair[0]], base[pair[1]], "*", color="k", ms=12, label="base")
         ax.set_xlabel(f"{pair[0]} ({'max' if directions[0] else 'min'})")
         ax.set_ylabel(f"{pair[1]} ({'max' if directions[1] else 'min'})")
-        out.append(("Pareto front", _save(fig, ax, f"{study.name}: Pareto front", folder / "pareto_front.png")))
+        out.append(
+            (
+                "Pareto front",
+                _save(fig, ax, f"{study.name}: Pareto front", folder / "pareto_front.png"),
+            )
+        )
     return out
 
 
@@ -237,7 +280,8 @@ def _spearman(x: np.ndarray, y: np.ndarray) -> float:
 
 
 def expectations(study, df) -> list[dict[str, Any]]:
-    """Each expected trend with the rank correlation the results show and whether its sign agrees."""
+    """Each expected trend with the rank correlation the results show and whether its sign
+    agrees."""
     ok = df[df["status"] == "ok"]
     out = []
     for e in study.expect:
@@ -248,49 +292,82 @@ def expectations(study, df) -> list[dict[str, Any]]:
         if not _numeric(sub, e.versus):
             out.append({"expectation": e, "rho": float("nan"), "holds": None, "n": len(sub)})
             continue
-        others = [a for a in study.axes if a != e.versus and a in ok.columns] if e.versus in study.axes else []
-        if others:  # a trend along one axis holds at every setting of the others (e.g. per material)
-            rhos = [_spearman(g[e.versus].astype(float).to_numpy(), g[e.metric].astype(float).to_numpy())
-                    for _, g in ok.dropna(subset=[e.metric, e.versus]).groupby(others, dropna=False)]
+        others = (
+            [a for a in study.axes if a != e.versus and a in ok.columns]
+            if e.versus in study.axes
+            else []
+        )
+        if (
+            others
+        ):  # a trend along one axis holds at every setting of the others (e.g. per material)
+            rhos = [
+                _spearman(
+                    g[e.versus].astype(float).to_numpy(), g[e.metric].astype(float).to_numpy()
+                )
+                for _, g in ok.dropna(subset=[e.metric, e.versus]).groupby(others, dropna=False)
+            ]
             rhos = [r for r in rhos if not math.isnan(r)]
             rho = min(rhos, key=lambda r: r * e.sign) if rhos else float("nan")
         else:
-            rho = _spearman(sub[e.versus].astype(float).to_numpy(), sub[e.metric].astype(float).to_numpy())
+            rho = _spearman(
+                sub[e.versus].astype(float).to_numpy(), sub[e.metric].astype(float).to_numpy()
+            )
         holds = None if math.isnan(rho) else bool(rho * e.sign > 0.5)
-        out.append({"expectation": e, "rho": rho, "holds": holds, "n": len(sub), "per_group": bool(others)})
+        out.append(
+            {"expectation": e, "rho": rho, "holds": holds, "n": len(sub), "per_group": bool(others)}
+        )
     return out
 
 
 def _html(study, df, images: list[tuple[str, str]], trends: list[dict[str, Any]]) -> str:
     esc = html.escape
     counts = df["status"].value_counts().to_dict()
-    parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{esc(study.name)}: design study</title>",
-             "<style>body{font-family:sans-serif;max-width:1200px;margin:auto}table{border-collapse:collapse;"
-             "font-size:12px}td,th{border:1px solid #ccc;padding:2px 6px}td.bad{color:#b00}img{max-width:100%}"
-             "</style></head><body>",
-             f"<h1>Design study {esc(study.name)}</h1>",
-             f"<p>{esc(study.kind)} study of <code>{esc(str(study.base_path))}</code>: {len(df)} variants; "
-             + ", ".join(f"{esc(str(k))}: {v}" for k, v in counts.items()) + ".</p>"]
+    parts = [
+        f"<!doctype html><html><head><meta charset='utf-8'><title>{esc(study.name)}: design "
+        "study</title>",
+        "<style>body{font-family:sans-serif;max-width:1200px;margin:auto}table{border-collapse:collapse;"
+        "font-size:12px}td,th{border:1px solid #ccc;padding:2px "
+        "6px}td.bad{color:#b00}img{max-width:100%}"
+        "</style></head><body>",
+        f"<h1>Design study {esc(study.name)}</h1>",
+        f"<p>{esc(study.kind)} study of <code>{esc(str(study.base_path))}</code>: {len(df)} "
+        "variants; " + ", ".join(f"{esc(str(k))}: {v}" for k, v in counts.items()) + ".</p>",
+    ]
     if trends:
-        parts.append("<h2>Trends the sources report, against the model</h2><table><tr><th>metric</th><th>expected"
-                     "</th><th>versus</th><th>rank correlation</th><th>variants</th><th>agrees</th><th>source</th>"
-                     "</tr>")
+        parts.append(
+            "<h2>Trends the sources report, against the "
+            "model</h2><table><tr><th>metric</th><th>expected"
+            "</th><th>versus</th><th>rank "
+            "correlation</th><th>variants</th><th>agrees</th><th>source</th>"
+            "</tr>"
+        )
         for t in trends:
             e = t["expectation"]
             verdict = {True: "yes", False: "no", None: "not measurable"}[t["holds"]]
-            parts.append(f"<tr><td>{esc(e.metric)}</td><td>{'rises' if e.sign > 0 else 'falls'}</td>"
-                         f"<td>{esc(e.versus)}</td><td>{t['rho']:.2f}{' (weakest over the other axes)' if t.get('per_group') else ''}"
-                         f"</td><td>{t['n']}</td>"
-                         f"<td class='{'' if t['holds'] else 'bad'}'>{verdict}</td><td>{esc(e.source)}</td></tr>")
+            parts.append(
+                f"<tr><td>{esc(e.metric)}</td><td>{'rises' if e.sign > 0 else 'falls'}</td>"
+                f"<td>{esc(e.versus)}</td><td>{t['rho']:.2f}"
+                f"{' (weakest over the other axes)' if t.get('per_group') else ''}"
+                f"</td><td>{t['n']}</td>"
+                f"<td class='{'' if t['holds'] else 'bad'}'>{verdict}</td>"
+                f"<td>{esc(e.source)}</td></tr>"
+            )
         parts.append("</table>")
-    shown = [c for c in df.columns if not c.startswith("seconds_") and c != "checks_json"]  # the table has them
-    parts.append("<h2>Results</h2><table><tr>" + "".join(f"<th>{esc(c)}</th>" for c in shown) + "</tr>")
+    shown = [
+        c for c in df.columns if not c.startswith("seconds_") and c != "checks_json"
+    ]  # the table has them
+    parts.append(
+        "<h2>Results</h2><table><tr>" + "".join(f"<th>{esc(c)}</th>" for c in shown) + "</tr>"
+    )
     for _, r in df.iterrows():
         cells = []
         for c in shown:
             v = r[c]
-            text = f"{v:.4g}" if isinstance(v, float) and not math.isnan(v) else ("" if v is None or (
-                isinstance(v, float) and math.isnan(v)) else str(v))
+            text = (
+                f"{v:.4g}"
+                if isinstance(v, float) and not math.isnan(v)
+                else ("" if v is None or (isinstance(v, float) and math.isnan(v)) else str(v))
+            )
             bad = " class='bad'" if c == "status" and v != "ok" else ""
             cells.append(f"<td{bad}>{esc(text)}</td>")
         parts.append("<tr>" + "".join(cells) + "</tr>")

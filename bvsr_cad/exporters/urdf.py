@@ -9,10 +9,10 @@ L - chord(theta) = L theta^2 / 24 + O(theta^4) at most at the joint limit
 with :func:`bvsr_cad.assembly.robot.chord_joint_value`.
 
 The collision shapes are for contacts with the world. Neighbouring panels' halves of an SOA or rod
-column meet (and overlap by the column's tilt) at mid-gap in every pose; URDF cannot exclude a pair of
-links, and MuJoCo's import collides every two links but a parent and its child (pybullet and Gazebo
-leave self-collision off unless asked). In MuJoCo use the MJCF, which turns the tail's self-contacts
-off, or set the imported geoms' ``conaffinity`` to 0 as ``bvsr check`` does.
+column meet (and overlap by the column's tilt) at mid-gap in every pose; URDF cannot exclude a pair
+of links, and MuJoCo's import collides every two links but a parent and its child (pybullet and
+Gazebo leave self-collision off unless asked). In MuJoCo use the MJCF, which turns the tail's
+self-contacts off, or set the imported geoms' ``conaffinity`` to 0 as ``bvsr check`` does.
 """
 
 from __future__ import annotations
@@ -27,11 +27,19 @@ from .xml import origin_attrs, write_tree
 from .xml import vec as _vec
 
 
-def urdf_tree(robot: RobotModel, mesh_files: dict[str, str], mesh_prefix: str = "meshes/") -> ET.ElementTree:
+def urdf_tree(
+    robot: RobotModel, mesh_files: dict[str, str], mesh_prefix: str = "meshes/"
+) -> ET.ElementTree:
     root = ET.Element("robot", name=robot.name)
     mj = ET.SubElement(root, "mujoco")
-    ET.SubElement(mj, "compiler", balanceinertia="false",
-                  discardvisual="false", fusestatic="false", strippath="false")
+    ET.SubElement(
+        mj,
+        "compiler",
+        balanceinertia="false",
+        discardvisual="false",
+        fusestatic="false",
+        strippath="false",
+    )
     materials = {}
     for link in robot.links.values():
         for vis in link.visuals:
@@ -45,8 +53,16 @@ def urdf_tree(robot: RobotModel, mesh_files: dict[str, str], mesh_prefix: str = 
         ET.SubElement(inertial, "origin", xyz=_vec(link.inertial.com), rpy="0 0 0")
         ET.SubElement(inertial, "mass", value=_f(link.inertial.mass_kg))
         I = link.inertial.inertia
-        ET.SubElement(inertial, "inertia", ixx=_f(I[0, 0]), ixy=_f(I[0, 1]), ixz=_f(I[0, 2]),
-                      iyy=_f(I[1, 1]), iyz=_f(I[1, 2]), izz=_f(I[2, 2]))
+        ET.SubElement(
+            inertial,
+            "inertia",
+            ixx=_f(I[0, 0]),
+            ixy=_f(I[0, 1]),
+            ixz=_f(I[0, 2]),
+            iyy=_f(I[1, 1]),
+            iyz=_f(I[1, 2]),
+            izz=_f(I[2, 2]),
+        )
         for vis in link.visuals:
             v = ET.SubElement(el, "visual", name=vis.name)
             ET.SubElement(v, "origin", xyz="0 0 0", rpy="0 0 0")
@@ -58,7 +74,9 @@ def urdf_tree(robot: RobotModel, mesh_files: dict[str, str], mesh_prefix: str = 
             ET.SubElement(c, "origin", **origin_attrs(col.T_link_geom))
             g = ET.SubElement(c, "geometry")
             if col.kind == "mesh":
-                ET.SubElement(g, "mesh", filename=mesh_prefix + mesh_files[collision_mesh_name(col)])
+                ET.SubElement(
+                    g, "mesh", filename=mesh_prefix + mesh_files[collision_mesh_name(col)]
+                )
             else:
                 ET.SubElement(g, "cylinder", radius=_f(col.radius_m), length=_f(col.length_m))
     for j in robot.joints:
@@ -74,11 +92,18 @@ def urdf_tree(robot: RobotModel, mesh_files: dict[str, str], mesh_prefix: str = 
         if j.damping:
             ET.SubElement(el, "dynamics", damping=_f(j.damping))
         if j.mimic is not None:
-            ET.SubElement(el, "mimic", joint=j.mimic.joint, multiplier=_f(j.mimic.multiplier),
-                          offset=_f(j.mimic.offset))
+            ET.SubElement(
+                el,
+                "mimic",
+                joint=j.mimic.joint,
+                multiplier=_f(j.mimic.multiplier),
+                offset=_f(j.mimic.offset),
+            )
     ET.indent(root)
     return ET.ElementTree(root)
 
 
-def write_urdf(robot: RobotModel, path: Path, mesh_files: dict[str, str], mesh_prefix: str = "meshes/") -> None:
+def write_urdf(
+    robot: RobotModel, path: Path, mesh_files: dict[str, str], mesh_prefix: str = "meshes/"
+) -> None:
     write_tree(urdf_tree(robot, mesh_files, mesh_prefix), path)

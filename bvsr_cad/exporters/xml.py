@@ -1,4 +1,5 @@
-"""The one XML helper of the URDF and MJCF writers: numbers as attribute text, element trees to files."""
+"""The one XML helper of the URDF and MJCF writers: numbers as attribute text, element trees to
+files."""
 
 from __future__ import annotations
 
@@ -10,7 +11,8 @@ from scipy.spatial.transform import Rotation
 
 
 def num(v: float) -> str:
-    """A number as attribute text: 10 significant digits (about 1e-10 relative, below every tolerance)."""
+    """A number as attribute text: 10 significant digits (about 1e-10 relative, below every
+    tolerance)."""
     return f"{float(v):.10g}"
 
 

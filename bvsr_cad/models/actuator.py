@@ -28,14 +28,21 @@ class SoaForceLaw:
 
     def stiffness_n_per_m(self, pressure_pa):
         """Eq 4: k = m_a P + n_a."""
-        return self.stiffness_slope_n_per_m_per_pa * np.asarray(pressure_pa, float) + self.stiffness_offset_n_per_m
+        return (
+            self.stiffness_slope_n_per_m_per_pa * np.asarray(pressure_pa, float)
+            + self.stiffness_offset_n_per_m
+        )
 
     def force_n(self, pressure_pa, stretch_m, stretch_rate_m_s=0.0):
         """Eq 3 with the damper: F = P A - k(P) dl - c dl/dt (N, pushing the sockets apart)."""
         p = np.asarray(pressure_pa, float)
-        return p * self.area_m2 - self.stiffness_n_per_m(p) * stretch_m - self.damping_n_s_per_m * stretch_rate_m_s
+        return (
+            p * self.area_m2
+            - self.stiffness_n_per_m(p) * stretch_m
+            - self.damping_n_s_per_m * stretch_rate_m_s
+        )
 
-    def scaled_area(self, factor: float) -> "SoaForceLaw":
+    def scaled_area(self, factor: float) -> SoaForceLaw:
         return replace(self, area_m2=self.area_m2 * factor)
 
 
@@ -43,7 +50,9 @@ def soa_force_law(spec: TailSpec) -> SoaForceLaw:
     """The law of one SOA from the parameter file's ``[actuation]``, with the area and damping
     that `bvsr calibrate` fitted where the file carries them (``[calibration.fitted]``)."""
     a = spec.actuation
-    return SoaForceLaw(area_m2=units.mm2_to_m2(spec.fitted("effective_area_mm2", a.effective_area_mm2)),
-                       stiffness_slope_n_per_m_per_pa=a.stiffness_slope_n_per_m_per_kpa / units.PA_PER_KPA,
-                       stiffness_offset_n_per_m=a.stiffness_offset_n_per_m,
-                       damping_n_s_per_m=spec.fitted("damping_n_s_per_m", a.damping_n_s_per_m))
+    return SoaForceLaw(
+        area_m2=units.mm2_to_m2(spec.fitted("effective_area_mm2", a.effective_area_mm2)),
+        stiffness_slope_n_per_m_per_pa=a.stiffness_slope_n_per_m_per_kpa / units.PA_PER_KPA,
+        stiffness_offset_n_per_m=a.stiffness_offset_n_per_m,
+        damping_n_s_per_m=spec.fitted("damping_n_s_per_m", a.damping_n_s_per_m),
+    )

@@ -38,13 +38,20 @@ def mimic_joints(urdf_path: str | Path) -> list[MimicJoint]:
     for j in ET.parse(urdf_path).getroot().iter("joint"):
         m = j.find("mimic")
         if m is not None:
-            out.append(MimicJoint(j.get("name"), m.get("joint"), float(m.get("multiplier", 1.0)),
-                                  float(m.get("offset", 0.0))))
+            out.append(
+                MimicJoint(
+                    j.get("name"),
+                    m.get("joint"),
+                    float(m.get("multiplier", 1.0)),
+                    float(m.get("offset", 0.0)),
+                )
+            )
     return out
 
 
-def couple_mimic_joints(pb, body: int, mimics: list[MimicJoint], max_force: float = 1e4,
-                        physics_client: int = 0) -> None:
+def couple_mimic_joints(
+    pb, body: int, mimics: list[MimicJoint], max_force: float = 1e4, physics_client: int = 0
+) -> None:
     """Drive every mimic joint to follow its master (call before each step).
 
     Args:
@@ -59,7 +66,14 @@ def couple_mimic_joints(pb, body: int, mimics: list[MimicJoint], max_force: floa
         index[pb.getJointInfo(body, i, physicsClientId=physics_client)[1].decode()] = i
     for m in mimics:
         q, qd = pb.getJointState(body, index[m.master], physicsClientId=physics_client)[:2]
-        pb.setJointMotorControl2(body, index[m.joint], pb.POSITION_CONTROL,
-                                 targetPosition=m.multiplier * q + m.offset, targetVelocity=m.multiplier * qd,
-                                 force=max_force, positionGain=1.0, velocityGain=1.0,
-                                 physicsClientId=physics_client)
+        pb.setJointMotorControl2(
+            body,
+            index[m.joint],
+            pb.POSITION_CONTROL,
+            targetPosition=m.multiplier * q + m.offset,
+            targetVelocity=m.multiplier * qd,
+            force=max_force,
+            positionGain=1.0,
+            velocityGain=1.0,
+            physicsClientId=physics_client,
+        )

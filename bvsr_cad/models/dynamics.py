@@ -9,8 +9,8 @@ and 2 m_p to m in the gravity potential. Then, in SI,
 
     M(q) q'' + c(q, q') + D(q) q' + G(q) = K(q),                       (Eq 6)
 
-    M = diag(I_phi + m L^2 sin^2(theta/2) / theta^2,
-             I_theta / 4 + m L^2 (theta^2 - 2 theta sin theta - 2 cos theta + 2) / (4 theta^4))   (Eq 7)
+    M = diag(I_phi + m L^2 sin^2(theta/2) / theta^2,                                     (Eq 7)
+             I_theta / 4 + m L^2 (theta^2 - 2 theta sin theta - 2 cos theta + 2) / (4 theta^4))
 
     c = [M_phi' phi' theta',  M_theta' theta'^2 / 2 - M_phi' phi'^2 / 2]   (Eq 8: the Christoffel
         terms of M; ' on M is d/dtheta; :func:`paper_coriolis` is Eq 8 as printed, for the tests)
@@ -55,7 +55,8 @@ from .kinematics import JointGeometry, socket_lengths_and_jacobian
 #: Standard gravity, m/s^2.
 G_M_S2 = units.STANDARD_GRAVITY_M_S2
 #: The arc's end over the body's centre of mass: the chord is 2 (L / theta) sin(theta / 2) along the
-#: direction theta / 2, and the centre of mass sits at its midpoint (Eq 7's premise), so p_tip = 2 p_com.
+#: direction theta / 2, and the centre of mass sits at its midpoint (Eq 7's premise), so p_tip = 2
+#: p_com.
 TIP_OVER_COM = 2.0
 #: The paper measures a segment's peak velocity before its angle passes this (Sec. IV-A-3).
 VELOCITY_WINDOW_DEG = 38.0
@@ -64,7 +65,7 @@ VELOCITY_WINDOW_DEG = 38.0
 def ramp_pa(t_s, p0_pa: float, t0_s: float):
     """Eq 13: P(t) = P0 t^2 (3 / t0^2 - 2 t / t0^3) for 0 < t < t0, then P0 (and 0 before 0)."""
     t = np.clip(np.asarray(t_s, float), 0.0, t0_s)
-    return p0_pa * t * t * (3.0 / t0_s ** 2 - 2.0 * t / t0_s ** 3)
+    return p0_pa * t * t * (3.0 / t0_s**2 - 2.0 * t / t0_s**3)
 
 
 @dataclass(frozen=True)
@@ -76,9 +77,11 @@ class RigidBody:
     inertia_phi_kg_m2: float  # about the tail axis
     inertia_theta_kg_m2: float  # about an axis normal to the bending plane
     arc_length_m: float  # L of Eq 7-9 (one joint: H_a; a segment: its whole bending length)
-    tip_mass_kg: float = 0.0  # m_p, a point mass at the arc's end: TIP_OVER_COM times the body's p_com
+    tip_mass_kg: float = (
+        0.0  # m_p, a point mass at the arc's end: TIP_OVER_COM times the body's p_com
+    )
 
-    def with_tip_mass(self, mass_kg: float) -> "RigidBody":
+    def with_tip_mass(self, mass_kg: float) -> RigidBody:
         """This body with a point mass ``mass_kg`` added at the end of its arc (a tip payload)."""
         if mass_kg < 0:
             raise ValueError(f"tip payload mass_kg = {mass_kg}: allowed >= 0")
@@ -95,26 +98,27 @@ class RigidBody:
     def translational_mass_kg(self) -> float:
         """The mass that multiplies |p_com'|^2 / 2 in the kinetic energy: the tip moves at
         TIP_OVER_COM times the centre of mass's velocity."""
-        return self.mass_kg + TIP_OVER_COM ** 2 * self.tip_mass_kg
+        return self.mass_kg + TIP_OVER_COM**2 * self.tip_mass_kg
 
     @property
     def gravity_mass_kg(self) -> float:
-        """The mass that multiplies -g . p_com in the potential (the tip is at TIP_OVER_COM p_com)."""
+        """The mass that multiplies -g . p_com in the potential (the tip is at TIP_OVER_COM
+        p_com)."""
         return self.mass_kg + TIP_OVER_COM * self.tip_mass_kg
 
 
 def _chord_factor(theta: float) -> float:
     """sin(theta/2) / theta, with its series near 0 (d = L * this)."""
     if abs(theta) < 1e-4:
-        return 0.5 - theta ** 2 / 48.0
+        return 0.5 - theta**2 / 48.0
     return math.sin(theta / 2.0) / theta
 
 
 def _m_theta_factor(theta: float) -> float:
     """(theta^2 - 2 theta sin theta - 2 cos theta + 2) / (4 theta^4), with its series near 0."""
     if abs(theta) < 2e-2:
-        return 1.0 / 16.0 - theta ** 2 / 288.0
-    return (theta ** 2 - 2 * theta * math.sin(theta) - 2 * math.cos(theta) + 2) / (4 * theta ** 4)
+        return 1.0 / 16.0 - theta**2 / 288.0
+    return (theta**2 - 2 * theta * math.sin(theta) - 2 * math.cos(theta) + 2) / (4 * theta**4)
 
 
 def _mass_diagonal(body: RigidBody, theta: float) -> tuple[float, float]:
@@ -122,7 +126,7 @@ def _mass_diagonal(body: RigidBody, theta: float) -> tuple[float, float]:
     thousands of times a run: no array per call)."""
     L, m = body.arc_length_m, body.translational_mass_kg
     m_phi = body.inertia_phi_kg_m2 + m * (L * _chord_factor(theta)) ** 2
-    m_theta = body.inertia_theta_kg_m2 / 4.0 + m * L ** 2 * _m_theta_factor(theta)
+    m_theta = body.inertia_theta_kg_m2 / 4.0 + m * L**2 * _m_theta_factor(theta)
     return m_phi, m_theta
 
 
@@ -131,8 +135,13 @@ def mass_matrix(body: RigidBody, theta: float) -> np.ndarray:
     return np.diag(_mass_diagonal(body, theta))
 
 
-def _mass_diagonal_derivative(body: RigidBody, theta: float, h: float = 1e-6) -> tuple[float, float]:
-    (a_phi, a_theta), (b_phi, b_theta) = _mass_diagonal(body, theta + h), _mass_diagonal(body, theta - h)
+def _mass_diagonal_derivative(
+    body: RigidBody, theta: float, h: float = 1e-6
+) -> tuple[float, float]:
+    (a_phi, a_theta), (b_phi, b_theta) = (
+        _mass_diagonal(body, theta + h),
+        _mass_diagonal(body, theta - h),
+    )
     return (a_phi - b_phi) / (2 * h), (a_theta - b_theta) / (2 * h)
 
 
@@ -141,9 +150,11 @@ def mass_matrix_derivative(body: RigidBody, theta: float, h: float = 1e-6) -> np
     return np.diag(_mass_diagonal_derivative(body, theta, h))
 
 
-def _coriolis_terms(body: RigidBody, theta: float, phi_dot: float, theta_dot: float) -> tuple[float, float]:
+def _coriolis_terms(
+    body: RigidBody, theta: float, phi_dot: float, theta_dot: float
+) -> tuple[float, float]:
     dm_phi, dm_theta = _mass_diagonal_derivative(body, theta)
-    return dm_phi * phi_dot * theta_dot, 0.5 * dm_theta * theta_dot ** 2 - 0.5 * dm_phi * phi_dot ** 2
+    return dm_phi * phi_dot * theta_dot, 0.5 * dm_theta * theta_dot**2 - 0.5 * dm_phi * phi_dot**2
 
 
 def coriolis(body: RigidBody, theta: float, phi_dot: float, theta_dot: float) -> np.ndarray:
@@ -153,17 +164,19 @@ def coriolis(body: RigidBody, theta: float, phi_dot: float, theta_dot: float) ->
 
 
 def paper_coriolis(body: RigidBody, theta: float, phi_dot: float, theta_dot: float) -> np.ndarray:
-    """Eq 8 exactly as printed (the I_theta term of M has no theta-dependence, so it drops out), with
-    m the mass of Eq 7's translational terms (a tip payload enters them as TIP_OVER_COM^2 m_p)."""
+    """Eq 8 exactly as printed (the I_theta term of M has no theta-dependence, so it drops out),
+    with m the mass of Eq 7's translational terms (a tip payload enters them as TIP_OVER_COM^2
+    m_p)."""
     L, m = body.arc_length_m, body.translational_mass_kg
     s2, c2 = math.sin(theta / 2), math.cos(theta / 2)
-    a = m * L ** 2 / theta ** 3 * (theta / 2 * math.sin(theta) - 2 * s2 ** 2)
-    b = m * L ** 2 / theta ** 5 * (theta * math.sin(theta) - 2 * s2 ** 2 - theta ** 2 / 2 * c2 ** 2)
-    return np.array([a * phi_dot * theta_dot, b * theta_dot ** 2 - a / 2 * phi_dot ** 2])
+    a = m * L**2 / theta**3 * (theta / 2 * math.sin(theta) - 2 * s2**2)
+    b = m * L**2 / theta**5 * (theta * math.sin(theta) - 2 * s2**2 - theta**2 / 2 * c2**2)
+    return np.array([a * phi_dot * theta_dot, b * theta_dot**2 - a / 2 * phi_dot**2])
 
 
 def com_position_m(body: RigidBody, phi: float, theta: float) -> np.ndarray:
-    """The body's centre of mass in the base frame: on the chord, d from the base (Eq 6's premise)."""
+    """The body's centre of mass in the base frame: on the chord, d from the base (Eq 6's
+    premise)."""
     return np.array(_com_position(body, phi, theta))
 
 
@@ -178,13 +191,17 @@ def tip_position_m(body: RigidBody, phi: float, theta: float) -> np.ndarray:
     return TIP_OVER_COM * com_position_m(body, phi, theta)
 
 
-def gravity_force(body: RigidBody, phi: float, theta: float, gravity_m_s2: np.ndarray) -> np.ndarray:
-    """G(q) = dU/dq with U = -m g . p_com - m_p g . p_tip (central differences of the exact potential)."""
+def gravity_force(
+    body: RigidBody, phi: float, theta: float, gravity_m_s2: np.ndarray
+) -> np.ndarray:
+    """G(q) = dU/dq with U = -m g . p_com - m_p g . p_tip (central differences of the exact
+    potential)."""
     return np.array(_gravity_terms(body, phi, theta, tuple(float(g) for g in gravity_m_s2)))
 
 
-def _gravity_terms(body: RigidBody, phi: float, theta: float, gravity_m_s2: tuple[float, float, float]
-                   ) -> tuple[float, float]:
+def _gravity_terms(
+    body: RigidBody, phi: float, theta: float, gravity_m_s2: tuple[float, float, float]
+) -> tuple[float, float]:
     """:func:`gravity_force` as floats."""
     gx, gy, gz = gravity_m_s2
     if gx == gy == gz == 0.0:
@@ -196,13 +213,16 @@ def _gravity_terms(body: RigidBody, phi: float, theta: float, gravity_m_s2: tupl
         return -m * (gx * x + gy * y + gz * z)
 
     h = 1e-7
-    return ((potential(phi + h, theta) - potential(phi - h, theta)) / (2 * h),
-            (potential(phi, theta + h) - potential(phi, theta - h)) / (2 * h))
+    return (
+        (potential(phi + h, theta) - potential(phi - h, theta)) / (2 * h),
+        (potential(phi, theta + h) - potential(phi, theta - h)) / (2 * h),
+    )
 
 
 @dataclass(frozen=True)
 class JointModel:
-    """Eq 6-12 for n identical-in-motion joints (n = 1: one joint; n = joints per segment: a segment).
+    """Eq 6-12 for n identical-in-motion joints (n = 1: one joint; n = joints per segment: a
+    segment).
 
     ``joints`` are the socket geometries of the joints that bend together
     (mm, from :func:`bvsr_cad.models.kinematics.joint_geometries`); ``rod``
@@ -221,24 +241,42 @@ class JointModel:
 
     def __post_init__(self) -> None:
         # Stacked socket centres (n, 5, 3) in m and the rest lengths: evaluated once, not per step.
-        object.__setattr__(self, "_base_m", units.mm_to_m(np.stack([g.base_mm for g in self.joints])))
-        object.__setattr__(self, "_moving_m", units.mm_to_m(np.stack([g.moving_mm for g in self.joints])))
-        object.__setattr__(self, "_rest_m", units.mm_to_m(np.stack([g.rest_lengths_mm for g in self.joints])))
+        object.__setattr__(
+            self, "_base_m", units.mm_to_m(np.stack([g.base_mm for g in self.joints]))
+        )
+        object.__setattr__(
+            self, "_moving_m", units.mm_to_m(np.stack([g.moving_mm for g in self.joints]))
+        )
+        object.__setattr__(
+            self, "_rest_m", units.mm_to_m(np.stack([g.rest_lengths_mm for g in self.joints]))
+        )
         lengths = {g.length_mm for g in self.joints}
         if len(lengths) != 1:
-            raise ValueError(f"joints that bend together need one arc length; got {sorted(lengths)} mm")
+            raise ValueError(
+                f"joints that bend together need one arc length; got {sorted(lengths)} mm"
+            )
         object.__setattr__(self, "_arc_m", units.mm_to_m(lengths.pop()))
         object.__setattr__(self, "_gravity", tuple(float(g) for g in self.gravity_m_s2))
 
     def soa_terms(self, phi: float, theta: float) -> tuple[np.ndarray, np.ndarray]:
-        """Per joint: stretch dl (n, 5) in m and dl/dq (n, 5, 2) in m/rad, q = (phi, theta) (Eq 1)."""
+        """Per joint: stretch dl (n, 5) in m and dl/dq (n, 5, 2) in m/rad, q = (phi, theta) (Eq
+        1)."""
         u, v = theta * math.cos(phi), theta * math.sin(phi)
-        length, jac_uv = socket_lengths_and_jacobian(self._base_m, self._moving_m, u, v, self._arc_m)
+        length, jac_uv = socket_lengths_and_jacobian(
+            self._base_m, self._moving_m, u, v, self._arc_m
+        )
         duv = np.array([[-v, math.cos(phi)], [u, math.sin(phi)]])  # d(u, v)/d(phi, theta)
         return length - self._rest_m, jac_uv @ duv
 
-    def generalized_forces(self, phi: float, theta: float, phi_dot: float, theta_dot: float,
-                           soa_pa: np.ndarray, terms: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+    def generalized_forces(
+        self,
+        phi: float,
+        theta: float,
+        phi_dot: float,
+        theta_dot: float,
+        soa_pa: np.ndarray,
+        terms: tuple[np.ndarray, np.ndarray] | None = None,
+    ) -> np.ndarray:
         """K(q) - D q' (Eq 10-12) summed over the joints, for gauge pressures (5,) or (n, 5), Pa.
 
         The joints share q, so their generalised forces add; expressed per joint
@@ -252,8 +290,15 @@ class JointModel:
         q[1] -= self.n * self.rod_nm_per_rad * theta
         return q
 
-    def rhs(self, phi: float, theta: float, phi_dot: float, theta_dot: float, soa_pa: np.ndarray,
-            terms: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+    def rhs(
+        self,
+        phi: float,
+        theta: float,
+        phi_dot: float,
+        theta_dot: float,
+        soa_pa: np.ndarray,
+        terms: tuple[np.ndarray, np.ndarray] | None = None,
+    ) -> np.ndarray:
         """(phi'', theta'') of one joint coordinate.
 
         The body is described on the segment's coordinate Theta = n theta, so its
@@ -265,7 +310,9 @@ class JointModel:
         m_phi, m_theta = _mass_diagonal(self.body, big)
         cor_phi, cor_theta = _coriolis_terms(self.body, big, phi_dot, n * theta_dot)
         grav_phi, grav_theta = _gravity_terms(self.body, phi, big, self._gravity)
-        q_phi, q_theta = self.generalized_forces(phi, theta, phi_dot, theta_dot, soa_pa, terms).tolist()
+        q_phi, q_theta = self.generalized_forces(
+            phi, theta, phi_dot, theta_dot, soa_pa, terms
+        ).tolist()
         theta_acc = (q_theta - cor_theta * n - grav_theta * n) / (m_theta * n * n)
         if abs(theta) < 1e-9:  # phi is undefined at the straight pose: hold it
             return np.array([0.0, theta_acc])
@@ -294,14 +341,16 @@ class Trajectory:
         return np.degrees(self.n_joints * self.theta_rate_rad_s)
 
     def peak_velocity_deg_s(self, window_deg: float = VELOCITY_WINDOW_DEG) -> float:
-        """Largest bending rate while the angle has not yet passed ``window_deg`` (the paper's measure)."""
+        """Largest bending rate while the angle has not yet passed ``window_deg`` (the paper's
+        measure)."""
         angle = np.abs(self.bend_angle_deg)
         passed = np.nonzero(angle > window_deg)[0]
         end = passed[0] if passed.size else angle.size
         return float(np.max(np.abs(self.bend_rate_deg_s[: max(end, 1)])))
 
     def time_to_deg_s(self, angle_deg: float = VELOCITY_WINDOW_DEG) -> float:
-        """First time the bend angle reaches ``angle_deg`` (nan if never): the paper's motion time T."""
+        """First time the bend angle reaches ``angle_deg`` (nan if never): the paper's motion time
+        T."""
         idx = np.nonzero(np.abs(self.bend_angle_deg) >= angle_deg)[0]
         if not idx.size:
             return float("nan")
@@ -309,15 +358,24 @@ class Trajectory:
         if i == 0:
             return float(self.time_s[0])
         a0, a1 = np.abs(self.bend_angle_deg[i - 1]), np.abs(self.bend_angle_deg[i])
-        return float(self.time_s[i - 1] + (angle_deg - a0) / (a1 - a0) * (self.time_s[i] - self.time_s[i - 1]))
+        return float(
+            self.time_s[i - 1]
+            + (angle_deg - a0) / (a1 - a0) * (self.time_s[i] - self.time_s[i - 1])
+        )
 
 
 PressureInput = Callable[[float], np.ndarray]  # t (s) -> gauge Pa of the five SOAs
 
 
-def simulate_joint(model: JointModel, pressure: PressureInput | None = None, seconds: float = 0.3,
-                   phi0_rad: float = 0.0, supply=None, sample_s: float = 2.5e-4,
-                   stop_angle_deg: float | None = None) -> Trajectory:
+def simulate_joint(
+    model: JointModel,
+    pressure: PressureInput | None = None,
+    seconds: float = 0.3,
+    phi0_rad: float = 0.0,
+    supply=None,
+    sample_s: float = 2.5e-4,
+    stop_angle_deg: float | None = None,
+) -> Trajectory:
     """Integrate Eq 6 from rest with scipy (LSODA, rtol 1e-6; absolute tolerances per state's unit).
 
     Exactly one of ``pressure`` (a function of time: the Eq 13 ramp or any
@@ -331,7 +389,9 @@ def simulate_joint(model: JointModel, pressure: PressureInput | None = None, sec
         raise ValueError("give exactly one of pressure and supply")
     n_p = 0 if supply is None else supply.n_states
     # Start straight with the bending plane phi0 (held while theta = 0, see JointModel.rhs).
-    y0 = np.concatenate([[phi0_rad, 0.0, 0.0, 0.0], [] if supply is None else supply.initial_state()])
+    y0 = np.concatenate(
+        [[phi0_rad, 0.0, 0.0, 0.0], [] if supply is None else supply.initial_state()]
+    )
 
     def soa_pressures(t: float, y: np.ndarray) -> np.ndarray:
         if supply is None:
@@ -352,14 +412,25 @@ def simulate_joint(model: JointModel, pressure: PressureInput | None = None, sec
 
     events = None
     if stop_angle_deg is not None:
+
         def passed(t, y):
             return abs(model.n * y[1]) - math.radians(stop_angle_deg + 5.0)
+
         passed.terminal = True
         events = [passed]
     t_eval = np.arange(0.0, seconds + 0.5 * sample_s, sample_s)
     scale = np.concatenate([[1e-6, 1e-6, 1e-3, 1e-3], np.full(n_p, 1.0)])  # rad, rad/s, Pa
-    sol = solve_ivp(f, (0.0, seconds), y0, method="LSODA", t_eval=t_eval, rtol=1e-6, atol=scale,
-                    max_step=2e-3, events=events)
+    sol = solve_ivp(
+        f,
+        (0.0, seconds),
+        y0,
+        method="LSODA",
+        t_eval=t_eval,
+        rtol=1e-6,
+        atol=scale,
+        max_step=2e-3,
+        events=events,
+    )
     if sol.status < 0:
         raise RuntimeError(f"Eq 6 integration failed: {sol.message}")
     y = sol.y
@@ -367,6 +438,19 @@ def simulate_joint(model: JointModel, pressure: PressureInput | None = None, sec
     return Trajectory(sol.t, y[0], y[1], y[2], y[3], model.n, p)
 
 
-__all__ = ["RigidBody", "JointModel", "Trajectory", "simulate_joint", "ramp_pa", "mass_matrix", "coriolis",
-           "paper_coriolis", "gravity_force", "com_position_m", "tip_position_m", "TIP_OVER_COM", "G_M_S2",
-           "VELOCITY_WINDOW_DEG"]
+__all__ = [
+    "RigidBody",
+    "JointModel",
+    "Trajectory",
+    "simulate_joint",
+    "ramp_pa",
+    "mass_matrix",
+    "coriolis",
+    "paper_coriolis",
+    "gravity_force",
+    "com_position_m",
+    "tip_position_m",
+    "TIP_OVER_COM",
+    "G_M_S2",
+    "VELOCITY_WINDOW_DEG",
+]

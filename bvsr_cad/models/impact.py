@@ -45,14 +45,16 @@ class Ball:
         return 2.0 * math.pi * self.radius_m * self.gauge_pressure_pa
 
     def damping_n_s_per_m(self, mass_kg: float | None = None) -> float:
-        """c = 2 zeta sqrt(k m) of the damped spring whose bounce returns ``restitution`` of the speed."""
+        """c = 2 zeta sqrt(k m) of the damped spring whose bounce returns ``restitution`` of the
+        speed."""
         ln_e = math.log(self.restitution)
-        zeta = -ln_e / math.sqrt(math.pi ** 2 + ln_e ** 2)
+        zeta = -ln_e / math.sqrt(math.pi**2 + ln_e**2)
         return 2.0 * zeta * math.sqrt(self.stiffness_n_per_m * (mass_kg or self.mass_kg))
 
     @property
     def contact_time_s(self) -> float:
-        """Half period of the ball's mass on its own stiffness: how long a bounce on a wall lasts."""
+        """Half period of the ball's mass on its own stiffness: how long a bounce on a wall
+        lasts."""
         return math.pi * math.sqrt(self.mass_kg / self.stiffness_n_per_m)
 
 

@@ -29,16 +29,24 @@ from ..parameters.tables import TailSpec
 SERIES_BELOW_RAD = 1e-2
 
 
-def _series_coefficients(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _series_coefficients(
+    theta: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """S = sin t / t, C = (1 - cos t) / t^2, S1 = S'(t) / t, C1 = C'(t) / t."""
     t = np.asarray(theta, float)
     if t.size == 1:
         one = _series_coefficients_one(float(t.reshape(())))
-        return tuple(np.array(x) for x in one) if t.ndim == 0 else tuple(np.full(t.shape, x) for x in one)
+        return (
+            tuple(np.array(x) for x in one)
+            if t.ndim == 0
+            else tuple(np.full(t.shape, x) for x in one)
+        )
     return _series_coefficients_array(t)
 
 
-def _series_coefficients_array(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _series_coefficients_array(
+    t: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`_series_coefficients` of an array of angles."""
     t2 = t * t
     small = t < SERIES_BELOW_RAD
@@ -52,18 +60,28 @@ def _series_coefficients_array(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, n
 
 
 def _series_coefficients_one(t: float) -> tuple[float, float, float, float]:
-    """:func:`_series_coefficients` of one angle, the bits :func:`_series_coefficients_array` gives for an
-    array of one: the same operations in the same order on Python floats, with numpy's sin, cos and
-    power (the loops an array of one runs through) and ``t * t`` where numpy squares (tests/test_kinematics.py
-    compares the two bit for bit). A joint's dynamics and statics ask for one angle at a time (about
-    21,000 calls in a default build's analyses): the array path's 25 numpy calls took 32 us a call."""
+    """:func:`_series_coefficients` of one angle, the bits :func:`_series_coefficients_array` gives
+    for an array of one: the same operations in the same order on Python floats, with numpy's sin,
+    cos and power (the loops an array of one runs through) and ``t * t`` where numpy squares
+    (tests/test_kinematics.py compares the two bit for bit). A joint's dynamics and statics ask for
+    one angle at a time (about 21,000 calls in a default build's analyses): the array path's 25
+    numpy calls took 32 us a call."""
     t2 = t * t
     if t < SERIES_BELOW_RAD:
         t6 = float(np.power(t2, 3.0))
-        return (1 - t2 / 6 + t2 * t2 / 120 - t6 / 5040, 0.5 - t2 / 24 + t2 * t2 / 720 - t6 / 40320,
-                -1 / 3 + t2 / 30 - t2 * t2 / 840, -1 / 12 + t2 / 180 - t2 * t2 / 6720)
+        return (
+            1 - t2 / 6 + t2 * t2 / 120 - t6 / 5040,
+            0.5 - t2 / 24 + t2 * t2 / 720 - t6 / 40320,
+            -1 / 3 + t2 / 30 - t2 * t2 / 840,
+            -1 / 12 + t2 / 180 - t2 * t2 / 6720,
+        )
     s, c = float(np.sin(t)), float(np.cos(t))
-    return s / t, (1 - c) / t2, (t * c - s) / float(np.power(t, 3.0)), (t * s - 2 * (1 - c)) / float(np.power(t, 4.0))
+    return (
+        s / t,
+        (1 - c) / t2,
+        (t * c - s) / float(np.power(t, 3.0)),
+        (t * s - 2 * (1 - c)) / float(np.power(t, 4.0)),
+    )
 
 
 def _hat(x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
@@ -98,7 +116,7 @@ class _Twist:
     om2: np.ndarray  # Omega @ Omega
 
     @classmethod
-    def at(cls, u: np.ndarray, v: np.ndarray) -> "_Twist":
+    def at(cls, u: np.ndarray, v: np.ndarray) -> _Twist:
         u, v = np.broadcast_arrays(np.asarray(u, float), np.asarray(v, float))
         S, C, S1, C1 = _series_coefficients(np.hypot(u, v))
         om = _bending_hat(u, v)
@@ -110,13 +128,34 @@ class _Twist:
         trans = length_mm * np.stack([self.u * C, self.v * C, S], -1)
         return rot, trans
 
-    def derivatives(self, length_mm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        u, v, S, C, S1, C1, om, om2 = self.u, self.v, self.S, self.C, self.S1, self.C1, self.om, self.om2
+    def derivatives(
+        self, length_mm: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        u, v, S, C, S1, C1, om, om2 = (
+            self.u,
+            self.v,
+            self.S,
+            self.C,
+            self.S1,
+            self.C1,
+            self.om,
+            self.om2,
+        )
         e = (..., None, None)
         # d(Omega)/du = hat(0, 1, 0), d(Omega)/dv = hat(-1, 0, 0).
         d_om_u, d_om_v = _EY, -_EX
-        dR_u = (S1 * u)[e] * om + S[e] * d_om_u + (C1 * u)[e] * om2 + C[e] * (d_om_u @ om + om @ d_om_u)
-        dR_v = (S1 * v)[e] * om + S[e] * d_om_v + (C1 * v)[e] * om2 + C[e] * (d_om_v @ om + om @ d_om_v)
+        dR_u = (
+            (S1 * u)[e] * om
+            + S[e] * d_om_u
+            + (C1 * u)[e] * om2
+            + C[e] * (d_om_u @ om + om @ d_om_u)
+        )
+        dR_v = (
+            (S1 * v)[e] * om
+            + S[e] * d_om_v
+            + (C1 * v)[e] * om2
+            + C[e] * (d_om_v @ om + om @ d_om_v)
+        )
         dp_u = length_mm * np.stack([C + u * u * C1, u * v * C1, u * S1], -1)
         dp_v = length_mm * np.stack([u * v * C1, C + v * v * C1, v * S1], -1)
         return dR_u, dR_v, dp_u, dp_v
@@ -126,8 +165,9 @@ _EX = _hat(np.array(1.0), np.array(0.0), np.array(0.0))
 _EY = _hat(np.array(0.0), np.array(1.0), np.array(0.0))
 
 
-def joint_rotation_translation(u: np.ndarray, v: np.ndarray, length_mm: float
-                               ) -> tuple[np.ndarray, np.ndarray]:
+def joint_rotation_translation(
+    u: np.ndarray, v: np.ndarray, length_mm: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Rotation (..., 3, 3) and translation (..., 3) of Eq 2 at bending vector (u, v)."""
     return _Twist.at(u, v).rotation_translation(length_mm)
 
@@ -148,14 +188,16 @@ def joint_transform(theta_rad: np.ndarray, phi_rad: np.ndarray, length_mm: float
     return joint_transform_uv(theta_rad * np.cos(phi_rad), theta_rad * np.sin(phi_rad), length_mm)
 
 
-def joint_transform_derivatives(u: np.ndarray, v: np.ndarray, length_mm: float
-                                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def joint_transform_derivatives(
+    u: np.ndarray, v: np.ndarray, length_mm: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """dR/du, dR/dv (..., 3, 3) and dp/du, dp/dv (..., 3), analytic."""
     return _Twist.at(u, v).derivatives(length_mm)
 
 
-def joint_transform_and_derivatives(u: np.ndarray, v: np.ndarray, length_mm: float
-                                    ) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, ...]]:
+def joint_transform_and_derivatives(
+    u: np.ndarray, v: np.ndarray, length_mm: float
+) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, ...]]:
     """(:func:`joint_rotation_translation`, :func:`joint_transform_derivatives`) at once: the series
     coefficients and Omega computed once (the same numbers as the two calls)."""
     twist = _Twist.at(u, v)
@@ -179,14 +221,17 @@ def _ry(a: np.ndarray) -> np.ndarray:
 
 
 def chord_length_mm(theta_rad: np.ndarray, length_mm: float) -> np.ndarray:
-    """c = 2 L sin(theta/2) / theta, the arc's chord (L at theta = 0; even in theta, any length unit).
+    """c = 2 L sin(theta/2) / theta, the arc's chord (L at theta = 0; even in theta, any length
+    unit).
 
     The one home of the chord: the kinematics, the robot model and its MJCF chord fit call it."""
     S, _, _, _ = _series_coefficients(np.abs(np.asarray(theta_rad, float)) / 2)
     return length_mm * S
 
 
-def joint_transform_chain(theta_rad: np.ndarray, phi_rad: np.ndarray, length_mm: float) -> np.ndarray:
+def joint_transform_chain(
+    theta_rad: np.ndarray, phi_rad: np.ndarray, length_mm: float
+) -> np.ndarray:
     """Rz(phi) Ry(theta/2) Tz(c) Ry(theta/2) Rz(-phi): the URDF realisation of Eq 2."""
     theta_rad = np.asarray(theta_rad, float)
     phi_rad = np.broadcast_to(np.asarray(phi_rad, float), theta_rad.shape)
@@ -216,7 +261,8 @@ class JointGeometry:
 
 
 def joint_geometries(spec: TailSpec) -> tuple[JointGeometry, ...]:
-    """Socket centres of every joint from the panel layout (pitch radii of the cone, pocket depth)."""
+    """Socket centres of every joint from the panel layout (pitch radii of the cone, pocket
+    depth)."""
     beta = half_angle_rad(spec)
     lays = [panel_layout(spec, k, beta) for k in range(spec.panels)]
     a = np.radians(soa_angles_deg())
@@ -237,16 +283,19 @@ def soa_lengths_mm(geom: JointGeometry, u: np.ndarray, v: np.ndarray) -> np.ndar
     return np.linalg.norm(d, axis=-1)
 
 
-def socket_lengths_and_jacobian(base: np.ndarray, moving: np.ndarray, u: np.ndarray, v: np.ndarray,
-                                length: float) -> tuple[np.ndarray, np.ndarray]:
+def socket_lengths_and_jacobian(
+    base: np.ndarray, moving: np.ndarray, u: np.ndarray, v: np.ndarray, length: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Eq 1 and its derivative for socket centres ``base``/``moving`` (..., 5, 3), broadcast against
     the bending vectors (u, v) (...,): (l (..., 5), dl/dw (..., 5, 2)), in the sockets' length unit.
 
     One bending vector (0-d ``u`` and ``v``: a joint's dynamics and statics, about 10,000 calls in a
-    default build's analyses) takes :func:`_one_twist_sockets`: the same quantities from Eq 2's entries
-    in closed form, to rounding (tests/test_kinematics.py compares the two)."""
+    default build's analyses) takes :func:`_one_twist_sockets`: the same quantities from Eq 2's
+    entries in closed form, to rounding (tests/test_kinematics.py compares the two)."""
     if np.ndim(u) == 0 and np.ndim(v) == 0:
-        return _one_twist_sockets(np.asarray(base, float), np.asarray(moving, float), float(u), float(v), length)
+        return _one_twist_sockets(
+            np.asarray(base, float), np.asarray(moving, float), float(u), float(v), length
+        )
     (rot, trans), (dR_u, dR_v, dp_u, dp_v) = joint_transform_and_derivatives(u, v, length)
     d = np.einsum("...ij,...sj->...si", rot, moving) + trans[..., None, :] - base
     lengths = np.linalg.norm(d, axis=-1)
@@ -257,36 +306,47 @@ def socket_lengths_and_jacobian(base: np.ndarray, moving: np.ndarray, u: np.ndar
     return lengths, jac
 
 
-def _one_twist_sockets(base: np.ndarray, moving: np.ndarray, u: float, v: float, length: float
-                       ) -> tuple[np.ndarray, np.ndarray]:
+def _one_twist_sockets(
+    base: np.ndarray, moving: np.ndarray, u: float, v: float, length: float
+) -> tuple[np.ndarray, np.ndarray]:
     """:func:`socket_lengths_and_jacobian` at one bending vector (u, v): R, dR/du, dR/dv written out
-    entry by entry (Omega = hat(-v, u, 0), Omega^2 = -[[uu, uv, 0], [uv, vv, 0], [0, 0, uu + vv]] and
-    their derivatives, see :class:`_Twist`) as the rows of one (9, 3) matrix, and p, dp/du, dp/dv as
-    its offsets, so that every socket's d = R m + p - b and dd/du, dd/dv come from one product: about
-    eight times faster than the twist's 3 x 3 products and three einsums on 15 sockets."""
+    entry by entry (Omega = hat(-v, u, 0), Omega^2 = -[[uu, uv, 0], [uv, vv, 0], [0, 0, uu + vv]]
+    and their derivatives, see :class:`_Twist`) as the rows of one (9, 3) matrix, and p, dp/du,
+    dp/dv as its offsets, so that every socket's d = R m + p - b and dd/du, dd/dv come from one
+    product: about eight times faster than the twist's 3 x 3 products and three einsums on 15
+    sockets."""
     S, C, S1, C1 = _series_coefficients_one(math.hypot(u, v))
     uu, uv, vv, ww = u * u, u * v, v * v, u * u + v * v
     su, sv, cu, cv = S1 * u, S1 * v, C1 * u, C1 * v  # dS/du, dS/dv, dC/du, dC/dv
-    rows = np.array([
-        [1.0 - C * uu, -C * uv, S * u],  # R
-        [-C * uv, 1.0 - C * vv, S * v],
-        [-S * u, -S * v, 1.0 - C * ww],
-        [-cu * uu - 2.0 * C * u, -cu * uv - C * v, su * u + S],  # dR/du
-        [-cu * uv - C * v, -cu * vv, su * v],
-        [-su * u - S, -su * v, -cu * ww - 2.0 * C * u],
-        [-cv * uu, -cv * uv - C * u, sv * u],  # dR/dv
-        [-cv * uv - C * u, -cv * vv - 2.0 * C * v, sv * v + S],
-        [-sv * u, -sv * v - S, -cv * ww - 2.0 * C * v]])
-    offsets = length * np.array([u * C, v * C, S, C + uu * C1, uv * C1, u * S1, uv * C1, C + vv * C1, v * S1])
+    rows = np.array(
+        [
+            [1.0 - C * uu, -C * uv, S * u],  # R
+            [-C * uv, 1.0 - C * vv, S * v],
+            [-S * u, -S * v, 1.0 - C * ww],
+            [-cu * uu - 2.0 * C * u, -cu * uv - C * v, su * u + S],  # dR/du
+            [-cu * uv - C * v, -cu * vv, su * v],
+            [-su * u - S, -su * v, -cu * ww - 2.0 * C * u],
+            [-cv * uu, -cv * uv - C * u, sv * u],  # dR/dv
+            [-cv * uv - C * u, -cv * vv - 2.0 * C * v, sv * v + S],
+            [-sv * u, -sv * v - S, -cv * ww - 2.0 * C * v],
+        ]
+    )
+    offsets = length * np.array(
+        [u * C, v * C, S, C + uu * C1, uv * C1, u * S1, uv * C1, C + vv * C1, v * S1]
+    )
     dd = moving @ rows.T + offsets  # (..., 5, 9): d + b, dd/du, dd/dv
     d = dd[..., :3] - base
     lengths = np.sqrt(np.einsum("...i,...i->...", d, d))
-    jac = np.einsum("...i,...ki->...k", d, dd[..., 3:].reshape(dd.shape[:-1] + (2, 3))) / lengths[..., None]
+    jac = (
+        np.einsum("...i,...ki->...k", d, dd[..., 3:].reshape(dd.shape[:-1] + (2, 3)))
+        / lengths[..., None]
+    )
     return lengths, jac
 
 
-def soa_lengths_and_jacobian(geom: JointGeometry, u: np.ndarray, v: np.ndarray
-                             ) -> tuple[np.ndarray, np.ndarray]:
+def soa_lengths_and_jacobian(
+    geom: JointGeometry, u: np.ndarray, v: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """(l (..., 5), dl/dw (..., 5, 2)) with w = (u, v)."""
     return socket_lengths_and_jacobian(geom.base_mm, geom.moving_mm, u, v, geom.length_mm)
 
@@ -312,7 +372,7 @@ class TailKinematics:
     joints_per_segment: int
 
     @classmethod
-    def from_spec(cls, spec: TailSpec) -> "TailKinematics":
+    def from_spec(cls, spec: TailSpec) -> TailKinematics:
         return cls(joint_geometries(spec), spec.joint.panel_thickness_mm, spec.joints_per_segment)
 
     @property
@@ -354,8 +414,9 @@ class TailKinematics:
         panel[..., 0, :, :] = np.eye(4)
         for k, g in enumerate(self.joints):
             base[..., k, :, :] = panel[..., k, :, :] @ tz
-            panel[..., k + 1, :, :] = base[..., k, :, :] @ joint_transform_uv(w[..., k, 0], w[..., k, 1],
-                                                                             g.length_mm)
+            panel[..., k + 1, :, :] = base[..., k, :, :] @ joint_transform_uv(
+                w[..., k, 0], w[..., k, 1], g.length_mm
+            )
         return base, panel
 
     def tip_point_mm(self, w: np.ndarray) -> np.ndarray:
@@ -380,19 +441,23 @@ PRB_PIVOT_FRACTION = 1.0 / 6.0
 
 
 def prb_angles(theta_rad: np.ndarray, phi_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Hinge angles (about X, then about Y) of each universal joint of the reduced joint at (theta, phi).
+    """Hinge angles (about X, then about Y) of each universal joint of the reduced joint at (theta,
+    phi).
 
     The first pivot turns Rx(a) Ry(b), the second Ry(b) Rx(a); their product Rx(a) Ry(2b) Rx(a)
     has no twist and equals Eq 2's rotation exactly when sin b = sin(theta/2) cos phi and
     tan a = -sin(theta/2) sin phi / cos(theta/2)."""
     half = np.asarray(theta_rad, float) / 2
-    return (np.arctan2(-np.sin(half) * np.sin(phi_rad), np.cos(half)),
-            np.arcsin(np.sin(half) * np.cos(phi_rad)))
+    return (
+        np.arctan2(-np.sin(half) * np.sin(phi_rad), np.cos(half)),
+        np.arcsin(np.sin(half) * np.cos(phi_rad)),
+    )
 
 
 def prb_bend_angle(a_rad: np.ndarray, b_rad: np.ndarray) -> np.ndarray:
-    """The reduced joint's bend theta from a pivot's hinge angles (the inverse of :func:`prb_angles`):
-    cos(theta/2) = cos a cos b (from sin b = sin(theta/2) cos phi, tan a = -tan(theta/2) sin phi)."""
+    """The reduced joint's bend theta from a pivot's hinge angles (the inverse of
+    :func:`prb_angles`): cos(theta/2) = cos a cos b (from sin b = sin(theta/2) cos phi, tan a =
+    -tan(theta/2) sin phi)."""
     return 2.0 * np.arccos(np.clip(np.cos(a_rad) * np.cos(b_rad), -1.0, 1.0))
 
 
@@ -403,11 +468,11 @@ class PrbLimitPolygon:
     The exact limit, cos a cos b >= cos(theta_max / 2) (:func:`prb_bend_angle`), is a convex region
     (log cos a + log cos b is concave), nearly the disc of radius theta_max / 2. Face i bounds
     cos(phi_i) a + sin(phi_i) b <= half_width_rad[i] on both sides, phi_i = 180 i / n deg for the n
-    directions (2 n faces), and touches the region at ``touch_ab[i]`` (the support function, in closed
-    form), so the polygon circumscribes it. Along a face theta is largest at its ends (-log(cos a cos b)
-    is convex), so the largest bend the polygon allows is at a vertex (``vertex_ab``, between faces i
-    and i + 1 of the 2 n): ``overshoot`` = theta / theta_max - 1 there; the smallest is theta_max, where
-    a face touches."""
+    directions (2 n faces), and touches the region at ``touch_ab[i]`` (the support function, in
+    closed form), so the polygon circumscribes it. Along a face theta is largest at its ends
+    (-log(cos a cos b) is convex), so the largest bend the polygon allows is at a vertex
+    (``vertex_ab``, between faces i and i + 1 of the 2 n): ``overshoot`` = theta / theta_max - 1
+    there; the smallest is theta_max, where a face touches."""
 
     theta_max_rad: float
     direction_rad: np.ndarray  # (n,)
@@ -427,14 +492,26 @@ class PrbLimitPolygon:
         big_t = np.tan(theta_max_rad / 2) ** 2
         c2, s2 = np.cos(phi) ** 2, np.sin(phi) ** 2
         w = 1.0 + np.sqrt(1.0 + 4.0 * s2 * c2 * big_t)
-        touch = np.stack([np.sign(np.cos(phi).round(15)) * np.arctan(np.sqrt(2 * c2 * big_t / w)),
-                          np.arctan(np.sqrt(2 * s2 * big_t / w))], axis=1)
+        touch = np.stack(
+            [
+                np.sign(np.cos(phi).round(15)) * np.arctan(np.sqrt(2 * c2 * big_t / w)),
+                np.arctan(np.sqrt(2 * s2 * big_t / w)),
+            ],
+            axis=1,
+        )
         half = np.cos(phi) * touch[:, 0] + np.sin(phi) * touch[:, 1]
         normal = np.concatenate([phi, phi + np.pi])  # faces phi and phi + pi (i.e. -half along phi)
         width = np.concatenate([half, half])
         n1 = np.stack([np.cos(normal), np.sin(normal)], axis=1)
-        vertex = np.array([np.linalg.solve(np.stack([n1[k], n1[(k + 1) % len(normal)]]),
-                                           [width[k], width[(k + 1) % len(normal)]]) for k in range(len(normal))])
+        vertex = np.array(
+            [
+                np.linalg.solve(
+                    np.stack([n1[k], n1[(k + 1) % len(normal)]]),
+                    [width[k], width[(k + 1) % len(normal)]],
+                )
+                for k in range(len(normal))
+            ]
+        )
         worst = float(prb_bend_angle(vertex[:, 0], vertex[:, 1]).max())
         return cls(theta_max_rad, phi, half, touch, vertex, worst / theta_max_rad - 1.0)
 
@@ -458,8 +535,9 @@ def _rx(a: np.ndarray) -> np.ndarray:
     return m
 
 
-def chain_tip_error_mm(joint_fn, lengths_mm, panel_thickness_mm: float, theta_max_rad, poses: int = 2000,
-                       seed: int = 0) -> float:
+def chain_tip_error_mm(
+    joint_fn, lengths_mm, panel_thickness_mm: float, theta_max_rad, poses: int = 2000, seed: int = 0
+) -> float:
     """Largest distance (mm) between the tip of a tail whose joints are ``joint_fn(theta, phi, L)``
     (4x4 end frames, e.g. :func:`joint_transform_prb`) and Eq 2's tip, over the joint range:
     ``poses`` random poses (theta uniform up to each joint's limit, phi uniform) and every joint at
@@ -469,8 +547,12 @@ def chain_tip_error_mm(joint_fn, lengths_mm, panel_thickness_mm: float, theta_ma
     lim = np.asarray(theta_max_rad, float)
     n = len(lim)
     theta = np.concatenate([rng.uniform(0, 1, (poses, n)) * lim, np.tile(lim, (24, 1))])
-    phi = np.concatenate([rng.uniform(-np.pi, np.pi, (poses, n)),
-                          np.repeat(np.linspace(-np.pi, np.pi, 24, endpoint=False)[:, None], n, 1)])
+    phi = np.concatenate(
+        [
+            rng.uniform(-np.pi, np.pi, (poses, n)),
+            np.repeat(np.linspace(-np.pi, np.pi, 24, endpoint=False)[:, None], n, 1),
+        ]
+    )
     tz = np.eye(4)
     tz[2, 3] = panel_thickness_mm
     tips = []

@@ -66,18 +66,23 @@ def front_lift_mm(wheelbase_m: float, pitch_rad: np.ndarray) -> float:
     return float(units.m_to_mm(wheelbase_m * np.sin(max(0.0, float(np.max(pitch_rad))))))
 
 
-def platform_motion(platform: Platform, tail: TailOnPlatform, time_s: np.ndarray, beta_rad: np.ndarray,
-                    gravity: bool = True) -> PlatformMotion:
-    """Integrate Eq 22 for a given tail motion beta(t) (semi-implicit Euler on the trace's own steps,
-    refined 20 times between samples). With ``gravity`` the cart pitches on the ground (alpha >= 0);
-    without it, it turns freely about a vertical hinge."""
+def platform_motion(
+    platform: Platform,
+    tail: TailOnPlatform,
+    time_s: np.ndarray,
+    beta_rad: np.ndarray,
+    gravity: bool = True,
+) -> PlatformMotion:
+    """Integrate Eq 22 for a given tail motion beta(t) (semi-implicit Euler on the trace's own
+    steps, refined 20 times between samples). With ``gravity`` the cart pitches on the ground (alpha
+    >= 0); without it, it turns freely about a vertical hinge."""
     from scipy.interpolate import CubicSpline
 
     t = np.asarray(time_s, float)
     spline = CubicSpline(t, np.asarray(beta_rad, float))
     acc = spline.derivative(2)
-    j_t = tail.inertia_kg_m2 + tail.mass_kg * tail.com_from_hinge_m ** 2
-    j_all = platform.inertia_kg_m2 + platform.mass_kg * platform.com_from_hinge_m ** 2 + j_t
+    j_t = tail.inertia_kg_m2 + tail.mass_kg * tail.com_from_hinge_m**2
+    j_all = platform.inertia_kg_m2 + platform.mass_kg * platform.com_from_hinge_m**2 + j_t
     g = G_M_S2 if gravity else 0.0
     fine = np.linspace(t[0], t[-1], 20 * (len(t) - 1) + 1)
     dt = fine[1] - fine[0]
@@ -85,8 +90,11 @@ def platform_motion(platform: Platform, tail: TailOnPlatform, time_s: np.ndarray
     out = np.zeros_like(fine)
     betas, accs = spline(fine).tolist(), acc(fine).tolist()  # the spline once, not per step
     for i, (beta, beta_acc) in enumerate(zip(betas, accs)):
-        moment = j_t * beta_acc - platform.mass_kg * g * platform.com_from_hinge_m * math.cos(alpha) \
+        moment = (
+            j_t * beta_acc
+            - platform.mass_kg * g * platform.com_from_hinge_m * math.cos(alpha)
             + tail.mass_kg * g * tail.com_from_hinge_m * math.cos(beta - alpha)
+        )
         a = moment / j_all
         if gravity and alpha <= 0.0 and rate <= 0.0 and a <= 0.0:
             alpha, rate = 0.0, 0.0  # resting on the front wheel: the ground takes the moment

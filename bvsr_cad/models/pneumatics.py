@@ -46,29 +46,44 @@ T_0_K = 293.15
 M3_S_PA_PER_L_S_BAR = 1e-3 / 1e5
 
 
-def iso6358_mass_flow_kg_s(p_up_pa: np.ndarray | float, p_down_pa: np.ndarray | float, conductance_m3_s_pa: float,
-                           critical_ratio: float, temperature_k: float = T_0_K) -> np.ndarray:
-    """Mass flow through a valve from p_up to p_down (absolute Pa, broadcast); negative when it flows
-    back: :func:`_mass_flow_one_kg_s`, the law's one home, at every pair of pressures."""
+def iso6358_mass_flow_kg_s(
+    p_up_pa: np.ndarray | float,
+    p_down_pa: np.ndarray | float,
+    conductance_m3_s_pa: float,
+    critical_ratio: float,
+    temperature_k: float = T_0_K,
+) -> np.ndarray:
+    """Mass flow through a valve from p_up to p_down (absolute Pa, broadcast); negative when it
+    flows back: :func:`_mass_flow_one_kg_s`, the law's one home, at every pair of pressures."""
     up, down = np.broadcast_arrays(np.asarray(p_up_pa, float), np.asarray(p_down_pa, float))
-    flows = [_mass_flow_one_kg_s(u, d, conductance_m3_s_pa, critical_ratio, temperature_k)
-             for u, d in zip(up.ravel().tolist(), down.ravel().tolist())]
+    flows = [
+        _mass_flow_one_kg_s(u, d, conductance_m3_s_pa, critical_ratio, temperature_k)
+        for u, d in zip(up.ravel().tolist(), down.ravel().tolist())
+    ]
     return np.array(flows, float).reshape(up.shape)[()]
 
 
-def _mass_flow_one_kg_s(p_up_pa: float, p_down_pa: float, conductance_m3_s_pa: float, critical_ratio: float,
-                        temperature_k: float) -> float:
-    """The ISO 6358 mass flow of one valve on floats (a line's filling asks for it at every step of its
-    integration: no arrays per call)."""
+def _mass_flow_one_kg_s(
+    p_up_pa: float,
+    p_down_pa: float,
+    conductance_m3_s_pa: float,
+    critical_ratio: float,
+    temperature_k: float,
+) -> float:
+    """The ISO 6358 mass flow of one valve on floats (a line's filling asks for it at every step of
+    its integration: no arrays per call)."""
     sign = 1.0 if p_up_pa >= p_down_pa else -1.0
     hi, lo = max(p_up_pa, p_down_pa), min(p_up_pa, p_down_pa)
     r = lo / max(hi, 1e-9)
 
     def subsonic(x: float) -> float:
-        return math.sqrt(min(max(1.0 - ((x - critical_ratio) / (1.0 - critical_ratio)) ** 2, 0.0), 1.0))
+        return math.sqrt(
+            min(max(1.0 - ((x - critical_ratio) / (1.0 - critical_ratio)) ** 2, 0.0), 1.0)
+        )
 
     # Near r = 1 the ellipse's slope is infinite (no flow law has that): below a 0.1 % drop the flow
-    # falls linearly to zero, the laminar end of ISO 6358-3, which keeps the integrators' steps sane.
+    # falls linearly to zero, the laminar end of ISO 6358-3, which keeps the integrators' steps
+    # sane.
     r_lam = 0.999
     if r <= critical_ratio:
         phi = 1.0
@@ -87,7 +102,7 @@ class Valve:
     critical_ratio: float  # b
 
     @classmethod
-    def from_catalogue(cls, conductance_l_s_bar: float, critical_ratio: float) -> "Valve":
+    def from_catalogue(cls, conductance_l_s_bar: float, critical_ratio: float) -> Valve:
         return cls(conductance_l_s_bar * M3_S_PA_PER_L_S_BAR, critical_ratio)
 
 
@@ -127,8 +142,11 @@ class LineSupply:
                 out[place] = state[line] - self.atmospheric_pa
         return out
 
-    def volumes_m3(self, dl_m: np.ndarray, dl_rate_m_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(V, dV/dt) of every line state; dl (n_joints, 5) of the SOAs in the joints that bend together.
+    def volumes_m3(
+        self, dl_m: np.ndarray, dl_rate_m_s: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(V, dV/dt) of every line state; dl (n_joints, 5) of the SOAs in the joints that bend
+        together.
 
         The joints carry one SOA of each line; in the segment model they all
         stretch alike, so the line's SOAs are ``soas_per_line`` copies of the
@@ -137,31 +155,50 @@ class LineSupply:
         v, dv = self._volumes(dl_m, dl_rate_m_s)
         return np.array(v), np.array(dv)
 
-    def _volumes(self, dl_m: np.ndarray, dl_rate_m_s: np.ndarray) -> tuple[list[float], list[float]]:
+    def _volumes(
+        self, dl_m: np.ndarray, dl_rate_m_s: np.ndarray
+    ) -> tuple[list[float], list[float]]:
         v = [float(x) for x in self.tube_volume_m3]
         dv = [0.0] * self.n_states
         dl_m, dl_rate_m_s = np.atleast_2d(dl_m), np.atleast_2d(dl_rate_m_s)
-        mean_dl = (dl_m.sum(0) / dl_m.shape[0]).tolist()  # np.mean's sum and division, without its checks
+        mean_dl = (
+            dl_m.sum(0) / dl_m.shape[0]
+        ).tolist()  # np.mean's sum and division, without its checks
         mean_rate = (dl_rate_m_s.sum(0) / dl_rate_m_s.shape[0]).tolist()
         for place, line in enumerate(self.lines):
             if line >= 0:
-                v[line] += self.soas_per_line * (self.soa_volume_m3 + self.soa_area_m2 * mean_dl[place])
+                v[line] += self.soas_per_line * (
+                    self.soa_volume_m3 + self.soa_area_m2 * mean_dl[place]
+                )
                 dv[line] += self.soas_per_line * self.soa_area_m2 * mean_rate[place]
         return v, dv
 
-    def state_rates(self, t_s: float, state: np.ndarray, dl_m: np.ndarray, dl_rate_m_s: np.ndarray) -> np.ndarray:
+    def state_rates(
+        self, t_s: float, state: np.ndarray, dl_m: np.ndarray, dl_rate_m_s: np.ndarray
+    ) -> np.ndarray:
         """dp/dt of every line (the valve opens at t = 0)."""
         v, dv = self._volumes(dl_m, dl_rate_m_s)
         rt = R_AIR_J_KG_K * self.temperature_k
         out = []
         for line, p in enumerate(np.asarray(state, float).tolist()):
-            q = _mass_flow_one_kg_s(self.source_pa_abs, p, self.valve.conductance_m3_s_pa, self.valve.critical_ratio,
-                                    self.temperature_k) if t_s >= 0 else 0.0
+            q = (
+                _mass_flow_one_kg_s(
+                    self.source_pa_abs,
+                    p,
+                    self.valve.conductance_m3_s_pa,
+                    self.valve.critical_ratio,
+                    self.temperature_k,
+                )
+                if t_s >= 0
+                else 0.0
+            )
             out.append(self.polytropic_index / v[line] * (rt * q - p * dv[line]))
         return np.array(out)
 
 
-def fill_curve(supply: LineSupply, seconds: float, samples: int = 2000) -> tuple[np.ndarray, np.ndarray]:
+def fill_curve(
+    supply: LineSupply, seconds: float, samples: int = 2000
+) -> tuple[np.ndarray, np.ndarray]:
     """Gauge pressure of line 0 filling its SOAs held at rest length: (time s, gauge Pa)."""
     from scipy.integrate import solve_ivp
 
@@ -171,18 +208,21 @@ def fill_curve(supply: LineSupply, seconds: float, samples: int = 2000) -> tuple
         return supply.state_rates(t, y, zeros, zeros)
 
     t = np.linspace(0.0, seconds, samples)
-    sol = solve_ivp(f, (0.0, seconds), supply.initial_state(), t_eval=t, rtol=1e-7, atol=1.0, method="RK45")
+    sol = solve_ivp(
+        f, (0.0, seconds), supply.initial_state(), t_eval=t, rtol=1e-7, atol=1.0, method="RK45"
+    )
     return sol.t, sol.y[0] - supply.atmospheric_pa
 
 
 def first_order_time_constant_s(supply: LineSupply) -> float:
-    """The lag tau of p' = (P0 - p) / tau fitted to the supply filling its SOAs at rest: least squares
-    of P0 (1 - exp(-t / tau)) against the fill curve up to 95 % of P0 (the MJCF actuators' ``dynprm``).
+    """The lag tau of p' = (P0 - p) / tau fitted to the supply filling its SOAs at rest: least
+    squares of P0 (1 - exp(-t / tau)) against the fill curve up to 95 % of P0 (the MJCF actuators'
+    ``dynprm``).
 
-    At rest every SOA place stretches alike (not at all), so which places a line feeds does not change
-    its fill: the fit is made once per supply with its places in a canonical order (a robot model asks
-    for each of a segment's five lines, whose tubes are often alike: 10 fits -> 2 for the default tail,
-    the same lags to the bit)."""
+    At rest every SOA place stretches alike (not at all), so which places a line feeds does not
+    change its fill: the fit is made once per supply with its places in a canonical order (a robot
+    model asks for each of a segment's five lines, whose tubes are often alike: 10 fits -> 2 for the
+    default tail, the same lags to the bit)."""
     return _time_constant_s(replace(supply, lines=tuple(sorted(supply.lines, reverse=True))))
 
 
@@ -204,9 +244,21 @@ def _time_constant_s(supply: LineSupply) -> float:
     def rms(tau: float) -> float:
         return float(np.sqrt(np.mean((p0 * (1 - np.exp(-t / tau)) - p) ** 2)))
 
-    return float(minimize_scalar(rms, bounds=(0.3 * t63, 3.0 * t63), method="bounded",
-                                 options={"xatol": 1e-4 * t63}).x)
+    return float(
+        minimize_scalar(
+            rms, bounds=(0.3 * t63, 3.0 * t63), method="bounded", options={"xatol": 1e-4 * t63}
+        ).x
+    )
 
 
-__all__ = ["Valve", "LineSupply", "iso6358_mass_flow_kg_s", "fill_curve", "first_order_time_constant_s",
-           "M3_S_PA_PER_L_S_BAR", "R_AIR_J_KG_K", "RHO_0_KG_M3", "T_0_K"]
+__all__ = [
+    "Valve",
+    "LineSupply",
+    "iso6358_mass_flow_kg_s",
+    "fill_curve",
+    "first_order_time_constant_s",
+    "M3_S_PA_PER_L_S_BAR",
+    "R_AIR_J_KG_K",
+    "RHO_0_KG_M3",
+    "T_0_K",
+]

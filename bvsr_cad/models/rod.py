@@ -29,12 +29,12 @@ class RodSection:
     @property
     def area_mm2(self) -> float:
         """A = pi d^2 / 4."""
-        return math.pi * self.diameter_mm ** 2 / 4.0
+        return math.pi * self.diameter_mm**2 / 4.0
 
     @property
     def second_moment_mm4(self) -> float:
         """I = pi d^4 / 64 (solid circle about a diameter)."""
-        return math.pi * self.diameter_mm ** 4 / 64.0
+        return math.pi * self.diameter_mm**4 / 64.0
 
     @property
     def flexural_rigidity_n_mm2(self) -> float:
@@ -85,16 +85,21 @@ def rod_section(spec: TailSpec) -> RodSection:
     fitted = spec.calibration.fitted.get("rod_flexural_rigidity_n_mm2")
     cal = spec.calibration
     measured = (cal.rod_material or v.material, cal.rod_diameter_mm or v.diameter_mm)
-    if fitted is None or measured[0] == NO_ROD:  # a fit of an invertebrate tail has no rod E I to carry over
+    if (
+        fitted is None or measured[0] == NO_ROD
+    ):  # a fit of an invertebrate tail has no rod E I to carry over
         return table
     if measured == (v.material, v.diameter_mm):
         return dataclasses.replace(table, fitted_flexural_rigidity_n_mm2=float(fitted))
     ratio = float(fitted) / _table_section(spec, *measured).flexural_rigidity_n_mm2
-    return dataclasses.replace(table, fitted_flexural_rigidity_n_mm2=ratio * table.flexural_rigidity_n_mm2)
+    return dataclasses.replace(
+        table, fitted_flexural_rigidity_n_mm2=ratio * table.flexural_rigidity_n_mm2
+    )
 
 
 def _table_section(spec: TailSpec, material: str, diameter_mm: float) -> RodSection:
-    """A rod of ``material`` and ``diameter_mm`` with the material table's modulus (no calibration)."""
+    """A rod of ``material`` and ``diameter_mm`` with the material table's modulus (no
+    calibration)."""
     mat = spec.material(material)
     return RodSection(material, diameter_mm, mat.youngs_modulus_mpa, mat.density_g_cm3)
 

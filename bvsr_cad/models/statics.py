@@ -30,17 +30,23 @@ import numpy as np
 from .. import units
 from ..parameters.tables import TailSpec
 from .actuator import SoaForceLaw, soa_force_law
+from .kinematics import (
+    TailKinematics,
+    soa_lengths_and_jacobian,
+    theta_phi_from_uv,
+    uv_from_theta_phi,
+)
 from .rod import joint_rod_stiffness_nmm_per_rad
-from .kinematics import TailKinematics, soa_lengths_and_jacobian, theta_phi_from_uv, uv_from_theta_phi
 
 #: Standard gravity, m/s^2 (N per kg).
 G_N_PER_KG = units.STANDARD_GRAVITY_M_S2
 #: Motions of SPEC section 2 as the bending-plane angle phi: towards +Y, -Y, +X.
 MOTION_PHI_RAD = {"extension": math.pi / 2, "flexion": -math.pi / 2, "waggle": 0.0}
-#: Forward statics' Newton keeps a sample's loads' Hessian (gravity, tip force: 2n evaluations of every
-#: load) while its steps stay below this and shrink, computing it afresh otherwise. On the build's 1500
-#: workspace samples that takes 1.3 CPU s instead of 1.9 (bvsr) and 2.9 instead of 4.7 (bvsr_l), the poses
-#: within 7e-14 rad of the Newton that recomputes it at every step (both stop at steps below 1e-11 rad).
+#: Forward statics' Newton keeps a sample's loads' Hessian (gravity, tip force: 2n evaluations of
+#: every load) while its steps stay below this and shrink, computing it afresh otherwise. On the
+#: build's 1500 workspace samples that takes 1.3 CPU s instead of 1.9 (bvsr) and 2.9 instead of 4.7
+#: (bvsr_l), the poses within 7e-14 rad of the Newton that recomputes it at every step (both stop at
+#: steps below 1e-11 rad).
 LOAD_HESSIAN_REUSE_BELOW_RAD = 1e-2
 
 
@@ -54,7 +60,7 @@ class Actuator:
     pressure_max_kpa: float
 
     @classmethod
-    def from_spec(cls, spec: TailSpec, area_mm2: float | None = None) -> "Actuator":
+    def from_spec(cls, spec: TailSpec, area_mm2: float | None = None) -> Actuator:
         law = soa_force_law(spec)
         if area_mm2 is not None:
             law = replace(law, area_m2=units.mm2_to_m2(area_mm2))
@@ -62,7 +68,7 @@ class Actuator:
 
     @property
     def area_mm2(self) -> float:
-        return self.law.area_m2 * units.MM_PER_M ** 2
+        return self.law.area_m2 * units.MM_PER_M**2
 
     @property
     def newton_per_kpa(self) -> float:
@@ -103,16 +109,25 @@ class TailStatics:
     masses: LumpedMasses | None = None  # None: no gravity
 
     @classmethod
-    def from_spec(cls, spec: TailSpec, masses: LumpedMasses | None = None,
-                  area_mm2: float | None = None) -> "TailStatics":
-        return cls(TailKinematics.from_spec(spec), Actuator.from_spec(spec, area_mm2),
-                   joint_rod_stiffness_nmm_per_rad(spec), masses)
+    def from_spec(
+        cls, spec: TailSpec, masses: LumpedMasses | None = None, area_mm2: float | None = None
+    ) -> TailStatics:
+        return cls(
+            TailKinematics.from_spec(spec),
+            Actuator.from_spec(spec, area_mm2),
+            joint_rod_stiffness_nmm_per_rad(spec),
+            masses,
+        )
 
-    def first_segment(self) -> "TailStatics":
+    def first_segment(self) -> TailStatics:
         """One standalone segment (the paper's Table III specimen): the first three joints."""
         j = self.kin.joints_per_segment
         kin = TailKinematics(self.kin.joints[:j], self.kin.panel_thickness_mm, j)
-        m = None if self.masses is None else LumpedMasses(self.masses.panel_kg[: j + 1], self.masses.joint_kg[:j])
+        m = (
+            None
+            if self.masses is None
+            else LumpedMasses(self.masses.panel_kg[: j + 1], self.masses.joint_kg[:j])
+        )
         return TailStatics(kin, self.act, self.rod_nmm_per_rad, m)
 
     # -- generalised forces -------------------------------------------------
@@ -126,7 +141,8 @@ class TailStatics:
         return np.stack(dls, -2), np.stack(jacs, -3)
 
     def load_forces(self, w: np.ndarray, tip_force_n: np.ndarray | None) -> np.ndarray:
-        """Generalised forces of gravity and the tip force on every joint, (..., n_joints, 2), N mm."""
+        """Generalised forces of gravity and the tip force on every joint, (..., n_joints, 2), N
+        mm."""
         from .kinematics import joint_transform_and_derivatives
 
         w = np.asarray(w, float)
@@ -134,13 +150,15 @@ class TailStatics:
         base, panel = self.kin.frames(w)
         t = self.kin.panel_thickness_mm
         lead = w.shape[:-2]
-        # Bodies: forces f (tail frame, N) at points x; suffix sums give what hangs distal of each joint.
+        # Bodies: forces f (tail frame, N) at points x; suffix sums give what hangs distal of each
+        # joint.
         f_panel = np.zeros(lead + (n + 1, 3))
         f_joint = np.zeros(lead + (n, 3))
         f_tip = np.zeros(lead + (3,))
         x_panel = panel[..., :3, 3] + 0.5 * t * panel[..., :3, 2]
-        (rot_all, p_all), (dR_u, dR_v, dp_u, dp_v) = joint_transform_and_derivatives(w[..., 0], w[..., 1],
-                                                                                 self.kin.length_mm)
+        (rot_all, p_all), (dR_u, dR_v, dp_u, dp_v) = joint_transform_and_derivatives(
+            w[..., 0], w[..., 1], self.kin.length_mm
+        )
         b_rot, b_org = base[..., :3, :3], base[..., :3, 3]
         x_joint = b_org + 0.5 * np.einsum("...ij,...j->...i", b_rot, p_all)
         if self.masses is not None:
@@ -151,9 +169,18 @@ class TailStatics:
             f_tip = f_tip + np.asarray(tip_force_n, float)
         x_tip = panel[..., -1, :3, 3] + t * panel[..., -1, :3, 2]
         # Distal of joint k (0-based): panels k+1.., joint masses k+1.., the tip.
-        fs_p = np.flip(np.cumsum(np.flip(f_panel[..., 1:, :], -2), -2), -2)  # index k: panels k+1..n
-        fx_p = np.flip(np.cumsum(np.flip(np.einsum("...i,...j->...ij", f_panel[..., 1:, :], x_panel[..., 1:, :]),
-                                         -3), -3), -3)
+        fs_p = np.flip(
+            np.cumsum(np.flip(f_panel[..., 1:, :], -2), -2), -2
+        )  # index k: panels k+1..n
+        fx_p = np.flip(
+            np.cumsum(
+                np.flip(
+                    np.einsum("...i,...j->...ij", f_panel[..., 1:, :], x_panel[..., 1:, :]), -3
+                ),
+                -3,
+            ),
+            -3,
+        )
         fj_x = np.einsum("...i,...j->...ij", f_joint, x_joint)
         fs_j = np.flip(np.cumsum(np.flip(f_joint, -2), -2), -2) - f_joint  # joints k+1..n
         fx_j = np.flip(np.cumsum(np.flip(fj_x, -3), -3), -3) - fj_x
@@ -161,8 +188,9 @@ class TailStatics:
         fx = fx_p + fx_j + np.einsum("...i,...j->...ij", f_tip, x_tip)[..., None, :, :]
         bt = np.swapaxes(b_rot, -1, -2)
         # G = sum_b g_b y_b^T with g_b = B_R^T f_b, y_b = B_R^T (x_b - B_o) - p.
-        g_mat = bt @ (fx - np.einsum("...i,...j->...ij", fs, b_org)) @ b_rot \
-            - np.einsum("...i,...j->...ij", np.einsum("...ij,...j->...i", bt, fs), p_all)
+        g_mat = bt @ (fx - np.einsum("...i,...j->...ij", fs, b_org)) @ b_rot - np.einsum(
+            "...i,...j->...ij", np.einsum("...ij,...j->...i", bt, fs), p_all
+        )
         gs = np.einsum("...ij,...j->...i", bt, fs)
         own = np.einsum("...ij,...j->...i", bt, f_joint) * 0.5
         rt = np.swapaxes(rot_all, -1, -2)
@@ -172,31 +200,46 @@ class TailStatics:
             q.append(np.sum(a_mat * g_mat, (-1, -2)) + np.sum((gs + own) * d_p, -1))
         return np.stack(q, -1)
 
-    def residual(self, w: np.ndarray, line_kpa: np.ndarray, tip_force_n: np.ndarray | None = None
-                 ) -> np.ndarray:
+    def residual(
+        self, w: np.ndarray, line_kpa: np.ndarray, tip_force_n: np.ndarray | None = None
+    ) -> np.ndarray:
         """dV/dw: zero at equilibrium. ``line_kpa`` (..., n_segments, 5) gauge."""
         w = np.asarray(w, float)
         p_joint = np.repeat(np.asarray(line_kpa, float), self.kin.joints_per_segment, axis=-2)
-        return self._actuator_residual(w, p_joint) + self.rod_nmm_per_rad * w - self.load_forces(w, tip_force_n)
+        return (
+            self._actuator_residual(w, p_joint)
+            + self.rod_nmm_per_rad * w
+            - self.load_forces(w, tip_force_n)
+        )
 
     def _actuator_residual(self, w: np.ndarray, p_joint: np.ndarray) -> np.ndarray:
-        """-tau_act (..., n_joints, 2) for per-joint pressures (..., n_joints, 5): joint k's term reads w_k only."""
+        """-tau_act (..., n_joints, 2) for per-joint pressures (..., n_joints, 5): joint k's term
+        reads w_k only."""
         dl, jac = self._actuator_terms(w)
         return -np.einsum("...si,...s->...i", jac, self.act.force_n(p_joint, dl))
 
-    def _hessian(self, w: np.ndarray, p_joint: np.ndarray, tip_force_n: np.ndarray | None, q0: np.ndarray,
-                 h: float = 1e-6, loads: np.ndarray | None = None) -> np.ndarray:
-        """d(residual)/dw (m, 2n, 2n) at poses ``w`` (m, n, 2) (rows: residual component), by differences
-        that follow the residual's structure: the actuator term of joint k reads w_k only, so its
-        2 x 2 blocks come from perturbing every joint at once along u, then v (central differences,
-        4 evaluations); the rod term is E I / L exactly; the loads (gravity, tip force) couple every
-        joint and take forward differences from ``q0`` = their value at ``w`` (2n evaluations), or are
-        ``loads`` when given (:meth:`_load_hessian` of nearby poses)."""
+    def _hessian(
+        self,
+        w: np.ndarray,
+        p_joint: np.ndarray,
+        tip_force_n: np.ndarray | None,
+        q0: np.ndarray,
+        h: float = 1e-6,
+        loads: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """d(residual)/dw (m, 2n, 2n) at poses ``w`` (m, n, 2) (rows: residual component), by
+        differences that follow the residual's structure: the actuator term of joint k reads w_k
+        only, so its 2 x 2 blocks come from perturbing every joint at once along u, then v (central
+        differences, 4 evaluations); the rod term is E I / L exactly; the loads (gravity, tip force)
+        couple every joint and take forward differences from ``q0`` = their value at ``w`` (2n
+        evaluations), or are ``loads`` when given (:meth:`_load_hessian` of nearby poses)."""
         m, n = w.shape[0], self.kin.n_joints
         dirs = (np.eye(2) * h)[None, :, None, :]  # (1, direction, 1, component)
         pj = p_joint[:, None]
-        act = (self._actuator_residual(w[:, None] + dirs, pj)
-               - self._actuator_residual(w[:, None] - dirs, pj)) / (2 * h)  # (m, direction, joint, component)
+        act = (
+            self._actuator_residual(w[:, None] + dirs, pj)
+            - self._actuator_residual(w[:, None] - dirs, pj)
+        ) / (2 * h)  # (m, direction, joint, component)
         hess = np.zeros((m, n, 2, n, 2))
         for k in range(n):
             hess[:, k, :, k, :] = np.swapaxes(act[:, :, k, :], -1, -2)
@@ -207,19 +250,31 @@ class TailStatics:
             hess = hess + self._load_hessian(w, tip_force_n, q0, h)
         return hess
 
-    def _load_hessian(self, w: np.ndarray, tip_force_n: np.ndarray | None, q0: np.ndarray, h: float = 1e-6
-                      ) -> np.ndarray:
-        """The loads' part of :meth:`_hessian` (m, 2n, 2n): -d(load forces)/dw by forward differences."""
+    def _load_hessian(
+        self, w: np.ndarray, tip_force_n: np.ndarray | None, q0: np.ndarray, h: float = 1e-6
+    ) -> np.ndarray:
+        """The loads' part of :meth:`_hessian` (m, 2n, 2n): -d(load forces)/dw by forward
+        differences."""
         m, n = w.shape[0], self.kin.n_joints
         pert = (np.eye(2 * n) * h).reshape(2 * n, n, 2)
-        fk = tip_force_n[:, None, :] if tip_force_n is not None and np.ndim(tip_force_n) > 1 else tip_force_n
+        fk = (
+            tip_force_n[:, None, :]
+            if tip_force_n is not None and np.ndim(tip_force_n) > 1
+            else tip_force_n
+        )
         dq = (self.load_forces(w[:, None] + pert, fk) - q0[:, None]).reshape((m, 2 * n, 2 * n)) / h
         return -np.swapaxes(dq, -1, -2)
 
     # -- forward map ---------------------------------------------------------
-    def forward(self, line_kpa: np.ndarray, tip_force_n: np.ndarray | None = None,
-                w0: np.ndarray | None = None, fixed: np.ndarray | None = None,
-                tol_rad: float = 1e-11, max_iter: int = 60) -> np.ndarray:
+    def forward(
+        self,
+        line_kpa: np.ndarray,
+        tip_force_n: np.ndarray | None = None,
+        w0: np.ndarray | None = None,
+        fixed: np.ndarray | None = None,
+        tol_rad: float = 1e-11,
+        max_iter: int = 60,
+    ) -> np.ndarray:
         """Equilibrium bending vectors (..., n_joints, 2) for line pressures (..., n_segments, 5).
 
         Args:
@@ -234,13 +289,19 @@ class TailStatics:
         line_kpa = np.asarray(line_kpa, float)
         lead = line_kpa.shape[:-2]
         n = self.kin.n_joints
-        w = np.zeros(lead + (n, 2)) if w0 is None else np.array(np.broadcast_to(w0, lead + (n, 2)), float)
+        w = (
+            np.zeros(lead + (n, 2))
+            if w0 is None
+            else np.array(np.broadcast_to(w0, lead + (n, 2)), float)
+        )
         free = np.ones(2 * n, bool) if fixed is None else ~np.repeat(np.asarray(fixed, bool), 2)
         eye = np.eye(2 * n)
         # Newton on the samples still moving only: one sample's slow convergence costs only itself.
         count = int(np.prod(lead, dtype=int))
         flat_w = w.reshape((count, n, 2))
-        flat_p = np.broadcast_to(line_kpa, lead + line_kpa.shape[-2:]).reshape((count,) + line_kpa.shape[-2:])
+        flat_p = np.broadcast_to(line_kpa, lead + line_kpa.shape[-2:]).reshape(
+            (count,) + line_kpa.shape[-2:]
+        )
         force = None if tip_force_n is None else np.asarray(tip_force_n, float)
         per_sample = force is not None and force.ndim > 1
         if per_sample:
@@ -248,8 +309,9 @@ class TailStatics:
         active = np.arange(count)
         last = 0.0
         loaded = self.masses is not None or tip_force_n is not None
-        # The loads' Hessian of each sample, kept while its steps are small and shrinking (the loads vary
-        # slowly with the pose: the steps after them converge as fast, each without its 2n evaluations).
+        # The loads' Hessian of each sample, kept while its steps are small and shrinking (the loads
+        # vary slowly with the pose: the steps after them converge as fast, each without its 2n
+        # evaluations).
         loads = np.zeros((count, 2 * n, 2 * n)) if loaded else None
         reuse = np.zeros(count, bool)
         step_was = np.full(count, np.inf)
@@ -258,11 +320,15 @@ class TailStatics:
             fa = force[active] if per_sample else force
             pj = np.repeat(pa, self.kin.joints_per_segment, axis=-2)
             q0 = self.load_forces(wa, fa)
-            r = (self._actuator_residual(wa, pj) + self.rod_nmm_per_rad * wa - q0).reshape((active.size, 2 * n))
+            r = (self._actuator_residual(wa, pj) + self.rod_nmm_per_rad * wa - q0).reshape(
+                (active.size, 2 * n)
+            )
             if loaded:
                 fresh = np.nonzero(~reuse[active])[0]
                 if fresh.size:
-                    loads[active[fresh]] = self._load_hessian(wa[fresh], fa[fresh] if per_sample else fa, q0[fresh])
+                    loads[active[fresh]] = self._load_hessian(
+                        wa[fresh], fa[fresh] if per_sample else fa, q0[fresh]
+                    )
                 hess = self._hessian(wa, pj, fa, q0, loads=loads[active])
             else:
                 hess = self._hessian(wa, pj, fa, q0)
@@ -285,27 +351,38 @@ class TailStatics:
             return flat_w.reshape(w.shape)
         raise RuntimeError(f"forward statics did not converge (last step {last:.2e} rad)")
 
-    def forward_theta_phi(self, line_kpa: np.ndarray, tip_force_n: np.ndarray | None = None
-                          ) -> tuple[np.ndarray, np.ndarray]:
+    def forward_theta_phi(
+        self, line_kpa: np.ndarray, tip_force_n: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """(theta, phi) of every joint at equilibrium, each (..., n_joints)."""
         return theta_phi_from_uv(self.forward(line_kpa, tip_force_n))
 
     # -- inverse map (Eq 5) --------------------------------------------------
-    def joint_pressure_system(self, w: np.ndarray, tip_force_n: np.ndarray | None = None
-                              ) -> tuple[np.ndarray, np.ndarray]:
-        """Eq 5 as linear equations M P = b per joint: M (..., n_joints, 2, 5), b (..., n_joints, 2).
+    def joint_pressure_system(
+        self, w: np.ndarray, tip_force_n: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Eq 5 as linear equations M P = b per joint: M (..., n_joints, 2, 5), b (..., n_joints,
+        2).
 
         From -J^T [P (A - m_a dl) - n_a dl] + K w - Q = 0.
         """
         dl, jac = self._actuator_terms(w)
         coef = self.act.newton_per_kpa - self.act.slope_n_per_mm_per_kpa * dl
         m = np.swapaxes(jac, -1, -2) * coef[..., None, :]
-        b = self.rod_nmm_per_rad * w - self.load_forces(w, tip_force_n) \
+        b = (
+            self.rod_nmm_per_rad * w
+            - self.load_forces(w, tip_force_n)
             + np.einsum("...si,...s->...i", jac, self.act.offset_n_per_mm * dl)
+        )
         return m, b
 
-    def inverse(self, w_segment: np.ndarray, tip_force_n: np.ndarray | None = None,
-                tol_kpa: float = 1e-10, max_iter: int = 100) -> tuple[np.ndarray, np.ndarray]:
+    def inverse(
+        self,
+        w_segment: np.ndarray,
+        tip_force_n: np.ndarray | None = None,
+        tol_kpa: float = 1e-10,
+        max_iter: int = 100,
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Line pressures that put each segment's first joint at ``w_segment`` (..., n_segments, 2).
 
         Returns:
@@ -321,8 +398,12 @@ class TailStatics:
         p = np.zeros(lead + (self.kin.n_segments, 5))
         for _ in range(max_iter):
             m, b = self.joint_pressure_system(w, tip_force_n)
-            p_new, ok = least_norm_in_box(m[..., ref, :, :], b[..., ref, :], self.act.pressure_min_kpa,
-                                          self.act.pressure_max_kpa)
+            p_new, ok = least_norm_in_box(
+                m[..., ref, :, :],
+                b[..., ref, :],
+                self.act.pressure_min_kpa,
+                self.act.pressure_max_kpa,
+            )
             p_new = np.where(ok[..., None], p_new, 0.0)
             if self.masses is None and tip_force_n is None and j == 1:
                 p = p_new
@@ -335,8 +416,9 @@ class TailStatics:
         return np.where(ok[..., None], p, np.nan), w
 
 
-def least_norm_in_box(m: np.ndarray, b: np.ndarray, lo: float, hi: float, max_iter: int = 100
-                      ) -> tuple[np.ndarray, np.ndarray]:
+def least_norm_in_box(
+    m: np.ndarray, b: np.ndarray, lo: float, hi: float, max_iter: int = 100
+) -> tuple[np.ndarray, np.ndarray]:
     """min |P|^2 s.t. M P = b, lo <= P <= hi, batched: M (..., 2, 5), b (..., 2).
 
     Solved in the dual: P = clip(M^T lam), lam maximises the concave dual
@@ -353,15 +435,20 @@ def least_norm_in_box(m: np.ndarray, b: np.ndarray, lo: float, hi: float, max_it
 
     def dual(lam_: np.ndarray) -> np.ndarray:
         p_ = primal(lam_)
-        return np.sum(lam_ * b, -1) - np.sum(lam_ * np.einsum("...ij,...j->...i", m, p_), -1) \
+        return (
+            np.sum(lam_ * b, -1)
+            - np.sum(lam_ * np.einsum("...ij,...j->...i", m, p_), -1)
             + 0.5 * np.sum(p_ * p_, -1)
+        )
 
     for _ in range(max_iter):
         p = primal(lam)
         grad = b - np.einsum("...ij,...j->...i", m, p)
         if np.max(np.abs(grad)) < 1e-10 * (1.0 + np.max(np.abs(b))):
             break
-        active = (np.einsum("...ij,...j->...i", mt, lam) > lo) & (np.einsum("...ij,...j->...i", mt, lam) < hi)
+        active = (np.einsum("...ij,...j->...i", mt, lam) > lo) & (
+            np.einsum("...ij,...j->...i", mt, lam) < hi
+        )
         hmat = np.einsum("...ik,...k,...jk->...ij", m, active.astype(float), m) + 1e-12 * np.eye(2)
         step = np.linalg.solve(hmat, grad[..., None])[..., 0]
         d0 = dual(lam)
@@ -405,8 +492,8 @@ class QuasiStatic:
     line_kpa: tuple[float, ...]
 
 
-#: The blocked-force equations' largest residual accepted as a root: moments over the rod's stiffness
-#: (rad) and the tip's offset (mm).
+#: The blocked-force equations' largest residual accepted as a root: moments over the rod's
+#: stiffness (rad) and the tip's offset (mm).
 BLOCKED_RESIDUAL_TOL = 1e-9
 
 
@@ -425,7 +512,9 @@ def quasi_static_segment(seg: TailStatics, motion: str) -> QuasiStatic:
     angle = float(np.degrees(segment_bend_angle_rad(seg.kin, w)))
     n = seg.kin.n_joints
     tip0 = seg.kin.rest_tip_mm()
-    scale = seg.rod_nmm_per_rad or 1.0e3  # N mm/rad, the residual's scale only (no rod: any positive value)
+    scale = (
+        seg.rod_nmm_per_rad or 1.0e3
+    )  # N mm/rad, the residual's scale only (no rod: any positive value)
 
     def equations(x: np.ndarray) -> np.ndarray:
         wx = x[: 2 * n].reshape(n, 2)
@@ -440,17 +529,19 @@ def quasi_static_segment(seg: TailStatics, motion: str) -> QuasiStatic:
     # segment in extension ends with every equation within 2e-16 of zero (rounding); judge the root.
     if not sol.success and not np.max(np.abs(equations(sol.x))) < BLOCKED_RESIDUAL_TOL:
         raise RuntimeError(f"blocked force for {motion}: {sol.message}")
-    reaction = sol.x[2 * n:]
-    return QuasiStatic(motion, angle, float(np.linalg.norm(reaction)), tuple(float(v) for v in p_line[0]))
+    reaction = sol.x[2 * n :]
+    return QuasiStatic(
+        motion, angle, float(np.linalg.norm(reaction)), tuple(float(v) for v in p_line[0])
+    )
 
 
 def lateral_stiffness_n_per_mm(seg: TailStatics, force_n: float = 0.5) -> float:
-    """Passive lateral stiffness of the tail ``seg`` at its tip, lines open (0 kPa gauge): the paper's
-    Fig. 3(d) test, a sideways force on the distal panel over the tip's displacement.
+    """Passive lateral stiffness of the tail ``seg`` at its tip, lines open (0 kPa gauge): the
+    paper's Fig. 3(d) test, a sideways force on the distal panel over the tip's displacement.
 
-    A force of +-``force_n`` along X (perpendicular to gravity, which is along -Y) is applied at the tip
-    point and the stiffness is the central difference 2 F / (x(+F) - x(-F)), so the sag under gravity
-    cancels and the figure is the tangent stiffness at the loaded rest pose.
+    A force of +-``force_n`` along X (perpendicular to gravity, which is along -Y) is applied at the
+    tip point and the stiffness is the central difference 2 F / (x(+F) - x(-F)), so the sag under
+    gravity cancels and the figure is the tangent stiffness at the loaded rest pose.
     """
     lines = np.zeros((2, seg.kin.n_segments, 5))
     forces = np.array([[force_n, 0.0, 0.0], [-force_n, 0.0, 0.0]])
@@ -459,6 +550,17 @@ def lateral_stiffness_n_per_mm(seg: TailStatics, force_n: float = 0.5) -> float:
     return float(2.0 * force_n / (x[0] - x[1]))
 
 
-__all__ = ["Actuator", "LumpedMasses", "TailStatics", "QuasiStatic", "least_norm_in_box", "pressure_pattern_kpa",
-           "quasi_static_segment", "segment_bend_angle_rad", "lateral_stiffness_n_per_mm",
-           "uv_from_theta_phi", "MOTION_PHI_RAD", "G_N_PER_KG"]
+__all__ = [
+    "Actuator",
+    "LumpedMasses",
+    "TailStatics",
+    "QuasiStatic",
+    "least_norm_in_box",
+    "pressure_pattern_kpa",
+    "quasi_static_segment",
+    "segment_bend_angle_rad",
+    "lateral_stiffness_n_per_mm",
+    "uv_from_theta_phi",
+    "MOTION_PHI_RAD",
+    "G_N_PER_KG",
+]

@@ -48,7 +48,9 @@ class Tapped:
     """A bore drilled (printed) at a tap drill and tapped after printing."""
 
     size: MetricSize
-    drill_mm: float  #: the nominal tap drill (the printed bore adds fabrication.hole_compensation_mm)
+    drill_mm: (
+        float  #: the nominal tap drill (the printed bore adds fabrication.hole_compensation_mm)
+    )
 
     @property
     def designation(self) -> str:
@@ -60,8 +62,9 @@ class Cyl:
     """A cylinder from p0 to p1 (part frame, mm): a cut unless ``boss`` or ``pin``."""
 
     name: str
-    role: str  # pocket, channel, port, tube, tube_port, feed, rod, setscrew, insert, lightening, boss; molds: bolt,
-    #            pin, pin_socket, gate, vent, flange_pocket
+    # pocket, channel, port, tube, tube_port, feed, rod, setscrew, insert, lightening, boss; molds:
+    # bolt, pin, pin_socket, gate, vent, flange_pocket
+    role: str
     p0: tuple[float, float, float]
     p1: tuple[float, float, float]
     diameter_mm: float
@@ -123,8 +126,14 @@ class LayoutProblem(NamedTuple):
 #: The parameter keys that size or place a panel feature, by the start of its name (first match).
 _HOLE = "fabrication.hole_compensation_mm"  # every printed hole (hole_d) is this much wider
 _FEATURE_KEYS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("pocket_depth", ("soa.height_mm", "joint.gap_mm", "joint.joint_height_mm", "fabrication.socket_floor_mm")),
-    ("pocket_", ("joint.base_diameter_mm", "fabrication.pocket_clearance_mm", "joint.pitch_diameter_mm")),
+    (
+        "pocket_depth",
+        ("soa.height_mm", "joint.gap_mm", "joint.joint_height_mm", "fabrication.socket_floor_mm"),
+    ),
+    (
+        "pocket_",
+        ("joint.base_diameter_mm", "fabrication.pocket_clearance_mm", "joint.pitch_diameter_mm"),
+    ),
     ("channel_", ("joint.channel_diameter_mm", "joint.pitch_diameter_mm", _HOLE)),
     ("fitting_port_", ("mount.fitting_tap_drill_mm", "joint.pitch_diameter_mm", _HOLE)),
     ("tube_port_", ("tubes.outer_diameter_mm", _HOLE)),
@@ -134,19 +143,39 @@ _FEATURE_KEYS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("rod_bore", ("vertebra.diameter_mm", "socket.rod_clearance_mm", _HOLE)),
     ("set_screw", ("socket.set_screw_tap_drill_mm", _HOLE)),
     ("clamp_boss", ("socket.boss_wall_mm", "vertebra.diameter_mm", _HOLE)),
-    ("mount_insert_", ("mount.insert_diameter_mm", "mount.bolt_circle_diameter_mm", "mount.insert_depth_mm", _HOLE)),
-    ("payload_insert_", ("payload.insert_diameter_mm", "payload.insert_circle_diameter_mm", "payload.insert_count",
-                         "payload.insert_depth_mm", _HOLE)),
+    (
+        "mount_insert_",
+        (
+            "mount.insert_diameter_mm",
+            "mount.bolt_circle_diameter_mm",
+            "mount.insert_depth_mm",
+            _HOLE,
+        ),
+    ),
+    (
+        "payload_insert_",
+        (
+            "payload.insert_diameter_mm",
+            "payload.insert_circle_diameter_mm",
+            "payload.insert_count",
+            "payload.insert_depth_mm",
+            _HOLE,
+        ),
+    ),
     ("lightening_", ("lightening.hole_diameter_mm",)),
     ("rim", ("joint.panel_diameter_mm",)),
-    ("bellows", ("soa.long_side_mm", "soa.fillet_radius_mm", "soa.rotation_deg", "joint.pitch_diameter_mm")),
+    (
+        "bellows",
+        ("soa.long_side_mm", "soa.fillet_radius_mm", "soa.rotation_deg", "joint.pitch_diameter_mm"),
+    ),
 )
 #: The tube rings: the tubes of segment s sit on this radius.
 _RING_KEYS = {"2": "tubes.inner_radius_mm", "3": "tubes.second_radius_mm"}
 
 
 def feature_keys(name: str) -> tuple[str, ...]:
-    """The parameter keys that size or place the panel feature ``name`` (see :class:`LayoutProblem`)."""
+    """The parameter keys that size or place the panel feature ``name`` (see
+    :class:`LayoutProblem`)."""
     keys: tuple[str, ...] = ()
     for start, found in _FEATURE_KEYS:
         if name.startswith(start):
@@ -268,49 +297,94 @@ def panel_layout(spec: TailSpec, k: int, half_angle: float | None = None) -> Pan
     cuts = _soa_cuts(spec, kind, t, depth, r_pitch_lo, r_pitch_hi, d_pocket)
     tube_cuts, passages = _tube_cuts(spec, k, t, r_pitch_lo, r_pitch_hi)
     socket_cuts, bosses = _rod_socket(spec, kind, t)
-    cuts += tube_cuts + socket_cuts + _insert_and_lightening_cuts(spec, kind, t, r_pitch_hi, r_rim_hi, d_pocket)
+    cuts += (
+        tube_cuts
+        + socket_cuts
+        + _insert_and_lightening_cuts(spec, kind, t, r_pitch_hi, r_rim_hi, d_pocket)
+    )
     return PanelLayout(
-        index=k, kind=kind, z0_mm=z0, thickness_mm=t,
-        rim_radius_lower_mm=r_rim_lo, rim_radius_upper_mm=r_rim_hi,
-        pitch_radius_lower_mm=r_pitch_lo, pitch_radius_upper_mm=r_pitch_hi,
-        pocket_depth_mm=depth, lower_pockets=lower, upper_pockets=upper,
-        cuts=tuple(cuts), bosses=tuple(bosses), passages=tuple(passages),
+        index=k,
+        kind=kind,
+        z0_mm=z0,
+        thickness_mm=t,
+        rim_radius_lower_mm=r_rim_lo,
+        rim_radius_upper_mm=r_rim_hi,
+        pitch_radius_lower_mm=r_pitch_lo,
+        pitch_radius_upper_mm=r_pitch_hi,
+        pocket_depth_mm=depth,
+        lower_pockets=lower,
+        upper_pockets=upper,
+        cuts=tuple(cuts),
+        bosses=tuple(bosses),
+        passages=tuple(passages),
     )
 
 
-def _soa_cuts(spec: TailSpec, kind: str, t: float, depth: float, r_pitch_lo: float, r_pitch_hi: float,
-              d_pocket: float) -> list[Cyl]:
-    """Each SOA's pockets on the faces it meets, and the channel through the panel (the root: the fitting
-    port) that feeds it."""
+def _soa_cuts(
+    spec: TailSpec,
+    kind: str,
+    t: float,
+    depth: float,
+    r_pitch_lo: float,
+    r_pitch_hi: float,
+    d_pocket: float,
+) -> list[Cyl]:
+    """Each SOA's pockets on the faces it meets, and the channel through the panel (the root: the
+    fitting port) that feeds it."""
     j = spec.joint
     cuts: list[Cyl] = []
     for i, a in enumerate(soa_angles_deg(), start=1):
         lo_xy = polar(r_pitch_lo, a)
         hi_xy = polar(r_pitch_hi, a)
         if kind != "root":
-            cuts.append(Cyl(f"pocket_lower_{i}", "pocket", (*lo_xy, -1e-3), (*lo_xy, depth), d_pocket))
+            cuts.append(
+                Cyl(f"pocket_lower_{i}", "pocket", (*lo_xy, -1e-3), (*lo_xy, depth), d_pocket)
+            )
         if kind != "tip":
-            cuts.append(Cyl(f"pocket_upper_{i}", "pocket", (*hi_xy, t - depth), (*hi_xy, t + 1e-3), d_pocket))
+            cuts.append(
+                Cyl(
+                    f"pocket_upper_{i}", "pocket", (*hi_xy, t - depth), (*hi_xy, t + 1e-3), d_pocket
+                )
+            )
         if kind == "intermediate":
             # Oblique by the taper (a few hundredths of a mm) so both pockets stay concentric.
-            cuts.append(Cyl(f"channel_{i}", "channel", (*lo_xy, -1e-3), (*hi_xy, t + 1e-3),
-                            hole_d(spec, j.channel_diameter_mm)))
+            cuts.append(
+                Cyl(
+                    f"channel_{i}",
+                    "channel",
+                    (*lo_xy, -1e-3),
+                    (*hi_xy, t + 1e-3),
+                    hole_d(spec, j.channel_diameter_mm),
+                )
+            )
         elif kind == "root":
-            cuts.append(Cyl(f"fitting_port_{i}", "port", (*hi_xy, -1e-3), (*hi_xy, t + 1e-3),
-                            hole_d(spec, spec.mount.fitting_tap_drill_mm), tapped(spec.mount.fitting_tap_drill_mm)))
+            cuts.append(
+                Cyl(
+                    f"fitting_port_{i}",
+                    "port",
+                    (*hi_xy, -1e-3),
+                    (*hi_xy, t + 1e-3),
+                    hole_d(spec, spec.mount.fitting_tap_drill_mm),
+                    tapped(spec.mount.fitting_tap_drill_mm),
+                )
+            )
     return cuts
 
 
-def _tube_cuts(spec: TailSpec, k: int, t: float, r_pitch_lo: float, r_pitch_hi: float) -> tuple[list[Cyl], list[Cyl]]:
-    """The tubes of the distal segments through panel k (segment s >= 2 starts at boundary panel p_s, where
-    its tubes end in ports, passages and feed holes): (cuts, passages)."""
+def _tube_cuts(
+    spec: TailSpec, k: int, t: float, r_pitch_lo: float, r_pitch_hi: float
+) -> tuple[list[Cyl], list[Cyl]]:
+    """The tubes of the distal segments through panel k (segment s >= 2 starts at boundary panel
+    p_s, where its tubes end in ports, passages and feed holes): (cuts, passages)."""
     j = spec.joint
     angles = soa_angles_deg()
     cuts: list[Cyl] = []
     passages: list[Cyl] = []
     d_tube = tube_hole_mm(spec)
-    rings = {2: (spec.tubes.inner_radius_mm, mid_angles_deg()),
-             3: (spec.tubes.second_radius_mm, angles)}
+    rings = {
+        2: (spec.tubes.inner_radius_mm, mid_angles_deg()),
+        3: (spec.tubes.second_radius_mm, angles),
+    }
     for s in range(2, spec.segments + 1):
         p_s = spec.joints_per_segment * (s - 1)
         if s not in rings:
@@ -326,12 +400,23 @@ def _tube_cuts(spec: TailSpec, k: int, t: float, r_pitch_lo: float, r_pitch_hi: 
                 # Tube port on the lower face, a passage at mid-thickness to the
                 # axis of SOA i, and a feed hole up into its upper pocket.
                 zm = t / 2.0
-                cuts.append(Cyl(f"tube_port_s{s}_{i}", "tube_port", (*xy, -1e-3),
-                                (*xy, spec.tubes.port_depth_mm), hole_d(spec, spec.tubes.outer_diameter_mm)))
+                cuts.append(
+                    Cyl(
+                        f"tube_port_s{s}_{i}",
+                        "tube_port",
+                        (*xy, -1e-3),
+                        (*xy, spec.tubes.port_depth_mm),
+                        hole_d(spec, spec.tubes.outer_diameter_mm),
+                    )
+                )
                 target = polar(r_pitch_hi, angles[i - 1])
                 d_pass = hole_d(spec, spec.tubes.passage_diameter_mm)
-                passages.append(Cyl(f"passage_s{s}_{i}", "passage", (*xy, zm), (*target, zm), d_pass))
-                cuts.append(Cyl(f"feed_s{s}_{i}", "feed", (*target, zm), (*target, t + 1e-3), d_pass))
+                passages.append(
+                    Cyl(f"passage_s{s}_{i}", "passage", (*xy, zm), (*target, zm), d_pass)
+                )
+                cuts.append(
+                    Cyl(f"feed_s{s}_{i}", "feed", (*target, zm), (*target, t + 1e-3), d_pass)
+                )
     return cuts, passages
 
 
@@ -339,7 +424,9 @@ def _rod_socket(spec: TailSpec, kind: str, t: float) -> tuple[list[Cyl], list[Cy
     """The vertebra's socket: the rod bore and, for set screws, the collar, its screw and its bore:
     (cuts, bosses)."""
     d_rod = rod_bore_mm(spec)
-    cuts = [Cyl("rod_bore", "rod", (0.0, 0.0, -1e-3), (0.0, 0.0, t + 1e-3), d_rod, rod_thread(spec))]
+    cuts = [
+        Cyl("rod_bore", "rod", (0.0, 0.0, -1e-3), (0.0, 0.0, t + 1e-3), d_rod, rod_thread(spec))
+    ]
     bosses: list[Cyl] = []
     if spec.vertebra.socket == "set_screw":
         boss_d = d_rod + 2 * spec.socket.boss_wall_mm
@@ -349,52 +436,100 @@ def _rod_socket(spec: TailSpec, kind: str, t: float) -> tuple[list[Cyl], list[Cy
             bosses.append(Cyl("clamp_boss", "boss", (0.0, 0.0, -h), (0.0, 0.0, 1e-3), boss_d))
             zc = -h / 2.0
         else:
-            bosses.append(Cyl("clamp_boss", "boss", (0.0, 0.0, t - 1e-3), (0.0, 0.0, t + h), boss_d))
+            bosses.append(
+                Cyl("clamp_boss", "boss", (0.0, 0.0, t - 1e-3), (0.0, 0.0, t + h), boss_d)
+            )
             zc = t + h / 2.0
         # Radial set screw along -Y (ventral midline, between SOA 3 and SOA 4).
-        cuts.append(Cyl("set_screw", "setscrew", (0.0, 0.0, zc), (0.0, -boss_d, zc),
-                        hole_d(spec, spec.socket.set_screw_tap_drill_mm), tapped(spec.socket.set_screw_tap_drill_mm)))
+        cuts.append(
+            Cyl(
+                "set_screw",
+                "setscrew",
+                (0.0, 0.0, zc),
+                (0.0, -boss_d, zc),
+                hole_d(spec, spec.socket.set_screw_tap_drill_mm),
+                tapped(spec.socket.set_screw_tap_drill_mm),
+            )
+        )
         z_lo, z_hi = bosses[-1].z_range
-        cuts.append(Cyl("rod_bore_boss", "rod", (0.0, 0.0, z_lo - 1e-3), (0.0, 0.0, z_hi + 1e-3), d_rod))
+        cuts.append(
+            Cyl("rod_bore_boss", "rod", (0.0, 0.0, z_lo - 1e-3), (0.0, 0.0, z_hi + 1e-3), d_rod)
+        )
     return cuts, bosses
 
 
-def _insert_and_lightening_cuts(spec: TailSpec, kind: str, t: float, r_pitch_hi: float, r_rim_hi: float,
-                                d_pocket: float) -> list[Cyl]:
-    """The root's mount inserts (else the lightening holes between the pockets) and the tip's payload
-    inserts."""
+def _insert_and_lightening_cuts(
+    spec: TailSpec, kind: str, t: float, r_pitch_hi: float, r_rim_hi: float, d_pocket: float
+) -> list[Cyl]:
+    """The root's mount inserts (else the lightening holes between the pockets) and the tip's
+    payload inserts."""
     cuts: list[Cyl] = []
     if kind == "root":
         for i, a in enumerate(mid_angles_deg(), start=1):
             xy = polar(spec.mount.bolt_circle_diameter_mm / 2, a)
-            cuts.append(Cyl(f"mount_insert_{i}", "insert", (*xy, -1e-3), (*xy, spec.mount.insert_depth_mm),
-                            hole_d(spec, spec.mount.insert_diameter_mm)))
+            cuts.append(
+                Cyl(
+                    f"mount_insert_{i}",
+                    "insert",
+                    (*xy, -1e-3),
+                    (*xy, spec.mount.insert_depth_mm),
+                    hole_d(spec, spec.mount.insert_diameter_mm),
+                )
+            )
     elif spec.lightening.hole_diameter_mm > 0:
         rho, _ = lightening_radius_mm(r_pitch_hi, r_rim_hi, d_pocket / 2)
         for i, a in enumerate(mid_angles_deg(), start=1):
             xy = polar(rho, a)
-            cuts.append(Cyl(f"lightening_{i}", "lightening", (*xy, -1e-3), (*xy, t + 1e-3),
-                            spec.lightening.hole_diameter_mm))
+            cuts.append(
+                Cyl(
+                    f"lightening_{i}",
+                    "lightening",
+                    (*xy, -1e-3),
+                    (*xy, t + 1e-3),
+                    spec.lightening.hole_diameter_mm,
+                )
+            )
     if kind == "tip":
         n = spec.payload.insert_count
         for i in range(n):
             xy = polar(spec.payload.insert_circle_diameter_mm / 2, 90.0 + 360.0 * i / n + 180.0 / n)
-            cuts.append(Cyl(f"payload_insert_{i + 1}", "insert", (*xy, t - spec.payload.insert_depth_mm),
-                            (*xy, t + 1e-3), hole_d(spec, spec.payload.insert_diameter_mm)))
+            cuts.append(
+                Cyl(
+                    f"payload_insert_{i + 1}",
+                    "insert",
+                    (*xy, t - spec.payload.insert_depth_mm),
+                    (*xy, t + 1e-3),
+                    hole_d(spec, spec.payload.insert_diameter_mm),
+                )
+            )
     return cuts
 
 
-def soa_frame(lower: PanelLayout, upper: PanelLayout, angle_deg: float, rotation_deg: float) -> np.ndarray:
-    """Placement (4 x 4, tail frame) of the SOA at ``angle_deg`` between two neighbouring panels: its lower
-    flange face centred on the lower panel's upper pocket floor, its axis to the upper panel's lower pocket
-    floor, its square turned by ``rotation_deg`` from the radial line (columns: the unit axes, the origin)."""
-    b = np.array([*polar(lower.pitch_radius_upper_mm, angle_deg),
-                  lower.z0_mm + lower.thickness_mm - lower.pocket_depth_mm])
-    m = np.array([*polar(upper.pitch_radius_lower_mm, angle_deg), upper.z0_mm + upper.pocket_depth_mm])
+def soa_frame(
+    lower: PanelLayout, upper: PanelLayout, angle_deg: float, rotation_deg: float
+) -> np.ndarray:
+    """Placement (4 x 4, tail frame) of the SOA at ``angle_deg`` between two neighbouring panels:
+    its lower flange face centred on the lower panel's upper pocket floor, its axis to the upper
+    panel's lower pocket floor, its square turned by ``rotation_deg`` from the radial line (columns:
+    the unit axes, the origin)."""
+    b = np.array(
+        [
+            *polar(lower.pitch_radius_upper_mm, angle_deg),
+            lower.z0_mm + lower.thickness_mm - lower.pocket_depth_mm,
+        ]
+    )
+    m = np.array(
+        [*polar(upper.pitch_radius_lower_mm, angle_deg), upper.z0_mm + upper.pocket_depth_mm]
+    )
     z = m - b
     z /= np.linalg.norm(z)
-    x = np.array([math.cos(math.radians(angle_deg + rotation_deg)), math.sin(math.radians(angle_deg + rotation_deg)),
-                  0.0])
+    x = np.array(
+        [
+            math.cos(math.radians(angle_deg + rotation_deg)),
+            math.sin(math.radians(angle_deg + rotation_deg)),
+            0.0,
+        ]
+    )
     x = x - np.dot(x, z) * z
     x /= np.linalg.norm(x)
     out = np.eye(4)
@@ -437,15 +572,20 @@ def _circle_gap(a: Cyl, b: Cyl) -> tuple[float, bool]:
 
 
 def _near_pairs(cuts: list[Cyl], need_mm: float) -> list[list[int]]:
-    """For each cut i, the cuts j > i (in order) whose circles may come within ``need_mm`` of it: every
-    pair but those whose plan-view gap (numpy's, within 1e-12 mm of :func:`_circle_gap`'s) exceeds it by
-    1e-6 mm, which no rule of :func:`panel_problems` on webs between cuts can flag. The pairs a panel has
-    are a few hundred; testing each in Python was most of :func:`max_feasible_taper_deg`'s bisection."""
+    """For each cut i, the cuts j > i (in order) whose circles may come within ``need_mm`` of it:
+    every pair but those whose plan-view gap (numpy's, within 1e-12 mm of :func:`_circle_gap`'s)
+    exceeds it by 1e-6 mm, which no rule of :func:`panel_problems` on webs between cuts can flag.
+    The pairs a panel has are a few hundred; testing each in Python was most of
+    :func:`max_feasible_taper_deg`'s bisection."""
     if len(cuts) < 2:
         return [[] for _ in cuts]
     xy = np.array([c.xy for c in cuts], float)
     r = np.array([c.diameter_mm / 2 for c in cuts], float)
-    gap = np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1]) - r[:, None] - r[None, :]
+    gap = (
+        np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1])
+        - r[:, None]
+        - r[None, :]
+    )
     ii, jj = np.nonzero(np.triu(gap < need_mm + 1e-6, 1))
     out: list[list[int]] = [[] for _ in cuts]
     for i, j in zip(ii.tolist(), jj.tolist()):
@@ -473,12 +613,25 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
     # Pockets from both faces plus a floor must fit in the panel.
     depth_total = lay.pocket_depth_mm * (int(lay.lower_pockets) + int(lay.upper_pockets))
     if depth_total + fab.socket_floor_mm > t + 1e-9:
-        out.append(LayoutProblem(f"{lay.name}: flange pockets ({lay.pocket_depth_mm:.3f} mm per face) deeper than "
-                                 f"the panel allows (thickness {t:.2f} mm, floor {fab.socket_floor_mm} mm)",
-                                 t - depth_total, fab.socket_floor_mm, ("pocket_depth",)))
+        out.append(
+            LayoutProblem(
+                f"{lay.name}: flange pockets ({lay.pocket_depth_mm:.3f} mm per face) deeper than "
+                f"the panel allows (thickness {t:.2f} mm, floor {fab.socket_floor_mm} mm)",
+                t - depth_total,
+                fab.socket_floor_mm,
+                ("pocket_depth",),
+            )
+        )
     if lay.pocket_depth_mm < 0:
-        out.append(LayoutProblem(f"{lay.name}: the SOA ({spec.soa.built_height_mm:.2f} mm) is shorter than the gap "
-                                 f"H_a ({spec.joint.gap_mm} mm)", lay.pocket_depth_mm, 0.0, ("pocket_depth",)))
+        out.append(
+            LayoutProblem(
+                f"{lay.name}: the SOA ({spec.soa.built_height_mm:.2f} mm) is shorter than the gap "
+                f"H_a ({spec.joint.gap_mm} mm)",
+                lay.pocket_depth_mm,
+                0.0,
+                ("pocket_depth",),
+            )
+        )
     cuts = list(lay.cuts)
     near = _near_pairs(cuts, max(fab.min_pocket_gap_mm, fab.min_wall_mm))
     for i, a in enumerate(cuts):
@@ -490,7 +643,11 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
         lip = rim - rho - ra
         need = fab.min_rim_lip_mm if a.role == "pocket" else fab.min_wall_mm
         if a.role not in ("setscrew",) and lip < need - 1e-9:
-            out.append(LayoutProblem(f"{lay.name}: {a.name} is {lip:.2f} mm from the rim", lip, need, (a.name, "rim")))
+            out.append(
+                LayoutProblem(
+                    f"{lay.name}: {a.name} is {lip:.2f} mm from the rim", lip, need, (a.name, "rim")
+                )
+            )
         for j in near[i]:
             b = cuts[j]
             if not _z_overlap(a, b) or "setscrew" in (a.role, b.role):
@@ -500,8 +657,14 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
                 continue
             need = fab.min_pocket_gap_mm if a.role == b.role == "pocket" else fab.min_wall_mm
             if gap < need - 1e-9:
-                out.append(LayoutProblem(f"{lay.name}: {a.name} and {b.name} leave a {gap:.2f} mm web", gap, need,
-                                         (a.name, b.name)))
+                out.append(
+                    LayoutProblem(
+                        f"{lay.name}: {a.name} and {b.name} leave a {gap:.2f} mm web",
+                        gap,
+                        need,
+                        (a.name, b.name),
+                    )
+                )
     for boss in lay.bosses:
         for b in cuts:
             if b.role in ("rod", "setscrew"):
@@ -510,8 +673,14 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
                 continue  # e.g. blind inserts on the face away from the collar
             gap, nested = _circle_gap(boss, b)
             if not nested and gap < fab.min_wall_mm - 1e-9:
-                out.append(LayoutProblem(f"{lay.name}: set-screw collar and {b.name} leave {gap:.2f} mm", gap,
-                                         fab.min_wall_mm, (boss.name, b.name)))
+                out.append(
+                    LayoutProblem(
+                        f"{lay.name}: set-screw collar and {b.name} leave {gap:.2f} mm",
+                        gap,
+                        fab.min_wall_mm,
+                        (boss.name, b.name),
+                    )
+                )
     for p in lay.passages:
         line = p.name.split("_", 1)[1]
         for b in cuts:
@@ -524,8 +693,14 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
                 continue
             web = _segment_point_distance(p.p0, p.p1, b.xy) - b.diameter_mm / 2 - p.diameter_mm / 2
             if web < fab.min_wall_mm - 1e-9:
-                out.append(LayoutProblem(f"{lay.name}: {p.name} passes {web:.2f} mm from {b.name}", web,
-                                         fab.min_wall_mm, (p.name, b.name)))
+                out.append(
+                    LayoutProblem(
+                        f"{lay.name}: {p.name} passes {web:.2f} mm from {b.name}",
+                        web,
+                        fab.min_wall_mm,
+                        (p.name, b.name),
+                    )
+                )
     return [found._replace(panel=lay.index) for found in out]
 
 
@@ -539,28 +714,39 @@ def _problems_at(spec: TailSpec, beta: float) -> list[LayoutProblem]:
 def _problems_at_tip(spec: TailSpec, beta: float) -> list[LayoutProblem]:
     """Bellows of neighbouring SOAs at the smallest pitch radius (the tip's)."""
     out: list[LayoutProblem] = []
-    r_min = spec.joint.pitch_diameter_mm / 2 - (spec.panels - 1) * spec.joint.joint_height_mm * math.tan(beta)
+    r_min = spec.joint.pitch_diameter_mm / 2 - (
+        spec.panels - 1
+    ) * spec.joint.joint_height_mm * math.tan(beta)
     gap = soa_neighbour_gap_mm(spec, r_min)
     if gap < spec.fabrication.min_pocket_gap_mm - 1e-9:
-        out.append(LayoutProblem(f"SOA bellows of neighbouring actuators leave {gap:.2f} mm at the tip", gap,
-                                 spec.fabrication.min_pocket_gap_mm, ("bellows",)))
+        out.append(
+            LayoutProblem(
+                f"SOA bellows of neighbouring actuators leave {gap:.2f} mm at the tip",
+                gap,
+                spec.fabrication.min_pocket_gap_mm,
+                ("bellows",),
+            )
+        )
     return out
 
 
 def _any_problem(spec: TailSpec, beta: float, first: tuple[int, ...] = ()) -> bool:
-    """Some rule of :func:`_problems_at` is broken (it stops at the first rule broken, trying the panels
-    ``first``, then the bellows at the tip (5 ms), then the other panels)."""
+    """Some rule of :func:`_problems_at` is broken (it stops at the first rule broken, trying the
+    panels ``first``, then the bellows at the tip (5 ms), then the other panels)."""
     hot = [k for k in first if k < spec.panels]
     others = [k for k in range(spec.panels) if k not in first]
-    return (any(panel_problems(spec, panel_layout(spec, k, beta)) for k in hot) or bool(_problems_at_tip(spec, beta))
-            or any(panel_problems(spec, panel_layout(spec, k, beta)) for k in others))
+    return (
+        any(panel_problems(spec, panel_layout(spec, k, beta)) for k in hot)
+        or bool(_problems_at_tip(spec, beta))
+        or any(panel_problems(spec, panel_layout(spec, k, beta)) for k in others)
+    )
 
 
 @lru_cache(maxsize=64)
 def max_feasible_taper_deg(spec: TailSpec) -> float:
-    """Largest cone half-angle for which every panel keeps its webs
-    (found by bisection over the same rules the validation applies; a cone that breaks one is left at
-    the first it breaks: 0.12 CPU s for the default tail instead of 0.21, the same angle)."""
+    """Largest cone half-angle for which every panel keeps its webs (found by bisection over the
+    same rules the validation applies; a cone that breaks one is left at the first it breaks: 0.12
+    CPU s for the default tail instead of 0.21, the same angle)."""
     if _problems_at(spec, 0.0):
         return 0.0
     lo, hi = 0.0, math.radians(10.0)
@@ -597,7 +783,8 @@ def _set_by(spec: TailSpec, problems: list[LayoutProblem]) -> str:
 
 
 def _binding_text(spec: TailSpec) -> str:
-    """:func:`binding_constraint` with the keys (and their values) that set the features it names."""
+    """:func:`binding_constraint` with the keys (and their values) that set the features it
+    names."""
     found = _binding_problem(spec)
     return found.desc + _set_by(spec, [found]) if found else "none"
 
@@ -606,17 +793,22 @@ def soa_is_sound(spec: TailSpec) -> bool:
     """The SOA's own rules hold (:func:`validate_layout` names any that does not), so the dimensions
     derived from Table II (fold levels, wall offset, interior) mean something."""
     s = spec.soa
-    return (s.long_side_mm > s.short_side_mm and s.origami_height_mm < s.height_mm
-            and s.short_side_mm - 2 * s.wall_offset_mm > 0.5 and 2 * s.fillet_radius_mm < s.short_side_mm)
+    return (
+        s.long_side_mm > s.short_side_mm
+        and s.origami_height_mm < s.height_mm
+        and s.short_side_mm - 2 * s.wall_offset_mm > 0.5
+        and 2 * s.fillet_radius_mm < s.short_side_mm
+    )
 
 
-#: Smallest cone the panels can be built with (other than none): below it the oblique air channels' end
-#: faces nearly coincide with the pocket floors and OCC's boolean cut returns the pockets as loose solids
-#: (found by the property tests: 1e-5 to 0.01 deg fail, 0.02 deg builds, for channels of 2 to 16 mm).
+#: Smallest cone the panels can be built with (other than none): below it the oblique air channels'
+#: end faces nearly coincide with the pocket floors and OCC's boolean cut returns the pockets as
+#: loose solids (found by the property tests: 1e-5 to 0.01 deg fail, 0.02 deg builds, for channels
+#: of 2 to 16 mm).
 MIN_BUILDABLE_TAPER_DEG = 0.05
-#: The longest chain whose exported MJCF passes its MuJoCo checks (couplings held within 0.01 rad, settled
-#: within 1 s): 6 (1 x 6, 2 x 3), 8 (2 x 4) and 9 (3 x 3) joints pass; 10 (2 x 5)
-#: and 12 (2 x 6, 3 x 4) fail.
+#: The longest chain whose exported MJCF passes its MuJoCo checks (couplings held within 0.01 rad,
+#: settled within 1 s): 6 (1 x 6, 2 x 3), 8 (2 x 4) and 9 (3 x 3) joints pass; 10 (2 x 5) and 12 (2
+#: x 6, 3 x 4) fail.
 MAX_JOINTS = 9
 #: The [fabrication] minimums a panel rule can require (the message names the one that binds).
 _WEB_KEYS = ("min_pocket_gap_mm", "min_wall_mm", "min_rim_lip_mm", "socket_floor_mm")
@@ -635,66 +827,98 @@ def validate_layout(spec: TailSpec) -> list[str]:
 
 
 def _axial_problems(spec: TailSpec) -> list[str]:
-    """What cannot stack along the axis: the gap in the joint, the SOA's shape and interior, its flanges'
-    pockets in the panels, the number of joints and segments, the tube ports' depth. Each of the first
-    rules stops the others (their numbers are meaningless past it)."""
+    """What cannot stack along the axis: the gap in the joint, the SOA's shape and interior, its
+    flanges' pockets in the panels, the number of joints and segments, the tube ports' depth. Each
+    of the first rules stops the others (their numbers are meaningless past it)."""
     problems: list[str] = []
     j = spec.joint
     if j.gap_mm >= j.joint_height_mm:
-        problems.append(f"joint.gap_mm = {j.gap_mm}: must be below joint.joint_height_mm = {j.joint_height_mm} "
-                        "(the difference is the panel thickness)")
+        problems.append(
+            f"joint.gap_mm = {j.gap_mm}: must be below joint.joint_height_mm = {j.joint_height_mm} "
+            "(the difference is the panel thickness)"
+        )
         return problems
     if spec.soa.long_side_mm <= spec.soa.short_side_mm:
-        problems.append(f"soa.long_side_mm = {spec.soa.long_side_mm}: must exceed soa.short_side_mm = "
-                        f"{spec.soa.short_side_mm}")
+        problems.append(
+            f"soa.long_side_mm = {spec.soa.long_side_mm}: must exceed soa.short_side_mm = "
+            f"{spec.soa.short_side_mm}"
+        )
         return problems
     if spec.soa.origami_height_mm >= spec.soa.height_mm:
-        problems.append(f"soa.origami_height_mm = {spec.soa.origami_height_mm}: must be below soa.height_mm "
-                        f"= {spec.soa.height_mm} (the rest is the two flanges)")
+        problems.append(
+            f"soa.origami_height_mm = {spec.soa.origami_height_mm}: must be below soa.height_mm "
+            f"= {spec.soa.height_mm} (the rest is the two flanges)"
+        )
         return problems
     inner = spec.soa.short_side_mm - 2 * spec.soa.wall_offset_mm
     if inner <= 0.5:
         soa = spec.soa
-        problems.append(f"soa.facet_thickness_mm = {soa.facet_thickness_mm}: leaves {inner:.2f} mm of interior at the "
-                        f"valleys (soa.short_side_mm = {soa.short_side_mm} less twice the wall's "
-                        f"{soa.wall_offset_mm:.2f} mm offset, which the fold's slope sets: soa.long_side_mm = "
-                        f"{soa.long_side_mm}, soa.origami_height_mm = {soa.origami_height_mm}, soa.pleats = "
-                        f"{soa.pleats}); allowed: > 0.5 mm")
+        problems.append(
+            f"soa.facet_thickness_mm = {soa.facet_thickness_mm}: leaves {inner:.2f} mm of interior "
+            "at the "
+            f"valleys (soa.short_side_mm = {soa.short_side_mm} less twice the wall's "
+            f"{soa.wall_offset_mm:.2f} mm offset, which the fold's slope sets: soa.long_side_mm = "
+            f"{soa.long_side_mm}, soa.origami_height_mm = {soa.origami_height_mm}, soa.pleats = "
+            f"{soa.pleats}); allowed: > 0.5 mm"
+        )
     if 2 * spec.soa.fillet_radius_mm >= spec.soa.short_side_mm:
-        problems.append(f"soa.fillet_radius_mm = {spec.soa.fillet_radius_mm}: must be below half of "
-                        f"soa.short_side_mm = {spec.soa.short_side_mm}")
+        problems.append(
+            f"soa.fillet_radius_mm = {spec.soa.fillet_radius_mm}: must be below half of "
+            f"soa.short_side_mm = {spec.soa.short_side_mm}"
+        )
     depth = pocket_depth_mm(spec)
     floor = spec.fabrication.socket_floor_mm
     if depth < 0:
         problems.append(
-            f"soa.height_mm = {spec.soa.height_mm}: the SOA as built ({spec.soa.built_height_mm:.3f} mm, "
-            f"soa.fold_height_from = {spec.soa.fold_height_from!r}) is {-2 * depth:.3f} mm shorter than the gap "
-            f"joint.gap_mm = {j.gap_mm}, so its flanges cannot sit in the panels' pockets; allowed: an SOA at "
-            "least as long as the gap (change soa.height_mm, soa.origami_height_mm or joint.gap_mm)")
+            f"soa.height_mm = {spec.soa.height_mm}: the SOA as built "
+            f"({spec.soa.built_height_mm:.3f} mm, "
+            f"soa.fold_height_from = {spec.soa.fold_height_from!r}) is {-2 * depth:.3f} mm shorter "
+            "than the gap "
+            f"joint.gap_mm = {j.gap_mm}, so its flanges cannot sit in the panels' pockets; "
+            "allowed: an SOA at "
+            "least as long as the gap (change soa.height_mm, soa.origami_height_mm or joint.gap_mm)"
+        )
         return problems
     if 2 * depth + floor > j.panel_thickness_mm + 1e-9:
         problems.append(
-            f"joint.joint_height_mm = {j.joint_height_mm}: flange pockets deeper than the panel: two pockets of "
-            f"(H - H_a) / 2 = {depth:.3f} mm plus a {floor} mm floor need {2 * depth + floor:.3f} mm, the panel "
-            f"is H_j - H_a = {j.panel_thickness_mm:.3f} mm (change joint.joint_height_mm, joint.gap_mm, "
-            "soa.height_mm or fabrication.socket_floor_mm)")
+            f"joint.joint_height_mm = {j.joint_height_mm}: flange pockets deeper than the panel: "
+            "two pockets of "
+            f"(H - H_a) / 2 = {depth:.3f} mm plus a {floor} mm floor need {2 * depth + floor:.3f} "
+            "mm, the panel "
+            f"is H_j - H_a = {j.panel_thickness_mm:.3f} mm (change joint.joint_height_mm, "
+            "joint.gap_mm, "
+            "soa.height_mm or fabrication.socket_floor_mm)"
+        )
         return problems
     if spec.segments > 3:
-        problems.append(f"segments = {spec.segments}: tube rings exist for the distal tubes of at most 3 "
-                        "segments; allowed: 1 to 3")
+        problems.append(
+            f"segments = {spec.segments}: tube rings exist for the distal tubes of at most 3 "
+            "segments; allowed: 1 to 3"
+        )
     elif spec.joints > MAX_JOINTS:
         problems.append(
-            f"joints_per_segment = {spec.joints_per_segment} with segments = {spec.segments}: {spec.joints} joints; "
-            f"allowed: at most {MAX_JOINTS} joints (joints_per_segment <= {MAX_JOINTS // spec.segments} here): the "
-            "exported MJCF's longer chains fail its checks (measured: 10 joints held the couplings to 0.011 rad, "
-            "limit 0.01, and still moved 0.22 rad/s 1 s after release, limit 0.1; 12 joints worse)")
-    if spec.tubes.port_depth_mm < j.panel_thickness_mm / 2 or \
-            spec.tubes.port_depth_mm > j.panel_thickness_mm - spec.fabrication.socket_floor_mm:
-        problems.append(f"tubes.port_depth_mm = {spec.tubes.port_depth_mm}: must reach the mid-plane passage and "
-                        f"keep a floor (fabrication.socket_floor_mm = {spec.fabrication.socket_floor_mm!r}) in the "
-                        f"{j.panel_thickness_mm:.2f} mm panels (joint.joint_height_mm = {j.joint_height_mm!r} minus "
-                        f"joint.gap_mm = {j.gap_mm!r}): allowed {j.panel_thickness_mm / 2:.2f} to "
-                        f"{j.panel_thickness_mm - spec.fabrication.socket_floor_mm:.2f} mm")
+            f"joints_per_segment = {spec.joints_per_segment} with segments = {spec.segments}: "
+            f"{spec.joints} joints; "
+            f"allowed: at most {MAX_JOINTS} joints (joints_per_segment <= "
+            f"{MAX_JOINTS // spec.segments} here): the "
+            "exported MJCF's longer chains fail its checks (measured: 10 joints held the couplings "
+            "to 0.011 rad, "
+            "limit 0.01, and still moved 0.22 rad/s 1 s after release, limit 0.1; 12 joints worse)"
+        )
+    if (
+        spec.tubes.port_depth_mm < j.panel_thickness_mm / 2
+        or spec.tubes.port_depth_mm > j.panel_thickness_mm - spec.fabrication.socket_floor_mm
+    ):
+        problems.append(
+            f"tubes.port_depth_mm = {spec.tubes.port_depth_mm}: must reach the mid-plane passage "
+            "and "
+            f"keep a floor (fabrication.socket_floor_mm = {spec.fabrication.socket_floor_mm!r}) in "
+            "the "
+            f"{j.panel_thickness_mm:.2f} mm panels (joint.joint_height_mm = {j.joint_height_mm!r} "
+            "minus "
+            f"joint.gap_mm = {j.gap_mm!r}): allowed {j.panel_thickness_mm / 2:.2f} to "
+            f"{j.panel_thickness_mm - spec.fabrication.socket_floor_mm:.2f} mm"
+        )
     return problems
 
 
@@ -707,12 +931,17 @@ def _rim_problems(spec: TailSpec) -> list[str]:
         soa = spec.soa
         reach = j.pitch_diameter_mm / 2 + radial_out
         problems.append(
-            f"joint.panel_diameter_mm = {j.panel_diameter_mm}: the rim lies inside the SOA envelope: "
-            f"joint.pitch_diameter_mm / 2 = {j.pitch_diameter_mm / 2:.2f} mm plus the bellows' {radial_out:.2f} mm "
-            f"(soa.long_side_mm = {soa.long_side_mm!r}, soa.fillet_radius_mm = {soa.fillet_radius_mm!r}, "
+            f"joint.panel_diameter_mm = {j.panel_diameter_mm}: the rim lies inside the SOA "
+            "envelope: "
+            f"joint.pitch_diameter_mm / 2 = {j.pitch_diameter_mm / 2:.2f} mm plus the bellows' "
+            f"{radial_out:.2f} mm "
+            f"(soa.long_side_mm = {soa.long_side_mm!r}, soa.fillet_radius_mm = "
+            f"{soa.fillet_radius_mm!r}, "
             f"soa.rotation_deg = {soa.rotation_deg!r}) reach {reach:.2f} mm, beyond the rim's "
-            f"{j.panel_diameter_mm / 2:.2f} mm; allowed: >= {math.ceil(200 * reach) / 100:g} mm, or a smaller "
-            "joint.pitch_diameter_mm or soa.long_side_mm")
+            f"{j.panel_diameter_mm / 2:.2f} mm; allowed: >= {math.ceil(200 * reach) / 100:g} mm, "
+            "or a smaller "
+            "joint.pitch_diameter_mm or soa.long_side_mm"
+        )
     return problems
 
 
@@ -720,28 +949,42 @@ def _taper_problems(spec: TailSpec) -> list[str]:
     """A cone beyond the feasible one, or too slight to cut; either stops the panel rules."""
     if spec.taper.half_angle_deg != AUTO:
         beta_max = max_feasible_taper_deg(spec)
-        # Rules broken without any cone are the other keys' doing: reported below, not as the taper's.
+        # Rules broken without any cone are the other keys' doing: reported below, not as the
+        # taper's.
         if float(spec.taper.half_angle_deg) > beta_max + 1e-9 and not _problems_at(spec, 0.0):
-            return [f"taper.half_angle_deg = {spec.taper.half_angle_deg}: beyond the feasible cone; allowed: 0 to "
-                    f"{beta_max:.4f} deg ('auto' picks it); limited by: {_binding_text(spec)}"]
+            return [
+                f"taper.half_angle_deg = {spec.taper.half_angle_deg}: beyond the feasible cone; "
+                "allowed: 0 to "
+                f"{beta_max:.4f} deg ('auto' picks it); limited by: {_binding_text(spec)}"
+            ]
     beta_deg = math.degrees(half_angle_rad(spec))
     if 0.0 < beta_deg < MIN_BUILDABLE_TAPER_DEG and spec.joints_per_segment > 1:
-        why = (f"a cone below {MIN_BUILDABLE_TAPER_DEG:g} deg tilts the intermediate panels' air channels so "
-               "little that their end faces lie within micrometres of the flange pockets' floors, which the CAD "
-               "kernel cannot cut (the panel falls apart)")
+        why = (
+            f"a cone below {MIN_BUILDABLE_TAPER_DEG:g} deg tilts the intermediate panels' air "
+            "channels so "
+            "little that their end faces lie within micrometres of the flange pockets' floors, "
+            "which the CAD "
+            "kernel cannot cut (the panel falls apart)"
+        )
         beta_max = max_feasible_taper_deg(spec)
         if spec.taper.half_angle_deg == AUTO:
-            return [f"taper.half_angle_deg = 'auto': the largest feasible cone is {beta_deg:.4f} deg "
-                    f"(limited by: {_binding_text(spec)}); {why}; allowed: 0 (no taper)"]
-        wider = f", or {MIN_BUILDABLE_TAPER_DEG:g} to {beta_max:.4f} deg" \
-            if beta_max >= MIN_BUILDABLE_TAPER_DEG else ""
+            return [
+                f"taper.half_angle_deg = 'auto': the largest feasible cone is {beta_deg:.4f} deg "
+                f"(limited by: {_binding_text(spec)}); {why}; allowed: 0 (no taper)"
+            ]
+        wider = (
+            f", or {MIN_BUILDABLE_TAPER_DEG:g} to {beta_max:.4f} deg"
+            if beta_max >= MIN_BUILDABLE_TAPER_DEG
+            else ""
+        )
         return [f"taper.half_angle_deg = {spec.taper.half_angle_deg}: {why}; allowed: 0{wider}"]
     return []
 
 
 def mjf_problems(spec: TailSpec) -> list[str]:
-    """The panels (printed flat in MJF, either way round on the bed, as the print job lays them out) must
-    fit the MJF build volume: the widest (the root's rim) and the tallest (a set-screw collar adds to it)."""
+    """The panels (printed flat in MJF, either way round on the bed, as the print job lays them out)
+    must fit the MJF build volume: the widest (the root's rim) and the tallest (a set-screw collar
+    adds to it)."""
     fp = spec.fabrication_package
     beta = half_angle_rad(spec)
     layouts = [panel_layout(spec, k, beta) for k in range(spec.panels)]
@@ -756,18 +999,26 @@ def mjf_problems(spec: TailSpec) -> list[str]:
     out = []
     lo_key = "mjf_x_mm" if fp.mjf_x_mm <= fp.mjf_y_mm else "mjf_y_mm"
     if width > min(fp.mjf_x_mm, fp.mjf_y_mm) + 1e-9:
-        out.append(f"fabrication_package.{lo_key} = {getattr(fp, lo_key)!r}: {wide.name} prints {width:.2f} mm across "
-                   f"(joint.panel_diameter_mm), wider than the {fp.mjf_x_mm:g} x {fp.mjf_y_mm:g} mm MJF bed; allowed: "
-                   f"fabrication_package.mjf_x_mm and mjf_y_mm >= {math.ceil(width * 100) / 100:g} mm")
+        out.append(
+            f"fabrication_package.{lo_key} = {getattr(fp, lo_key)!r}: {wide.name} prints "
+            f"{width:.2f} mm across "
+            f"(joint.panel_diameter_mm), wider than the {fp.mjf_x_mm:g} x {fp.mjf_y_mm:g} mm MJF "
+            "bed; allowed: "
+            f"fabrication_package.mjf_x_mm and mjf_y_mm >= {math.ceil(width * 100) / 100:g} mm"
+        )
     if height(tall) > fp.mjf_z_mm + 1e-9:
-        out.append(f"fabrication_package.mjf_z_mm = {fp.mjf_z_mm!r}: {tall.name} prints {height(tall):.2f} mm tall "
-                   f"(the panel and its set-screw collar), more than the MJF build volume; allowed: >= "
-                   f"{math.ceil(height(tall) * 100) / 100:g} mm")
+        out.append(
+            f"fabrication_package.mjf_z_mm = {fp.mjf_z_mm!r}: {tall.name} prints "
+            f"{height(tall):.2f} mm tall "
+            f"(the panel and its set-screw collar), more than the MJF build volume; allowed: >= "
+            f"{math.ceil(height(tall) * 100) / 100:g} mm"
+        )
     return out
 
 
 def _allowed_values(spec: TailSpec, key: str, holds) -> str | None:
-    """What ``key`` may be for ``holds(spec with that value)``, the other keys as they are (None: nothing)."""
+    """What ``key`` may be for ``holds(spec with that value)``, the other keys as they are (None:
+    nothing)."""
     *tables, name = key.split(".")
     section = key_value(spec, ".".join(tables)) if tables else spec
     meta = {f.name: f.metadata for f in dataclasses.fields(section)}[name]
@@ -805,31 +1056,35 @@ def _panels_text(indices: list[int]) -> str:
     return ", ".join(f"{r[0]}-{r[-1]}" if len(r) > 1 else f"{r[0]}" for r in runs)
 
 
-#: Candidate tails :func:`panel_rule_messages` judges, at most, before it stops looking for the next key's
-#: allowed values (a few ms each): a file whose rim cut through every feature named 18 keys, each of
-#: which alone could not mend it, and took 16-39 s to refuse, over the 10 s a load may take.
+#: Candidate tails :func:`panel_rule_messages` judges, at most, before it stops looking for the next
+#: key's allowed values (a few ms each): a file whose rim cut through every feature named 18 keys,
+#: each of which alone could not mend it, and took 16-39 s to refuse, over the 10 s a load may take.
 ALLOWED_SEARCH_BUDGET = 1200
-#: Candidates judged for one key before its first feasible value, at most: the search's values nearest the
-#: file's (1.6 % steps) from 0.27 to 3.7 times it, a new user's edit either way (a key that cannot mend
-#: the panels alone otherwise tries 322).
+#: Candidates judged for one key before its first feasible value, at most: the search's values
+#: nearest the file's (1.6 % steps) from 0.27 to 3.7 times it, a new user's edit either way (a key
+#: that cannot mend the panels alone otherwise tries 322).
 ALLOWED_TRIES_PER_KEY = 160
 
 
 class _SearchSpent(Exception):
-    """A key's search for an allowed value judged :data:`ALLOWED_TRIES_PER_KEY` candidates, none feasible."""
+    """A key's search for an allowed value judged :data:`ALLOWED_TRIES_PER_KEY` candidates, none
+    feasible."""
 
 
 def panel_rule_messages(spec: TailSpec, beta: float) -> list[str]:
-    """The panel rules broken at cone ``beta`` (rad), as messages that name the keys the user writes.
+    """The panel rules broken at cone ``beta`` (rad), as messages that name the keys the user
+    writes.
 
-    First each key that sets a broken feature and could, alone, make every rule hold, with its value and
-    what it may be (searched key by key until :data:`ALLOWED_SEARCH_BUDGET` candidates were judged); then
-    each rule once (the same rule on other panels and feature pairs counted), its worst case, the web it
-    needs and the keys that set its features."""
+    First each key that sets a broken feature and could, alone, make every rule hold, with its value
+    and what it may be (searched key by key until :data:`ALLOWED_SEARCH_BUDGET` candidates were
+    judged); then each rule once (the same rule on other panels and feature pairs counted), its
+    worst case, the web it needs and the keys that set its features."""
     found = _problems_at(spec, beta)
     if not found:
         return []
-    at = 0.0 if spec.taper.half_angle_deg == AUTO else beta  # 'auto' finds a cone when the rules hold without one
+    at = (
+        0.0 if spec.taper.half_angle_deg == AUTO else beta
+    )  # 'auto' finds a cone when the rules hold without one
     keys = _keys_of(found)
     hot = tuple(dict.fromkeys(p.panel for p in found if p.panel is not None))
     out = []
@@ -854,23 +1109,38 @@ def panel_rule_messages(spec: TailSpec, beta: float) -> list[str]:
         if allowed is not None:
             unit = " mm" if key.endswith("_mm") and allowed[0] in "<>0123456789" else ""
             unit = " deg" if key.endswith("_deg") else unit
-            out.append(f"{key} = {key_value(spec, key)!r}: allowed: {allowed}{unit} for the panel rules below to "
-                       "hold, with the other keys as they are")
+            out.append(
+                f"{key} = {key_value(spec, key)!r}: allowed: {allowed}{unit} for the panel rules "
+                "below to "
+                "hold, with the other keys as they are"
+            )
     groups: dict[str, list[LayoutProblem]] = {}
     for p in found:
-        groups.setdefault(re.sub(r"\d+(\.\d+)?", "#", p.desc), []).append(p)  # same rule, any panel or size
+        groups.setdefault(re.sub(r"\d+(\.\d+)?", "#", p.desc), []).append(
+            p
+        )  # same rule, any panel or size
     for same in groups.values():
         worst = min(same, key=lambda p: p.measured_mm - p.need_mm)
         need = worst.need_mm
-        web = " or ".join(f"fabrication.{k} = {getattr(spec.fabrication, k)!r}" for k in _WEB_KEYS
-                          if getattr(spec.fabrication, k) == need) or f"{need:g} mm"
+        web = (
+            " or ".join(
+                f"fabrication.{k} = {getattr(spec.fabrication, k)!r}"
+                for k in _WEB_KEYS
+                if getattr(spec.fabrication, k) == need
+            )
+            or f"{need:g} mm"
+        )
         line = f"{worst.desc}, {need - worst.measured_mm:.2f} mm short (allowed: >= {web})"
         panels = [p.panel for p in same if p.panel is not None]
         if len(same) > 1:
-            line += f"; {len(same) - 1} more like it" + (f" (panels {_panels_text(panels)})" if panels else "")
+            line += f"; {len(same) - 1} more like it" + (
+                f" (panels {_panels_text(panels)})" if panels else ""
+            )
         out.append(line + _set_by(spec, same))
     return out
 
 
 def replace_taper(spec: TailSpec, half_angle_deg: float | str) -> TailSpec:
-    return dataclasses.replace(spec, taper=dataclasses.replace(spec.taper, half_angle_deg=half_angle_deg))
+    return dataclasses.replace(
+        spec, taper=dataclasses.replace(spec.taper, half_angle_deg=half_angle_deg)
+    )

@@ -25,7 +25,8 @@ from typing import Any
 from .tables import _SCHEMA, AUTO, NO_ROD, Material, TailSpec
 from .twin import RIGID_TWIN_MATERIAL
 
-#: The rigid comparison tail (parts/rigid_tail.py, the fabrication package) is printed in this material.
+#: The rigid comparison tail (parts/rigid_tail.py, the fabrication package) is printed in this
+#: material.
 
 
 class InputFileError(ValueError):
@@ -56,7 +57,9 @@ def _allowed(meta: dict[str, Any]) -> str:
     for key, sym in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<=")):
         if meta.get(key) is not None:
             bound = meta[key]  # whole numbers in full (a seed's 2147483647, not 2.14748e+09)
-            bounds.append(f"{sym} {int(bound) if float(bound).is_integer() else format(bound, 'g')}")
+            bounds.append(
+                f"{sym} {int(bound) if float(bound).is_integer() else format(bound, 'g')}"
+            )
     return " and ".join(bounds) if bounds else "any value"
 
 
@@ -106,7 +109,8 @@ def _build(cls: type, data: Any, prefix: str, problems: list[str]) -> Any:
         if key not in fields:
             where = f"{prefix}.{key}" if prefix else key
             problems.append(
-                f"{where}: unknown key; allowed keys in [{prefix or 'top level'}]: {', '.join(fields)}"
+                f"{where}: unknown key; allowed keys in [{prefix or 'top level'}]: "
+                f"{', '.join(fields)}"
             )
     values: dict[str, Any] = {}
     for name, f in fields.items():
@@ -178,9 +182,14 @@ def spec_from_dict(data: dict[str, Any], source: str | Path = "<dict>") -> TailS
     # Geometry: the panels, then what the generators build on them (one set of derived numbers each,
     # shared with the generators: parameters/layout.py, parameters/molds.py, parameters/twin.py).
     problems = validate_layout(spec)
-    problems += mold_problems(spec.soa, spec.joint.base_diameter_mm, spec.casting) if soa_is_sound(spec) else []
+    problems += (
+        mold_problems(spec.soa, spec.joint.base_diameter_mm, spec.casting)
+        if soa_is_sound(spec)
+        else []
+    )
     if not problems:
-        # What the analyses are asked for, against what the layout gives them (parameters/feasibility.py).
+        # What the analyses are asked for, against what the layout gives them
+        # (parameters/feasibility.py).
         problems = twin_problems(spec) + clearance_problems(spec)
     if problems:
         raise ParamError(source, problems)
@@ -188,48 +197,77 @@ def spec_from_dict(data: dict[str, Any], source: str | Path = "<dict>") -> TailS
 
 
 def material_problems(spec: TailSpec) -> list[str]:
-    """Every material key named anywhere in the spec (and the rigid twin's fixed one) must be in [materials]."""
+    """Every material key named anywhere in the spec (and the rigid twin's fixed one) must be in
+    [materials]."""
     out = []
     allowed = ", ".join(spec.materials)
-    for key, value in (("use.panel", spec.use.panel), ("use.soa", spec.use.soa),
-                       ("vertebra.material", spec.vertebra.material),
-                       ("fabrication_package.core_material", spec.fabrication_package.core_material),
-                       ("fabrication_package.mold_material", spec.fabrication_package.mold_material)):
+    for key, value in (
+        ("use.panel", spec.use.panel),
+        ("use.soa", spec.use.soa),
+        ("vertebra.material", spec.vertebra.material),
+        ("fabrication_package.core_material", spec.fabrication_package.core_material),
+        ("fabrication_package.mold_material", spec.fabrication_package.mold_material),
+    ):
         if key == "vertebra.material" and value == NO_ROD:
             continue
         if value not in spec.materials:
             extra = f" (or {NO_ROD!r}: no rod)" if key == "vertebra.material" else ""
-            out.append(f"{key} = {value!r}: not a material in [materials]; allowed: {allowed}{extra}")
+            out.append(
+                f"{key} = {value!r}: not a material in [materials]; allowed: {allowed}{extra}"
+            )
     rod = spec.calibration.rod_material
     if rod and rod not in spec.materials:
-        out.append(f"calibration.rod_material = {rod!r}: not a material in [materials]; allowed: {allowed}")
+        out.append(
+            f"calibration.rod_material = {rod!r}: not a material in [materials]; allowed: {allowed}"
+        )
     if RIGID_TWIN_MATERIAL not in spec.materials:
-        out.append(f"materials.{RIGID_TWIN_MATERIAL}: missing; the rigid comparison tail is printed in "
-                   f"{RIGID_TWIN_MATERIAL!r} and its mass needs [materials.{RIGID_TWIN_MATERIAL}] (the file names: "
-                   f"{allowed})")
+        out.append(
+            f"materials.{RIGID_TWIN_MATERIAL}: missing; the rigid comparison tail is printed in "
+            f"{RIGID_TWIN_MATERIAL!r} and its mass needs [materials.{RIGID_TWIN_MATERIAL}] (the "
+            "file names: "
+            f"{allowed})"
+        )
     return out
 
 
 def actuation_problems(spec: TailSpec) -> list[str]:
     """The workspace protocol draws a pressurised line from atmospheric up to its maximum and a
-    depressurised one from its minimum up to atmospheric: each range must run upwards, and one must be
-    wider than a point (else the workspace is empty)."""
+    depressurised one from its minimum up to atmospheric: each range must run upwards, and one must
+    be wider than a point (else the workspace is empty)."""
     a = spec.actuation
     out = []
     if a.workspace_pressurised_max_kpa_abs < a.atmospheric_kpa:
-        out.append(f"actuation.workspace_pressurised_max_kpa_abs = {a.workspace_pressurised_max_kpa_abs!r}: below "
-                   f"actuation.atmospheric_kpa = {a.atmospheric_kpa!r} (a pressurised line draws from atmospheric "
-                   f"up to it); allowed: >= {a.atmospheric_kpa:g} kPa (absolute)")
+        out.append(
+            "actuation.workspace_pressurised_max_kpa_abs = "
+            f"{a.workspace_pressurised_max_kpa_abs!r}: below "
+            f"actuation.atmospheric_kpa = {a.atmospheric_kpa!r} (a pressurised line draws from "
+            "atmospheric "
+            f"up to it); allowed: >= {a.atmospheric_kpa:g} kPa (absolute)"
+        )
     if a.workspace_depressurised_min_kpa_abs > a.atmospheric_kpa:
-        out.append(f"actuation.workspace_depressurised_min_kpa_abs = {a.workspace_depressurised_min_kpa_abs!r}: above "
-                   f"actuation.atmospheric_kpa = {a.atmospheric_kpa!r} (a depressurised line draws from it up to "
-                   f"atmospheric); allowed: 0 to {a.atmospheric_kpa:g} kPa (absolute)")
-    if a.workspace_pressurised_max_kpa_abs == a.atmospheric_kpa == a.workspace_depressurised_min_kpa_abs:
-        out.append(f"actuation.workspace_pressurised_max_kpa_abs = {a.workspace_pressurised_max_kpa_abs!r} and "
-                   f"actuation.workspace_depressurised_min_kpa_abs = {a.workspace_depressurised_min_kpa_abs!r}: both "
-                   f"at actuation.atmospheric_kpa = {a.atmospheric_kpa!r}, so the workspace protocol draws no pressure "
-                   "and its workspace is the straight tail's tip alone; allowed: a pressurised maximum above it or a "
-                   "depressurised minimum below it")
+        out.append(
+            "actuation.workspace_depressurised_min_kpa_abs = "
+            f"{a.workspace_depressurised_min_kpa_abs!r}: above "
+            f"actuation.atmospheric_kpa = {a.atmospheric_kpa!r} (a depressurised line draws from "
+            "it up to "
+            f"atmospheric); allowed: 0 to {a.atmospheric_kpa:g} kPa (absolute)"
+        )
+    if (
+        a.workspace_pressurised_max_kpa_abs
+        == a.atmospheric_kpa
+        == a.workspace_depressurised_min_kpa_abs
+    ):
+        out.append(
+            "actuation.workspace_pressurised_max_kpa_abs = "
+            f"{a.workspace_pressurised_max_kpa_abs!r} and "
+            "actuation.workspace_depressurised_min_kpa_abs = "
+            f"{a.workspace_depressurised_min_kpa_abs!r}: both "
+            f"at actuation.atmospheric_kpa = {a.atmospheric_kpa!r}, so the workspace protocol "
+            "draws no pressure "
+            "and its workspace is the straight tail's tip alone; allowed: a pressurised maximum "
+            "above it or a "
+            "depressurised minimum below it"
+        )
     return out
 
 
@@ -255,7 +293,8 @@ def load_spec(path: str | Path) -> TailSpec:
 
 
 def read_toml(path: Path, error: type) -> dict[str, Any]:
-    """A user's TOML file as a mapping; ``error(path, [problem])`` when it is unreadable or not TOML."""
+    """A user's TOML file as a mapping; ``error(path, [problem])`` when it is unreadable or not
+    TOML."""
     try:
         return tomllib.loads(read_input_text(path, error))
     except tomllib.TOMLDecodeError as exc:

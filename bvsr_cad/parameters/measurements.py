@@ -29,30 +29,61 @@ MOTIONS = ("extension", "flexion", "waggle")
 
 #: quantity -> (unit, {condition: kind}, what it is). Kinds: "motion", "number".
 QUANTITIES: dict[str, tuple[str, dict[str, str], str]] = {
-    "segment_max_angle": ("deg", {"motion": "motion"},
-                          "one segment's quasi-static bending angle at the lines' pressure limits"),
-    "segment_blocked_force": ("N", {"motion": "motion"},
-                              "one segment's quasi-static blocked tip force at the lines' pressure limits"),
+    "segment_max_angle": (
+        "deg",
+        {"motion": "motion"},
+        "one segment's quasi-static bending angle at the lines' pressure limits",
+    ),
+    "segment_blocked_force": (
+        "N",
+        {"motion": "motion"},
+        "one segment's quasi-static blocked tip force at the lines' pressure limits",
+    ),
     "soa_stiffness": ("N/m", {"pressure_kpa": "number"}, "k of Eq 4 at a gauge pressure"),
-    "segment_peak_velocity": ("deg/s", {"motion": "motion", "pressure_bar": "number"},
-                              "one segment's peak bending rate before 38 deg, after a pressure pulse"),
-    "velocity_pressure_exponent": ("1", {"motion": "motion", "pressure_min_bar": "number",
-                                         "pressure_max_bar": "number"},
-                                   "x of V ~ P^x fitted over the pressures 1..6 bar"),
-    "time_pressure_exponent": ("1", {"motion": "motion", "pressure_min_bar": "number",
-                                     "pressure_max_bar": "number"},
-                               "x of T ~ P^x, T the time to bend 38 deg"),
-    "tip_workspace_radius": ("mm", {"segments": "number", "pressurised_max_kpa_abs": "number",
-                                    "depressurised_min_kpa_abs": "number"},
-                             "largest lateral distance of the tip from its rest point under the random protocol"),
-    "root_peak_torque": ("N m", {"pressure_bar": "number", "payload_g": "number", "motion": "motion"},
-                         "the whole tail's peak torque at the root after a pulse"),
-    "root_peak_force": ("N", {"pressure_bar": "number", "payload_g": "number", "motion": "motion"},
-                        "the whole tail's peak force at the root after a pulse"),
-    "cart_lift": ("mm", {"pressure_bar": "number", "motion": "motion"},
-                  "the hinged cart's front-end lift (Eq 20-22)"),
-    "cart_peak_angle": ("deg", {"pressure_bar": "number", "motion": "motion"},
-                        "the hinged cart's peak angle (Eq 20-22)"),
+    "segment_peak_velocity": (
+        "deg/s",
+        {"motion": "motion", "pressure_bar": "number"},
+        "one segment's peak bending rate before 38 deg, after a pressure pulse",
+    ),
+    "velocity_pressure_exponent": (
+        "1",
+        {"motion": "motion", "pressure_min_bar": "number", "pressure_max_bar": "number"},
+        "x of V ~ P^x fitted over the pressures 1..6 bar",
+    ),
+    "time_pressure_exponent": (
+        "1",
+        {"motion": "motion", "pressure_min_bar": "number", "pressure_max_bar": "number"},
+        "x of T ~ P^x, T the time to bend 38 deg",
+    ),
+    "tip_workspace_radius": (
+        "mm",
+        {
+            "segments": "number",
+            "pressurised_max_kpa_abs": "number",
+            "depressurised_min_kpa_abs": "number",
+        },
+        "largest lateral distance of the tip from its rest point under the random protocol",
+    ),
+    "root_peak_torque": (
+        "N m",
+        {"pressure_bar": "number", "payload_g": "number", "motion": "motion"},
+        "the whole tail's peak torque at the root after a pulse",
+    ),
+    "root_peak_force": (
+        "N",
+        {"pressure_bar": "number", "payload_g": "number", "motion": "motion"},
+        "the whole tail's peak force at the root after a pulse",
+    ),
+    "cart_lift": (
+        "mm",
+        {"pressure_bar": "number", "motion": "motion"},
+        "the hinged cart's front-end lift (Eq 20-22)",
+    ),
+    "cart_peak_angle": (
+        "deg",
+        {"pressure_bar": "number", "motion": "motion"},
+        "the hinged cart's peak angle (Eq 20-22)",
+    ),
 }
 
 
@@ -62,8 +93,10 @@ class MeasurementError(ValueError):
     def __init__(self, path: str | Path, problems: list[str]):
         self.path = str(path)
         self.problems = problems
-        super().__init__(f"{path}: {len(problems)} problem(s) in the measurements:\n"
-                         + "\n".join(f"  - {p}" for p in problems))
+        super().__init__(
+            f"{path}: {len(problems)} problem(s) in the measurements:\n"
+            + "\n".join(f"  - {p}" for p in problems)
+        )
 
 
 @dataclass(frozen=True)
@@ -82,19 +115,30 @@ class Measurement:
 
     @property
     def label(self) -> str:
-        cond = ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in self.conditions)
+        cond = ", ".join(
+            f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in self.conditions
+        )
         return f"{self.quantity} ({cond})" if cond else self.quantity
 
 
-#: What the models can be asked, per numeric condition: (lowest, highest, whole numbers only). Pressures
-#: in bar and kPa are gauge unless named ``_abs``; a pulse is positive; a vacuum stops at -1 atm.
+#: What the models can be asked, per numeric condition: (lowest, highest, whole numbers only).
+#: Pressures in bar and kPa are gauge unless named ``_abs``; a pulse is positive; a vacuum stops at
+#: -1 atm.
 CONDITION_RANGES: dict[str, tuple[float, float, bool]] = {
-    "pressure_kpa": (-101.325, 1000.0, False), "pressure_bar": (0.01, 10.0, False),
-    "pressure_min_bar": (0.01, 10.0, False), "pressure_max_bar": (0.01, 10.0, False),
-    "payload_g": (0.0, 10000.0, False), "segments": (1, 3, True),
-    "pressurised_max_kpa_abs": (0.0, 1100.0, False), "depressurised_min_kpa_abs": (0.0, 1100.0, False)}
+    "pressure_kpa": (-101.325, 1000.0, False),
+    "pressure_bar": (0.01, 10.0, False),
+    "pressure_min_bar": (0.01, 10.0, False),
+    "pressure_max_bar": (0.01, 10.0, False),
+    "payload_g": (0.0, 10000.0, False),
+    "segments": (1, 3, True),
+    "pressurised_max_kpa_abs": (0.0, 1100.0, False),
+    "depressurised_min_kpa_abs": (0.0, 1100.0, False),
+}
 #: Conditions that bound a range from below and above: the first may not exceed the second.
-CONDITION_ORDER = (("pressure_min_bar", "pressure_max_bar"), ("depressurised_min_kpa_abs", "pressurised_max_kpa_abs"))
+CONDITION_ORDER = (
+    ("pressure_min_bar", "pressure_max_bar"),
+    ("depressurised_min_kpa_abs", "pressurised_max_kpa_abs"),
+)
 
 
 def _conditions(text: str, allowed: dict[str, str], where: str, problems: list[str]) -> tuple:
@@ -104,10 +148,15 @@ def _conditions(text: str, allowed: dict[str, str], where: str, problems: list[s
             continue
         key, sep, raw = (s.strip() for s in item.partition("="))
         if not sep:
-            problems.append(f"{where} = {item!r}: expected key=value; allowed keys: {', '.join(allowed) or 'none'}")
+            problems.append(
+                f"{where} = {item!r}: expected key=value; allowed keys: "
+                f"{', '.join(allowed) or 'none'}"
+            )
             continue
         if key not in allowed:
-            problems.append(f"{where}: unknown condition {key!r}; allowed: {', '.join(allowed) or 'none'}")
+            problems.append(
+                f"{where}: unknown condition {key!r}; allowed: {', '.join(allowed) or 'none'}"
+            )
             continue
         if allowed[key] == "motion":
             if raw not in MOTIONS:
@@ -122,15 +171,19 @@ def _conditions(text: str, allowed: dict[str, str], where: str, problems: list[s
                 continue
             lo, hi, whole = CONDITION_RANGES.get(key, (-math.inf, math.inf, False))
             if not lo <= value <= hi or (whole and not value.is_integer()):
-                problems.append(f"{where}: {key} = {raw}; allowed: {'whole numbers ' if whole else ''}"
-                                f"{lo:g} to {hi:g}")
+                problems.append(
+                    f"{where}: {key} = {raw}; allowed: {'whole numbers ' if whole else ''}"
+                    f"{lo:g} to {hi:g}"
+                )
                 continue
             out.append((key, value))
     given = dict(out)
     for low, high in CONDITION_ORDER:
         if low in given and high in given and given[low] > given[high]:
-            problems.append(f"{where}: {low} = {given[low]:g} exceeds {high} = {given[high]:g}; allowed: "
-                            f"{low} <= {high}")
+            problems.append(
+                f"{where}: {low} = {given[low]:g} exceeds {high} = {given[high]:g}; allowed: "
+                f"{low} <= {high}"
+            )
     missing = [k for k in allowed if k not in given]
     if missing and not any(f"{where}:" in p for p in problems):
         problems.append(f"{where}: missing condition(s) {', '.join(missing)}")
@@ -153,8 +206,13 @@ def load_measurements(path: str | Path) -> list[Measurement]:
     header = [h.strip() for h in rows[0]]
     missing = [c for c in COLUMNS if c not in header]
     if missing:
-        raise MeasurementError(path, [f"row 1 (header): missing column(s) {', '.join(missing)}; "
-                                      f"expected {', '.join(COLUMNS)}"])
+        raise MeasurementError(
+            path,
+            [
+                f"row 1 (header): missing column(s) {', '.join(missing)}; "
+                f"expected {', '.join(COLUMNS)}"
+            ],
+        )
     col = {c: header.index(c) for c in COLUMNS}
     problems: list[str] = []
     out: list[Measurement] = []
@@ -165,7 +223,10 @@ def load_measurements(path: str | Path) -> list[Measurement]:
         before = len(problems)
         quantity = cells["quantity"]
         if quantity not in QUANTITIES:
-            problems.append(f"row {n}, column quantity = {quantity!r}: unknown; allowed: {', '.join(QUANTITIES)}")
+            problems.append(
+                f"row {n}, column quantity = {quantity!r}: unknown; allowed: "
+                f"{', '.join(QUANTITIES)}"
+            )
             continue
         unit, allowed, _ = QUANTITIES[quantity]
         if not cells["unit"]:
@@ -182,11 +243,25 @@ def load_measurements(path: str | Path) -> list[Measurement]:
         if value == 0.0:
             problems.append(f"row {n}, column value = 0: relative errors need a non-zero figure")
         if cells["role"] not in ROLES:
-            problems.append(f"row {n}, column role = {cells['role']!r}: allowed: {', '.join(ROLES)}")
-        conditions = _conditions(cells["conditions"], allowed, f"row {n}, column conditions", problems)
+            problems.append(
+                f"row {n}, column role = {cells['role']!r}: allowed: {', '.join(ROLES)}"
+            )
+        conditions = _conditions(
+            cells["conditions"], allowed, f"row {n}, column conditions", problems
+        )
         if len(problems) == before:
-            out.append(Measurement(n, cells["experiment"], quantity, conditions, value, unit, cells["role"],
-                                   cells["source"]))
+            out.append(
+                Measurement(
+                    n,
+                    cells["experiment"],
+                    quantity,
+                    conditions,
+                    value,
+                    unit,
+                    cells["role"],
+                    cells["source"],
+                )
+            )
     if not problems and not out:
         problems.append("no measurement rows")
     if not problems and not any(m.role == "fit" for m in out):
@@ -200,4 +275,11 @@ def data_sha256(path: str | Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-__all__ = ["Measurement", "MeasurementError", "load_measurements", "data_sha256", "QUANTITIES", "COLUMNS"]
+__all__ = [
+    "Measurement",
+    "MeasurementError",
+    "load_measurements",
+    "data_sha256",
+    "QUANTITIES",
+    "COLUMNS",
+]

@@ -54,8 +54,10 @@ class MoldDims:
     @property
     def pin_socket_web_mm(self) -> float:
         """Smallest web beside a pin socket: to the cavity and to the block's outside."""
-        return min(self.pin_circle_mm - self.socket_mm / 2.0 - self.cavity_radius_mm,
-                   self.block_half_mm - self.pin_circle_mm - self.socket_mm / 2.0)
+        return min(
+            self.pin_circle_mm - self.socket_mm / 2.0 - self.cavity_radius_mm,
+            self.block_half_mm - self.pin_circle_mm - self.socket_mm / 2.0,
+        )
 
     @property
     def halves_height_mm(self) -> float:
@@ -63,17 +65,27 @@ class MoldDims:
 
     def bolt_to_cavity_mm(self, bolt_hole_mm: float) -> float:
         """Material between a bolt hole and the cavity's largest radius."""
-        return math.hypot(self.bolt_uv_mm, self.bolt_uv_mm) - bolt_hole_mm / 2.0 - self.cavity_radius_mm
+        return (
+            math.hypot(self.bolt_uv_mm, self.bolt_uv_mm)
+            - bolt_hole_mm / 2.0
+            - self.cavity_radius_mm
+        )
 
     def bolt_to_pin_mm(self, bolt_hole_mm: float) -> float:
         """Web between a bolt hole and the nearest pin socket."""
-        return math.hypot(self.bolt_uv_mm - self.pin_circle_mm, self.bolt_uv_mm) - bolt_hole_mm / 2.0 \
+        return (
+            math.hypot(self.bolt_uv_mm - self.pin_circle_mm, self.bolt_uv_mm)
+            - bolt_hole_mm / 2.0
             - self.socket_mm / 2.0
+        )
 
     def channel_span_mm(self, d_mm: float) -> tuple[float, float]:
         """(innermost, outermost) radius of a channel of diameter d on the flange face:
         a printable wall to the square core print inside, fully on the flange outside."""
-        return self.core_half_mm + self.min_wall_mm + d_mm / 2.0, self.cast_flange_radius_mm - d_mm / 2.0
+        return (
+            self.core_half_mm + self.min_wall_mm + d_mm / 2.0,
+            self.cast_flange_radius_mm - d_mm / 2.0,
+        )
 
     def channel_radius_mm(self, d_mm: float) -> float:
         lo, hi = self.channel_span_mm(d_mm)
@@ -89,19 +101,37 @@ def mold_dimensions(soa: SoaTable, flange_diameter_mm: float, casting: Casting) 
     r_flange = flange_diameter_mm / 2.0
     h = k * height
     fk = k * f
-    inner_end = soa.long_side_mm - 2.0 * soa.wall_offset_mm  # the bellows' interior at a mountain fold (the ends)
-    rho_max = k * max(r_flange, soa.computed_circumcircle_mm / 2.0)  # corners may stand proud of the flange
+    inner_end = (
+        soa.long_side_mm - 2.0 * soa.wall_offset_mm
+    )  # the bellows' interior at a mountain fold (the ends)
+    rho_max = k * max(
+        r_flange, soa.computed_circumcircle_mm / 2.0
+    )  # corners may stand proud of the flange
     wall = c.cavity_wall_mm
     w = rho_max + wall
     t = wall
     mw = c.min_print_wall_mm
     bolt_c = c.bolt_hole_diameter_mm / 2.0 + 2.0 * mw
     return MoldDims(
-        scale=k, flange_radius_mm=r_flange, cast_height_mm=h, flange_mm=fk, z_lo_mm=fk, z_hi_mm=h - fk,
-        cast_flange_radius_mm=k * r_flange, cavity_radius_mm=rho_max, core_half_mm=k * inner_end / 2.0,
-        wall_mm=wall, block_half_mm=w, plate_mm=t, socket_mm=c.pin_diameter_mm + c.pin_clearance_mm,
-        pin_circle_mm=rho_max + wall / 2.0, bolt_edge_mm=bolt_c, bolt_uv_mm=w - bolt_c,
-        z_bottom_mm=-t, z_top_mm=h + t, min_wall_mm=mw,
+        scale=k,
+        flange_radius_mm=r_flange,
+        cast_height_mm=h,
+        flange_mm=fk,
+        z_lo_mm=fk,
+        z_hi_mm=h - fk,
+        cast_flange_radius_mm=k * r_flange,
+        cavity_radius_mm=rho_max,
+        core_half_mm=k * inner_end / 2.0,
+        wall_mm=wall,
+        block_half_mm=w,
+        plate_mm=t,
+        socket_mm=c.pin_diameter_mm + c.pin_clearance_mm,
+        pin_circle_mm=rho_max + wall / 2.0,
+        bolt_edge_mm=bolt_c,
+        bolt_uv_mm=w - bolt_c,
+        z_bottom_mm=-t,
+        z_top_mm=h + t,
+        min_wall_mm=mw,
     )
 
 
@@ -111,39 +141,71 @@ def _violations(d: MoldDims, c: Casting) -> list[tuple[str, str]]:
     mw = c.min_print_wall_mm
     web = d.pin_socket_web_mm
     if web < mw:
-        out.append(("casting.cavity_wall_mm",
-                    f"the pins sit mid-wall, so a {d.socket_mm:g} mm pin socket (casting.pin_diameter_mm + "
-                    f"casting.pin_clearance_mm) leaves a {web:.2f} mm web to the cavity and to the outside, "
-                    f"{mw - web:.2f} mm short of casting.min_print_wall_mm = {mw!r}"))
+        out.append(
+            (
+                "casting.cavity_wall_mm",
+                f"the pins sit mid-wall, so a {d.socket_mm:g} mm pin socket "
+                "(casting.pin_diameter_mm + "
+                f"casting.pin_clearance_mm) leaves a {web:.2f} mm web to the cavity and to the "
+                "outside, "
+                f"{mw - web:.2f} mm short of casting.min_print_wall_mm = {mw!r}",
+            )
+        )
     floor = d.plate_mm - c.core_print_mm
     if floor < mw:
-        out.append(("casting.core_print_mm",
-                    f"the core print's socket leaves a {floor:.2f} mm floor in the {d.plate_mm:g} mm bottom plate "
-                    f"and lid (as thick as casting.cavity_wall_mm), {mw - floor:.2f} mm short of "
-                    f"casting.min_print_wall_mm = {mw!r}"))
+        out.append(
+            (
+                "casting.core_print_mm",
+                f"the core print's socket leaves a {floor:.2f} mm floor in the {d.plate_mm:g} mm "
+                "bottom plate "
+                f"and lid (as thick as casting.cavity_wall_mm), {mw - floor:.2f} mm short of "
+                f"casting.min_print_wall_mm = {mw!r}",
+            )
+        )
     reach = c.pin_length_mm + SOCKET_EXTRA_DEPTH_MM + mw
     if reach > d.halves_height_mm / 2.0:
-        out.append(("casting.pin_length_mm",
-                    f"the bottom-plate and lid pin sockets ({SOCKET_EXTRA_DEPTH_MM:g} mm deeper than the pins, "
-                    f"{mw:g} mm wall) from both ends of the {d.halves_height_mm:.2f} mm tall mold halves would meet "
-                    f"({2 * reach - d.halves_height_mm:.2f} mm too long together)"))
+        out.append(
+            (
+                "casting.pin_length_mm",
+                f"the bottom-plate and lid pin sockets ({SOCKET_EXTRA_DEPTH_MM:g} mm deeper than "
+                "the pins, "
+                f"{mw:g} mm wall) from both ends of the {d.halves_height_mm:.2f} mm tall mold "
+                "halves would meet "
+                f"({2 * reach - d.halves_height_mm:.2f} mm too long together)",
+            )
+        )
     to_cavity = d.bolt_to_cavity_mm(c.bolt_hole_diameter_mm)
     to_pin = d.bolt_to_pin_mm(c.bolt_hole_diameter_mm)
     if to_cavity < c.cavity_wall_mm or to_pin < mw:
-        out.append(("casting.bolt_hole_diameter_mm",
-                    f"the four clamping bolts in the block corners ({d.bolt_edge_mm:.2f} mm from the edges of the "
-                    f"{2 * d.block_half_mm:.2f} mm block) leave {to_cavity:.2f} mm to the cavity (needs "
-                    f"casting.cavity_wall_mm = {c.cavity_wall_mm!r}: {max(c.cavity_wall_mm - to_cavity, 0.0):.2f} mm "
-                    f"short) and {to_pin:.2f} mm to a pin socket (needs casting.min_print_wall_mm = {mw!r}: "
-                    f"{max(mw - to_pin, 0.0):.2f} mm short)"))
+        out.append(
+            (
+                "casting.bolt_hole_diameter_mm",
+                f"the four clamping bolts in the block corners ({d.bolt_edge_mm:.2f} mm from the "
+                "edges of the "
+                f"{2 * d.block_half_mm:.2f} mm block) leave {to_cavity:.2f} mm to the cavity "
+                "(needs "
+                f"casting.cavity_wall_mm = {c.cavity_wall_mm!r}: "
+                f"{max(c.cavity_wall_mm - to_cavity, 0.0):.2f} mm "
+                f"short) and {to_pin:.2f} mm to a pin socket (needs casting.min_print_wall_mm = "
+                f"{mw!r}: "
+                f"{max(mw - to_pin, 0.0):.2f} mm short)",
+            )
+        )
     for what, dia in (("gate", c.gate_diameter_mm), ("vent", c.vent_diameter_mm)):
         lo, hi = d.channel_span_mm(dia)
         if lo > hi:
-            out.append((f"casting.{what}_diameter_mm",
-                        f"the {what} does not fit on the flange face between the core print ({2 * d.core_half_mm:.2f} "
-                        f"mm square, casting.min_print_wall_mm = {mw!r} around it) and the flange rim (D "
-                        f"{2 * d.cast_flange_radius_mm:.2f} mm, from joint.base_diameter_mm): {lo - hi:.2f} mm "
-                        "too wide"))
+            out.append(
+                (
+                    f"casting.{what}_diameter_mm",
+                    f"the {what} does not fit on the flange face between the core print "
+                    f"({2 * d.core_half_mm:.2f} "
+                    f"mm square, casting.min_print_wall_mm = {mw!r} around it) and the flange rim "
+                    "(D "
+                    f"{2 * d.cast_flange_radius_mm:.2f} mm, from joint.base_diameter_mm): "
+                    f"{lo - hi:.2f} mm "
+                    "too wide",
+                )
+            )
     return out
 
 
@@ -154,32 +216,48 @@ def _with(c: Casting, name: str, value: float) -> Casting:
 
 
 def _allowed(soa: SoaTable, flange_diameter_mm: float, c: Casting, name: str) -> str:
-    """What ``casting.<name>`` may be with every other value fixed: the feasible part of its rule range."""
+    """What ``casting.<name>`` may be with every other value fixed: the feasible part of its rule
+    range."""
     meta = {f.name: f.metadata for f in dataclasses.fields(Casting)}[name]
     lo, hi = rule_bounds(meta)
-    span = feasible_span(meta, lambda x: not _violations(mold_dimensions(soa, flange_diameter_mm, _with(c, name, x)),
-                                                         _with(c, name, x)), 2000)
+    span = feasible_span(
+        meta,
+        lambda x: (
+            not _violations(
+                mold_dimensions(soa, flange_diameter_mm, _with(c, name, x)), _with(c, name, x)
+            )
+        ),
+        2000,
+    )
     if span is None:
         return "no value within its rule range, with the other [casting] values"
     first, last = span
     if first > lo and last < hi:
         return f"{first:.2f} to {last:.2f} mm with the other [casting] values"
-    return (f">= {first:.2f} mm" if first > lo else f"<= {last:.2f} mm") + " with the other [casting] values"
+    return (
+        f">= {first:.2f} mm" if first > lo else f"<= {last:.2f} mm"
+    ) + " with the other [casting] values"
 
 
 def mold_problems(soa: SoaTable, flange_diameter_mm: float, casting: Casting) -> list[str]:
-    """Every reason the mold set of this SOA cannot be built, each naming the key, its value, the derived
-    dimension that breaks and what is allowed (empty when it can be built)."""
+    """Every reason the mold set of this SOA cannot be built, each naming the key, its value, the
+    derived dimension that breaks and what is allowed (empty when it can be built)."""
     c = casting
     found = _violations(mold_dimensions(soa, flange_diameter_mm, c), c)
     out = []
     for key, why in found:
         name = key.split(".")[1]
-        line = f"{key} = {getattr(c, name)!r}: mold set: {why}; allowed: {_allowed(soa, flange_diameter_mm, c, name)}"
+        line = (
+            f"{key} = {getattr(c, name)!r}: mold set: {why}; allowed: "
+            f"{_allowed(soa, flange_diameter_mm, c, name)}"
+        )
         if name in ("gate_diameter_mm", "vent_diameter_mm"):  # the core print: the SOA's interior
-            line += (f" (the core print is the bellows' interior: soa.long_side_mm = {soa.long_side_mm!r} less twice "
-                     f"the wall's {soa.wall_offset_mm:.2f} mm offset, which soa.facet_thickness_mm = "
-                     f"{soa.facet_thickness_mm!r} sets along the fold's slope)")
+            line += (
+                " (the core print is the bellows' interior: soa.long_side_mm = "
+                f"{soa.long_side_mm!r} less twice "
+                f"the wall's {soa.wall_offset_mm:.2f} mm offset, which soa.facet_thickness_mm = "
+                f"{soa.facet_thickness_mm!r} sets along the fold's slope)"
+            )
         if name in ("core_print_mm", "bolt_hole_diameter_mm"):  # a thicker wall also makes room
             wall = _allowed(soa, flange_diameter_mm, c, "cavity_wall_mm")
             if wall[0] in "<>0123456789":

@@ -1,4 +1,5 @@
-"""Standard parts read from data (``data/iso_metric.toml``): ISO metric threads, tap drills and nuts.
+"""Standard parts read from data (``data/iso_metric.toml``): ISO metric threads, tap drills and
+nuts.
 
 The panel layout (threaded rod sockets), the rigid twin (tie-rod nuts) and the
 BOM (fastener designations) all look sizes up here.
@@ -30,8 +31,10 @@ class MetricSize:
 def iso_metric() -> dict[float, MetricSize]:
     """Every size in the table, by nominal diameter (mm)."""
     text = resources.files(__package__).joinpath("data/iso_metric.toml").read_text(encoding="utf-8")
-    return {float(row["diameter_mm"]): MetricSize(**{k: float(v) for k, v in row.items()})
-            for row in tomllib.loads(text).values()}
+    return {
+        float(row["diameter_mm"]): MetricSize(**{k: float(v) for k, v in row.items()})
+        for row in tomllib.loads(text).values()
+    }
 
 
 def metric(diameter_mm: float) -> MetricSize:
@@ -44,15 +47,19 @@ def metric(diameter_mm: float) -> MetricSize:
     try:
         return table[float(diameter_mm)]
     except KeyError:
-        raise KeyError(f"M{diameter_mm:g} is not in data/iso_metric.toml; sizes: "
-                       + ", ".join(s.designation for s in table.values())) from None
+        raise KeyError(
+            f"M{diameter_mm:g} is not in data/iso_metric.toml; sizes: "
+            + ", ".join(s.designation for s in table.values())
+        ) from None
 
 
 def size_for_tap_drill(tap_drill_mm: float) -> MetricSize:
-    """The size whose tap drill is nearest to ``tap_drill_mm`` (a parameter file's set-screw drill)."""
+    """The size whose tap drill is nearest to ``tap_drill_mm`` (a parameter file's set-screw
+    drill)."""
     return min(iso_metric().values(), key=lambda s: abs(s.tap_drill_mm - tap_drill_mm))
 
 
 def size_for_clearance_hole(hole_mm: float) -> MetricSize:
-    """The size whose ISO 273 medium clearance hole is nearest to ``hole_mm`` (a bolt through-hole)."""
+    """The size whose ISO 273 medium clearance hole is nearest to ``hole_mm`` (a bolt
+    through-hole)."""
     return min(iso_metric().values(), key=lambda s: abs(s.clearance_hole_mm - hole_mm))

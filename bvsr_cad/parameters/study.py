@@ -39,10 +39,11 @@ A study is TOML::
     [optuna.space]
     "vertebra.diameter_mm" = [4.0, 5.0, 6.0]   # a list: categorical; a table: low/high (step, log)
 
-A key is a dotted path of the parameter file (``table.key``; ``materials.nylon.youngs_modulus_mpa``).
-Every problem is found when the study is loaded (:class:`StudyError` lists them all, naming the key,
-its value and what is allowed); a variant whose values make an impossible tail is not a problem of
-the study: it becomes a result row with the loader's reason.
+A key is a dotted path of the parameter file (``table.key``;
+``materials.nylon.youngs_modulus_mpa``). Every problem is found when the study is loaded
+(:class:`StudyError` lists them all, naming the key, its value and what is allowed); a variant whose
+values make an impossible tail is not a problem of the study: it becomes a result row with the
+loader's reason.
 """
 
 from __future__ import annotations
@@ -68,8 +69,21 @@ from .load import InputFileError, read_toml
 from .tables import TailSpec
 
 DIRECTIONS = ("maximize", "minimize")
-TOP_KEYS = {"name", "base", "metrics", "checks", "time_limit_s", "baseline", "conditions", "set", "grid",
-            "variants", "random", "optuna", "expect"}
+TOP_KEYS = {
+    "name",
+    "base",
+    "metrics",
+    "checks",
+    "time_limit_s",
+    "baseline",
+    "conditions",
+    "set",
+    "grid",
+    "variants",
+    "random",
+    "optuna",
+    "expect",
+}
 
 
 class StudyError(InputFileError):
@@ -111,7 +125,8 @@ class Variant:
 
     @property
     def key(self) -> str:
-        """Hash of the variant's parameters (the whole mapping, so an edited base is a new variant)."""
+        """Hash of the variant's parameters (the whole mapping, so an edited base is a new
+        variant)."""
         text = json.dumps(self.data, sort_keys=True, separators=(",", ":"), default=str)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -135,8 +150,10 @@ class Constraint:
         if value is None or (isinstance(value, float) and math.isnan(value)):
             return 1.0
         v = float(value)
-        return max((self.min - v) if self.min is not None else -math.inf,
-                   (v - self.max) if self.max is not None else -math.inf)
+        return max(
+            (self.min - v) if self.min is not None else -math.inf,
+            (v - self.max) if self.max is not None else -math.inf,
+        )
 
 
 @dataclass(frozen=True)
@@ -190,7 +207,8 @@ class Study:
         return Variant(text, dict(overrides), data)
 
     def variants(self) -> list[Variant]:
-        """The grid, the listed variants and the random samples (an Optuna study asks as it goes)."""
+        """The grid, the listed variants and the random samples (an Optuna study asks as it
+        goes)."""
         out = [self.variant({}, "base")] if self.baseline else []
         if self.grid:
             keys = list(self.grid)
@@ -214,7 +232,8 @@ def _short(v: Any) -> str:
 
 
 def get_path(data: dict[str, Any], key: str, default: Any = None) -> Any:
-    """The value at a dotted key, or ``default`` where the file leaves the key to the schema's default."""
+    """The value at a dotted key, or ``default`` where the file leaves the key to the schema's
+    default."""
     node: Any = data
     for part in key.split("."):
         if not isinstance(node, dict) or part not in node:
@@ -262,7 +281,11 @@ def _check_key(key: str, where: str, allowed: list[str], problems: list[str]) ->
     if key in allowed or (key.startswith("materials.") and key.count(".") == 2):
         return
     near = difflib.get_close_matches(key, allowed, n=3)
-    hint = f"; did you mean {', '.join(near)}?" if near else "; a key is 'table.key' of the parameter file"
+    hint = (
+        f"; did you mean {', '.join(near)}?"
+        if near
+        else "; a key is 'table.key' of the parameter file"
+    )
     problems.append(f"{where} {key!r}: not a parameter{hint}")
 
 
@@ -275,9 +298,13 @@ def _dimension(key: str, raw: Any, where: str, problems: list[str]) -> Dimension
     if isinstance(raw, dict):
         extra = set(raw) - {"low", "high", "step", "log"}
         low, high = raw.get("low"), raw.get("high")
-        if extra or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (low, high)):
-            problems.append(f"{where}.{key} = {raw!r}: expected {{ low = number, high = number }} "
-                            f"(optional step, log) or a list of choices")
+        if extra or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) for v in (low, high)
+        ):
+            problems.append(
+                f"{where}.{key} = {raw!r}: expected {{ low = number, high = number }} "
+                f"(optional step, log) or a list of choices"
+            )
             return None
         if not low < high:
             problems.append(f"{where}.{key}: low = {low} must be below high = {high}")
@@ -287,7 +314,13 @@ def _dimension(key: str, raw: Any, where: str, problems: list[str]) -> Dimension
         if log and low <= 0:
             problems.append(f"{where}.{key}: log = true needs low > 0 (found {low})")
             return None
-        return Dimension(key, low=float(low), high=float(high), step=None if step is None else float(step), log=log)
+        return Dimension(
+            key,
+            low=float(low),
+            high=float(high),
+            step=None if step is None else float(step),
+            log=log,
+        )
     problems.append(f"{where}.{key} = {raw!r}: expected a list of choices or {{ low, high }}")
     return None
 
@@ -296,7 +329,8 @@ def load_study(path: str | Path) -> Study:
     """Read and validate a study file.
 
     Raises:
-        StudyError: naming every problem (unknown keys, empty axes, bad ranges, no axes, a bad base file).
+        StudyError: naming every problem (unknown keys, empty axes, bad ranges, no axes, a bad base
+            file).
     """
     path = Path(path)
     raw = read_toml(path, StudyError)
@@ -323,17 +357,32 @@ def load_study(path: str | Path) -> Study:
         problems.append("no axes: give [grid], [[variants]], [random] or [optuna]")
     if problems:
         raise StudyError(path, problems)
-    return Study(path=path, name=name, base_path=base_path, base_data=base_data, **options, fixed=dict(fixed),
-                 grid={k: list(v) for k, v in grid.items()}, listed=tuple(listed), **search, expect=tuple(expect))
+    return Study(
+        path=path,
+        name=name,
+        base_path=base_path,
+        base_data=base_data,
+        **options,
+        fixed=dict(fixed),
+        grid={k: list(v) for k, v in grid.items()},
+        listed=tuple(listed),
+        **search,
+        expect=tuple(expect),
+    )
 
 
-def _study_base(raw: dict[str, Any], path: Path, problems: list[str]) -> tuple[Path, dict[str, Any]]:
-    """The base parameter file's path (relative to the study) and its data, its data file made absolute."""
+def _study_base(
+    raw: dict[str, Any], path: Path, problems: list[str]
+) -> tuple[Path, dict[str, Any]]:
+    """The base parameter file's path (relative to the study) and its data, its data file made
+    absolute."""
     base_raw = raw.get("base")
     base_data: dict[str, Any] = {}
     base_path = path.parent / str(base_raw or "")
     if not isinstance(base_raw, str) or not base_raw:
-        problems.append("base: missing; the parameter file the variants start from (relative to the study)")
+        problems.append(
+            "base: missing; the parameter file the variants start from (relative to the study)"
+        )
     else:
         try:
             base_data = read_toml(base_path, StudyError)
@@ -361,21 +410,33 @@ def _study_options(raw: dict[str, Any], problems: list[str]) -> dict[str, Any]:
     if not isinstance(baseline, bool):
         problems.append(f"baseline = {baseline!r}: true or false")
     conditions = raw.get("conditions", {})
-    if not isinstance(conditions, dict) or set(conditions) - {"pressure_bar", "motion", "payload_g"}:
+    if not isinstance(conditions, dict) or set(conditions) - {
+        "pressure_bar",
+        "motion",
+        "payload_g",
+    }:
         problems.append(f"conditions = {conditions!r}: a table of pressure_bar, motion, payload_g")
         conditions = {}
     if conditions.get("motion", "extension") not in ("extension", "flexion", "waggle"):
-        problems.append(f"conditions.motion = {conditions['motion']!r}: extension, flexion or waggle")
+        problems.append(
+            f"conditions.motion = {conditions['motion']!r}: extension, flexion or waggle"
+        )
     for k in ("pressure_bar", "payload_g"):
         v = conditions.get(k, 0.0)
         if isinstance(v, bool) or not isinstance(v, (int, float)) or v < 0:
             problems.append(f"conditions.{k} = {v!r}: a number >= 0")
-    return {"metrics": tuple(metrics), "checks": bool(checks), "time_limit_s": float(limit),
-            "baseline": bool(baseline), "conditions": dict(conditions)}
+    return {
+        "metrics": tuple(metrics),
+        "checks": bool(checks),
+        "time_limit_s": float(limit),
+        "baseline": bool(baseline),
+        "conditions": dict(conditions),
+    }
 
 
-def _study_axes(raw: dict[str, Any], check_key: collections.abc.Callable[[str, str], None],
-                problems: list[str]) -> tuple[dict, dict, list]:
+def _study_axes(
+    raw: dict[str, Any], check_key: collections.abc.Callable[[str, str], None], problems: list[str]
+) -> tuple[dict, dict, list]:
     """The values every variant sets (``set``), the grid's axes and the listed variants."""
     fixed = raw.get("set", {})
     if not isinstance(fixed, dict):
@@ -393,7 +454,10 @@ def _study_axes(raw: dict[str, Any], check_key: collections.abc.Callable[[str, s
             problems.append(f"grid.{k} = {values!r}: a non-empty list of values")
     listed = raw.get("variants", [])
     if not isinstance(listed, list) or not all(isinstance(v, dict) for v in listed):
-        problems.append("variants: an array of tables ([[variants]]), each 'table.key' = value and an optional label")
+        problems.append(
+            "variants: an array of tables ([[variants]]), each 'table.key' = value and an optional "
+            "label"
+        )
         listed = []
     for i, v in enumerate(listed, start=1):
         for k in v:
@@ -402,15 +466,26 @@ def _study_axes(raw: dict[str, Any], check_key: collections.abc.Callable[[str, s
     return fixed, grid, listed
 
 
-def _study_search(raw: dict[str, Any], check_key: collections.abc.Callable[[str, str], None],
-                  problems: list[str]) -> dict[str, Any]:
-    """The study's kind (grid, random or optuna) and its search: space, samples or trials, seed, and for
-    Optuna its objectives, constraints and sampler (as :class:`Study`'s fields)."""
-    out: dict[str, Any] = {"kind": "grid", "space": (), "samples": 0, "seed": 1, "trials": 0, "sampler": "tpe",
-                           "objectives": (), "constraints": ()}
+def _study_search(
+    raw: dict[str, Any], check_key: collections.abc.Callable[[str, str], None], problems: list[str]
+) -> dict[str, Any]:
+    """The study's kind (grid, random or optuna) and its search: space, samples or trials, seed, and
+    for Optuna its objectives, constraints and sampler (as :class:`Study`'s fields)."""
+    out: dict[str, Any] = {
+        "kind": "grid",
+        "space": (),
+        "samples": 0,
+        "seed": 1,
+        "trials": 0,
+        "sampler": "tpe",
+        "objectives": (),
+        "constraints": (),
+    }
     space: list[Dimension] = []
     if "random" in raw and "optuna" in raw:
-        problems.append("random and optuna: a study is one of them (grid and listed variants may join either)")
+        problems.append(
+            "random and optuna: a study is one of them (grid and listed variants may join either)"
+        )
     for section in ("random", "optuna"):
         if section not in raw:
             continue
@@ -419,8 +494,10 @@ def _study_search(raw: dict[str, Any], check_key: collections.abc.Callable[[str,
         if not isinstance(sec, dict):
             problems.append(f"{section}: a table")
             continue
-        known = {"random": {"samples", "seed", "space"},
-                 "optuna": {"trials", "seed", "space", "objectives", "constraints", "sampler"}}[section]
+        known = {
+            "random": {"samples", "seed", "space"},
+            "optuna": {"trials", "seed", "space", "objectives", "constraints", "sampler"},
+        }[section]
         for k in sec:
             if k not in known:
                 problems.append(f"{section}.{k}: unknown key; allowed: {', '.join(sorted(known))}")
@@ -436,7 +513,9 @@ def _study_search(raw: dict[str, Any], check_key: collections.abc.Callable[[str,
         out["seed"] = seed
         dims = sec.get("space", {})
         if not isinstance(dims, dict) or not dims:
-            problems.append(f"{section}.space: a non-empty table of 'table.key' = [choices] or {{ low, high }}")
+            problems.append(
+                f"{section}.space: a non-empty table of 'table.key' = [choices] or {{ low, high }}"
+            )
             dims = {}
         for k, v in dims.items():
             check_key(k, f"{section}.space")
@@ -461,16 +540,28 @@ def _optuna_goals(sec: dict[str, Any], problems: list[str]) -> dict[str, Any]:
         problems.append("optuna.objectives: a non-empty list of { metric = ..., direction = ... }")
         objs = []
     for o in objs:
-        if not isinstance(o, dict) or set(o) != {"metric", "direction"} or o["direction"] not in DIRECTIONS:
-            problems.append(f"optuna.objectives: {o!r}: expected {{ metric = name, direction = "
-                            f"'maximize' or 'minimize' }}")
+        if (
+            not isinstance(o, dict)
+            or set(o) != {"metric", "direction"}
+            or o["direction"] not in DIRECTIONS
+        ):
+            problems.append(
+                f"optuna.objectives: {o!r}: expected {{ metric = name, direction = "
+                f"'maximize' or 'minimize' }}"
+            )
             continue
         objectives.append(Objective(o["metric"], o["direction"]))
     for c in sec.get("constraints", []):
-        ok = isinstance(c, dict) and "metric" in c and set(c) <= {"metric", "min", "max"} \
+        ok = (
+            isinstance(c, dict)
+            and "metric" in c
+            and set(c) <= {"metric", "min", "max"}
             and ("min" in c or "max" in c)
+        )
         if not ok:
-            problems.append(f"optuna.constraints: {c!r}: expected {{ metric = name, min = x and/or max = y }}")
+            problems.append(
+                f"optuna.constraints: {c!r}: expected {{ metric = name, min = x and/or max = y }}"
+            )
             continue
         constraints.append(Constraint(c["metric"], c.get("min"), c.get("max")))
     sampler = sec.get("sampler", "tpe")
@@ -480,21 +571,33 @@ def _optuna_goals(sec: dict[str, Any], problems: list[str]) -> dict[str, Any]:
 
 
 def _study_expectations(raw: dict[str, Any], problems: list[str]) -> list[Expectation]:
-    """The ``[[expect]]`` tables: which metric rises or falls with which axis, and the source saying so."""
+    """The ``[[expect]]`` tables: which metric rises or falls with which axis, and the source saying
+    so."""
     expect: list[Expectation] = []
     raw_expect = raw.get("expect", [])
     if not isinstance(raw_expect, list):
         problems.append(f"expect = {raw_expect!r}: an array of tables ([[expect]])")
         raw_expect = []
     for i, e in enumerate(raw_expect, start=1):
-        ok = isinstance(e, dict) and "metric" in e and (("rises_with" in e) != ("falls_with" in e)) \
+        ok = (
+            isinstance(e, dict)
+            and "metric" in e
+            and (("rises_with" in e) != ("falls_with" in e))
             and set(e) <= {"metric", "rises_with", "falls_with", "source"}
+        )
         if not ok:
-            problems.append(f"expect[{i}] = {e!r}: expected {{ metric = name, rises_with = name (or falls_with), "
-                            f"source = text }}")
+            problems.append(
+                f"expect[{i}] = {e!r}: expected {{ metric = name, rises_with = name (or "
+                "falls_with), "
+                f"source = text }}"
+            )
             continue
         versus = e.get("rises_with", e.get("falls_with"))
-        expect.append(Expectation(e["metric"], versus, 1 if "rises_with" in e else -1, str(e.get("source", ""))))
+        expect.append(
+            Expectation(
+                e["metric"], versus, 1 if "rises_with" in e else -1, str(e.get("source", ""))
+            )
+        )
     return expect
 
 
@@ -506,5 +609,15 @@ def _absolute_data_file(data: dict[str, Any], base_path: Path) -> None:
         cal["data_file"] = os.path.normpath(str((base_path.parent / cal["data_file"]).resolve()))
 
 
-__all__ = ["Study", "StudyError", "Expectation", "Variant", "Dimension", "Objective", "Constraint", "load_study", "set_path",
-           "get_path"]
+__all__ = [
+    "Study",
+    "StudyError",
+    "Expectation",
+    "Variant",
+    "Dimension",
+    "Objective",
+    "Constraint",
+    "load_study",
+    "set_path",
+    "get_path",
+]

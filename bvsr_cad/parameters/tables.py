@@ -14,16 +14,17 @@ import dataclasses
 import math
 import sys
 import tomllib
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from importlib import resources
-from collections.abc import Callable, Mapping
 from typing import Any
 
 AUTO = "auto"
 
 _RULE_KEYS = ("gt", "ge", "lt", "le")
 _SCHEMA: dict[str, dict[str, dict[str, Any]]] = tomllib.loads(
-    resources.files(__package__).joinpath("data/schema.toml").read_text(encoding="utf-8"))
+    resources.files(__package__).joinpath("data/schema.toml").read_text(encoding="utf-8")
+)
 #: What `bvsr calibrate` may fit, by name: {doc, gt/ge/lt/le} (schema.toml [calibratable]).
 CALIBRATABLE: dict[str, dict[str, Any]] = _SCHEMA["calibratable"]
 
@@ -39,17 +40,25 @@ def table(cls: type) -> Any:
     rules = _SCHEMA.get(cls.__name__, {})
     declared = list(cls.__dict__.get("__annotations__", {}))
     if declared != list(rules):
-        raise RuntimeError(f"schema.toml [{cls.__name__}] lists {list(rules)}; {cls.__name__} declares {declared}")
+        raise RuntimeError(
+            f"schema.toml [{cls.__name__}] lists {list(rules)}; {cls.__name__} declares {declared}"
+        )
     module = vars(sys.modules[cls.__module__])
     for name in declared:
         rule = dict(rules[name])
-        meta = {"doc": rule.pop("doc"), **{k: rule.pop(k, None) for k in _RULE_KEYS}, "keys": rule.pop("keys", None),
-                "depends_on": tuple(rule.pop("depends_on", ()))}
+        meta = {
+            "doc": rule.pop("doc"),
+            **{k: rule.pop(k, None) for k in _RULE_KEYS},
+            "keys": rule.pop("keys", None),
+            "depends_on": tuple(rule.pop("depends_on", ())),
+        }
         choices = rule.pop("choices", None)
         meta["choices"] = tuple(choices) if choices is not None else None
         default = rule.pop("default", dataclasses.MISSING)
         if rule:
-            raise RuntimeError(f"schema.toml [{cls.__name__}].{name}: unknown rule keys {sorted(rule)}")
+            raise RuntimeError(
+                f"schema.toml [{cls.__name__}].{name}: unknown rule keys {sorted(rule)}"
+            )
         if default == "table":
             default = module[cls.__annotations__[name]]()
         if default == "empty":
@@ -61,7 +70,8 @@ def table(cls: type) -> Any:
 
 
 def rule_bounds(meta: Any) -> tuple[float, float]:
-    """(lowest, highest) of a field's rule range (``meta``: its metadata); a strict end is the bound itself."""
+    """(lowest, highest) of a field's rule range (``meta``: its metadata); a strict end is the bound
+    itself."""
     lo = meta["ge"] if meta.get("ge") is not None else meta["gt"]
     hi = meta["le"] if meta.get("le") is not None else meta["lt"]
     return lo, hi
@@ -69,28 +79,50 @@ def rule_bounds(meta: Any) -> tuple[float, float]:
 
 def _inside(meta: Any, x: float) -> bool:
     lo, hi = rule_bounds(meta)
-    return lo <= x <= hi and (meta.get("gt") is None or x > meta["gt"]) and (meta.get("lt") is None or x < meta["lt"])
+    return (
+        lo <= x <= hi
+        and (meta.get("gt") is None or x > meta["gt"])
+        and (meta.get("lt") is None or x < meta["lt"])
+    )
 
 
-def feasible_span(meta: Any, ok: Callable[[float], bool], samples: int) -> tuple[float, float] | None:
-    """The feasible part of a field's rule range: (first, last) of ``samples`` + 1 evenly spaced values
-    within its bounds (``meta``: a field's metadata; a strict bound is left out) for which ``ok`` holds,
-    or None."""
+def feasible_span(
+    meta: Any, ok: Callable[[float], bool], samples: int
+) -> tuple[float, float] | None:
+    """The feasible part of a field's rule range: (first, last) of ``samples`` + 1 evenly spaced
+    values within its bounds (``meta``: a field's metadata; a strict bound is left out) for which
+    ``ok`` holds, or None."""
     lo, hi = rule_bounds(meta)
-    good = [x for x in (lo + (hi - lo) * i / samples for i in range(samples + 1)) if _inside(meta, x) and ok(x)]
+    good = [
+        x
+        for x in (lo + (hi - lo) * i / samples for i in range(samples + 1))
+        if _inside(meta, x) and ok(x)
+    ]
     return (good[0], good[-1]) if good else None
 
 
-def feasible_interval(meta: Any, ok: Callable[[float], bool], value: float,
-                      steps: int = 14) -> tuple[float, float] | None:
-    """The interval of a field's rule range around ``value`` (which need not hold) where ``ok`` holds,
-    assuming there is one: the value nearest ``value`` that holds, searched in steps of 1.6 % from an
-    eighth to eight times it and then over the whole range in 64 even steps, then each end found by
-    ``steps`` bisections towards the range's bound (None: nothing holds). Cheap when ``ok`` fails fast."""
+def feasible_interval(
+    meta: Any, ok: Callable[[float], bool], value: float, steps: int = 14
+) -> tuple[float, float] | None:
+    """The interval of a field's rule range around ``value`` (which need not hold) where ``ok``
+    holds, assuming there is one: the value nearest ``value`` that holds, searched in steps of 1.6 %
+    from an eighth to eight times it and then over the whole range in 64 even steps, then each end
+    found by ``steps`` bisections towards the range's bound (None: nothing holds). Cheap when ``ok``
+    fails fast."""
     lo, hi = rule_bounds(meta)
-    near = [value * 8.0 ** (i / 128) for k in range(129) for i in ((k, -k) if k else (0,))] if value > 0 else []
-    found = next((x for x in [*near, *(lo + (hi - lo) * i / 64 for i in range(65))] if _inside(meta, x) and ok(x)),
-                 None)
+    near = (
+        [value * 8.0 ** (i / 128) for k in range(129) for i in ((k, -k) if k else (0,))]
+        if value > 0
+        else []
+    )
+    found = next(
+        (
+            x
+            for x in [*near, *(lo + (hi - lo) * i / 64 for i in range(65))]
+            if _inside(meta, x) and ok(x)
+        ),
+        None,
+    )
     if found is None:
         return None
 
@@ -204,8 +236,9 @@ class MaterialUse:
     soa: str
 
 
-#: ``vertebra.material`` of an invertebrate tail: no rod (the paper's "no vertebra" segment). The panels
-#: keep their sockets (sized by ``vertebra.diameter_mm``); the rod, its mass and its stiffness go.
+#: ``vertebra.material`` of an invertebrate tail: no rod (the paper's "no vertebra" segment). The
+#: panels keep their sockets (sized by ``vertebra.diameter_mm``); the rod, its mass and its
+#: stiffness go.
 NO_ROD = "none"
 
 
@@ -372,7 +405,8 @@ class FabricationPackage:
 
 @table
 class Pneumatics:
-    """The pneumatic supply of a pulse: the paper's Eq 13 ramp, or valve, tube and chambers (ISO 6358)."""
+    """The pneumatic supply of a pulse: the paper's Eq 13 ramp, or valve, tube and chambers (ISO
+    6358)."""
 
     model: str
     ramp_time_s: float
@@ -436,7 +470,8 @@ class TailSpec:
     calibration: Calibration
 
     def fitted(self, name: str, table_value: float) -> float:
-        """A calibratable quantity's value: fitted by `bvsr calibrate` if the file says so, else the table's."""
+        """A calibratable quantity's value: fitted by `bvsr calibrate` if the file says so, else the
+        table's."""
         return float(self.calibration.fitted.get(name, table_value))
 
     @property

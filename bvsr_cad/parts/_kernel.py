@@ -11,7 +11,6 @@ from collections.abc import Callable, Iterable, Sequence
 import build123d as bd
 import numpy as np
 
-
 #: A B-spline face is flat (:func:`ruled_loft`) when no point of it leaves its plane by more.
 PLANAR_TOLERANCE_MM = 1e-7
 
@@ -21,13 +20,13 @@ class GeometryError(RuntimeError):
 
 
 def kernel_threads(n: int) -> int:
-    """Run OCCT's parallel algorithms (the booleans and the meshing build123d and the exporters ask to
-    run in parallel) on ``n`` threads, the calling one included (1: on it alone); the number before is
-    returned, to give back. A build whose second process keeps the other core busy asks for 1: on the
-    default tail its booleans then take 0.65 CPU s less than on two threads (the assembly 1.48 against
-    1.77, the rigid twin 2.67 against 2.86, the mold set 1.41 against 1.55) for the same solids, and the
-    meshing as much for the same STL bytes. OCCT refuses while its threads are at work: the pool is then left
-    as it was."""
+    """Run OCCT's parallel algorithms (the booleans and the meshing build123d and the exporters ask
+    to run in parallel) on ``n`` threads, the calling one included (1: on it alone); the number
+    before is returned, to give back. A build whose second process keeps the other core busy asks
+    for 1: on the default tail its booleans then take 0.65 CPU s less than on two threads (the
+    assembly 1.48 against 1.77, the rigid twin 2.67 against 2.86, the mold set 1.41 against 1.55)
+    for the same solids, and the meshing as much for the same STL bytes. OCCT refuses while its
+    threads are at work: the pool is then left as it was."""
     from OCP.OSD import OSD_ThreadPool
 
     pool = OSD_ThreadPool.DefaultPool_s()
@@ -49,17 +48,20 @@ def location(t) -> bd.Location:
     return bd.Location(TopLoc_Location(trsf))
 
 
-def mesh_arrays(shape: bd.Shape, tolerance_mm: float, angular_tolerance_rad: float = 0.1, relative: bool = True
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """``shape.tessellate(...)`` as arrays: vertices (n, 3) float and triangles (m, 3) int64, equal value for
-    value to build123d's (the same triangulation, faces in the same order, a reversed face's triangles
-    flipped), about three times faster (no Vector per vertex, a face at its identity place not moved).
+def mesh_arrays(
+    shape: bd.Shape, tolerance_mm: float, angular_tolerance_rad: float = 0.1, relative: bool = True
+) -> tuple[np.ndarray, np.ndarray]:
+    """``shape.tessellate(...)`` as arrays: vertices (n, 3) float and triangles (m, 3) int64, equal
+    value for value to build123d's (the same triangulation, faces in the same order, a reversed
+    face's triangles flipped), about three times faster (no Vector per vertex, a face at its
+    identity place not moved).
 
-    ``relative``: build123d's meshing, ``tolerance_mm`` a fraction of each edge's size where ``shape``
-    has no triangulation within ``tolerance_mm`` yet. False: an absolute deflection, as the STL writer
-    meshes (:func:`bvsr_cad.exporters.cad.write_stl`): at its tolerances, a part's triangulation is the
-    one its print STL left (the same to the bit: OCCT meshes a B-rep alike whether it had a
-    triangulation that build123d's ``bounding_box`` then cleared, or never had one)."""
+    ``relative``: build123d's meshing, ``tolerance_mm`` a fraction of each edge's size where
+    ``shape`` has no triangulation within ``tolerance_mm`` yet. False: an absolute deflection, as
+    the STL writer meshes (:func:`bvsr_cad.exporters.cad.write_stl`): at its tolerances, a part's
+    triangulation is the one its print STL left (the same to the bit: OCCT meshes a B-rep alike
+    whether it had a triangulation that build123d's ``bounding_box`` then cleared, or never had
+    one)."""
     from OCP.BRep import BRep_Tool
     from OCP.TopAbs import TopAbs_Orientation
     from OCP.TopLoc import TopLoc_Location
@@ -80,15 +82,24 @@ def mesh_arrays(shape: bd.Shape, tolerance_mm: float, angular_tolerance_rad: flo
             trsf = loc.Transformation()
             verts += [node(i).Transformed(trsf).Coord() for i in range(1, poly.NbNodes() + 1)]
         tri = poly.Triangle
-        t = np.array([tri(i).Get() for i in range(1, poly.NbTriangles() + 1)], np.int64).reshape(-1, 3)
+        t = np.array([tri(i).Get() for i in range(1, poly.NbTriangles() + 1)], np.int64).reshape(
+            -1, 3
+        )
         t += offset - 1
-        tris.append(t[:, [0, 2, 1]] if face.wrapped.Orientation() == TopAbs_Orientation.TopAbs_REVERSED else t)
-    return (np.array(verts, float).reshape(-1, 3),
-            np.concatenate(tris) if tris else np.zeros((0, 3), np.int64))
+        tris.append(
+            t[:, [0, 2, 1]]
+            if face.wrapped.Orientation() == TopAbs_Orientation.TopAbs_REVERSED
+            else t
+        )
+    return (
+        np.array(verts, float).reshape(-1, 3),
+        np.concatenate(tris) if tris else np.zeros((0, 3), np.int64),
+    )
 
 
 class PrintPosed:
-    """A part with a ``solid`` in its own frame and a ``print_transform`` onto the print bed (mm)."""
+    """A part with a ``solid`` in its own frame and a ``print_transform`` onto the print bed
+    (mm)."""
 
     solid: bd.Solid
     print_transform: tuple[tuple[float, ...], ...]
@@ -104,7 +115,9 @@ def cylinder_between(p0: Sequence[float], p1: Sequence[float], diameter_mm: floa
     length = d.length
     if length <= 0:
         raise GeometryError(f"zero-length cylinder at {tuple(p0)}")
-    return bd.Solid.make_cylinder(diameter_mm / 2.0, length, bd.Plane(origin=bd.Vector(*p0), z_dir=d))
+    return bd.Solid.make_cylinder(
+        diameter_mm / 2.0, length, bd.Plane(origin=bd.Vector(*p0), z_dir=d)
+    )
 
 
 def single_solid(shape: bd.Shape, what: str) -> bd.Solid:
@@ -122,11 +135,11 @@ def single_solid(shape: bd.Shape, what: str) -> bd.Solid:
 
 
 def mesh_absolute(shape: bd.Shape, tolerance_mm: float, angular_tolerance_rad: float) -> None:
-    """Triangulate ``shape`` with an absolute deflection of ``tolerance_mm`` unless it has one within it,
-    each of its solids in the solid's own frame: OCCT meshing placed copies (a compound of a joint's five
-    SOAs) evaluates the surfaces where they are placed and may split a face differently (10 of 11,880
-    triangles, measured), so a mesh would depend on whether the solid had been meshed before (a print
-    STL written in this build, or taken from the cache)."""
+    """Triangulate ``shape`` with an absolute deflection of ``tolerance_mm`` unless it has one
+    within it, each of its solids in the solid's own frame: OCCT meshing placed copies (a compound
+    of a joint's five SOAs) evaluates the surfaces where they are placed and may split a face
+    differently (10 of 11,880 triangles, measured), so a mesh would depend on whether the solid had
+    been meshed before (a print STL written in this build, or taken from the cache)."""
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
     from OCP.BRepTools import BRepTools
     from OCP.TopLoc import TopLoc_Location
@@ -135,19 +148,21 @@ def mesh_absolute(shape: bd.Shape, tolerance_mm: float, angular_tolerance_rad: f
         own = solid.wrapped.Located(TopLoc_Location())
         if not BRepTools.Triangulation_s(own, tolerance_mm):
             BRepMesh_IncrementalMesh(own, tolerance_mm, False, angular_tolerance_rad, True)
-    if not BRepTools.Triangulation_s(shape.wrapped, tolerance_mm):  # what is not a solid (a face, a shell)
+    if not BRepTools.Triangulation_s(
+        shape.wrapped, tolerance_mm
+    ):  # what is not a solid (a face, a shell)
         BRepMesh_IncrementalMesh(shape.wrapped, tolerance_mm, False, angular_tolerance_rad, True)
 
 
 def bounds(shape: bd.Shape) -> bd.BoundBox:
     """``shape.bounding_box()``'s box (OCCT's optimal box of the exact geometry), leaving its
-    triangulation in place. build123d's ``bounding_box`` first calls ``BRepTools.Clean`` on the shape,
-    which deletes the triangulation of every face it shares with other shapes: the manifest's tail
-    length (a compound of the placed parts) and the drawings' hole tables (the parts' faces) would wipe
-    what the print STLs meshed, and the robot's meshes (the same solids at the same tolerances) would
-    be meshed again (1.6 CPU s in a cold default build). Here the box reads the geometry only
-    (``useTriangulation`` off), which is what the optimal box reads after a clean: the same numbers
-    (tests/test_parts.py compares them on every part, face and placed assembly)."""
+    triangulation in place. build123d's ``bounding_box`` first calls ``BRepTools.Clean`` on the
+    shape, which deletes the triangulation of every face it shares with other shapes: the manifest's
+    tail length (a compound of the placed parts) and the drawings' hole tables (the parts' faces)
+    would wipe what the print STLs meshed, and the robot's meshes (the same solids at the same
+    tolerances) would be meshed again (1.6 CPU s in a cold default build). Here the box reads the
+    geometry only (``useTriangulation`` off), which is what the optimal box reads after a clean: the
+    same numbers (tests/test_parts.py compares them on every part, face and placed assembly)."""
     from OCP.Bnd import Bnd_Box
     from OCP.BRepBndLib import BRepBndLib
 
@@ -157,16 +172,16 @@ def bounds(shape: bd.Shape) -> bd.BoundBox:
 
 
 def fresh_copy(shape: bd.Shape) -> bd.Shape:
-    """A copy of ``shape`` with its own geometry and no triangulation (``BRepBuilderAPI_Copy``): whatever a
-    caller does to it (mesh it, label it) leaves the original as it was."""
+    """A copy of ``shape`` with its own geometry and no triangulation (``BRepBuilderAPI_Copy``):
+    whatever a caller does to it (mesh it, label it) leaves the original as it was."""
     from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 
     return type(shape)(BRepBuilderAPI_Copy(shape.wrapped, True, False).Shape())
 
 
 def brep_bytes(solid: bd.Solid) -> bytes:
-    """``solid`` in OCCT's binary BRep format (its geometry, topology and tolerances; no triangulation
-    unless it has one)."""
+    """``solid`` in OCCT's binary BRep format (its geometry, topology and tolerances; no
+    triangulation unless it has one)."""
     import io
 
     from OCP.BinTools import BinTools
@@ -188,16 +203,16 @@ def solid_from_brep(data: bytes) -> bd.Solid:
     return bd.Solid(TopoDS.Solid_s(shape))
 
 
-#: Solids :func:`remembered` keeps per function: a `bvsr watch` session that tries many SOA tables keeps
-#: the most recently used ones, not every one it saw.
+#: Solids :func:`remembered` keeps per function: a `bvsr watch` session that tries many SOA tables
+#: keeps the most recently used ones, not every one it saw.
 REMEMBERED_MAX = 8
 
 
 def remembered(make: Callable[..., bd.Shape]) -> Callable[..., bd.Shape]:
-    """``make`` (a pure function of hashable arguments returning a solid) made once per arguments in a
-    process (the :data:`REMEMBERED_MAX` most recently used are kept); each call gets a :func:`fresh_copy`,
-    so no caller sees another's triangulation or label. The SOA's solids are asked for by the assembly,
-    the mold set and the rigid twin alike."""
+    """``make`` (a pure function of hashable arguments returning a solid) made once per arguments in
+    a process (the :data:`REMEMBERED_MAX` most recently used are kept); each call gets a
+    :func:`fresh_copy`, so no caller sees another's triangulation or label. The SOA's solids are
+    asked for by the assembly, the mold set and the rigid twin alike."""
     made: OrderedDict[tuple, bd.Shape] = OrderedDict()
     lock = threading.Lock()
 
@@ -218,12 +233,12 @@ def remembered(make: Callable[..., bd.Shape]) -> Callable[..., bd.Shape]:
 
 def _boolean(base: bd.Shape, tools: list[bd.Shape], operation) -> bd.Shape:
     """build123d's boolean of ``base`` and ``tools`` (its clean and history included: what
-    ``Shape.cut`` and ``Shape.fuse`` run) with OCCT's oriented bounding boxes on
-    (``SetUseOBB``): the kernel then rejects the pairs of sub-shapes whose oriented boxes do not
-    meet before it intersects them, for the same solid. On the default tail (alternated, 4 runs each,
-    one core) the mold set takes 0.8-1.4 CPU s with it against 2.2-2.9 without, the assembly and the
-    rigid twin the same within the machine's noise; the default export byte-identical with it and without (compared file by
-    file, the manifest's volatile section apart)."""
+    ``Shape.cut`` and ``Shape.fuse`` run) with OCCT's oriented bounding boxes on (``SetUseOBB``):
+    the kernel then rejects the pairs of sub-shapes whose oriented boxes do not meet before it
+    intersects them, for the same solid. On the default tail (alternated, 4 runs each, one core) the
+    mold set takes 0.8-1.4 CPU s with it against 2.2-2.9 without, the assembly and the rigid twin
+    the same within the machine's noise; the default export byte-identical with it and without
+    (compared file by file, the manifest's volatile section apart)."""
     operation.SetUseOBB(True)
     return base._bool_op((base,), tools, operation)  # build123d 0.12's one boolean path (pinned)
 
@@ -251,10 +266,10 @@ def ruled_loft(sections: Sequence[bd.Face], what: str) -> bd.Solid:
     band is flat (between two straight edges). Those faces are given their plane here (the same
     edges, so the same solid): what reads the solid then meets a plane, not a B-spline, and a CAD
     user picks a flat face that is one. The SOA's outer loft has 16 flat bands of 32, its interior
-    all 16. Measured on the default tail: its parts, mold set and rigid twin mesh for print (0.01 mm)
-    to 255,188 triangles instead of 523,656 (OCCT refines a B-spline face's interior, flat or not), in
-    5.1-6.3 CPU s instead of 6.5-7.8 (alternated, one core); their volumes unchanged to 1e-4 mm^3;
-    the export 72 MB instead of 104 MB.
+    all 16. Measured on the default tail: its parts, mold set and rigid twin mesh for print (0.01
+    mm) to 255,188 triangles instead of 523,656 (OCCT refines a B-spline face's interior, flat or
+    not), in 5.1-6.3 CPU s instead of 6.5-7.8 (alternated, one core); their volumes unchanged to
+    1e-4 mm^3; the export 72 MB instead of 104 MB.
     """
     from OCP.BRep import BRep_Builder, BRep_Tool
     from OCP.BRepAdaptor import BRepAdaptor_Surface
@@ -274,8 +289,12 @@ def ruled_loft(sections: Sequence[bd.Face], what: str) -> bd.Solid:
         if BRepAdaptor_Surface(face).GetType() == GeomAbs_BSplineSurface:
             planar = GeomLib_IsPlanarSurface(BRep_Tool.Surface_s(face), PLANAR_TOLERANCE_MM)
             if planar.IsPlanar():
-                flat = BRepBuilderAPI_MakeFace(planar.Plan(), BRepTools.OuterWire_s(face), True).Face()
-                if bd.Face(flat).normal_at().dot(f.normal_at()) < 0:  # facing the way the loft's face did
+                flat = BRepBuilderAPI_MakeFace(
+                    planar.Plan(), BRepTools.OuterWire_s(face), True
+                ).Face()
+                if (
+                    bd.Face(flat).normal_at().dot(f.normal_at()) < 0
+                ):  # facing the way the loft's face did
                     flat.Reverse()
                 face = flat
         builder.Add(shell, face)

@@ -47,7 +47,16 @@ import numpy as np
 from ..parameters.layout import Cyl
 from ..parameters.molds import PIN_ROOT_MM, SOCKET_EXTRA_DEPTH_MM, mold_dimensions, mold_problems
 from ..parameters.tables import Casting, SoaTable
-from ._kernel import PrintPosed, GeometryError, bounds, cut_all, cylinder_between, fuse_all, location, single_solid
+from ._kernel import (
+    GeometryError,
+    PrintPosed,
+    bounds,
+    cut_all,
+    cylinder_between,
+    fuse_all,
+    location,
+    single_solid,
+)
 from .soa import bellows_profile, soa_body, soa_envelope, soa_interior
 
 #: Pull direction of half_a (the side x - y > 0); half_b is pulled the other way.
@@ -67,9 +76,13 @@ class MoldPart(PrintPosed):
     solid: bd.Solid
     pull_direction: tuple[float, float, float] | None  # None: sacrificial
     print_transform: Matrix  # 4x4, cast frame -> print frame
-    parting_planes: tuple[tuple[tuple[float, float, float], tuple[float, float, float]], ...]  # (point, normal)
+    parting_planes: tuple[
+        tuple[tuple[float, float, float], tuple[float, float, float]], ...
+    ]  # (point, normal)
     note: str = ""
-    features: tuple[Cyl, ...] = ()  #: its round holes and pins, as cut and fused (the drawings' hole tables)
+    features: tuple[
+        Cyl, ...
+    ] = ()  #: its round holes and pins, as cut and fused (the drawings' hole tables)
 
     @property
     def sacrificial(self) -> bool:
@@ -130,8 +143,8 @@ def _uez_box(u0: float, u1: float, e0: float, e1: float, z0: float, z1: float) -
 
 @dataclass(frozen=True)
 class _MoldFeatures:
-    """The round features shared by several mold parts, declared once: the parts' solids are cut and fused
-    from these, and the drawings' hole tables list them."""
+    """The round features shared by several mold parts, declared once: the parts' solids are cut and
+    fused from these, and the drawings' hole tables list them."""
 
     bolts: list[Cyl]
     ab_pins: list[Cyl]  # half_a -> half_b, on the parting plane either side of the cavity
@@ -147,10 +160,15 @@ class _MoldFeatures:
     lid_flange: Cyl
 
     def shell(self, side: int) -> tuple[Cyl, ...]:
-        """Half_a's (``side`` 1) or half_b's (-1) features: its plate and lid sockets, its bolts and the
-        parting plane's pins (half_a) or sockets (half_b)."""
-        mine = [f for f, su in zip(self.plate_sockets + self.lid_sockets + self.bolts, (1, -1, 1, -1, 1, 1, -1, -1))
-                if su == side]
+        """Half_a's (``side`` 1) or half_b's (-1) features: its plate and lid sockets, its bolts and
+        the parting plane's pins (half_a) or sockets (half_b)."""
+        mine = [
+            f
+            for f, su in zip(
+                self.plate_sockets + self.lid_sockets + self.bolts, (1, -1, 1, -1, 1, 1, -1, -1)
+            )
+            if su == side
+        ]
         return tuple(mine + (self.ab_pins if side > 0 else self.ab_sockets))
 
 
@@ -161,7 +179,12 @@ def _solids(features: list[Cyl]) -> list[bd.Solid]:
 def _mold_features(dims, c: Casting) -> _MoldFeatures:
     """The bolts, pins, sockets, gate, vents and flange pockets in the cast frame."""
     z_lo, z_hi, z_bot, z_top = dims.z_lo_mm, dims.z_hi_mm, dims.z_bottom_mm, dims.z_top_mm
-    socket_d, rho_pin, bolt_uv, h = dims.socket_mm, dims.pin_circle_mm, dims.bolt_uv_mm, dims.cast_height_mm
+    socket_d, rho_pin, bolt_uv, h = (
+        dims.socket_mm,
+        dims.pin_circle_mm,
+        dims.bolt_uv_mm,
+        dims.cast_height_mm,
+    )
     r_gate = dims.channel_radius_mm(c.gate_diameter_mm)
     r_vent = dims.channel_radius_mm(c.vent_diameter_mm)
     pin_len, sock_len = c.pin_length_mm, c.pin_length_mm + SOCKET_EXTRA_DEPTH_MM
@@ -169,25 +192,84 @@ def _mold_features(dims, c: Casting) -> _MoldFeatures:
     vents_xy = [(r_vent, 0.0), (0.0, r_vent), (-r_vent, 0.0), (0.0, -r_vent)]
     d_fl = 2.0 * dims.cast_flange_radius_mm
     return _MoldFeatures(
-        bolts=[Cyl(f"bolt_{i}", "bolt", _uez(su * bolt_uv, se * bolt_uv, z_bot - 1.0),
-                   _uez(su * bolt_uv, se * bolt_uv, z_top + 1.0), c.bolt_hole_diameter_mm)
-               for i, (su, se) in enumerate(((1, 1), (1, -1), (-1, 1), (-1, -1)), start=1)],
-        ab_pins=[Cyl(f"pin_{i}", "pin", _uez(PIN_ROOT_MM, se * rho_pin, z_mid), _uez(-pin_len, se * rho_pin, z_mid),
-                     c.pin_diameter_mm) for i, se in enumerate((1, -1), start=1)],
-        ab_sockets=[Cyl(f"socket_{i}", "pin_socket", _uez(0.1, se * rho_pin, z_mid),
-                        _uez(-sock_len, se * rho_pin, z_mid), socket_d) for i, se in enumerate((1, -1), start=1)],
-        plate_pins=[Cyl(f"pin_{i}", "pin", _uez(su * rho_pin, 0, z_lo - PIN_ROOT_MM),
-                        _uez(su * rho_pin, 0, z_lo + pin_len), c.pin_diameter_mm) for i, su in enumerate((1, -1), 1)],
-        lid_pins=[Cyl(f"pin_{i}", "pin", _uez(su * rho_pin, 0, z_hi + PIN_ROOT_MM),
-                      _uez(su * rho_pin, 0, z_hi - pin_len), c.pin_diameter_mm) for i, su in enumerate((1, -1), 1)],
-        plate_sockets=[Cyl(f"plate_socket_{i}", "pin_socket", _uez(su * rho_pin, 0, z_lo - 0.1),
-                           _uez(su * rho_pin, 0, z_lo + sock_len), socket_d) for i, su in enumerate((1, -1), 1)],
-        lid_sockets=[Cyl(f"lid_socket_{i}", "pin_socket", _uez(su * rho_pin, 0, z_hi + 0.1),
-                         _uez(su * rho_pin, 0, z_hi - sock_len), socket_d) for i, su in enumerate((1, -1), 1)],
-        gate=Cyl("gate", "gate", (r_gate, 0.0, z_bot - 1.0), (r_gate, 0.0, 0.0), c.gate_diameter_mm),
+        bolts=[
+            Cyl(
+                f"bolt_{i}",
+                "bolt",
+                _uez(su * bolt_uv, se * bolt_uv, z_bot - 1.0),
+                _uez(su * bolt_uv, se * bolt_uv, z_top + 1.0),
+                c.bolt_hole_diameter_mm,
+            )
+            for i, (su, se) in enumerate(((1, 1), (1, -1), (-1, 1), (-1, -1)), start=1)
+        ],
+        ab_pins=[
+            Cyl(
+                f"pin_{i}",
+                "pin",
+                _uez(PIN_ROOT_MM, se * rho_pin, z_mid),
+                _uez(-pin_len, se * rho_pin, z_mid),
+                c.pin_diameter_mm,
+            )
+            for i, se in enumerate((1, -1), start=1)
+        ],
+        ab_sockets=[
+            Cyl(
+                f"socket_{i}",
+                "pin_socket",
+                _uez(0.1, se * rho_pin, z_mid),
+                _uez(-sock_len, se * rho_pin, z_mid),
+                socket_d,
+            )
+            for i, se in enumerate((1, -1), start=1)
+        ],
+        plate_pins=[
+            Cyl(
+                f"pin_{i}",
+                "pin",
+                _uez(su * rho_pin, 0, z_lo - PIN_ROOT_MM),
+                _uez(su * rho_pin, 0, z_lo + pin_len),
+                c.pin_diameter_mm,
+            )
+            for i, su in enumerate((1, -1), 1)
+        ],
+        lid_pins=[
+            Cyl(
+                f"pin_{i}",
+                "pin",
+                _uez(su * rho_pin, 0, z_hi + PIN_ROOT_MM),
+                _uez(su * rho_pin, 0, z_hi - pin_len),
+                c.pin_diameter_mm,
+            )
+            for i, su in enumerate((1, -1), 1)
+        ],
+        plate_sockets=[
+            Cyl(
+                f"plate_socket_{i}",
+                "pin_socket",
+                _uez(su * rho_pin, 0, z_lo - 0.1),
+                _uez(su * rho_pin, 0, z_lo + sock_len),
+                socket_d,
+            )
+            for i, su in enumerate((1, -1), 1)
+        ],
+        lid_sockets=[
+            Cyl(
+                f"lid_socket_{i}",
+                "pin_socket",
+                _uez(su * rho_pin, 0, z_hi + 0.1),
+                _uez(su * rho_pin, 0, z_hi - sock_len),
+                socket_d,
+            )
+            for i, su in enumerate((1, -1), 1)
+        ],
+        gate=Cyl(
+            "gate", "gate", (r_gate, 0.0, z_bot - 1.0), (r_gate, 0.0, 0.0), c.gate_diameter_mm
+        ),
         vents_xy=vents_xy,
-        vents=[Cyl(f"vent_{i}", "vent", (x, y, h), (x, y, z_top + 1.0), c.vent_diameter_mm)
-               for i, (x, y) in enumerate(vents_xy, start=1)],
+        vents=[
+            Cyl(f"vent_{i}", "vent", (x, y, h), (x, y, z_top + 1.0), c.vent_diameter_mm)
+            for i, (x, y) in enumerate(vents_xy, start=1)
+        ],
         plate_flange=Cyl("flange_pocket", "flange_pocket", (0.0, 0.0, 0.0), (0.0, 0.0, z_lo), d_fl),
         lid_flange=Cyl("flange_pocket", "flange_pocket", (0.0, 0.0, h), (0.0, 0.0, z_hi), d_fl),
     )
@@ -199,8 +281,8 @@ _PLANE_DIAG = ((0.0, 0.0, 0.0), tuple(DIAGONAL_PULL))
 
 
 def _shell_part(side: int, dims, feats: _MoldFeatures, envelope: bd.Solid) -> MoldPart:
-    """Half_a (``side`` 1: pins on its parting face) or half_b (-1: the pins' sockets): the block between the
-    flanges on one side of the diagonal parting plane, pulled along the diagonal."""
+    """Half_a (``side`` 1: pins on its parting face) or half_b (-1: the pins' sockets): the block
+    between the flanges on one side of the diagonal parting plane, pulled along the diagonal."""
     w, z_lo, z_hi = dims.block_half_mm, dims.z_lo_mm, dims.z_hi_mm
     u0, u1 = (0.0, w) if side > 0 else (-w, 0.0)
     body = cut_all(_uez_box(u0, u1, -w, w, z_lo, z_hi), [envelope])
@@ -209,39 +291,71 @@ def _shell_part(side: int, dims, feats: _MoldFeatures, envelope: bd.Solid) -> Mo
     name = "half_a" if side > 0 else "half_b"
     solid = single_solid(body, f"mold {name}")
     planes = (_PLANE_DIAG, ((0.0, 0.0, z_lo), (0.0, 0.0, 1.0)), ((0.0, 0.0, z_hi), (0.0, 0.0, 1.0)))
-    return MoldPart(name, "shell", solid, tuple(float(v) for v in side * _PULL_A),
-                    _as_matrix(_print_transform(_Z_AXIS, -side * _PULL_A, solid)), planes,
-                    "printed lying on its back face, pins up" if side > 0 else "printed lying on its back face",
-                    feats.shell(side))
+    return MoldPart(
+        name,
+        "shell",
+        solid,
+        tuple(float(v) for v in side * _PULL_A),
+        _as_matrix(_print_transform(_Z_AXIS, -side * _PULL_A, solid)),
+        planes,
+        "printed lying on its back face, pins up" if side > 0 else "printed lying on its back face",
+        feats.shell(side),
+    )
 
 
 def _bottom_plate(dims, feats: _MoldFeatures, envelope: bd.Solid, core: bd.Solid) -> MoldPart:
-    """The plate under the lower flange: it forms that flange, holds the core's lower print and the gate."""
+    """The plate under the lower flange: it forms that flange, holds the core's lower print and the
+    gate."""
     w, z_lo = dims.block_half_mm, dims.z_lo_mm
-    plate = cut_all(_uez_box(-w, w, -w, w, dims.z_bottom_mm, z_lo),
-                    [envelope, core, *_solids([feats.gate]), *_solids(feats.bolts)])
+    plate = cut_all(
+        _uez_box(-w, w, -w, w, dims.z_bottom_mm, z_lo),
+        [envelope, core, *_solids([feats.gate]), *_solids(feats.bolts)],
+    )
     plate = single_solid(fuse_all(plate, _solids(feats.plate_pins)), "mold bottom_plate")
-    return MoldPart("bottom_plate", "bottom_plate", plate, (0.0, 0.0, -1.0),
-                    _as_matrix(_print_transform(_PULL_A, _Z_AXIS, plate)),
-                    (((0.0, 0.0, z_lo), (0.0, 0.0, 1.0)),), "forms the lower flange; gate from below",
-                    (feats.gate, feats.plate_flange, *feats.bolts, *feats.plate_pins))
+    return MoldPart(
+        "bottom_plate",
+        "bottom_plate",
+        plate,
+        (0.0, 0.0, -1.0),
+        _as_matrix(_print_transform(_PULL_A, _Z_AXIS, plate)),
+        (((0.0, 0.0, z_lo), (0.0, 0.0, 1.0)),),
+        "forms the lower flange; gate from below",
+        (feats.gate, feats.plate_flange, *feats.bolts, *feats.plate_pins),
+    )
 
 
 def _lid(dims, feats: _MoldFeatures, envelope: bd.Solid, core: bd.Solid) -> MoldPart:
-    """The lid over the upper flange: it forms that flange, holds the core's upper print and the vents."""
+    """The lid over the upper flange: it forms that flange, holds the core's upper print and the
+    vents."""
     w, z_hi = dims.block_half_mm, dims.z_hi_mm
-    lid = cut_all(_uez_box(-w, w, -w, w, z_hi, dims.z_top_mm),
-                  [envelope, core, *_solids(feats.vents), *_solids(feats.bolts)])
+    lid = cut_all(
+        _uez_box(-w, w, -w, w, z_hi, dims.z_top_mm),
+        [envelope, core, *_solids(feats.vents), *_solids(feats.bolts)],
+    )
     lid = single_solid(fuse_all(lid, _solids(feats.lid_pins)), "mold lid")
-    return MoldPart("lid", "lid", lid, (0.0, 0.0, 1.0), _as_matrix(_print_transform(_PULL_A, -_Z_AXIS, lid)),
-                    (((0.0, 0.0, z_hi), (0.0, 0.0, 1.0)),), "forms the upper flange; printed upside down",
-                    (*feats.vents, feats.lid_flange, *feats.bolts, *feats.lid_pins))
+    return MoldPart(
+        "lid",
+        "lid",
+        lid,
+        (0.0, 0.0, 1.0),
+        _as_matrix(_print_transform(_PULL_A, -_Z_AXIS, lid)),
+        (((0.0, 0.0, z_hi), (0.0, 0.0, 1.0)),),
+        "forms the upper flange; printed upside down",
+        (*feats.vents, feats.lid_flange, *feats.bolts, *feats.lid_pins),
+    )
 
 
 def _core_part(core: bd.Solid) -> MoldPart:
     """The sacrificial core: the SOA's interior and its prints."""
-    return MoldPart("core", "core", core, None, _as_matrix(_print_transform(np.array([1.0, 0, 0]), _Z_AXIS, core)),
-                    (), "sacrificial: print in PVA/BVOH and dissolve, or cast in wax and melt out")
+    return MoldPart(
+        "core",
+        "core",
+        core,
+        None,
+        _as_matrix(_print_transform(np.array([1.0, 0, 0]), _Z_AXIS, core)),
+        (),
+        "sacrificial: print in PVA/BVOH and dissolve, or cast in wax and melt out",
+    )
 
 
 def _channels(dims, feats: _MoldFeatures, c: Casting) -> tuple[Channel, ...]:
@@ -250,11 +364,25 @@ def _channels(dims, feats: _MoldFeatures, c: Casting) -> tuple[Channel, ...]:
     block = _uez_box(-w, w, -w, w, dims.z_bottom_mm, dims.z_top_mm)
     r_gate, h = dims.channel_radius_mm(c.gate_diameter_mm), dims.cast_height_mm
     gate = _solids([feats.gate])[0]
-    return (Channel("gate", "gate", c.gate_diameter_mm, single_solid(gate.intersect(block), "gate channel"),
-                    (r_gate, 0.0, 0.0)),
-            *(Channel(f"vent_{i}", "vent", c.vent_diameter_mm, single_solid(v.intersect(block), f"vent {i}"),
-                      (x, y, h))
-              for i, (v, (x, y)) in enumerate(zip(_solids(feats.vents), feats.vents_xy), start=1)))
+    return (
+        Channel(
+            "gate",
+            "gate",
+            c.gate_diameter_mm,
+            single_solid(gate.intersect(block), "gate channel"),
+            (r_gate, 0.0, 0.0),
+        ),
+        *(
+            Channel(
+                f"vent_{i}",
+                "vent",
+                c.vent_diameter_mm,
+                single_solid(v.intersect(block), f"vent {i}"),
+                (x, y, h),
+            )
+            for i, (v, (x, y)) in enumerate(zip(_solids(feats.vents), feats.vents_xy), start=1)
+        ),
+    )
 
 
 def mold_set(soa: SoaTable, flange_diameter_mm: float, casting: Casting) -> MoldSet:
@@ -274,10 +402,14 @@ def mold_set(soa: SoaTable, flange_diameter_mm: float, casting: Casting) -> Mold
         GeometryError: the kernel did not produce one valid solid per part.
     """
     c = casting
-    problems = mold_problems(soa, flange_diameter_mm, c)  # the rules the parameter file was validated by
+    problems = mold_problems(
+        soa, flange_diameter_mm, c
+    )  # the rules the parameter file was validated by
     if problems:
         raise ValueError("; ".join(problems))
-    dims = mold_dimensions(soa, flange_diameter_mm, c)  # the same numbers the parameter validation judges
+    dims = mold_dimensions(
+        soa, flange_diameter_mm, c
+    )  # the same numbers the parameter validation judges
     k = dims.scale
 
     # The cast and the envelope it fills, in the SOA frame, then scaled.
@@ -289,26 +421,50 @@ def mold_set(soa: SoaTable, flange_diameter_mm: float, casting: Casting) -> Mold
     core = single_solid(soa_interior(soa, flange_diameter_mm, c.core_print_mm / k).scale(k), "core")
 
     feats = _mold_features(dims, c)
-    parts = {"half_a": _shell_part(1, dims, feats, envelope), "half_b": _shell_part(-1, dims, feats, envelope),
-             "bottom_plate": _bottom_plate(dims, feats, envelope, core), "lid": _lid(dims, feats, envelope, core),
-             "core": _core_part(core)}
+    parts = {
+        "half_a": _shell_part(1, dims, feats, envelope),
+        "half_b": _shell_part(-1, dims, feats, envelope),
+        "bottom_plate": _bottom_plate(dims, feats, envelope, core),
+        "lid": _lid(dims, feats, envelope, core),
+        "core": _core_part(core),
+    }
     channels = _channels(dims, feats, c)
     for p in parts.values():
         if not p.solid.is_valid:
             raise GeometryError(f"mold {p.name}: invalid solid")
-    return MoldSet(cast=cast, parts=parts, channels=channels, scale=k, soa_volume_mm3=soa_solid.volume,
-                   parting_margin_mm=k * soa.fillet_radius_mm, info=_mold_info(soa, flange_diameter_mm, dims, c))
+    return MoldSet(
+        cast=cast,
+        parts=parts,
+        channels=channels,
+        scale=k,
+        soa_volume_mm3=soa_solid.volume,
+        parting_margin_mm=k * soa.fillet_radius_mm,
+        info=_mold_info(soa, flange_diameter_mm, dims, c),
+    )
 
 
 def _mold_info(soa: SoaTable, flange_diameter_mm: float, dims, c: Casting) -> dict:
-    """The mold set's figures for the export's records: block, cast, channels, bolts, demolding order."""
-    w, k, r_fl, bolt_uv = dims.block_half_mm, dims.scale, dims.cast_flange_radius_mm, dims.bolt_uv_mm
+    """The mold set's figures for the export's records: block, cast, channels, bolts, demolding
+    order."""
+    w, k, r_fl, bolt_uv = (
+        dims.block_half_mm,
+        dims.scale,
+        dims.cast_flange_radius_mm,
+        dims.bolt_uv_mm,
+    )
     prof = bellows_profile(soa, flange_diameter_mm)
-    return {"block_mm": [2 * w, 2 * w, dims.z_top_mm - dims.z_bottom_mm], "cast_height_mm": dims.cast_height_mm,
-            "flange_diameter_mm": 2 * r_fl, "gate_radius_mm": dims.channel_radius_mm(c.gate_diameter_mm),
-            "vent_radius_mm": dims.channel_radius_mm(c.vent_diameter_mm), "pin_radius_mm": dims.pin_circle_mm,
-            "bolt_positions_mm": [list(_uez(su * bolt_uv, se * bolt_uv, 0.0)[:2]) for su in (1, -1) for se in (1, -1)],
-            "bolt_length_mm": dims.z_top_mm - dims.z_bottom_mm,
-            "corner_proud_of_flange_mm": k * soa.computed_circumcircle_mm / 2.0 - r_fl,
-            "valley_core_width_mm": k * min(prof.inner_side_mm),
-            "demolding_order": ["lid", "bottom_plate", "half_a", "half_b", "core"]}
+    return {
+        "block_mm": [2 * w, 2 * w, dims.z_top_mm - dims.z_bottom_mm],
+        "cast_height_mm": dims.cast_height_mm,
+        "flange_diameter_mm": 2 * r_fl,
+        "gate_radius_mm": dims.channel_radius_mm(c.gate_diameter_mm),
+        "vent_radius_mm": dims.channel_radius_mm(c.vent_diameter_mm),
+        "pin_radius_mm": dims.pin_circle_mm,
+        "bolt_positions_mm": [
+            list(_uez(su * bolt_uv, se * bolt_uv, 0.0)[:2]) for su in (1, -1) for se in (1, -1)
+        ],
+        "bolt_length_mm": dims.z_top_mm - dims.z_bottom_mm,
+        "corner_proud_of_flange_mm": k * soa.computed_circumcircle_mm / 2.0 - r_fl,
+        "valley_core_width_mm": k * min(prof.inner_side_mm),
+        "demolding_order": ["lid", "bottom_plate", "half_a", "half_b", "core"],
+    }

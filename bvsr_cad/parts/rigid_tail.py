@@ -36,14 +36,31 @@ from dataclasses import dataclass
 import build123d as bd
 import numpy as np
 
-from ..parameters.layout import PanelLayout, soa_angles_deg, polar
+from ..parameters.layout import PanelLayout, polar, soa_angles_deg
 from ..parameters.standard_parts import metric
 from ..parameters.tables import TailSpec
-# The twin's derived dimensions (pin depths, nut pockets, the printer fit) live with the rules that validate them.
-from ..parameters.twin import (NUT_POCKET_CLEARANCE_MM, fits_printer, nut_pocket_depth_mm, pin_depths_mm,
-                               pin_hole_mm, tie_rod_hole_mm, twin_problems)
+
+# The twin's derived dimensions (pin depths, nut pockets, the printer fit) live with the rules that
+# validate them.
+from ..parameters.twin import (
+    NUT_POCKET_CLEARANCE_MM,
+    fits_printer,
+    nut_pocket_depth_mm,
+    pin_depths_mm,
+    pin_hole_mm,
+    tie_rod_hole_mm,
+    twin_problems,
+)
+from ._kernel import (
+    GeometryError,
+    bounds,
+    cut_all,
+    cylinder_between,
+    fuse_all,
+    location,
+    single_solid,
+)
 from .soa import soa_envelope
-from ._kernel import GeometryError, bounds, cut_all, cylinder_between, fuse_all, location, single_solid
 
 #: Panel features kept in the twin (they show from outside or carry the robot and payload).
 KEPT_ROLES = ("lightening", "tube", "insert")
@@ -87,21 +104,24 @@ def _hex_prism(af_mm: float, z0: float, z1: float) -> bd.Solid:
     return bd.Solid.extrude(face, bd.Vector(0, 0, z1 - z0))
 
 
-def rigid_tail_pieces(spec: TailSpec, layouts: list[PanelLayout],
-                      soa_transforms: dict[int, list[np.ndarray]]) -> list[RigidPiece]:
+def rigid_tail_pieces(
+    spec: TailSpec, layouts: list[PanelLayout], soa_transforms: dict[int, list[np.ndarray]]
+) -> list[RigidPiece]:
     """Build every piece of the rigid twin in its print frame.
 
     Args:
         spec: the validated tail spec.
         layouts: every panel's layout (the same ones the BVSR panels are built from).
-        soa_transforms: per joint k (1-based), the five SOA placements (4x4, SOA frame -> tail frame, mm).
+        soa_transforms: per joint k (1-based), the five SOA placements (4x4, SOA frame -> tail
+            frame, mm).
 
     Returns:
         The pieces from root to tip.
 
     Raises:
-        ValueError: the spec breaks a rule of the twin (:func:`bvsr_cad.parameters.twin.twin_problems`,
-            checked when the parameter file is loaded; names the key).
+        ValueError: the spec breaks a rule of the twin
+            (:func:`bvsr_cad.parameters.twin.twin_problems`, checked when the parameter file is
+            loaded; names the key).
         GeometryError: a piece does not fit the printer volume of ``[fabrication_package]``, or the
             kernel failed.
     """
@@ -109,38 +129,68 @@ def rigid_tail_pieces(spec: TailSpec, layouts: list[PanelLayout],
     if problems:
         raise ValueError("; ".join(problems))
     soa_env = soa_envelope(spec.soa, spec.joint.base_diameter_mm)
-    return [_rigid_piece(spec, layouts, k, soa_env, soa_transforms) for k in range(1, len(layouts) + 1)]
+    return [
+        _rigid_piece(spec, layouts, k, soa_env, soa_transforms) for k in range(1, len(layouts) + 1)
+    ]
 
 
-def _piece_features(spec: TailSpec, layouts: list[PanelLayout], k: int, top: float) -> list[PrintFeature]:
-    """Piece k's tie rod hole, pin holes and nut pockets, in the tail frame. Pin holes go up from the piece's
-    bed face (into the panel, under the previous joint's columns) and down from its columns' top faces."""
+def _piece_features(
+    spec: TailSpec, layouts: list[PanelLayout], k: int, top: float
+) -> list[PrintFeature]:
+    """Piece k's tie rod hole, pin holes and nut pockets, in the tail frame. Pin holes go up from
+    the piece's bed face (into the panel, under the previous joint's columns) and down from its
+    columns' top faces."""
     n = len(layouts)
     lay = layouts[k - 1]
     z0 = lay.z0_mm
     d_pin, d_tie = pin_hole_mm(spec), tie_rod_hole_mm(spec)
-    # The pin sits deeper in the column than in the panel so the tip panel keeps a floor over its holes.
+    # The pin sits deeper in the column than in the panel so the tip panel keeps a floor over its
+    # holes.
     panel_pin_depth, column_pin_depth = pin_depths_mm(spec, layouts[0].thickness_mm)
-    features = [PrintFeature("tie_rod", "tie_rod_hole", (0.0, 0.0, z0 - 1e-3), (0.0, 0.0, top + 1e-3), d_tie)]
+    features = [
+        PrintFeature(
+            "tie_rod", "tie_rod_hole", (0.0, 0.0, z0 - 1e-3), (0.0, 0.0, top + 1e-3), d_tie
+        )
+    ]
     angles = soa_angles_deg()
     if k > 1:
         for i, a in enumerate(angles, start=1):
             xy = polar(lay.pitch_radius_lower_mm, a)
-            features.append(PrintFeature(f"pin_{k - 1}_{i}_upper", "pin_hole", (*xy, z0 - 1e-3),
-                                         (*xy, z0 + panel_pin_depth), d_pin))
+            features.append(
+                PrintFeature(
+                    f"pin_{k - 1}_{i}_upper",
+                    "pin_hole",
+                    (*xy, z0 - 1e-3),
+                    (*xy, z0 + panel_pin_depth),
+                    d_pin,
+                )
+            )
     if k < n:
         nxt = layouts[k]
         for i, a in enumerate(angles, start=1):
             xy = polar(nxt.pitch_radius_lower_mm, a)
-            features.append(PrintFeature(f"pin_{k}_{i}_lower", "pin_hole", (*xy, top - column_pin_depth),
-                                         (*xy, top + 1e-3), d_pin))
+            features.append(
+                PrintFeature(
+                    f"pin_{k}_{i}_lower",
+                    "pin_hole",
+                    (*xy, top - column_pin_depth),
+                    (*xy, top + 1e-3),
+                    d_pin,
+                )
+            )
     return features
 
 
-def _rigid_piece(spec: TailSpec, layouts: list[PanelLayout], k: int, soa_env: bd.Solid,
-                 soa_transforms: dict[int, list[np.ndarray]]) -> RigidPiece:
-    """Piece k: panel k-1 with joint k's SOA columns and rod fused on (the tip piece: the tip panel alone),
-    less the panel's kept cuts, the next panel's flange pockets, its holes and its nut pocket."""
+def _rigid_piece(
+    spec: TailSpec,
+    layouts: list[PanelLayout],
+    k: int,
+    soa_env: bd.Solid,
+    soa_transforms: dict[int, list[np.ndarray]],
+) -> RigidPiece:
+    """Piece k: panel k-1 with joint k's SOA columns and rod fused on (the tip piece: the tip panel
+    alone), less the panel's kept cuts, the next panel's flange pockets, its holes and its nut
+    pocket."""
     fp = spec.fabrication_package
     nut_af = metric(fp.tie_rod_thread).nut_af_mm + NUT_POCKET_CLEARANCE_MM
     nut_depth = nut_pocket_depth_mm(spec)
@@ -162,19 +212,36 @@ def _rigid_piece(spec: TailSpec, layouts: list[PanelLayout], k: int, soa_env: bd
     if k < n:
         # The SOA flanges reach into the next panel's pockets: that part belongs to the next piece.
         side = max(400.0, 4.0 * (lay.rim_radius_lower_mm + spec.joint.base_diameter_mm))
-        tools.append(bd.Solid.make_box(side, side, max(20.0, 2.0 * lay.thickness_mm))
-                     .moved(bd.Location((-side / 2.0, -side / 2.0, h))))
+        tools.append(
+            bd.Solid.make_box(side, side, max(20.0, 2.0 * lay.thickness_mm)).moved(
+                bd.Location((-side / 2.0, -side / 2.0, h))
+            )
+        )
     for f in features:
         p0 = (f.p0[0], f.p0[1], f.p0[2] - z0)
         p1 = (f.p1[0], f.p1[1], f.p1[2] - z0)
         tools.append(cylinder_between(p0, p1, f.diameter_mm))
     if k == 1:
-        features.append(PrintFeature("nut_root", "nut_pocket", (0.0, 0.0, z0 - 1e-3), (0.0, 0.0, z0 + nut_depth),
-                                     nut_af * 2 / math.sqrt(3.0)))
+        features.append(
+            PrintFeature(
+                "nut_root",
+                "nut_pocket",
+                (0.0, 0.0, z0 - 1e-3),
+                (0.0, 0.0, z0 + nut_depth),
+                nut_af * 2 / math.sqrt(3.0),
+            )
+        )
         tools.append(_hex_prism(nut_af, -1e-3, nut_depth))
     if k == n:
-        features.append(PrintFeature("nut_tip", "nut_pocket", (0.0, 0.0, top - nut_depth), (0.0, 0.0, top + 1e-3),
-                                     nut_af * 2 / math.sqrt(3.0)))
+        features.append(
+            PrintFeature(
+                "nut_tip",
+                "nut_pocket",
+                (0.0, 0.0, top - nut_depth),
+                (0.0, 0.0, top + 1e-3),
+                nut_af * 2 / math.sqrt(3.0),
+            )
+        )
         tools.append(_hex_prism(nut_af, h - nut_depth, h + 1e-3))
     name = f"rigid_j{k}" if k < n else "rigid_tip"
     solid = single_solid(cut_all(body, tools), f"rigid tail piece {name}")
@@ -183,8 +250,12 @@ def _rigid_piece(spec: TailSpec, layouts: list[PanelLayout], k: int, soa_env: bd
     # Either way round on the bed.
     if not fits_printer(size, fp):
         raise GeometryError(
-            f"rigid tail piece {name} is {size[0]:.1f} x {size[1]:.1f} x {size[2]:.1f} mm and does not fit the "
-            f"printer (fabrication_package.printer_x_mm/printer_y_mm/printer_z_mm = {fp.printer_x_mm:g} x "
-            f"{fp.printer_y_mm:g} x {fp.printer_z_mm:g} mm); one joint per piece is the smallest split that "
-            "prints without support")
+            f"rigid tail piece {name} is {size[0]:.1f} x {size[1]:.1f} x {size[2]:.1f} mm and does "
+            "not fit the "
+            "printer (fabrication_package.printer_x_mm/printer_y_mm/printer_z_mm = "
+            f"{fp.printer_x_mm:g} x "
+            f"{fp.printer_y_mm:g} x {fp.printer_z_mm:g} mm); one joint per piece is the smallest "
+            "split that "
+            "prints without support"
+        )
     return RigidPiece(name, k, z0, solid, tuple(features), size, solid.volume)

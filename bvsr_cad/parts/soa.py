@@ -40,8 +40,15 @@ def bellows_profile(soa: SoaTable, flange_diameter_mm: float) -> BellowsProfile:
         z.append(f + m * rise)
         outer.append(side)
         inner.append(side - 2.0 * off)
-    return BellowsProfile(tuple(z), tuple(outer), tuple(inner), soa.fillet_radius_mm, f,
-                          flange_diameter_mm, soa.built_height_mm)
+    return BellowsProfile(
+        tuple(z),
+        tuple(outer),
+        tuple(inner),
+        soa.fillet_radius_mm,
+        f,
+        flange_diameter_mm,
+        soa.built_height_mm,
+    )
 
 
 def rounded_square(side_mm: float, radius_mm: float, z_mm: float) -> bd.Face:
@@ -62,16 +69,22 @@ def soa_envelope(soa: SoaTable, flange_diameter_mm: float) -> bd.Solid:
     rigid twin's columns all start from it.
     """
     p = bellows_profile(soa, flange_diameter_mm)
-    outer = ruled_loft([rounded_square(s, p.corner_radius_mm, z) for s, z in zip(p.outer_side_mm, p.z_mm)],
-                       "SOA outer loft")
+    outer = ruled_loft(
+        [rounded_square(s, p.corner_radius_mm, z) for s, z in zip(p.outer_side_mm, p.z_mm)],
+        "SOA outer loft",
+    )
     r = flange_diameter_mm / 2.0
     lower = bd.Solid.make_cylinder(r, p.flange_thickness_mm)
-    upper = bd.Solid.make_cylinder(r, p.flange_thickness_mm, bd.Plane.XY.offset(p.height_mm - p.flange_thickness_mm))
+    upper = bd.Solid.make_cylinder(
+        r, p.flange_thickness_mm, bd.Plane.XY.offset(p.height_mm - p.flange_thickness_mm)
+    )
     return single_solid(fuse_all(lower, [outer, upper]), "SOA envelope")
 
 
 @remembered
-def soa_interior(soa: SoaTable, flange_diameter_mm: float, beyond_ends_mm: float = 0.01) -> bd.Solid:
+def soa_interior(
+    soa: SoaTable, flange_diameter_mm: float, beyond_ends_mm: float = 0.01
+) -> bd.Solid:
     """The SOA's air space: the inner ruled loft, prolonged at the end size through both
     flanges and ``beyond_ends_mm`` past them (the mold core's prints use the same sections)."""
     p = bellows_profile(soa, flange_diameter_mm)

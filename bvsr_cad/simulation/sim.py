@@ -28,18 +28,19 @@ import numpy as np
 from .. import units
 from ..assembly.build import Assembly, build_assembly
 from ..assembly.robot import robot_model
-from ..models.dynamics import VELOCITY_WINDOW_DEG, ramp_pa
-from ..models.platform import front_lift_mm
 from ..exporters.mjcf import mjcf_tree, write_mjcf
 from ..exporters.robot_meshes import write_robot_meshes
+from ..models.dynamics import VELOCITY_WINDOW_DEG, ramp_pa
+from ..models.platform import front_lift_mm
 from ..parameters.tables import TailSpec
 
 EXTENSION_LINES = (3, 4)
 SETTLE_S = 0.3  # the two ventral SOAs push: the tail bends dorsally (+Y)
 
 
-def pressure_input(spec: TailSpec, p0_pa: float, supply: str, places: tuple[int, ...] = EXTENSION_LINES,
-                   asm=None) -> Callable[[float], float]:
+def pressure_input(
+    spec: TailSpec, p0_pa: float, supply: str, places: tuple[int, ...] = EXTENSION_LINES, asm=None
+) -> Callable[[float], float]:
     """The gauge pressure of a pulsed line over time (s), for ``supply``:
 
     - ``ramp``: the paper's Eq 13 with t_0 = ``pneumatics.ramp_time_s`` (or its calibrated value);
@@ -53,7 +54,9 @@ def pressure_input(spec: TailSpec, p0_pa: float, supply: str, places: tuple[int,
     from ..assembly.pneumatic_lines import line_supply
     from ..models.pneumatics import fill_curve
 
-    t_s, p_pa = fill_curve(line_supply(asm or build_assembly(spec), 1, places, p0_pa, spec), 1.0, samples=4001)
+    t_s, p_pa = fill_curve(
+        line_supply(asm or build_assembly(spec), 1, places, p0_pa, spec), 1.0, samples=4001
+    )
     return lambda t: float(np.interp(t, t_s, p_pa))
 
 
@@ -93,7 +96,9 @@ class SimResult:
     peak_root_torque_nm: float
 
 
-def _model_xml(spec: TailSpec, theta_max_rad: list[float], folder: Path, payload_g: float) -> tuple[Path, list[str]]:
+def _model_xml(
+    spec: TailSpec, theta_max_rad: list[float], folder: Path, payload_g: float
+) -> tuple[Path, list[str]]:
     """Per-segment MJCF of ``spec`` with a root force/torque sensor and an optional tip payload,
     and the names of its extension lines' actuators."""
     asm = build_assembly(spec)
@@ -110,7 +115,13 @@ def _model_xml(spec: TailSpec, theta_max_rad: list[float], folder: Path, payload
         r = 0.01  # a 20 mm solid sphere's inertia: small next to its offset
         m = units.g_to_kg(payload_g)
         i = 0.4 * m * r * r
-        ET.SubElement(payload, "inertial", pos="0 0 0.01", mass=f"{m:.6g}", diaginertia=f"{i:.6g} {i:.6g} {i:.6g}")
+        ET.SubElement(
+            payload,
+            "inertial",
+            pos="0 0 0.01",
+            mass=f"{m:.6g}",
+            diaginertia=f"{i:.6g} {i:.6g} {i:.6g}",
+        )
     _without_supply_lag(root)
     sensor = ET.SubElement(root, "sensor")
     ET.SubElement(sensor, "force", name="root_force", site="root_ft")
@@ -120,8 +131,13 @@ def _model_xml(spec: TailSpec, theta_max_rad: list[float], folder: Path, payload
     return path, sorted({s.line for s in robot.soas if s.line_index in EXTENSION_LINES})
 
 
-def _run(model: tuple[Path, list[str]], spec: TailSpec, pressure: Callable[[float], float], seconds: float,
-         stop_angle_deg: float | None = None):
+def _run(
+    model: tuple[Path, list[str]],
+    spec: TailSpec,
+    pressure: Callable[[float], float],
+    seconds: float,
+    stop_angle_deg: float | None = None,
+):
     import mujoco
 
     path, extension = model
@@ -159,16 +175,19 @@ def check_inputs(spec: TailSpec, pressure_bar: float, payload_g: float) -> None:
     """Raises SimulationInputError naming the argument and what is allowed."""
     p_max = spec.robot.pulse_pressure_max_kpa * units.PA_PER_KPA / units.PA_PER_BAR
     if not 0 < pressure_bar <= p_max:
-        raise SimulationInputError(f"--pressure-bar {pressure_bar:g}: allowed 0 < P <= {p_max:g} bar "
-                                   "(robot.pulse_pressure_max_kpa)")
+        raise SimulationInputError(
+            f"--pressure-bar {pressure_bar:g}: allowed 0 < P <= {p_max:g} bar "
+            "(robot.pulse_pressure_max_kpa)"
+        )
     if payload_g < 0:
         raise SimulationInputError(f"--payload-g {payload_g:g}: must be >= 0")
 
 
-def joint_limits_rad(spec: TailSpec, progress: Callable[[str], None] | None = None,
-                     asm: Assembly | None = None) -> list[float]:
-    """Collision-free theta_max of every joint (minimum over phi), as the build's limits analysis gives
-    (``asm``: the spec's assembly, if already built)."""
+def joint_limits_rad(
+    spec: TailSpec, progress: Callable[[str], None] | None = None, asm: Assembly | None = None
+) -> list[float]:
+    """Collision-free theta_max of every joint (minimum over phi), as the build's limits analysis
+    gives (``asm``: the spec's assembly, if already built)."""
     from ..analysis.limits import theta_max_per_joint_rad
 
     say = progress or (lambda _m: None)
@@ -178,8 +197,8 @@ def joint_limits_rad(spec: TailSpec, progress: Callable[[str], None] | None = No
 
 @dataclass
 class ProtocolRun:
-    """The workspace protocol of Sec. IV-A-5 run in time on the exported (reduced-chain) MJCF, the tail
-    horizontal: every ``actuation.workspace_cycle_s`` each line draws a new pressure
+    """The workspace protocol of Sec. IV-A-5 run in time on the exported (reduced-chain) MJCF, the
+    tail horizontal: every ``actuation.workspace_cycle_s`` each line draws a new pressure
     (:func:`bvsr_cad.analysis.workspace.sample_line_pressures_kpa`), reached through the actuators'
     supply lag. Positions in mm, in the model's world frame."""
 
@@ -190,7 +209,8 @@ class ProtocolRun:
     warnings: int  # MuJoCo warnings raised during the run
 
     def lateral_mm(self, points_mm: np.ndarray) -> np.ndarray:
-        """Distance of each point from the rest point across the tail's axis (the radius the paper reads)."""
+        """Distance of each point from the rest point across the tail's axis (the radius the paper
+        reads)."""
         rel = np.asarray(points_mm) - self.rest_mm
         return np.linalg.norm(rel - np.outer(rel @ self.axis, self.axis), axis=1)
 
@@ -201,7 +221,8 @@ class ProtocolRun:
 
     @property
     def settled_radius_mm(self) -> float:
-        """The same over the settled ends of the cycles only (close to the quasi-static workspace)."""
+        """The same over the settled ends of the cycles only (close to the quasi-static
+        workspace)."""
         return float(np.max(self.lateral_mm(self.settled_mm)))
 
 
@@ -226,20 +247,31 @@ def _drop(root: ET.Element, unwanted: Callable[[ET.Element, ET.Element], bool]) 
 
 def _without_meshes(root: ET.Element) -> None:
     """Drop mesh assets and mesh geoms (visuals, mass-less: every body's inertia is explicit)."""
-    _drop(root, lambda parent, child: (child.tag == "mesh" and parent.tag == "asset") or (
-        child.tag == "geom" and bool(child.get("mesh") or child.get("class") == "visual")))
+    _drop(
+        root,
+        lambda parent, child: (
+            (child.tag == "mesh" and parent.tag == "asset")
+            or (child.tag == "geom" and bool(child.get("mesh") or child.get("class") == "visual"))
+        ),
+    )
 
 
-def protocol_model(asm: Assembly, spec: TailSpec, theta_max_rad: list[float], tip_body: str,
-                   keep_geoms: bool = False):
+def protocol_model(
+    asm: Assembly,
+    spec: TailSpec,
+    theta_max_rad: list[float],
+    tip_body: str,
+    keep_geoms: bool = False,
+):
     """(MjModel, robot model) of the workspace protocol: ``asm``'s exported reduced-chain MJCF with
     ``spec``'s values, a ``framepos`` sensor on ``tip_body`` (sensors do not act on the dynamics).
 
     Its geoms are mass-less (every body's inertia is explicit) and, in this scene of the tail alone,
-    collide with nothing (no geom has a non-zero ``conaffinity``, the scene declares no contact pair):
-    unless ``keep_geoms``, the robot model is made without its collision shapes (their fits are most
-    of its making) and any geom left is dropped, so each step skips their kinematics and the collision
-    pass. The run is the same either way (``tests/test_workspace_protocol.py`` compares the two)."""
+    collide with nothing (no geom has a non-zero ``conaffinity``, the scene declares no contact
+    pair): unless ``keep_geoms``, the robot model is made without its collision shapes (their fits
+    are most of its making) and any geom left is dropped, so each step skips their kinematics and
+    the collision pass. The run is the same either way (``tests/test_workspace_protocol.py``
+    compares the two)."""
     import mujoco
 
     with_values = dataclasses.replace(asm, spec=spec)
@@ -253,7 +285,13 @@ def protocol_model(asm: Assembly, spec: TailSpec, theta_max_rad: list[float], ti
         sensor = ET.SubElement(root, "sensor")
     ET.SubElement(sensor, "framepos", name="protocol_tip", objtype="xbody", objname=tip_body)
     m = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
-    if not keep_geoms and m.ngeom and not m.geom_conaffinity.any() and m.npair == 0 and m.nexclude == 0:
+    if (
+        not keep_geoms
+        and m.ngeom
+        and not m.geom_conaffinity.any()
+        and m.npair == 0
+        and m.nexclude == 0
+    ):
         _drop(root, lambda _parent, child: child.tag == "geom")
         m = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
     return m, robot
@@ -261,7 +299,8 @@ def protocol_model(asm: Assembly, spec: TailSpec, theta_max_rad: list[float], ti
 
 def _hold(m, d, ctrl: np.ndarray, steps: int) -> np.ndarray:
     """``steps`` steps of ``d`` with ``ctrl`` held, in MuJoCo's rollout (C, without Python's lock:
-    protocols run side by side in threads); ``d`` is left at the last step. The sensor data of each step."""
+    protocols run side by side in threads); ``d`` is left at the last step. The sensor data of each
+    step."""
     import mujoco
     from mujoco import rollout
 
@@ -269,17 +308,29 @@ def _hold(m, d, ctrl: np.ndarray, steps: int) -> np.ndarray:
     state = np.empty(mujoco.mj_stateSize(m, spec_full))
     mujoco.mj_getState(m, d, state, spec_full)
     d.ctrl[:] = ctrl
-    _, sensordata = rollout.rollout(m, d, state[None], d.ctrl[None, None].copy(), nstep=steps,
-                                    initial_warmstart=d.qacc_warmstart[None].copy())
+    _, sensordata = rollout.rollout(
+        m,
+        d,
+        state[None],
+        d.ctrl[None, None].copy(),
+        nstep=steps,
+        initial_warmstart=d.qacc_warmstart[None].copy(),
+    )
     return sensordata[0]
 
 
-def workspace_protocol(asm: Assembly, spec: TailSpec | None = None, theta_max_rad: list[float] | None = None,
-                       cycles: int | None = None, progress: Callable[[str], None] | None = None,
-                       keep_geoms: bool = False) -> ProtocolRun:
+def workspace_protocol(
+    asm: Assembly,
+    spec: TailSpec | None = None,
+    theta_max_rad: list[float] | None = None,
+    cycles: int | None = None,
+    progress: Callable[[str], None] | None = None,
+    keep_geoms: bool = False,
+) -> ProtocolRun:
     """The paper's workspace experiment (Sec. IV-A-5) in MuJoCo: ``cycles`` pressure draws (default
-    ``analysis.workspace_protocol_cycles``, seed ``analysis.seed``) held ``actuation.workspace_cycle_s``
-    each, on ``asm``'s exported MJCF with ``spec``'s values (same geometry; it may carry fitted ones).
+    ``analysis.workspace_protocol_cycles``, seed ``analysis.seed``) held
+    ``actuation.workspace_cycle_s`` each, on ``asm``'s exported MJCF with ``spec``'s values (same
+    geometry; it may carry fitted ones).
 
     ``theta_max_rad``: the joints' limits (default: from the clearance analysis of ``asm``);
     ``keep_geoms``: see :func:`protocol_model`."""
@@ -312,29 +363,40 @@ def workspace_protocol(asm: Assembly, spec: TailSpec | None = None, theta_max_ra
     ctrl = d.ctrl.copy()
     for c in range(cycles):
         ctrl[actuator] = units.kpa_to_pa(draws_kpa[c, segment, place])
-        tips = _hold(m, d, ctrl, steps)[:, sensor:sensor + 3]
-        path.append(tips[every - 1::every])
+        tips = _hold(m, d, ctrl, steps)[:, sensor : sensor + 3]
+        path.append(tips[every - 1 :: every])
         settled.append(tips[-1])
     warnings = int(sum(w.number for w in d.warning))
-    return ProtocolRun(units.m_to_mm(np.concatenate(path)), units.m_to_mm(np.array(settled)), rest, axis, warnings)
+    return ProtocolRun(
+        units.m_to_mm(np.concatenate(path)), units.m_to_mm(np.array(settled)), rest, axis, warnings
+    )
 
 
 def protocol_radius_mm(asm: Assembly, spec: TailSpec, theta_max_rad: list[float]) -> float:
-    """:data:`bvsr_cad.analysis.predict.WorkspaceSim`: the radius of :func:`workspace_protocol`'s tip path, mm."""
+    """:data:`bvsr_cad.analysis.predict.WorkspaceSim`: the radius of :func:`workspace_protocol`'s
+    tip path, mm."""
     run = workspace_protocol(asm, spec, theta_max_rad)
     if run.warnings:
         raise RuntimeError(f"workspace protocol: MuJoCo raised {run.warnings} warnings")
     return run.radius_mm
 
 
-def segment_extension(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float, supply: str,
-                      seconds: float = 0.5, progress: Callable[[str], None] | None = None,
-                      pressure: Callable[[float], float] | None = None):
+def segment_extension(
+    spec: TailSpec,
+    theta_max_rad: list[float],
+    pressure_bar: float,
+    supply: str,
+    seconds: float = 0.5,
+    progress: Callable[[str], None] | None = None,
+    pressure: Callable[[float], float] | None = None,
+):
     """One standalone segment of ``spec`` pulsed in extension (``pressure``: the line's input, by
     default :func:`pressure_input` of ``supply``): (time s, bending angle deg, its rate deg/s, the
     peak rate before the angle passes 38 deg)."""
     say = progress or (lambda _m: None)
-    pressure = pressure or pressure_input(spec, pressure_bar * units.PA_PER_BAR, _supply(spec, supply))
+    pressure = pressure or pressure_input(
+        spec, pressure_bar * units.PA_PER_BAR, _supply(spec, supply)
+    )
     one = dataclasses.replace(spec, name=f"{spec.name}_segment", segments=1)
     with tempfile.TemporaryDirectory() as tmp:
         say("segment model")
@@ -346,9 +408,15 @@ def segment_extension(spec: TailSpec, theta_max_rad: list[float], pressure_bar: 
     return t, angle, rate, float(np.max(rate[window])) if window.any() else float("nan")
 
 
-def simulate(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float, payload_g: float = 0.0,
-             seconds: float = 0.5, progress: Callable[[str], None] | None = None,
-             supply: str | None = None) -> SimResult:
+def simulate(
+    spec: TailSpec,
+    theta_max_rad: list[float],
+    pressure_bar: float,
+    payload_g: float = 0.0,
+    seconds: float = 0.5,
+    progress: Callable[[str], None] | None = None,
+    supply: str | None = None,
+) -> SimResult:
     """Run the two experiments at a pulse pressure (gauge, bar).
 
     Raises:
@@ -358,15 +426,29 @@ def simulate(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float, pa
     check_inputs(spec, pressure_bar, payload_g)
     supply = _supply(spec, supply)
     pressure = pressure_input(spec, pressure_bar * units.PA_PER_BAR, supply)
-    t, angle, rate, peak_v = segment_extension(spec, theta_max_rad, pressure_bar, supply, seconds, say, pressure)
+    t, angle, rate, peak_v = segment_extension(
+        spec, theta_max_rad, pressure_bar, supply, seconds, say, pressure
+    )
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         say("tail model")
         tail_xml = _model_xml(spec, theta_max_rad, folder / "tail", payload_g)
         say(f"tail extension at {pressure_bar:g} bar, payload {payload_g:g} g")
         tt, _, force, torque = _run(tail_xml, spec, pressure, seconds)
-    return SimResult(pressure_bar, payload_g, t, angle, rate, peak_v, float(angle.max()), tt, force, torque,
-                     float(np.max(np.linalg.norm(force, axis=1))), float(np.max(np.linalg.norm(torque, axis=1))))
+    return SimResult(
+        pressure_bar,
+        payload_g,
+        t,
+        angle,
+        rate,
+        peak_v,
+        float(angle.max()),
+        tt,
+        force,
+        torque,
+        float(np.max(np.linalg.norm(force, axis=1))),
+        float(np.max(np.linalg.norm(torque, axis=1))),
+    )
 
 
 @dataclass
@@ -388,9 +470,15 @@ class CartRun:
         return front_lift_mm(self.wheelbase_m, np.radians(self.pitch_deg))
 
 
-def simulate_cart(spec: TailSpec, theta_max_rad: list[float], pressure_bar: float,
-                  motions: tuple[str, ...] = ("extension", "waggle"), seconds: float = 0.5,
-                  progress: Callable[[str], None] | None = None, supply: str | None = None) -> list[CartRun]:
+def simulate_cart(
+    spec: TailSpec,
+    theta_max_rad: list[float],
+    pressure_bar: float,
+    motions: tuple[str, ...] = ("extension", "waggle"),
+    seconds: float = 0.5,
+    progress: Callable[[str], None] | None = None,
+    supply: str | None = None,
+) -> list[CartRun]:
     """The tail on the paper's hinged cart (``robot/scene_cart.xml``) pulsed at ``pressure_bar``:
     the cart's pitch (front lift) and yaw over time for each motion."""
     import mujoco
@@ -416,7 +504,9 @@ def simulate_cart(spec: TailSpec, theta_max_rad: list[float], pressure_bar: floa
             places = pulse_places(motion)
             say(f"cart: {motion} at {pressure_bar:g} bar (lines {places})")
             p_of_t = pressure_input(spec, pressure_bar * units.PA_PER_BAR, supply, places, asm)
-            lines = [m.actuator(f"s{s}_line{i}").id for s in range(1, spec.segments + 1) for i in places]
+            lines = [
+                m.actuator(f"s{s}_line{i}").id for s in range(1, spec.segments + 1) for i in places
+            ]
             d = mujoco.MjData(m)
             for _ in range(int(round(SETTLE_S / m.opt.timestep))):
                 mujoco.mj_step(m, d)
@@ -441,8 +531,11 @@ def cart_comparison(spec: TailSpec, runs: list[CartRun], pressure_bar: float) ->
     from ..parameters import paper
 
     pred = Predictor.from_spec(spec)
-    reported = {("extension", "angle"): paper.CART_ANGLE_EXTENSION_5BAR, ("waggle", "angle"): paper.CART_ANGLE_WAGGLE_5BAR,
-                ("extension", "lift"): paper.CART_LIFT_9MM}
+    reported = {
+        ("extension", "angle"): paper.CART_ANGLE_EXTENSION_5BAR,
+        ("waggle", "angle"): paper.CART_ANGLE_WAGGLE_5BAR,
+        ("extension", "lift"): paper.CART_LIFT_9MM,
+    }
     rows = []
     for r in runs:
         items = [("angle", "deg", r.peak_angle_deg, pred.cart_peak_angle(pressure_bar, r.motion))]
@@ -450,14 +543,23 @@ def cart_comparison(spec: TailSpec, runs: list[CartRun], pressure_bar: float) ->
             items.append(("lift", "mm", r.lift_mm, pred.cart_lift(pressure_bar, r.motion)))
         for what, unit, mj, eq in items:
             ref = reported.get((r.motion, what)) if pressure_bar == 5 else None
-            rows.append({"motion": r.motion, "quantity": f"cart_{what}", "unit": unit, "mujoco": mj, "eq20_22": eq,
-                         "paper": None if ref is None else ref.value})
+            rows.append(
+                {
+                    "motion": r.motion,
+                    "quantity": f"cart_{what}",
+                    "unit": unit,
+                    "mujoco": mj,
+                    "eq20_22": eq,
+                    "paper": None if ref is None else ref.value,
+                }
+            )
     return rows
 
 
 @dataclass
 class ImpactRun:
-    """One ball into one tail (``bvsr simulate --impact``); forces tared just before the first touch."""
+    """One ball into one tail (``bvsr simulate --impact``); forces tared just before the first
+    touch."""
 
     tail: str  # soft, rigid
     ball: str
@@ -469,7 +571,9 @@ class ImpactRun:
     ball_speed_at_contact_m_s: float
     rolling_speed_m_s: float  # the closed form at the ramp's foot from its drop (models/impact)
     contact_impulse_n_s: np.ndarray  # on the tail, world frame, over the window
-    root_impulse_n_s: np.ndarray  # the root sensor's force (tared; the mount's on the tail), world frame
+    root_impulse_n_s: (
+        np.ndarray
+    )  # the root sensor's force (tared; the mount's on the tail), world frame
     time_s: np.ndarray
     root_force_n: np.ndarray
     touched: tuple[str, ...] = ()  # the tail's collision geoms the ball touched, sorted
@@ -477,9 +581,9 @@ class ImpactRun:
 
 #: How long an impact run records after the ball first touches the tail.
 IMPACT_WINDOW_S = 0.15
-#: Peaks are of the signals' running mean over this time, a 1 kHz sensor (the paper's six-axis sensors
-#: and IMUs sample at most that fast): the ball skin's first touch is a spike a few steps long whose
-#: height is set by the skin's mass share (exporters/impact_scene), not by the ball.
+#: Peaks are of the signals' running mean over this time, a 1 kHz sensor (the paper's six-axis
+#: sensors and IMUs sample at most that fast): the ball skin's first touch is a spike a few steps
+#: long whose height is set by the skin's mass share (exporters/impact_scene), not by the ball.
 SENSOR_AVERAGE_S = 1e-3
 
 
@@ -488,13 +592,18 @@ def _running_mean(x: np.ndarray, n: int) -> np.ndarray:
     return (c[n:] - c[:-n]) / n if len(x) >= n else x.mean(axis=0, keepdims=True)
 
 
-def simulate_impact(spec: TailSpec, theta_max_rad: list[float], balls: tuple[str, ...] = ("size5", "size7"),
-                    ramp_length_m: float | None = None, window_s: float = IMPACT_WINDOW_S,
-                    progress: Callable[[str], None] | None = None, asm: Assembly | None = None
-                    ) -> list[ImpactRun]:
-    """The paper's disturbance test (Sec. IV-D): each ball rolls down the ramp into the soft tail and
-    into the rigid PLA twin (:mod:`bvsr_cad.exporters.impact_scene`). ``asm``: ``spec``'s assembly
-    where the caller has built it already."""
+def simulate_impact(
+    spec: TailSpec,
+    theta_max_rad: list[float],
+    balls: tuple[str, ...] = ("size5", "size7"),
+    ramp_length_m: float | None = None,
+    window_s: float = IMPACT_WINDOW_S,
+    progress: Callable[[str], None] | None = None,
+    asm: Assembly | None = None,
+) -> list[ImpactRun]:
+    """The paper's disturbance test (Sec. IV-D): each ball rolls down the ramp into the soft tail
+    and into the rigid PLA twin (:mod:`bvsr_cad.exporters.impact_scene`). ``asm``: ``spec``'s
+    assembly where the caller has built it already."""
     from ..assembly.products import build_rigid_twin, rigid_robot_model
     from ..exporters.impact_scene import ramp_drop_m, rigid_impact_tree, soft_impact_tree
     from ..models.impact import BALLS, RAMP_LENGTH_M, rolling_speed_m_s
@@ -518,13 +627,21 @@ def simulate_impact(spec: TailSpec, theta_max_rad: list[float], balls: tuple[str
         mesh_files = write_robot_meshes(robot, folder / "meshes")
         for key in balls:
             ball = BALLS[key]
-            trees = {"soft": soft_impact_tree(robot, mesh_files, ball, tip_z_m, units.mm_to_m(t_mm / 2), ramp),
-                     "rigid": rigid_impact_tree(robot, twin, panel_z_m, ball, tip_z_m, ramp)}
+            trees = {
+                "soft": soft_impact_tree(
+                    robot, mesh_files, ball, tip_z_m, units.mm_to_m(t_mm / 2), ramp
+                ),
+                "rigid": rigid_impact_tree(robot, twin, panel_z_m, ball, tip_z_m, ramp),
+            }
             for tail, tree in trees.items():
                 say(f"impact: {ball.name} into the {tail} tail")
                 path = folder / f"impact_{tail}_{key}.xml"
                 write_mjcf(path, tree)
-                runs.append(_impact_run(path, tail, ball.name, window_s, rolling_speed_m_s(ramp_drop_m(ramp))))
+                runs.append(
+                    _impact_run(
+                        path, tail, ball.name, window_s, rolling_speed_m_s(ramp_drop_m(ramp))
+                    )
+                )
     return runs
 
 
@@ -534,7 +651,9 @@ def _impact_run(path: Path, tail: str, ball: str, window_s: float, v_roll: float
     m = mujoco.MjModel.from_xml_path(str(path))
     d = mujoco.MjData(m)
     ball_geom = m.geom("ball").id
-    tail_bodies = {b for b in range(m.nbody) if m.body(b).name.startswith(("panel", "rigid_tail", "j"))}
+    tail_bodies = {
+        b for b in range(m.nbody) if m.body(b).name.startswith(("panel", "rigid_tail", "j"))
+    }
     site = m.site("root_ft").id
     sensors = ("root_force", "root_torque", "tip_acc")
     history: list[np.ndarray] = []
@@ -585,20 +704,43 @@ def _impact_run(path: Path, tail: str, ball: str, window_s: float, v_roll: float
     def peak(x) -> float:
         return float(np.max(np.linalg.norm(_running_mean(np.asarray(x), n), axis=1)))
 
-    return ImpactRun(tail, ball, peak(forces), peak(torques), peak(accs),
-                     units.m_to_mm(pen), warnings, v_touch, v_roll, contact_impulse, root_impulse,
-                     np.asarray(times), np.asarray(forces), tuple(sorted(touched)))
+    return ImpactRun(
+        tail,
+        ball,
+        peak(forces),
+        peak(torques),
+        peak(accs),
+        units.m_to_mm(pen),
+        warnings,
+        v_touch,
+        v_roll,
+        contact_impulse,
+        root_impulse,
+        np.asarray(times),
+        np.asarray(forces),
+        tuple(sorted(touched)),
+    )
 
 
 def impact_table(runs: list[ImpactRun]) -> list[dict]:
-    """One row per run, the paper's tip acceleration beside (Sec. IV-D: rod strikes, not balls; shown,
-    never used)."""
+    """One row per run, the paper's tip acceleration beside (Sec. IV-D: rod strikes, not balls;
+    shown, never used)."""
     from ..parameters.paper import IMPACT_TIP_ACCELERATION
 
-    return [{"tail": r.tail, "ball": r.ball, "peak_root_force_n": r.peak_root_force_n,
-             "peak_root_torque_nm": r.peak_root_torque_nm, "peak_tip_acceleration_m_s2": r.peak_tip_acceleration_m_s2,
-             "paper_tip_acceleration_m_s2": IMPACT_TIP_ACCELERATION.value,
-             "tip_acceleration_minus_paper_m_s2": r.peak_tip_acceleration_m_s2 - IMPACT_TIP_ACCELERATION.value,
-             "max_penetration_mm": r.max_penetration_mm, "warnings": r.warnings,
-             "ball_speed_m_s": r.ball_speed_at_contact_m_s, "rolling_speed_m_s": r.rolling_speed_m_s}
-            for r in runs]
+    return [
+        {
+            "tail": r.tail,
+            "ball": r.ball,
+            "peak_root_force_n": r.peak_root_force_n,
+            "peak_root_torque_nm": r.peak_root_torque_nm,
+            "peak_tip_acceleration_m_s2": r.peak_tip_acceleration_m_s2,
+            "paper_tip_acceleration_m_s2": IMPACT_TIP_ACCELERATION.value,
+            "tip_acceleration_minus_paper_m_s2": r.peak_tip_acceleration_m_s2
+            - IMPACT_TIP_ACCELERATION.value,
+            "max_penetration_mm": r.max_penetration_mm,
+            "warnings": r.warnings,
+            "ball_speed_m_s": r.ball_speed_at_contact_m_s,
+            "rolling_speed_m_s": r.rolling_speed_m_s,
+        }
+        for r in runs
+    ]

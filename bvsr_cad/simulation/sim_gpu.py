@@ -2,15 +2,15 @@
 
 Shared by the tests (``tests/test_sim_gpu.py``) and the benchmark (``benchmarks/sim_bench.py``):
 
-- :func:`constraint_buffers`: MuJoCo Warp allocates a fixed number of constraint rows (``njmax``) and
-  contacts (``nconmax``) per world; too few and the solver drops rows and the state goes NaN (the
-  per-segment scene overflowed the default 64). The buffers are sized from CPU MuJoCo probe runs of
-  the same model under held pressures, with a margin, plus a row for every limit (which held pressures
-  do not reach).
-- :func:`randomised_fields`: domain randomisation as a learning team needs it: per world, the hinges'
-  spring stiffness (the rod's bending stiffness) and damping scaled, and a tip payload (a point mass
-  at the tip body's centre of mass, so its centre of mass and rotational inertia are unchanged and
-  only ``body_mass`` and the ancestors' ``body_subtreemass`` change).
+- :func:`constraint_buffers`: MuJoCo Warp allocates a fixed number of constraint rows (``njmax``)
+  and contacts (``nconmax``) per world; too few and the solver drops rows and the state goes NaN
+  (the per-segment scene overflowed the default 64). The buffers are sized from CPU MuJoCo probe
+  runs of the same model under held pressures, with a margin, plus a row for every limit (which held
+  pressures do not reach).
+- :func:`randomised_fields`: domain randomisation as a learning team needs it: per world, the
+  hinges' spring stiffness (the rod's bending stiffness) and damping scaled, and a tip payload (a
+  point mass at the tip body's centre of mass, so its centre of mass and rotational inertia are
+  unchanged and only ``body_mass`` and the ancestors' ``body_subtreemass`` change).
 - :func:`mjx_batch` / :func:`warp_batch`: the batched model (those fields with one row per world)
   and data, with a step function; :func:`world_model` is the CPU MuJoCo model of one world, the
   reference each batch's world is checked against.
@@ -50,31 +50,37 @@ def import_mjx():
     return jax, mjx
 
 
-#: XLA options for compiling MJX's step on JAX's CPU backend (DebugOptions fields, passed per function
-#: through ``jax.jit(compiler_options=...)``, so nothing else in the process changes). XLA:CPU's loop
-#: fusion copies the step's long chains of dependent arithmetic (the tail is 14 bodies and 24 hinges
-#: deep) into every consumer, so its kernels nest thousands of calls deep: on the default scene (a shared
-#: 2-core machine, JAX 0.10.2, MJX 3.17) ``compile()`` of one step took 64 s of CPU at float32 (over 7 min
-#: at float64) and the first step then ran for minutes. Without fusion (each operation its own kernel)
-#: one step compiles in 29-33 s of CPU and runs in milliseconds; with XLA's backend optimisation level 0
-#: and LLVM's expensive passes off as well, 23 s (float32). :func:`mjx_batch` (two worlds, float64,
-#: compile and the first 25 steps): 40-50 s of CPU without fusion, 35-38 s with all three, whose steps
-#: then run 2.4 times slower, which matters little: MJX on a CPU is for trying and testing (CPU MuJoCo
-#: steps this scene 50-100 times faster per world). A GPU's fusion is what makes it fast: these are
-#: for CPU devices only (:func:`compiler_options`).
-CPU_COMPILER_OPTIONS = {"xla_disable_hlo_passes": "fusion", "xla_backend_optimization_level": 0,
-                        "xla_llvm_disable_expensive_passes": True}
+#: XLA options for compiling MJX's step on JAX's CPU backend (DebugOptions fields, passed per
+#: function through ``jax.jit(compiler_options=...)``, so nothing else in the process changes).
+#: XLA:CPU's loop fusion copies the step's long chains of dependent arithmetic (the tail is 14
+#: bodies and 24 hinges deep) into every consumer, so its kernels nest thousands of calls deep: on
+#: the default scene (a shared 2-core machine, JAX 0.10.2, MJX 3.17) ``compile()`` of one step took
+#: 64 s of CPU at float32 (over 7 min at float64) and the first step then ran for minutes. Without
+#: fusion (each operation its own kernel) one step compiles in 29-33 s of CPU and runs in
+#: milliseconds; with XLA's backend optimisation level 0 and LLVM's expensive passes off as well, 23
+#: s (float32). :func:`mjx_batch` (two worlds, float64, compile and the first 25 steps): 40-50 s of
+#: CPU without fusion, 35-38 s with all three, whose steps then run 2.4 times slower, which matters
+#: little: MJX on a CPU is for trying and testing (CPU MuJoCo steps this scene 50-100 times faster
+#: per world). A GPU's fusion is what makes it fast: these are for CPU devices only
+#: (:func:`compiler_options`).
+CPU_COMPILER_OPTIONS = {
+    "xla_disable_hlo_passes": "fusion",
+    "xla_backend_optimization_level": 0,
+    "xla_llvm_disable_expensive_passes": True,
+}
 
 
 def compiler_options(device=None) -> dict:
-    """The XLA options :func:`mjx_batch` compiles with on ``device`` (JAX's default device when None)."""
+    """The XLA options :func:`mjx_batch` compiles with on ``device`` (JAX's default device when
+    None)."""
     jax, _ = import_mjx()
     platform = (device if device is not None else jax.devices()[0]).platform
     return dict(CPU_COMPILER_OPTIONS) if platform == "cpu" else {}
 
 
 def import_warp():
-    """``(warp, mujoco_warp)`` with Warp's per-kernel messages off, or an ImportError naming the extra."""
+    """``(warp, mujoco_warp)`` with Warp's per-kernel messages off, or an ImportError naming the
+    extra."""
     require("gpu", "MuJoCo Warp")
     import warp
 
@@ -117,20 +123,30 @@ class ConstraintBuffers:
     limit_rows: int = 0  # of njmax, reserved for the joint and tendon limits (one row each at most)
 
     def line(self) -> str:
-        return (f"njmax {self.njmax} (probe saw nefc <= {self.nefc_seen}; {self.limit_rows} reserved for limits), "
-                f"nconmax {self.nconmax} (probe saw ncon <= {self.ncon_seen})")
+        return (
+            f"njmax {self.njmax} (probe saw nefc <= {self.nefc_seen}; {self.limit_rows} reserved "
+            "for limits), "
+            f"nconmax {self.nconmax} (probe saw ncon <= {self.ncon_seen})"
+        )
 
 
-def constraint_buffers(model: mujoco.MjModel, seconds: float = 0.3, margin: float = 2.0,
-                       controls: list[np.ndarray] | None = None) -> ConstraintBuffers:
+def constraint_buffers(
+    model: mujoco.MjModel,
+    seconds: float = 0.3,
+    margin: float = 2.0,
+    controls: list[np.ndarray] | None = None,
+) -> ConstraintBuffers:
     """Per-world buffer sizes for MuJoCo Warp from CPU MuJoCo: ``seconds`` of each held pattern of
-    :func:`probe_controls` from rest, the largest ``nefc`` and ``ncon`` of any step, times ``margin``
-    (at least 16 rows and 8 contacts more than seen: randomised worlds bend further), and one row more
-    per limited joint and tendon: MuJoCo makes at most one row per limit, and held pressures bend the
-    default tail to at most 38 % of its joint limits, so the probe never sees them, but a load (a
-    contact, an impact) does: the reduced chain's bend limits are 8 fixed tendons per joint."""
+    :func:`probe_controls` from rest, the largest ``nefc`` and ``ncon`` of any step, times
+    ``margin`` (at least 16 rows and 8 contacts more than seen: randomised worlds bend further), and
+    one row more per limited joint and tendon: MuJoCo makes at most one row per limit, and held
+    pressures bend the default tail to at most 38 % of its joint limits, so the probe never sees
+    them, but a load (a contact, an impact) does: the reduced chain's bend limits are 8 fixed
+    tendons per joint."""
     if margin < 1.0:
-        raise ValueError(f"constraint_buffers: margin={margin} must be >= 1 (a multiple of what the probe saw)")
+        raise ValueError(
+            f"constraint_buffers: margin={margin} must be >= 1 (a multiple of what the probe saw)"
+        )
     data = mujoco.MjData(model)
     nefc = ncon = 0
     for ctrl in controls if controls is not None else probe_controls(model):
@@ -140,8 +156,13 @@ def constraint_buffers(model: mujoco.MjModel, seconds: float = 0.3, margin: floa
             mujoco.mj_step(model, data)
             nefc, ncon = max(nefc, data.nefc), max(ncon, data.ncon)
     limits = int(model.jnt_limited.sum() + model.tendon_limited.sum())
-    return ConstraintBuffers(nefc, ncon, max(int(np.ceil(nefc * margin)), nefc + 16) + limits,
-                             max(int(np.ceil(ncon * margin)), ncon + 8), limits)
+    return ConstraintBuffers(
+        nefc,
+        ncon,
+        max(int(np.ceil(nefc * margin)), nefc + 16) + limits,
+        max(int(np.ceil(ncon * margin)), ncon + 8),
+        limits,
+    )
 
 
 # --- domain randomisation ------------------------------------------------------------------------
@@ -149,7 +170,8 @@ def constraint_buffers(model: mujoco.MjModel, seconds: float = 0.3, margin: floa
 
 @dataclass(frozen=True)
 class Randomisation:
-    """Uniform ranges, per world: scale factors on the hinges' stiffness and damping, tip payload (kg)."""
+    """Uniform ranges, per world: scale factors on the hinges' stiffness and damping, tip payload
+    (kg)."""
 
     stiffness_scale: tuple[float, float] = (0.8, 1.2)
     damping_scale: tuple[float, float] = (0.5, 2.0)
@@ -171,16 +193,20 @@ def tip_body(model: mujoco.MjModel) -> int:
     return int(np.flatnonzero(depth == depth.max())[-1])
 
 
-def randomised_fields(model: mujoco.MjModel, nworld: int, rand: Randomisation = Randomisation()
-                      ) -> dict[str, np.ndarray]:
-    """The :data:`RANDOMISED_FIELDS`, each with a leading axis of ``nworld`` rows (world 0 included)."""
+def randomised_fields(
+    model: mujoco.MjModel, nworld: int, rand: Randomisation = Randomisation()
+) -> dict[str, np.ndarray]:
+    """The :data:`RANDOMISED_FIELDS`, each with a leading axis of ``nworld`` rows (world 0
+    included)."""
     if nworld < 1:
         raise ValueError(f"randomised_fields: nworld={nworld} must be >= 1")
     rng = np.random.default_rng(rand.seed)
     hinge = model.jnt_type == mujoco.mjtJoint.mjJNT_HINGE
     fields = {name: np.tile(getattr(model, name), (nworld, 1)) for name in RANDOMISED_FIELDS}
     fields["jnt_stiffness"][:, hinge] *= rng.uniform(*rand.stiffness_scale, (nworld, 1))
-    fields["dof_damping"][:, model.jnt_dofadr[hinge]] *= rng.uniform(*rand.damping_scale, (nworld, 1))
+    fields["dof_damping"][:, model.jnt_dofadr[hinge]] *= rng.uniform(
+        *rand.damping_scale, (nworld, 1)
+    )
     payload = rng.uniform(*rand.payload_kg, nworld)
     body = tip_body(model)
     fields["body_mass"][:, body] += payload
@@ -199,7 +225,8 @@ def world_model(model: mujoco.MjModel, fields: dict[str, np.ndarray], world: int
     return out
 
 
-# --- batches ---------------------------------------------------------------------------------------
+# --- batches
+# ---------------------------------------------------------------------------------------
 
 
 @dataclass
@@ -213,11 +240,13 @@ class Batch:
     check: Callable[[], list[str]]  # problems (overflow, NaN) so far; empty when none
 
 
-def mjx_batch(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndarray], device=None) -> Batch:
+def mjx_batch(
+    model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndarray], device=None
+) -> Batch:
     """MJX: ``jax.vmap`` of ``mjx.step`` over a model whose randomised fields carry a world axis
     (MuJoCo Playground's pattern), the data broadcast to every world; ``n`` steps run in one jitted
-    ``fori_loop``, compiled with :func:`compiler_options`. Uses JAX's default device unless ``device``
-    is given."""
+    ``fori_loop``, compiled with :func:`compiler_options`. Uses JAX's default device unless
+    ``device`` is given."""
     jax, mjx = import_mjx()
     import jax.numpy as jnp
 
@@ -226,15 +255,21 @@ def mjx_batch(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndar
     data.ctrl[:] = ctrl
     mx = mjx.put_model(model, device=device)
     axes = jax.tree.map(lambda _: None, mx).tree_replace({name: 0 for name in fields})
-    mx = mx.tree_replace({name: jax.device_put(jnp.asarray(rows), device) for name, rows in fields.items()})
-    dx = jax.tree.map(lambda x: jnp.broadcast_to(x, (nworld, *x.shape)), mjx.put_data(model, data, device=device))
+    mx = mx.tree_replace(
+        {name: jax.device_put(jnp.asarray(rows), device) for name, rows in fields.items()}
+    )
+    dx = jax.tree.map(
+        lambda x: jnp.broadcast_to(x, (nworld, *x.shape)), mjx.put_data(model, data, device=device)
+    )
 
     def one(m, d):  # mjx.step returns some integer fields wider than put_data made them
         return jax.tree.map(lambda new, old: new.astype(old.dtype), mjx.step(m, d), d)
 
     batched = jax.vmap(one, in_axes=(axes, 0))
-    run = jax.jit(lambda m, d, n: jax.lax.fori_loop(0, n, lambda _, dd: batched(m, dd), d),
-                  compiler_options=compiler_options(device))
+    run = jax.jit(
+        lambda m, d, n: jax.lax.fori_loop(0, n, lambda _, dd: batched(m, dd), d),
+        compiler_options=compiler_options(device),
+    )
     state = {"d": dx}
 
     def step(n: int) -> None:
@@ -248,8 +283,12 @@ def mjx_batch(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndar
     return Batch("mjx", nworld, step, lambda: np.asarray(state["d"].qpos), check)
 
 
-def _warp_model_data(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndarray],
-                     buffers: ConstraintBuffers):
+def _warp_model_data(
+    model: mujoco.MjModel,
+    ctrl: np.ndarray,
+    fields: dict[str, np.ndarray],
+    buffers: ConstraintBuffers,
+):
     """MuJoCo Warp's batched model and data on Warp's current device (:func:`warp_batch`)."""
     _, mjw = import_warp()
     nworld = len(next(iter(fields.values())))
@@ -258,14 +297,22 @@ def _warp_model_data(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, 
     mw = mjw.put_model(model, batch_sizes={name: nworld for name in fields})
     for name, rows in fields.items():
         getattr(mw, name).assign(rows)
-    return mw, mjw.put_data(model, data, nworld=nworld, nconmax=buffers.nconmax, njmax=buffers.njmax)
+    return mw, mjw.put_data(
+        model, data, nworld=nworld, nconmax=buffers.nconmax, njmax=buffers.njmax
+    )
 
 
-def warp_batch(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndarray],
-               buffers: ConstraintBuffers, device: str = "cpu", graph: bool | None = None) -> Batch:
-    """MuJoCo Warp: ``put_model`` with ``batch_sizes`` giving the randomised fields one row per world,
-    filled from ``fields``; ``put_data`` with ``nworld`` and the constraint buffers. On a CUDA device
-    one step is captured as a CUDA graph (``graph`` overrides) and replayed."""
+def warp_batch(
+    model: mujoco.MjModel,
+    ctrl: np.ndarray,
+    fields: dict[str, np.ndarray],
+    buffers: ConstraintBuffers,
+    device: str = "cpu",
+    graph: bool | None = None,
+) -> Batch:
+    """MuJoCo Warp: ``put_model`` with ``batch_sizes`` giving the randomised fields one row per
+    world, filled from ``fields``; ``put_data`` with ``nworld`` and the constraint buffers. On a
+    CUDA device one step is captured as a CUDA graph (``graph`` overrides) and replayed."""
     wp, mjw = import_warp()
     nworld = len(next(iter(fields.values())))
     with wp.ScopedDevice(device):
@@ -289,16 +336,27 @@ def warp_batch(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.nda
             wp.synchronize_device(device)
 
     overflow = mjw.OverflowType
-    buffer_bits = overflow.NEFC | overflow.NJMAX_NNZ | overflow.BROADPHASE | overflow.NARROWPHASE | overflow.CCD
+    buffer_bits = (
+        overflow.NEFC
+        | overflow.NJMAX_NNZ
+        | overflow.BROADPHASE
+        | overflow.NARROWPHASE
+        | overflow.CCD
+    )
 
     def check() -> list[str]:
         problems = []
         flags = dw.overflow.numpy() & int(buffer_bits)
         if flags.any():
-            problems.append(f"MuJoCo Warp: {int((flags != 0).sum())} of {nworld} worlds overflowed their buffers "
-                            f"({overflow(int(np.bitwise_or.reduce(flags))).name}; {buffers.line()})")
+            problems.append(
+                f"MuJoCo Warp: {int((flags != 0).sum())} of {nworld} worlds overflowed their "
+                "buffers "
+                f"({overflow(int(np.bitwise_or.reduce(flags))).name}; {buffers.line()})"
+            )
         if (dw.nefc.numpy() > buffers.njmax).any():
-            problems.append(f"MuJoCo Warp: nefc {int(dw.nefc.numpy().max())} > njmax {buffers.njmax}")
+            problems.append(
+                f"MuJoCo Warp: nefc {int(dw.nefc.numpy().max())} > njmax {buffers.njmax}"
+            )
         bad = ~np.isfinite(dw.qpos.numpy()).all(axis=1)
         if bad.any():
             problems.append(f"MuJoCo Warp: {bad.sum()} of {nworld} worlds have a non-finite qpos")
@@ -307,8 +365,11 @@ def warp_batch(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.nda
     return Batch("warp", nworld, step, lambda: dw.qpos.numpy(), check)
 
 
-def cpu_reference(model: mujoco.MjModel, ctrl: np.ndarray, steps: int) -> tuple[np.ndarray, list[str]]:
-    """CPU MuJoCo's ``qpos`` after ``steps`` steps from rest under ``ctrl``, and the warnings it raised."""
+def cpu_reference(
+    model: mujoco.MjModel, ctrl: np.ndarray, steps: int
+) -> tuple[np.ndarray, list[str]]:
+    """CPU MuJoCo's ``qpos`` after ``steps`` steps from rest under ``ctrl``, and the warnings it
+    raised."""
     data = mujoco.MjData(model)
     data.ctrl[:] = ctrl
     for _ in range(steps):
@@ -328,15 +389,15 @@ class KernelTime:
 
 def kernel_label(name: str) -> str:
     """A Warp timing name without Warp's decorations: ``forward kernel _spring_damper_tendon_passive
-    __locals__kernel_1c3d22e2`` -> ``_spring_damper_tendon_passive`` (the module hash and the closure's
-    ``__locals__`` suffix differ between builds of the same kernel)."""
+    __locals__kernel_1c3d22e2`` -> ``_spring_damper_tendon_passive`` (the module hash and the
+    closure's ``__locals__`` suffix differ between builds of the same kernel)."""
     name = re.sub(r"^(forward|backward) kernel ", "", name)
     return re.sub(r"(__locals__\w*?)?_[0-9a-f]{8}$", "", name)
 
 
 def kernel_times(results, steps: int) -> list[KernelTime]:
-    """Warp's timing results (objects with ``name`` and ``elapsed`` in ms) of ``steps`` steps, summed
-    per kernel, slowest first."""
+    """Warp's timing results (objects with ``name`` and ``elapsed`` in ms) of ``steps`` steps,
+    summed per kernel, slowest first."""
     total: dict[str, list[float]] = {}
     for r in results:
         entry = total.setdefault(kernel_label(r.name), [0.0, 0])
@@ -346,13 +407,21 @@ def kernel_times(results, steps: int) -> list[KernelTime]:
     return sorted(rows, key=lambda k: -k.ms_per_step)
 
 
-def warp_kernel_profile(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndarray],
-                        buffers: ConstraintBuffers, device: str = "cuda:0", steps: int = 5) -> list[KernelTime]:
-    """Where a MuJoCo Warp step of this batch spends its GPU time: ``steps`` steps launched one by one
-    (not as a graph) under Warp's CUDA kernel timing, after a step that compiles. Slowest kernel first.
+def warp_kernel_profile(
+    model: mujoco.MjModel,
+    ctrl: np.ndarray,
+    fields: dict[str, np.ndarray],
+    buffers: ConstraintBuffers,
+    device: str = "cuda:0",
+    steps: int = 5,
+) -> list[KernelTime]:
+    """Where a MuJoCo Warp step of this batch spends its GPU time: ``steps`` steps launched one by
+    one (not as a graph) under Warp's CUDA kernel timing, after a step that compiles. Slowest kernel
+    first.
 
     Raises:
-        ValueError: ``device`` is not a CUDA device (Warp times only CUDA kernels), or ``steps`` < 1.
+        ValueError: ``device`` is not a CUDA device (Warp times only CUDA kernels), or ``steps`` <
+            1.
     """
     if steps < 1:
         raise ValueError(f"steps must be at least 1, got {steps}")
@@ -370,10 +439,16 @@ def warp_kernel_profile(model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[st
     return kernel_times(results, steps)
 
 
-def world_difference(batch: Batch, model: mujoco.MjModel, ctrl: np.ndarray, fields: dict[str, np.ndarray],
-                     steps: int, world: int = 0) -> float:
-    """The largest ``|qpos|`` difference between ``batch``'s world and CPU MuJoCo stepping that world's
-    model (the batch must have stepped ``steps`` times from rest under ``ctrl``)."""
+def world_difference(
+    batch: Batch,
+    model: mujoco.MjModel,
+    ctrl: np.ndarray,
+    fields: dict[str, np.ndarray],
+    steps: int,
+    world: int = 0,
+) -> float:
+    """The largest ``|qpos|`` difference between ``batch``'s world and CPU MuJoCo stepping that
+    world's model (the batch must have stepped ``steps`` times from rest under ``ctrl``)."""
     ref, warned = cpu_reference(world_model(model, fields, world), ctrl, steps)
     if warned:
         raise RuntimeError(f"CPU MuJoCo warned on world {world}: {warned}")

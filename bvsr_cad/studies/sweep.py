@@ -45,9 +45,9 @@ from typing import Any
 import numpy as np
 
 from ..analysis.metrics import METRICS, Conditions, group_of
+from ..build._runtime.worker import child_env
 from ..extras import require
 from ..parameters.study import Study, StudyError, Variant, get_path
-from ..build._runtime.worker import child_env
 
 #: Metrics of the ``checks`` group (a full export and every check of it).
 CHECK_METRICS = {
@@ -89,8 +89,10 @@ def plan(study: Study) -> Plan:
             groups.append(group_of(name))
         elif not (name in study.axes or name.startswith("fitted_")):
             known = sorted(m for g in METRICS.values() for m in g)
-            problems.append(f"{where} {name!r}: not a metric; groups: {allowed}; metrics: {', '.join(known)}, "
-                            f"{', '.join(CHECK_METRICS)}")
+            problems.append(
+                f"{where} {name!r}: not a metric; groups: {allowed}; metrics: {', '.join(known)}, "
+                f"{', '.join(CHECK_METRICS)}"
+            )
 
     for m in study.metrics:
         need(m, "metrics")
@@ -106,21 +108,44 @@ def plan(study: Study) -> Plan:
     return Plan(tuple(dict.fromkeys(groups)), checks)
 
 
-# -- one variant --------------------------------------------------------------------------------------
+# -- one variant
+# --------------------------------------------------------------------------------------
 
-def payload(study: Study, variant: Variant, pl: Plan, export_root: Path | None = None) -> dict[str, Any]:
+
+def payload(
+    study: Study, variant: Variant, pl: Plan, export_root: Path | None = None
+) -> dict[str, Any]:
     """Everything a worker needs for one variant (no file of this machine is read there)."""
     data = json.loads(json.dumps(variant.data, default=str))
-    data["name"] = f"{study.name}_{variant.key[:8]}"  # its own tail: the base's measurements are not its own
-    return {"key": variant.key, "label": variant.label, "study": study.name, "data": data, "groups": list(pl.groups),
-            "checks": pl.checks, "conditions": dict(study.conditions), "time_limit_s": study.time_limit_s,
-            "axes": {k: _plain(get_path(variant.data, k)) for k in study.axes},  # None: the schema's default
-            "export_dir": None if export_root is None else str(export_root / variant.key)}
+    data["name"] = (
+        f"{study.name}_{variant.key[:8]}"  # its own tail: the base's measurements are not its own
+    )
+    return {
+        "key": variant.key,
+        "label": variant.label,
+        "study": study.name,
+        "data": data,
+        "groups": list(pl.groups),
+        "checks": pl.checks,
+        "conditions": dict(study.conditions),
+        "time_limit_s": study.time_limit_s,
+        "axes": {
+            k: _plain(get_path(variant.data, k)) for k in study.axes
+        },  # None: the schema's default
+        "export_dir": None if export_root is None else str(export_root / variant.key),
+    }
 
 
 def _row(task: dict[str, Any], status: str, reason: str, **extra: Any) -> dict[str, Any]:
     """A result row: the variant's key, label and axis values, its status and why."""
-    return {"key": task["key"], "label": task["label"], **task["axes"], "status": status, "reason": reason, **extra}
+    return {
+        "key": task["key"],
+        "label": task["label"],
+        **task["axes"],
+        "status": status,
+        "reason": reason,
+        **extra,
+    }
 
 
 def _plain(v: Any) -> Any:
@@ -150,14 +175,22 @@ def evaluate(task: dict[str, Any]) -> dict[str, Any]:
     t0 = time.perf_counter()
     row = _row(task, "error", "", worker=f"{socket.gethostname()}:{os.getpid()}")
     # The study's name on the command line: `ps` shows which study a variant's process belongs to.
-    proc = subprocess.Popen([sys.executable, "-m", "bvsr_cad.studies.sweep", "-", task["study"]], stdin=subprocess.PIPE,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=child_env())
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "bvsr_cad.studies.sweep", "-", task["study"]],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=child_env(),
+    )
     try:
         out, err = proc.communicate(json.dumps(task).encode(), timeout=task["time_limit_s"])
     except subprocess.TimeoutExpired:
         proc.kill()
         proc.communicate()
-        row.update(status="timeout", reason=f"ran over the study's time_limit_s = {task['time_limit_s']:g} s")
+        row.update(
+            status="timeout",
+            reason=f"ran over the study's time_limit_s = {task['time_limit_s']:g} s",
+        )
     except BaseException:
         proc.kill()
         proc.wait()
@@ -167,7 +200,9 @@ def evaluate(task: dict[str, Any]) -> dict[str, Any]:
             kind, result, _cpu_s = pickle.loads(out)  # worker.serve's answer
         except Exception:  # noqa: BLE001 - the child died without a result
             tail = err.decode("utf-8", "replace").strip().splitlines()[-3:]
-            row["reason"] = f"the variant's process ended with code {proc.returncode}: " + " | ".join(tail)
+            row["reason"] = (
+                f"the variant's process ended with code {proc.returncode}: " + " | ".join(tail)
+            )
         else:
             if kind == "ok":
                 row.update(result)
@@ -200,8 +235,8 @@ WORKDIR_PREFIX = "bvsr-variant-"
 
 def _export_and_check(task: dict[str, Any]) -> dict[str, Any]:
     from ..build._runtime.checks_process import run_checks
-    from ..exporters.study_report import toml_text
     from ..build.pipeline import build_export
+    from ..exporters.study_report import toml_text
 
     with tempfile.TemporaryDirectory(prefix=f"{WORKDIR_PREFIX}{os.getpid()}-") as tmp:
         params = Path(tmp) / f"{task['data']['name']}.toml"
@@ -212,10 +247,14 @@ def _export_and_check(task: dict[str, Any]) -> dict[str, Any]:
         results = run_checks(out, parallel=False)
     failed = [r.name for r in results if r.passed is False]
     verdicts = [r for r in results if r.passed is not None]
-    return {"checks_total": len(verdicts), "checks_failed": len(failed), "checks_passed_ok": not failed,
-            "failed_checks": "; ".join(failed[:20]),
-            "checks_json": json.dumps({r.name: r.passed for r in verdicts}, sort_keys=True),
-            "seconds_checks": time.perf_counter() - t}
+    return {
+        "checks_total": len(verdicts),
+        "checks_failed": len(failed),
+        "checks_passed_ok": not failed,
+        "failed_checks": "; ".join(failed[:20]),
+        "checks_json": json.dumps({r.name: r.passed for r in verdicts}, sort_keys=True),
+        "seconds_checks": time.perf_counter() - t,
+    }
 
 
 def _clean_dead_workdirs() -> None:
@@ -225,14 +264,16 @@ def _clean_dead_workdirs() -> None:
     root = Path(tempfile.gettempdir())
     for folder in root.glob(f"{WORKDIR_PREFIX}*"):
         try:
-            pid = int(folder.name[len(WORKDIR_PREFIX):].split("-")[0])
+            pid = int(folder.name[len(WORKDIR_PREFIX) :].split("-")[0])
         except ValueError:
             continue
         if pid != os.getpid() and not Path(f"/proc/{pid}").exists():
             shutil.rmtree(folder, ignore_errors=True)
 
 
-# -- results ------------------------------------------------------------------------------------------
+# -- results
+# ------------------------------------------------------------------------------------------
+
 
 def read_journal(path: Path) -> dict[str, dict[str, Any]]:
     """Rows by key (the last one wins); a torn last line (a killed run) is skipped."""
@@ -268,16 +309,29 @@ class StudyResult:
 
     def as_json(self) -> dict[str, Any]:
         counts = {s: sum(r["status"] == s for r in self.rows) for s in STATUSES}
-        return {"study": self.study.name, "kind": self.study.kind, "out_dir": str(self.out_dir),
-                "variants": len(self.rows), "reused": self.reused, "computed": self.computed, "status": counts,
-                "workers": self.workers, "seconds": round(self.seconds, 2), "files": self.files,
-                "best": self.best, "rows": self.rows}
+        return {
+            "study": self.study.name,
+            "kind": self.study.kind,
+            "out_dir": str(self.out_dir),
+            "variants": len(self.rows),
+            "reused": self.reused,
+            "computed": self.computed,
+            "status": counts,
+            "workers": self.workers,
+            "seconds": round(self.seconds, 2),
+            "files": self.files,
+            "best": self.best,
+            "rows": self.rows,
+        }
 
 
-# -- the engine ---------------------------------------------------------------------------------------
+# -- the engine
+# ---------------------------------------------------------------------------------------
+
 
 class _Cluster:
-    """A Dask client on a new LocalCluster or an existing scheduler; closing it stops what it started."""
+    """A Dask client on a new LocalCluster or an existing scheduler; closing it stops what it
+    started."""
 
     def __init__(self, scheduler: str | None, workers: int | None):
         from distributed import Client, LocalCluster
@@ -288,8 +342,13 @@ class _Cluster:
                 self.client = Client(scheduler, timeout="10s")
             else:
                 n = workers or max(1, (os.cpu_count() or 1))
-                self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                            dashboard_address=None, silence_logs=logging.CRITICAL)
+                self.cluster = LocalCluster(
+                    n_workers=n,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                    silence_logs=logging.CRITICAL,
+                )
                 self.client = Client(self.cluster)
         except (OSError, TimeoutError) as exc:
             raise SweepError(f"no Dask scheduler at {scheduler!r}: {exc}") from None
@@ -304,9 +363,15 @@ class _Cluster:
             self.cluster.close()
 
 
-def run_study(study: Study, out_dir: str | Path | None = None, scheduler: str | None = None,
-              workers: int | None = None, progress: bool = True, keep_exports: bool = False,
-              say: Callable[[str], None] | None = None) -> StudyResult:
+def run_study(
+    study: Study,
+    out_dir: str | Path | None = None,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    progress: bool = True,
+    keep_exports: bool = False,
+    say: Callable[[str], None] | None = None,
+) -> StudyResult:
     """Run every variant of ``study`` not already in its journal; write the table and the report.
 
     Raises:
@@ -322,8 +387,10 @@ def run_study(study: Study, out_dir: str | Path | None = None, scheduler: str | 
     pl = plan(study)
     base_problem = infeasible_reason(study.variant({}, "base"))
     if base_problem:
-        raise StudyError(study.path, [f"base = {str(study.base_path)!r} with [set] is not a buildable tail: "
-                                      f"{base_problem}"])
+        raise StudyError(
+            study.path,
+            [f"base = {str(study.base_path)!r} with [set] is not a buildable tail: {base_problem}"],
+        )
     out = Path(out_dir) if out_dir is not None else Path("exports") / "studies" / study.name
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -332,18 +399,24 @@ def run_study(study: Study, out_dir: str | Path | None = None, scheduler: str | 
     journal = out / JOURNAL
     # What a rerun keeps: results and impossible tails. A timeout or an error is tried again (with a
     # longer time_limit_s, or after a fix), so a rerun finishes what an earlier one could not.
-    done = {k: r for k, r in read_journal(journal).items() if r.get("status") in ("ok", "infeasible")}
+    done = {
+        k: r for k, r in read_journal(journal).items() if r.get("status") in ("ok", "infeasible")
+    }
     export_root = (out / "variants") if keep_exports else None
     previous = _terminate_as_interrupt()
     cluster = None
     try:
         cluster = _Cluster(scheduler, workers)
         n_workers = cluster.n_workers
-        say(f"study {study.name}: {study.kind}, groups {', '.join(pl.groups) or '-'}"
+        say(
+            f"study {study.name}: {study.kind}, groups {', '.join(pl.groups) or '-'}"
             f"{', export + checks' if pl.checks else ''}; {n_workers} Dask worker(s)"
-            f"{' at ' + scheduler if scheduler else ''}")
+            f"{' at ' + scheduler if scheduler else ''}"
+        )
         if study.kind == "optuna":
-            rows, reused, best = _optuna(study, pl, cluster, journal, done, export_root, progress, n_workers)
+            rows, reused, best = _optuna(
+                study, pl, cluster, journal, done, export_root, progress, n_workers
+            )
         else:
             variants = study.variants()
             todo = [v for v in variants if v.key not in done]
@@ -358,8 +431,11 @@ def run_study(study: Study, out_dir: str | Path | None = None, scheduler: str | 
                     done[v.key] = row
                 else:
                     tasks.append(task)
-            say(f"{len(variants)} variants: {reused} already in {journal.name}, {len(todo) - len(tasks)} infeasible "
-                f"(recorded with the reason), {len(tasks)} to run")
+            say(
+                f"{len(variants)} variants: {reused} already in {journal.name}, "
+                f"{len(todo) - len(tasks)} infeasible "
+                f"(recorded with the reason), {len(tasks)} to run"
+            )
             new = _run_many(cluster, tasks, journal, progress, study.name)
             done.update(new)
             rows = [done[v.key] for v in variants]
@@ -369,8 +445,17 @@ def run_study(study: Study, out_dir: str | Path | None = None, scheduler: str | 
             cluster.close()  # its workers stop, and each variant's process dies with its worker
         _restore(previous)
     files = write_outputs(study, rows, out)
-    return StudyResult(study, out, rows, reused, len(rows) - reused, time.perf_counter() - t0, n_workers, files,
-                       best)
+    return StudyResult(
+        study,
+        out,
+        rows,
+        reused,
+        len(rows) - reused,
+        time.perf_counter() - t0,
+        n_workers,
+        files,
+        best,
+    )
 
 
 def _terminate_as_interrupt():
@@ -397,7 +482,14 @@ def _restore(previous) -> None:
 def _bar(total: int, enabled: bool, name: str):
     from tqdm import tqdm
 
-    return tqdm(total=total, file=sys.stderr, disable=not enabled, desc=name, unit="variant", dynamic_ncols=True)
+    return tqdm(
+        total=total,
+        file=sys.stderr,
+        disable=not enabled,
+        desc=name,
+        unit="variant",
+        dynamic_ncols=True,
+    )
 
 
 def _result(fut, task: dict[str, Any]) -> dict[str, Any]:
@@ -408,8 +500,8 @@ def _result(fut, task: dict[str, Any]) -> dict[str, Any]:
 
 
 def _first_done(futures) -> list:
-    """The futures that finished, waiting in short slices so that Ctrl-C and SIGTERM are seen at once
-    (a plain blocking wait holds the main thread inside Dask's event-loop call)."""
+    """The futures that finished, waiting in short slices so that Ctrl-C and SIGTERM are seen at
+    once (a plain blocking wait holds the main thread inside Dask's event-loop call)."""
     from distributed import wait
 
     while True:
@@ -419,12 +511,16 @@ def _first_done(futures) -> list:
             continue
 
 
-def _run_many(cluster: _Cluster, tasks: list[dict[str, Any]], journal: Path, progress: bool, name: str
-              ) -> dict[str, dict[str, Any]]:
+def _run_many(
+    cluster: _Cluster, tasks: list[dict[str, Any]], journal: Path, progress: bool, name: str
+) -> dict[str, dict[str, Any]]:
     rows: dict[str, dict[str, Any]] = {}
     if not tasks:
         return rows
-    futures = {cluster.client.submit(evaluate, t, key=f"bvsr-variant-{t['key']}", pure=False): t for t in tasks}
+    futures = {
+        cluster.client.submit(evaluate, t, key=f"bvsr-variant-{t['key']}", pure=False): t
+        for t in tasks
+    }
     with _bar(len(tasks), progress, name) as bar:
         while futures:
             for fut in _first_done(futures):
@@ -437,8 +533,16 @@ def _run_many(cluster: _Cluster, tasks: list[dict[str, Any]], journal: Path, pro
     return rows
 
 
-def _optuna(study: Study, pl: Plan, cluster: _Cluster, journal: Path, done: dict[str, dict[str, Any]],
-            export_root: Path | None, progress: bool, slots: int):
+def _optuna(
+    study: Study,
+    pl: Plan,
+    cluster: _Cluster,
+    journal: Path,
+    done: dict[str, dict[str, Any]],
+    export_root: Path | None,
+    progress: bool,
+    slots: int,
+):
     import optuna
     from optuna.storages import JournalStorage
     from optuna.storages.journal import JournalFileBackend
@@ -448,19 +552,32 @@ def _optuna(study: Study, pl: Plan, cluster: _Cluster, journal: Path, done: dict
     storage = JournalStorage(JournalFileBackend(str(journal.parent / "optuna.journal")))
 
     # Feasibility reaches the sampler through each trial's set_constraint values.
-    sampler = (optuna.samplers.RandomSampler if study.sampler == "random" else optuna.samplers.TPESampler)(
-        seed=study.seed)
-    ost = optuna.create_study(study_name=study.name, storage=storage, sampler=sampler, load_if_exists=True,
-                              directions=[o.direction for o in study.objectives])
-    for t in ost.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):  # left by an interrupted run
+    sampler = (
+        optuna.samplers.RandomSampler if study.sampler == "random" else optuna.samplers.TPESampler
+    )(seed=study.seed)
+    ost = optuna.create_study(
+        study_name=study.name,
+        storage=storage,
+        sampler=sampler,
+        load_if_exists=True,
+        directions=[o.direction for o in study.objectives],
+    )
+    for t in ost.get_trials(
+        deepcopy=False, states=(TrialState.RUNNING,)
+    ):  # left by an interrupted run
         ost.tell(t.number, state=TrialState.FAIL)
-    # Trials that count towards the study: those whose tail has a row (a trial interrupted before its
-    # row was written does not count, and is asked again).
-    finished = [t for t in ost.get_trials(deepcopy=False) if t.state in (TrialState.COMPLETE, TrialState.FAIL)
-                and t.user_attrs.get("variant") in done]
+    # Trials that count towards the study: those whose tail has a row (a trial interrupted before
+    # its row was written does not count, and is asked again).
+    finished = [
+        t
+        for t in ost.get_trials(deepcopy=False)
+        if t.state in (TrialState.COMPLETE, TrialState.FAIL) and t.user_attrs.get("variant") in done
+    ]
     if study.baseline and not ost.get_trials(deepcopy=False):
         base = {d.key: get_path(study.base_data, d.key) for d in study.space}
-        ost.enqueue_trial({k: v for k, v in base.items() if v is not None}, user_attrs={"baseline": True})
+        ost.enqueue_trial(
+            {k: v for k, v in base.items() if v is not None}, user_attrs={"baseline": True}
+        )
     rows = {t.user_attrs["variant"]: done[t.user_attrs["variant"]] for t in finished}
     reused = len(rows)
     in_flight: dict[Any, tuple[Any, Variant, dict]] = {}
@@ -480,7 +597,9 @@ def _optuna(study: Study, pl: Plan, cluster: _Cluster, journal: Path, done: dict
                 reused += v.key not in rows
                 rows.setdefault(v.key, row)
             values = [row.get(o.metric) for o in study.objectives]
-            if row["status"] == "ok" and all(isinstance(x, (int, float)) and math.isfinite(x) for x in values):
+            if row["status"] == "ok" and all(
+                isinstance(x, (int, float)) and math.isfinite(x) for x in values
+            ):
                 violations = [c.violation(row.get(c.metric)) for c in study.constraints]
                 for c, x in zip(study.constraints, violations):
                     trial.set_constraint(c.metric, x)  # how the sampler learns feasibility
@@ -496,19 +615,28 @@ def _optuna(study: Study, pl: Plan, cluster: _Cluster, journal: Path, done: dict
         while count + len(in_flight) < study.trials or in_flight:
             while len(in_flight) < slots and count + len(in_flight) < study.trials:
                 trial = ost.ask()
-                over = {d.key: (trial.suggest_categorical(d.key, list(d.choices)) if d.choices is not None else
-                                trial.suggest_float(d.key, d.low, d.high, step=d.step, log=d.log))
-                        for d in study.space}
+                over = {
+                    d.key: (
+                        trial.suggest_categorical(d.key, list(d.choices))
+                        if d.choices is not None
+                        else trial.suggest_float(d.key, d.low, d.high, step=d.step, log=d.log)
+                    )
+                    for d in study.space
+                }
                 v = study.variant(over, "base" if trial.user_attrs.get("baseline") else None)
                 trial.set_user_attr("variant", v.key)
                 task = payload(study, v, pl, export_root)
                 reason = "" if v.key in done else infeasible_reason(v)
-                if v.key in done:  # the same tail ran before (an earlier trial or run): its row answers
+                if (
+                    v.key in done
+                ):  # the same tail ran before (an earlier trial or run): its row answers
                     finish(trial, v, done[v.key], new=False)
                 elif reason:
                     finish(trial, v, _row(task, "infeasible", reason), new=True)
                 else:
-                    fut = cluster.client.submit(evaluate, task, key=f"bvsr-trial-{trial.number}-{v.key}", pure=False)
+                    fut = cluster.client.submit(
+                        evaluate, task, key=f"bvsr-trial-{trial.number}-{v.key}", pure=False
+                    )
                     in_flight[fut] = (trial, v, task)
             for fut in _first_done(in_flight) if in_flight else ():
                 trial, v, task = in_flight.pop(fut)
@@ -521,15 +649,23 @@ def _best(study: Study, ost) -> dict[str, Any] | None:
     constraint holds) or the feasible Pareto front's trial numbers (several objectives)."""
     from optuna.trial import TrialState
 
-    feasible = [t for t in ost.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
-                if all(x <= 0 for x in t.user_attrs.get("constraints", []))]
+    feasible = [
+        t
+        for t in ost.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
+        if all(x <= 0 for x in t.user_attrs.get("constraints", []))
+    ]
     if not feasible:
         return None
     if len(study.objectives) == 1:
         pick = max if study.objectives[0].direction == "maximize" else min
         t = pick(feasible, key=lambda tr: tr.values[0])
-        return {"trial": t.number, "variant": t.user_attrs["variant"], "params": t.params,
-                "value": t.values[0], "metric": study.objectives[0].metric}
+        return {
+            "trial": t.number,
+            "variant": t.user_attrs["variant"],
+            "params": t.params,
+            "value": t.values[0],
+            "metric": study.objectives[0].metric,
+        }
     from ..exporters.study_report import pareto_mask
 
     values = np.array([t.values for t in feasible])
@@ -538,7 +674,8 @@ def _best(study: Study, ost) -> dict[str, Any] | None:
 
 
 def _main() -> int:
-    """``python -m bvsr_cad.studies.sweep -``: one variant (JSON on stdin), its row pickled onto stdout."""
+    """``python -m bvsr_cad.studies.sweep -``: one variant (JSON on stdin), its row pickled onto
+    stdout."""
     from ..build._runtime.worker import serve
 
     task = json.loads(sys.stdin.buffer.read())

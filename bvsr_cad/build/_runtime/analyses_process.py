@@ -1,10 +1,11 @@
-"""The analyses' second process of `bvsr build` (``python -m bvsr_cad.build._runtime.worker bvsr_cad.build._runtime.analyses_process``).
+"""The analyses' second process of `bvsr build` (``python -m bvsr_cad.build._runtime.worker
+bvsr_cad.build._runtime.analyses_process``).
 
-Its own module, beside :mod:`bvsr_cad.build.pipeline` rather than in it, so that the process imports what
-the analyses read (the CAD kernel, the models, the simulator) and not the exporters the build's own
-process writes with (matplotlib, pyvista, the drawings' SVG): measured with ``python -X importtime``,
-about 2.4 CPU s of imports instead of 2.9. Here, not in the analysis layer, because a measured
-workspace is predicted in the simulator.
+Its own module, beside :mod:`bvsr_cad.build.pipeline` rather than in it, so that the process imports
+what the analyses read (the CAD kernel, the models, the simulator) and not the exporters the build's
+own process writes with (matplotlib, pyvista, the drawings' SVG): measured with ``python -X
+importtime``, about 2.4 CPU s of imports instead of 2.9. Here, not in the analysis layer, because a
+measured workspace is predicted in the simulator.
 """
 
 from __future__ import annotations
@@ -27,12 +28,13 @@ SHARED_SOLIDS_FOLDER = ".solids"
 
 
 class SharedSolids:
-    """The part solids of one build, shared by its two processes (the build's and its analyses') through a
-    folder of BRep files (:func:`bvsr_cad.parts._kernel.brep_bytes`): a part is made by whichever process
-    asks for it first, which writes it (atomically); the other reads it (a millisecond) instead of making it
-    again (0.06-0.37 CPU s a part of the default tail, 1.5 s in all, measured). The build makes its parts
-    from the first, the analyses' process from the last, so that they meet in the middle. What either uses
-    is the solid its bytes give back, made or read (see :func:`bvsr_cad.assembly.build.build_assembly`)."""
+    """The part solids of one build, shared by its two processes (the build's and its analyses')
+    through a folder of BRep files (:func:`bvsr_cad.parts._kernel.brep_bytes`): a part is made by
+    whichever process asks for it first, which writes it (atomically); the other reads it (a
+    millisecond) instead of making it again (0.06-0.37 CPU s a part of the default tail, 1.5 s in
+    all, measured). The build makes its parts from the first, the analyses' process from the last,
+    so that they meet in the middle. What either uses is the solid its bytes give back, made or read
+    (see :func:`bvsr_cad.assembly.build.build_assembly`)."""
 
     def __init__(self, folder: Path):
         self.folder = Path(folder)
@@ -51,22 +53,25 @@ class SharedSolids:
             return data
 
     def offer(self, name: str, data: bytes) -> None:
-        """Write part ``name``'s BRep bytes unless the folder has them (a part both processes made at once is
-        written twice, the same bytes: the rename makes either whole)."""
+        """Write part ``name``'s BRep bytes unless the folder has them (a part both processes made
+        at once is written twice, the same bytes: the rename makes either whole)."""
         path = self._path(name)
         if not path.exists():
-            _replace_whole(path, data, path.with_name(f".{name}.{os.getpid()}.{threading.get_ident()}.part"))
+            _replace_whole(
+                path, data, path.with_name(f".{name}.{os.getpid()}.{threading.get_ident()}.part")
+            )
 
 
-#: In the build's temporary folder: the geometry analyses, pickled by the analyses' second process as soon
-#: as it has them (:func:`write_geometry_ahead`), so that the build writes and checks the robot files (which
-#: need the joint limits alone) while the other analyses go on; the build removes it before it publishes.
+#: In the build's temporary folder: the geometry analyses, pickled by the analyses' second process
+#: as soon as it has them (:func:`write_geometry_ahead`), so that the build writes and checks the
+#: robot files (which need the joint limits alone) while the other analyses go on; the build removes
+#: it before it publishes.
 GEOMETRY_AHEAD_FILE = ".analysis-geometry.pkl"
 
 
 def _replace_whole(path: Path, data: bytes, part: Path | None = None) -> None:
-    """``data`` into ``path``, whole or not at all: written beside (``part``, by default ``path`` with
-    ``.part`` added; a name of its own where two writers may race), then renamed."""
+    """``data`` into ``path``, whole or not at all: written beside (``part``, by default ``path``
+    with ``.part`` added; a name of its own where two writers may race), then renamed."""
     part = part or path.with_name(path.name + ".part")
     part.write_bytes(data)
     os.replace(part, path)
@@ -82,12 +87,13 @@ def write_geometry_ahead(folder: Path, geo: GeometryAnalyses) -> None:
     _write_whole(folder / GEOMETRY_AHEAD_FILE, geo)
 
 
-#: In the build's temporary folder: the rest geometry (:class:`bvsr_cad.analysis.run.RestGeometry`: the posed
-#: tail and the parts' mass properties) the analyses' process made, pickled (:func:`write_rest_ahead`); the
-#: build moves it into its cache entry of the geometry analyses as :data:`REST_FILE` (:func:`keep_rest`),
-#: beside their pickle, and the next build of the same geometry hands it back: an edit that moves no solid
-#: then makes no solid in this process, meshes none and measures no rest distance (its assembly ahead
-#: and the posed tail are 3-4 CPU s of this process's work, most of it before its analyses could start).
+#: In the build's temporary folder: the rest geometry (:class:`bvsr_cad.analysis.run.RestGeometry`:
+#: the posed tail and the parts' mass properties) the analyses' process made, pickled
+#: (:func:`write_rest_ahead`); the build moves it into its cache entry of the geometry analyses as
+#: :data:`REST_FILE` (:func:`keep_rest`), beside their pickle, and the next build of the same
+#: geometry hands it back: an edit that moves no solid then makes no solid in this process, meshes
+#: none and measures no rest distance (its assembly ahead and the posed tail are 3-4 CPU s of this
+#: process's work, most of it before its analyses could start).
 REST_AHEAD_FILE = ".analysis-rest.pkl"
 #: The rest geometry's name in the cache entry of the geometry analyses.
 REST_FILE = "rest_geometry.pkl"
@@ -99,8 +105,8 @@ def write_rest_ahead(folder: Path, rest: RestGeometry) -> None:
 
 
 def keep_rest(folder: Path, entry: Path) -> None:
-    """Move the rest geometry the analyses' process left in ``folder`` (if any) into the cache ``entry``
-    being filled with the geometry analyses."""
+    """Move the rest geometry the analyses' process left in ``folder`` (if any) into the cache
+    ``entry`` being filled with the geometry analyses."""
     try:
         os.replace(folder / REST_AHEAD_FILE, entry / REST_FILE)
     except FileNotFoundError:
@@ -108,8 +114,8 @@ def keep_rest(folder: Path, entry: Path) -> None:
 
 
 def read_rest(geometry: str) -> RestGeometry | None:
-    """The rest geometry kept beside the cached geometry analyses at ``geometry`` (their pickle's path),
-    or None (an entry without one, or evicted since the build looked)."""
+    """The rest geometry kept beside the cached geometry analyses at ``geometry`` (their pickle's
+    path), or None (an entry without one, or evicted since the build looked)."""
     try:
         return pickle.loads((Path(geometry).parent / REST_FILE).read_bytes())
     except OSError:
@@ -117,8 +123,8 @@ def read_rest(geometry: str) -> RestGeometry | None:
 
 
 def take_geometry_ahead(folder: Path) -> GeometryAnalyses | None:
-    """The geometry analyses :func:`write_geometry_ahead` left in ``folder`` (then removed), or None when
-    there are none (yet)."""
+    """The geometry analyses :func:`write_geometry_ahead` left in ``folder`` (then removed), or None
+    when there are none (yet)."""
     path = folder / GEOMETRY_AHEAD_FILE
     try:
         data = path.read_bytes()
@@ -129,26 +135,33 @@ def take_geometry_ahead(folder: Path) -> GeometryAnalyses | None:
 
 
 def drop_geometry_ahead(folder: Path) -> None:
-    """Remove what :func:`write_geometry_ahead` and :func:`write_rest_ahead` may have left in ``folder`` (a
-    file or its half-written part; the rest geometry once the build has moved it into its cache, or where
-    it has none), and the solids it shared (:data:`SHARED_SOLIDS_FOLDER`)."""
+    """Remove what :func:`write_geometry_ahead` and :func:`write_rest_ahead` may have left in
+    ``folder`` (a file or its half-written part; the rest geometry once the build has moved it into
+    its cache, or where it has none), and the solids it shared (:data:`SHARED_SOLIDS_FOLDER`)."""
     import shutil
 
-    for name in (GEOMETRY_AHEAD_FILE, GEOMETRY_AHEAD_FILE + ".part", REST_AHEAD_FILE, REST_AHEAD_FILE + ".part"):
+    for name in (
+        GEOMETRY_AHEAD_FILE,
+        GEOMETRY_AHEAD_FILE + ".part",
+        REST_AHEAD_FILE,
+        REST_AHEAD_FILE + ".part",
+    ):
         (folder / name).unlink(missing_ok=True)
     shutil.rmtree(folder / SHARED_SOLIDS_FOLDER, ignore_errors=True)
 
 
-#: The standby analyses process's head start (:func:`_prepare_analyses`): (params path, SHA-256) -> assembly.
+#: The standby analyses process's head start (:func:`_prepare_analyses`): (params path, SHA-256) ->
+#: assembly.
 _PREPARED: dict[tuple[str, str], object] = {}
 
 
 def _prepare_analyses(params: str) -> None:
-    """A standby analyses process's head start (``python -m bvsr_cad.build._runtime.worker bvsr_cad.build._runtime.analyses_process --standby
-    PARAMS``): the tail's assembly from the file, its solids made one by one while the build imports and
-    reads its cache, until the work comes (a build whose geometry is cached hands over the rest geometry:
-    it needs none of them; a solid not made by then is made when first read). Used only if the work names
-    the same file with the same SHA-256 (the bytes the assembly was built from)."""
+    """A standby analyses process's head start (``python -m bvsr_cad.build._runtime.worker
+    bvsr_cad.build._runtime.analyses_process --standby PARAMS``): the tail's assembly from the file,
+    its solids made one by one while the build imports and reads its cache, until the work comes (a
+    build whose geometry is cached hands over the rest geometry: it needs none of them; a solid not
+    made by then is made when first read). Used only if the work names the same file with the same
+    SHA-256 (the bytes the assembly was built from)."""
     kernel_threads(1)  # beside the build, which keeps the other core busy
     read = _assembly_read(params)
     if read is None:
@@ -162,9 +175,9 @@ def _prepare_analyses(params: str) -> None:
 
 
 def _assembly_read(params: str, sha256: str | None = None):
-    """``(assembly, SHA-256)``: the tail's assembly from the file (its solids made when first read) and the
-    SHA-256 of the bytes it was built from; None where the file changed while it was read, or its bytes
-    are not ``sha256``."""
+    """``(assembly, SHA-256)``: the tail's assembly from the file (its solids made when first read)
+    and the SHA-256 of the bytes it was built from; None where the file changed while it was read,
+    or its bytes are not ``sha256``."""
     from ...assembly.build import build_assembly
 
     before = params_sha256(params)
@@ -184,18 +197,25 @@ def _work_waiting() -> bool:
         return False
 
 
-def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str = "", folder: str = "",
-                      name: str = ""):
-    """The analyses' second process (``python -m bvsr_cad.build._runtime.worker bvsr_cad.build._runtime.analyses_process - PARAMS SHA256
-    [GEOMETRY [THREADS [FOLDER NAME]]]``): ``(results, drawn)``. ``GEOMETRY``: the cached geometry
-    analyses' pickle (computed here when it is gone); ``THREADS``: those that predict the measured rows
-    (default :data:`bvsr_cad.analysis.run.BESIDE_BUILD_THREADS`); ``FOLDER``: the build's temporary
-    folder. Into it go the geometry analyses as soon as they are computed here
-    (:func:`write_geometry_ahead`: the build writes and checks the robot files,
-    which need the joint limits alone, while the other analyses go on; they took the build's last
-    seconds, on one core, when they waited for the whole result), and once the analyses are done their
-    pictures of the tail ``NAME`` (:func:`bvsr_cad.exporters.analysis_files.write_analysis_pictures`;
-    ``drawn`` says so): they were 1.1 s of the build's last stages too."""
+def _analyses_process(
+    params: str,
+    sha256: str,
+    geometry: str = "",
+    threads: str = "",
+    folder: str = "",
+    name: str = "",
+):
+    """The analyses' second process (``python -m bvsr_cad.build._runtime.worker
+    bvsr_cad.build._runtime.analyses_process - PARAMS SHA256 [GEOMETRY [THREADS [FOLDER NAME]]]``):
+    ``(results, drawn)``. ``GEOMETRY``: the cached geometry analyses' pickle (computed here when it
+    is gone); ``THREADS``: those that predict the measured rows (default
+    :data:`bvsr_cad.analysis.run.BESIDE_BUILD_THREADS`); ``FOLDER``: the build's temporary folder.
+    Into it go the geometry analyses as soon as they are computed here
+    (:func:`write_geometry_ahead`: the build writes and checks the robot files, which need the joint
+    limits alone, while the other analyses go on; they took the build's last seconds, on one core,
+    when they waited for the whole result), and once the analyses are done their pictures of the
+    tail ``NAME`` (:func:`bvsr_cad.exporters.analysis_files.write_analysis_pictures`; ``drawn`` says
+    so): they were 1.1 s of the build's last stages too."""
     from ...analysis.run import from_params
 
     kernel_threads(1)  # beside the build, which keeps the other core busy
@@ -205,26 +225,38 @@ def _analyses_process(params: str, sha256: str, geometry: str = "", threads: str
         given = None
     asm = _PREPARED.pop((str(Path(params).resolve()), sha256), None)
     if asm is None and folder and given is None:
-        read = _assembly_read(params, sha256)  # None: changed since the build read it (from_params says so)
+        read = _assembly_read(
+            params, sha256
+        )  # None: changed since the build read it (from_params says so)
         asm = read[0] if read is not None else None
     if asm is not None and folder and given is None:
-        # Every solid is needed (the clearance meshes them all): the ones the build has not made yet,
-        # from the last (it makes them from the first), each read where the build made it already.
+        # Every solid is needed (the clearance meshes them all): the ones the build has not made
+        # yet, from the last (it makes them from the first), each read where the build made it
+        # already.
         asm.share_solids(SharedSolids(Path(folder) / SHARED_SOLIDS_FOLDER))
         for part in reversed(list(asm.parts.values())):
             part.solid  # noqa: B018
-    results = from_params(params, sha256, protocol_radius_mm, given, asm,
-                          int(threads) if threads else BESIDE_BUILD_THREADS,
-                          (lambda geo: write_geometry_ahead(Path(folder), geo)) if folder else None,
-                          read_rest(geometry) if given is not None else None,
-                          (lambda rest: write_rest_ahead(Path(folder), rest)) if folder and given is None else None)
+    results = from_params(
+        params,
+        sha256,
+        protocol_radius_mm,
+        given,
+        asm,
+        int(threads) if threads else BESIDE_BUILD_THREADS,
+        (lambda geo: write_geometry_ahead(Path(folder), geo)) if folder else None,
+        read_rest(geometry) if given is not None else None,
+        (lambda rest: write_rest_ahead(Path(folder), rest)) if folder and given is None else None,
+    )
     if not folder:
         return results, False
-    from ...exporters.analysis_files import write_analysis_pictures  # matplotlib: after the analyses
+    from ...exporters.analysis_files import (
+        write_analysis_pictures,
+    )  # matplotlib: after the analyses
 
     write_analysis_pictures(results, Path(folder), name)
     return results, True
 
 
-#: What the analyses' second process serves (:func:`bvsr_cad.build._runtime.worker.child_main`): its work and its head start.
+#: What the analyses' second process serves (:func:`bvsr_cad.build._runtime.worker.child_main`): its
+#: work and its head start.
 SECOND_PROCESS = (_analyses_process, _prepare_analyses)

@@ -11,63 +11,96 @@ from collections.abc import Callable, Collection
 from pathlib import Path
 from typing import Any
 
-from ..cache import ArtifactCache
 from ...checks.export import Export
 from ...checks.memo import CheckMemo
 from ...checks.result import CheckResult
 from ...checks.run import Checks, StartBeside, printability_groups
-from .worker import SecondProcess
+from ..cache import ArtifactCache
 from ..stages import verdict_store
+from .worker import SecondProcess
 
 #: The second process's module: it serves :data:`SECOND_PROCESS`.
 MODULE = "bvsr_cad.build._runtime.checks_process"
 
 
 def beside(cache: ArtifactCache | None) -> StartBeside:
-    """What starts the printability checks' second process, its verdicts kept in ``cache`` (None: none
-    kept). It works in the export's folder: MuJoCo may write its log into the working folder."""
+    """What starts the printability checks' second process, its verdicts kept in ``cache`` (None:
+    none kept). It works in the export's folder: MuJoCo may write its log into the working
+    folder."""
     root = str(cache.root) if cache is not None else ""
 
-    def start(export: Path, sliced_now: Collection[str], meshes: bool, robot: bool) -> SecondProcess | None:
-        return SecondProcess.start(MODULE, [str(export), json.dumps(sorted(sliced_now)), root, "1" if meshes else "",
-                                            "1" if robot else ""], Path(export))
+    def start(
+        export: Path, sliced_now: Collection[str], meshes: bool, robot: bool
+    ) -> SecondProcess | None:
+        return SecondProcess.start(
+            MODULE,
+            [
+                str(export),
+                json.dumps(sorted(sliced_now)),
+                root,
+                "1" if meshes else "",
+                "1" if robot else "",
+            ],
+            Path(export),
+        )
 
     return start
 
 
-def start_checks(root: str | Path, progress: Callable[[str], None] | None = None, *, parallel: bool = True,
-                 cache: ArtifactCache | None = None, **kw: Any) -> Checks:
-    """:meth:`bvsr_cad.checks.run.Checks.start` with the second process (``parallel``, on two cores or more)
-    and the verdicts kept in ``cache``; ``kw``: the rest of its arguments."""
-    return Checks.start(root, progress, beside=beside(cache) if parallel else None, store=verdict_store(cache), **kw)
+def start_checks(
+    root: str | Path,
+    progress: Callable[[str], None] | None = None,
+    *,
+    parallel: bool = True,
+    cache: ArtifactCache | None = None,
+    **kw: Any,
+) -> Checks:
+    """:meth:`bvsr_cad.checks.run.Checks.start` with the second process (``parallel``, on two cores
+    or more) and the verdicts kept in ``cache``; ``kw``: the rest of its arguments."""
+    return Checks.start(
+        root, progress, beside=beside(cache) if parallel else None, store=verdict_store(cache), **kw
+    )
 
 
 def finish_checks(checks: Checks, cache: ArtifactCache | None) -> list[CheckResult]:
-    """:meth:`bvsr_cad.checks.run.Checks.finish`, then the cache trimmed to its size once (after the groups'
-    small entries)."""
+    """:meth:`bvsr_cad.checks.run.Checks.finish`, then the cache trimmed to its size once (after the
+    groups' small entries)."""
     results = checks.finish()
     if cache is not None:
         cache.evict()
     return results
 
 
-def run_checks(root: str | Path, progress: Callable[[str], None] | None = None, *, run_slicer: bool = False,
-               parallel: bool = True, cache: ArtifactCache | None = None) -> list[CheckResult]:
-    """Every check on the export at ``root`` (:func:`bvsr_cad.checks.run.run_checks`); with ``parallel``
-    (and two cores) the printability checks in a second process, with ``cache`` the verdicts of groups
-    whose reads are unchanged from it."""
-    return finish_checks(start_checks(root, progress, run_slicer=run_slicer, parallel=parallel, cache=cache), cache)
+def run_checks(
+    root: str | Path,
+    progress: Callable[[str], None] | None = None,
+    *,
+    run_slicer: bool = False,
+    parallel: bool = True,
+    cache: ArtifactCache | None = None,
+) -> list[CheckResult]:
+    """Every check on the export at ``root`` (:func:`bvsr_cad.checks.run.run_checks`); with
+    ``parallel`` (and two cores) the printability checks in a second process, with ``cache`` the
+    verdicts of groups whose reads are unchanged from it."""
+    return finish_checks(
+        start_checks(root, progress, run_slicer=run_slicer, parallel=parallel, cache=cache), cache
+    )
 
 
-def _printability(root: str, sliced_now: str, cache_root: str = "", meshes: str = "", robot: str = ""
-                  ) -> dict[str, Any]:
-    """The second process's work (``python -m bvsr_cad.build._runtime.worker bvsr_cad.build._runtime.checks_process - ROOT SLICED
-    CACHE MESHES ROBOT``): :func:`bvsr_cad.checks.run.printability_groups` of the export at ``root``, the
-    verdicts kept in the artifact cache at ``cache_root`` (when given)."""
+def _printability(
+    root: str, sliced_now: str, cache_root: str = "", meshes: str = "", robot: str = ""
+) -> dict[str, Any]:
+    """The second process's work (``python -m bvsr_cad.build._runtime.worker
+    bvsr_cad.build._runtime.checks_process - ROOT SLICED CACHE MESHES ROBOT``):
+    :func:`bvsr_cad.checks.run.printability_groups` of the export at ``root``, the verdicts kept in
+    the artifact cache at ``cache_root`` (when given)."""
     exp = Export.open(root)
     store = verdict_store(ArtifactCache(Path(cache_root)) if cache_root else None)
-    return printability_groups(exp, json.loads(sliced_now), CheckMemo(exp, store), bool(meshes), bool(robot))
+    return printability_groups(
+        exp, json.loads(sliced_now), CheckMemo(exp, store), bool(meshes), bool(robot)
+    )
 
 
-#: What the printability checks' second process serves (:func:`bvsr_cad.build._runtime.worker.child_main`).
+#: What the printability checks' second process serves
+#: (:func:`bvsr_cad.build._runtime.worker.child_main`).
 SECOND_PROCESS = (_printability, None)

@@ -8,8 +8,8 @@ sweep's variants): a third of build123d's import, on the critical path of every 
 :func:`defer_sklearn_cluster` adds an import hook that acts once, on the import of ``build123d``:
 while build123d's modules run, ``sklearn.cluster`` is a stand-in whose ``DBSCAN`` loads the real
 module when called and returns the real estimator; when build123d's import ends the stand-in leaves
-``sys.modules``. So ``detect_primitives`` gets scikit-learn's own estimator, and anything that imports
-``sklearn.cluster`` (or its submodules) gets the real package, at any time.
+``sys.modules``. So ``detect_primitives`` gets scikit-learn's own estimator, and anything that
+imports ``sklearn.cluster`` (or its submodules) gets the real package, at any time.
 """
 
 from __future__ import annotations
@@ -46,7 +46,8 @@ def _dbscan(*args: Any, **kwargs: Any) -> Any:
 
 
 class _Build123dImport(importlib.abc.MetaPathFinder):
-    """Finds ``build123d`` as the other finders do, and runs its import with the stand-in in place."""
+    """Finds ``build123d`` as the other finders do, and runs its import with the stand-in in
+    place."""
 
     def find_spec(self, name: str, path: Any = None, target: Any = None) -> Any:
         if name != "build123d":
@@ -74,7 +75,8 @@ class _Build123dImport(importlib.abc.MetaPathFinder):
 
 
 def defer_sklearn_cluster() -> None:
-    """Install the hook, unless build123d or ``sklearn.cluster`` is loaded already (then nothing changes)."""
+    """Install the hook, unless build123d or ``sklearn.cluster`` is loaded already (then nothing
+    changes)."""
     if "build123d" in sys.modules or _NAME in sys.modules:
         return
     if not any(isinstance(f, _Build123dImport) for f in sys.meta_path):

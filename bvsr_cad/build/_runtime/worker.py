@@ -39,7 +39,8 @@ from typing import Any
 
 
 class WorkerLost(RuntimeError):
-    """The second process ended without a result (killed, crashed); the caller may do the work itself."""
+    """The second process ended without a result (killed, crashed); the caller may do the work
+    itself."""
 
 
 #: The parent's PID, handed to the child so that it dies with the parent (even a SIGKILLed one).
@@ -58,9 +59,12 @@ def _die_with_parent() -> None:
     try:
         import ctypes
 
-        if ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL), 0, 0, 0) != 0:  # 1 = PR_SET_PDEATHSIG
+        if (
+            ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL), 0, 0, 0) != 0
+        ):  # 1 = PR_SET_PDEATHSIG
             raise OSError("prctl failed")
     except (OSError, AttributeError):
+
         def watch() -> None:
             while os.getppid() == parent:
                 time.sleep(0.5)
@@ -71,20 +75,20 @@ def _die_with_parent() -> None:
         os._exit(1)
 
 
-#: glibc's allocator settings of a ``bvsr`` process (:func:`tune_allocator`): (mallopt parameter, value).
-#: M_MMAP_THRESHOLD (-3) 64 MiB, M_TRIM_THRESHOLD (-1) 256 MiB, M_TOP_PAD (-2) 64 MiB.
+#: glibc's allocator settings of a ``bvsr`` process (:func:`tune_allocator`): (mallopt parameter,
+#: value). M_MMAP_THRESHOLD (-3) 64 MiB, M_TRIM_THRESHOLD (-1) 256 MiB, M_TOP_PAD (-2) 64 MiB.
 ALLOCATOR_SETTINGS = ((-3, 64 << 20), (-1, 256 << 20), (-2, 64 << 20))
 
 
 def tune_allocator() -> bool:
     """Keep freed memory in the process for the next allocation instead of handing it back to the
-    kernel (glibc's ``mallopt``; elsewhere nothing changes, False). With the defaults, the many large
-    numpy temporaries of a build (meshes, pose batches) are each mapped fresh and unmapped when freed,
-    and the kernel zeroes every page again on first touch: a cold default build took 690,000-725,000
-    minor page faults and 2.9-3.1 s of system CPU in its three processes, 503,000-524,000 and 2.3-2.6 s
-    with these (three alternated runs each; peak memory of the largest process 1.24-1.25 -> 1.28-1.33 GB).
-    Called by the entry points only (the ``bvsr`` command, a second process), never by a library call
-    in someone else's process."""
+    kernel (glibc's ``mallopt``; elsewhere nothing changes, False). With the defaults, the many
+    large numpy temporaries of a build (meshes, pose batches) are each mapped fresh and unmapped
+    when freed, and the kernel zeroes every page again on first touch: a cold default build took
+    690,000-725,000 minor page faults and 2.9-3.1 s of system CPU in its three processes,
+    503,000-524,000 and 2.3-2.6 s with these (three alternated runs each; peak memory of the largest
+    process 1.24-1.25 -> 1.28-1.33 GB). Called by the entry points only (the ``bvsr`` command, a
+    second process), never by a library call in someone else's process."""
     try:
         import ctypes
 
@@ -95,12 +99,12 @@ def tune_allocator() -> bool:
 
 
 def no_mujoco_rendering() -> None:
-    """MuJoCo's OpenGL contexts off (``MUJOCO_GL=disable``) unless the environment names one: nothing of
-    bvsr_cad draws through MuJoCo (its pictures are pyvista's), and ``import mujoco`` otherwise loads
-    GLFW, whose Python binding starts a Python interpreter to read the library's version (0.1 s and 0.1
-    CPU s in each process that imports MuJoCo, three in a build: ``import mujoco`` takes 0.29 s
-    instead of 0.38). Called by the entry points only (the ``bvsr`` command, a second process, which inherits
-    it), as :func:`tune_allocator`."""
+    """MuJoCo's OpenGL contexts off (``MUJOCO_GL=disable``) unless the environment names one:
+    nothing of bvsr_cad draws through MuJoCo (its pictures are pyvista's), and ``import mujoco``
+    otherwise loads GLFW, whose Python binding starts a Python interpreter to read the library's
+    version (0.1 s and 0.1 CPU s in each process that imports MuJoCo, three in a build: ``import
+    mujoco`` takes 0.29 s instead of 0.38). Called by the entry points only (the ``bvsr`` command, a
+    second process, which inherits it), as :func:`tune_allocator`."""
     os.environ.setdefault("MUJOCO_GL", "disable")
 
 
@@ -109,13 +113,13 @@ BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_TH
 
 
 def one_blas_thread() -> None:
-    """numpy's and scipy's OpenBLAS on one thread (``OPENBLAS_NUM_THREADS=1``) unless the environment
-    sets a number OpenBLAS reads (:data:`BLAS_THREAD_VARIABLES`); before they are imported. A build
-    keeps both cores busy with its own processes: OpenBLAS's second thread only takes CPU from them
-    (cold default builds run two at a time, same machine phase: 71.3 and 80.1 CPU s against 73.0 and
-    81.0 with OpenBLAS's default of one thread per core) and the export is the same (every file, the
-    manifest's volatile section aside). Called by the entry points only (the ``bvsr`` command, a second
-    process, which inherits it), as :func:`tune_allocator`."""
+    """numpy's and scipy's OpenBLAS on one thread (``OPENBLAS_NUM_THREADS=1``) unless the
+    environment sets a number OpenBLAS reads (:data:`BLAS_THREAD_VARIABLES`); before they are
+    imported. A build keeps both cores busy with its own processes: OpenBLAS's second thread only
+    takes CPU from them (cold default builds run two at a time, same machine phase: 71.3 and 80.1
+    CPU s against 73.0 and 81.0 with OpenBLAS's default of one thread per core) and the export is
+    the same (every file, the manifest's volatile section aside). Called by the entry points only
+    (the ``bvsr`` command, a second process, which inherits it), as :func:`tune_allocator`."""
     if not any(os.environ.get(name) for name in BLAS_THREAD_VARIABLES):
         os.environ["OPENBLAS_NUM_THREADS"] = "1"
 
@@ -126,14 +130,17 @@ STANDBY = "--standby"
 
 @contextmanager
 def interrupts_held() -> Iterator[None]:
-    """Ctrl-C (SIGINT) held back while the block runs and raised as KeyboardInterrupt when it ends: for
-    imports of the libraries. trimesh's optional imports catch ``BaseException``, so an interrupt that
-    lands in one is swallowed (measured: Ctrl-C 0.6 s into ``bvsr build``, during the pipeline's imports,
-    and the build ran on to the end), and pybind11 turns one into OCP's ``ImportError: initialization
-    failed``. An interrupt that came wins over an error the block raised. Off the main thread, or where
-    SIGINT is not Python's own handler (ignored, or the caller's), the block runs as it is."""
-    if threading.current_thread() is not threading.main_thread() or \
-            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+    """Ctrl-C (SIGINT) held back while the block runs and raised as KeyboardInterrupt when it ends:
+    for imports of the libraries. trimesh's optional imports catch ``BaseException``, so an
+    interrupt that lands in one is swallowed (measured: Ctrl-C 0.6 s into ``bvsr build``, during the
+    pipeline's imports, and the build ran on to the end), and pybind11 turns one into OCP's
+    ``ImportError: initialization failed``. An interrupt that came wins over an error the block
+    raised. Off the main thread, or where SIGINT is not Python's own handler (ignored, or the
+    caller's), the block runs as it is."""
+    if (
+        threading.current_thread() is not threading.main_thread()
+        or signal.getsignal(signal.SIGINT) is not signal.default_int_handler
+    ):
         yield
         return
     came: list[int] = []
@@ -142,34 +149,37 @@ def interrupts_held() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGINT, signal.default_int_handler)
-        if came:  # before any error the block raised (the user asked to stop): that one is its context
+        if (
+            came
+        ):  # before any error the block raised (the user asked to stop): that one is its context
             raise KeyboardInterrupt
 
 
-#: Entry points (:func:`tune_collector`) freeze what the libraries' imports made (:func:`library_imports`).
+#: Entry points (:func:`tune_collector`) freeze what the libraries' imports made
+#: (:func:`library_imports`).
 _FREEZE_IMPORTS = False
 
 
 def tune_collector() -> None:
     """This process's libraries, once :func:`library_imports` has imported them, are frozen out of
-    Python's cyclic garbage collector (``gc.freeze``: a full collection no longer walks their million
-    objects). The collector's CPU in a cold default build, by process (build, analyses, checks): 0.99,
-    0.56, 0.10 s without, 0.19, 0.07, 0.01 s with the imports paused and frozen. Called by the entry points
-    only (the ``bvsr`` command, a second process), as :func:`tune_allocator`: frozen objects are never
-    freed (what the imports left in cycles stays until the process ends), which a library call in
-    someone else's process must not decide."""
+    Python's cyclic garbage collector (``gc.freeze``: a full collection no longer walks their
+    million objects). The collector's CPU in a cold default build, by process (build, analyses,
+    checks): 0.99, 0.56, 0.10 s without, 0.19, 0.07, 0.01 s with the imports paused and frozen.
+    Called by the entry points only (the ``bvsr`` command, a second process), as
+    :func:`tune_allocator`: frozen objects are never freed (what the imports left in cycles stays
+    until the process ends), which a library call in someone else's process must not decide."""
     global _FREEZE_IMPORTS
     _FREEZE_IMPORTS = True
 
 
 @contextmanager
 def library_imports() -> Iterator[None]:
-    """The block that imports the libraries (the CAD kernel, MuJoCo, scipy, trimesh, ...): Ctrl-C held
-    back (:func:`interrupts_held`) and Python's cyclic garbage collector paused. Imports make about a
-    million objects and almost no garbage, yet the collector would run some 640 times over them in each
-    process, 0.4-0.5 CPU s (measured on the pipeline's and the analyses' imports). It resumes when the
-    block ends, if it ran before; in an entry point's process (:func:`tune_collector`) what the block
-    imported is frozen first."""
+    """The block that imports the libraries (the CAD kernel, MuJoCo, scipy, trimesh, ...): Ctrl-C
+    held back (:func:`interrupts_held`) and Python's cyclic garbage collector paused. Imports make
+    about a million objects and almost no garbage, yet the collector would run some 640 times over
+    them in each process, 0.4-0.5 CPU s (measured on the pipeline's and the analyses' imports). It
+    resumes when the block ends, if it ran before; in an entry point's process
+    (:func:`tune_collector`) what the block imported is frozen first."""
     was = gc.isenabled()
     gc.disable()
     try:
@@ -185,9 +195,10 @@ def library_imports() -> Iterator[None]:
 def tune_process() -> None:
     """What a ``bvsr`` process sets at its start, before its imports: :func:`tune_allocator`,
     :func:`tune_collector`, :func:`no_mujoco_rendering`, :func:`one_blas_thread` and scikit-learn's
-    clustering loaded when used (:func:`bvsr_cad.build._runtime.deferred.defer_sklearn_cluster`). Called by the entry
-    points only (the command, a second process, the rebuild benchmark's own process), in one place so
-    that they stay alike: ``import bvsr_cad`` changes nothing in the importing process."""
+    clustering loaded when used (:func:`bvsr_cad.build._runtime.deferred.defer_sklearn_cluster`).
+    Called by the entry points only (the command, a second process, the rebuild benchmark's own
+    process), in one place so that they stay alike: ``import bvsr_cad`` changes nothing in the
+    importing process."""
     from .deferred import defer_sklearn_cluster
 
     tune_allocator()
@@ -198,10 +209,11 @@ def tune_process() -> None:
 
 
 def child_main(argv: list[str]) -> int:
-    """A child's entry, ``python -m bvsr_cad.build._runtime.worker MODULE OUT ARGS...``: it dies with its parent from the
-    start, imports MODULE in :func:`library_imports` (Ctrl-C held: an interrupt during the imports ends it
-    quietly with 130, its parent reports it; the collector paused, then what was imported frozen) and
-    serves the module's ``SECOND_PROCESS``, ``(fn, prepare)`` (see :func:`serve`)."""
+    """A child's entry, ``python -m bvsr_cad.build._runtime.worker MODULE OUT ARGS...``: it dies
+    with its parent from the start, imports MODULE in :func:`library_imports` (Ctrl-C held: an
+    interrupt during the imports ends it quietly with 130, its parent reports it; the collector
+    paused, then what was imported frozen) and serves the module's ``SECOND_PROCESS``, ``(fn,
+    prepare)`` (see :func:`serve`)."""
     _die_with_parent()
     tune_process()
     module, out, *args = argv
@@ -213,18 +225,22 @@ def child_main(argv: list[str]) -> int:
     return serve(out, fn, *args, prepare=prepare)
 
 
-def serve(_out: str, fn: Callable[..., Any], *args: Any, prepare: Callable[..., None] | None = None) -> int:
-    """Run ``fn(*args)``, pickle its result, or its exception, onto stdout and end the process at once
-    (the child's side; nothing after it runs).
+def serve(
+    _out: str, fn: Callable[..., Any], *args: Any, prepare: Callable[..., None] | None = None
+) -> int:
+    """Run ``fn(*args)``, pickle its result, or its exception, onto stdout and end the process at
+    once (the child's side; nothing after it runs).
 
-    ``_out`` is the placeholder argument the parent passes (``-``), or :data:`STANDBY`: then the child,
-    its modules imported, waits for one JSON line on stdin, ``{"args": [...], "cwd": ...}``, and exits
-    quietly at end of input (the parent did not need it). A standby child's own ``args`` are its hint
-    (what the parent expects to ask of it): ``prepare(*args)`` runs first, while the parent is still
-    deciding (a head start it may waste: the parent stops a child it gives no work)."""
+    ``_out`` is the placeholder argument the parent passes (``-``), or :data:`STANDBY`: then the
+    child, its modules imported, waits for one JSON line on stdin, ``{"args": [...], "cwd": ...}``,
+    and exits quietly at end of input (the parent did not need it). A standby child's own ``args``
+    are its hint (what the parent expects to ask of it): ``prepare(*args)`` runs first, while the
+    parent is still deciding (a head start it may waste: the parent stops a child it gives no
+    work)."""
     if _out == STANDBY:
-        # Ctrl-C reaches this child too (it shares the terminal's process group) while it waits: the parent
-        # reports the interrupt; the child leaves quietly, without a traceback among the parent's lines.
+        # Ctrl-C reaches this child too (it shares the terminal's process group) while it waits: the
+        # parent reports the interrupt; the child leaves quietly, without a traceback among the
+        # parent's lines.
         try:
             if prepare is not None and args:
                 try:
@@ -250,7 +266,9 @@ def serve(_out: str, fn: Callable[..., Any], *args: Any, prepare: Callable[..., 
         data = pickle.dumps((*payload, cpu_seconds()))
         pickle.loads(data)  # an exception class with its own __init__ may not come back
     except Exception:  # an exception or a result that does not pickle
-        data = pickle.dumps(("error", RuntimeError(f"second process failed: {payload[1]}"), cpu_seconds()))
+        data = pickle.dumps(
+            ("error", RuntimeError(f"second process failed: {payload[1]}"), cpu_seconds())
+        )
     with os.fdopen(result_fd, "wb") as out:
         out.write(data)
     # Its work is handed over: leave without the interpreter's teardown, which frees every object of
@@ -266,25 +284,34 @@ def cpu_seconds() -> float:
     return t.user + t.system
 
 
-#: Environment variables that name a folder, taken from where the user stands: a child works elsewhere.
+#: Environment variables that name a folder, taken from where the user stands: a child works
+#: elsewhere.
 PATH_VARIABLES = ("BVSR_CACHE",)
 
 
 def child_env() -> dict[str, str]:
     """The environment of a child started as ``python -m bvsr_cad...``: it imports the bvsr_cad this
-    process runs, knows its parent's PID (so that it dies with it: :func:`child_main`) and is given the
-    folders of :data:`PATH_VARIABLES` as absolute paths (it starts in another working folder)."""
+    process runs, knows its parent's PID (so that it dies with it: :func:`child_main`) and is given
+    the folders of :data:`PATH_VARIABLES` as absolute paths (it starts in another working
+    folder)."""
     package_root = str(Path(__file__).resolve().parents[3])  # bvsr_cad/build/_runtime/worker.py
     folders = {k: str(Path(os.environ[k]).absolute()) for k in PATH_VARIABLES if os.environ.get(k)}
-    return {**os.environ, **folders, PARENT_PID_ENV: str(os.getpid()), "PYTHONPATH": os.pathsep.join(
-        [package_root] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])}
+    return {
+        **os.environ,
+        **folders,
+        PARENT_PID_ENV: str(os.getpid()),
+        "PYTHONPATH": os.pathsep.join(
+            [package_root] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
+        ),
+    }
 
 
 class SecondProcess:
     def __init__(self, proc: subprocess.Popen):
         self.proc: subprocess.Popen | None = proc
         self.t0 = time.perf_counter()
-        #: The CPU seconds the child used, once :meth:`result` has its answer (None before, or when it was lost).
+        #: The CPU seconds the child used, once :meth:`result` has its answer (None before, or when
+        #: it was lost).
         self.cpu_s: float | None = None
         self._chunks: list[bytes] = []
         self._reader = threading.Thread(target=self._read, daemon=True)
@@ -296,20 +323,40 @@ class SecondProcess:
             self._chunks.append(chunk)
 
     @classmethod
-    def start(cls, module: str, args: list[str], cwd: Path,
-              progress: Callable[[str], None] | None = None, standby: bool = False) -> "SecondProcess | None":
-        """``python -m bvsr_cad.build._runtime.worker module - *args`` (:func:`child_main`) in ``cwd``; each line of its
-        stderr goes to ``progress`` (from a reader thread) or, without it, nowhere. ``standby``: see :meth:`standby`."""
+    def start(
+        cls,
+        module: str,
+        args: list[str],
+        cwd: Path,
+        progress: Callable[[str], None] | None = None,
+        standby: bool = False,
+    ) -> SecondProcess | None:
+        """``python -m bvsr_cad.build._runtime.worker module - *args`` (:func:`child_main`) in
+        ``cwd``; each line of its stderr goes to ``progress`` (from a reader thread) or, without it,
+        nowhere. ``standby``: see :meth:`standby`."""
         if (os.cpu_count() or 1) < 2:
             return None
         try:
-            cmd = [sys.executable, "-m", "bvsr_cad.build._runtime.worker", module, STANDBY if standby else "-", *args]
-            proc = subprocess.Popen(cmd, cwd=cwd, env=child_env(),
-                                    stdin=subprocess.PIPE if standby else subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                    stderr=subprocess.DEVNULL if progress is None else subprocess.PIPE)
+            cmd = [
+                sys.executable,
+                "-m",
+                "bvsr_cad.build._runtime.worker",
+                module,
+                STANDBY if standby else "-",
+                *args,
+            ]
+            proc = subprocess.Popen(
+                cmd,
+                cwd=cwd,
+                env=child_env(),
+                stdin=subprocess.PIPE if standby else subprocess.DEVNULL,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.DEVNULL if progress is None else subprocess.PIPE,
+            )
         except OSError:
             return None
         if progress is not None:
+
             def relay() -> None:
                 for raw in proc.stderr:
                     line = raw.decode("utf-8", "replace").rstrip()
@@ -320,23 +367,32 @@ class SecondProcess:
         return cls(proc)
 
     @classmethod
-    def standby(cls, module: str, progress: Callable[[str], None] | None = None,
-                hint: list[str] | None = None) -> "SecondProcess | None":
-        """``python -m bvsr_cad.build._runtime.worker module --standby [HINT...]``: a child that imports its modules now, while this
-        process imports its own, prepares what ``hint`` lets it (see :func:`serve`) and waits for its work
-        (:meth:`begin`); ``None`` where :meth:`start` would give none. A child never given work exits when
-        it is :meth:`close`\\ d."""
+    def standby(
+        cls,
+        module: str,
+        progress: Callable[[str], None] | None = None,
+        hint: list[str] | None = None,
+    ) -> SecondProcess | None:
+        """``python -m bvsr_cad.build._runtime.worker module --standby [HINT...]``: a child that
+        imports its modules now, while this process imports its own, prepares what ``hint`` lets it
+        (see :func:`serve`) and waits for its work (:meth:`begin`); ``None`` where :meth:`start`
+        would give none. A child never given work exits when it is :meth:`close`\\ d."""
         # It starts in the temporary folder (the caller's working folder may be gone) and moves into
         # the one :meth:`begin` names.
-        return cls.start(module, list(hint or []), Path(tempfile.gettempdir()), progress, standby=True)
+        return cls.start(
+            module, list(hint or []), Path(tempfile.gettempdir()), progress, standby=True
+        )
 
     def begin(self, args: list[str], cwd: Path) -> bool:
-        """Hand a standby child its arguments and working folder; False if it is gone (then start another).
-        A relative ``cwd`` is this process's (the child started elsewhere: :meth:`standby`)."""
+        """Hand a standby child its arguments and working folder; False if it is gone (then start
+        another). A relative ``cwd`` is this process's (the child started elsewhere:
+        :meth:`standby`)."""
         if not self.running or self.proc is None or self.proc.stdin is None:
             return False
         try:
-            self.proc.stdin.write((json.dumps({"args": list(args), "cwd": str(Path(cwd).resolve())}) + "\n").encode())
+            self.proc.stdin.write(
+                (json.dumps({"args": list(args), "cwd": str(Path(cwd).resolve())}) + "\n").encode()
+            )
             self.proc.stdin.close()
         except OSError:
             return False
@@ -363,7 +419,9 @@ class SecondProcess:
         try:
             status, payload, self.cpu_s = pickle.loads(b"".join(self._chunks))
         except (EOFError, pickle.UnpicklingError) as exc:
-            raise WorkerLost(f"the second process ended (exit code {code}) without a result") from exc
+            raise WorkerLost(
+                f"the second process ended (exit code {code}) without a result"
+            ) from exc
         finally:
             self.close()
         if status == "error":
@@ -384,8 +442,11 @@ class SecondProcess:
             self.proc = None
 
 
-def result_or(proc: SecondProcess | None, here: Callable[[], Any], say: Callable[[str], None], what: str) -> Any:
-    """The second process's result, or ``here()`` run in this process when there is none or it was lost."""
+def result_or(
+    proc: SecondProcess | None, here: Callable[[], Any], say: Callable[[str], None], what: str
+) -> Any:
+    """The second process's result, or ``here()`` run in this process when there is none or it was
+    lost."""
     if proc is None:
         say(what)
         return here()
@@ -401,6 +462,8 @@ def result_or(proc: SecondProcess | None, here: Callable[[], Any], say: Callable
 
 
 if __name__ == "__main__":
-    from bvsr_cad.build._runtime.worker import child_main as _child_main  # the module by its real name, not __main__
+    from bvsr_cad.build._runtime.worker import (
+        child_main as _child_main,
+    )  # the module by its real name, not __main__
 
     sys.exit(_child_main(sys.argv[1:]))

@@ -368,7 +368,8 @@ source install/setup.bash
 ros2 launch {package} display.launch.py
 ```
 
-RViz shows the tail with `robot_state_publisher`; move the joints with the
-`joint_state_publisher_gui` sliders (mimic joints follow their leaders). Regenerate the package with
-bvsr_cad rather than editing it.
+RViz shows the tail with `robot_state_publisher`; move the joints with the \
+`joint_state_publisher_gui`
+sliders (mimic joints follow their leaders). Regenerate the package with bvsr_cad rather than \
+editing it.
 """

@@ -732,7 +732,7 @@ def _problems_at_tip(spec: TailSpec, beta: float) -> list[LayoutProblem]:
 
 def _any_problem(spec: TailSpec, beta: float, first: tuple[int, ...] = ()) -> bool:
     """Some rule of :func:`_problems_at` is broken (it stops at the first rule broken, trying the
-    panels ``first``, then the bellows at the tip (5 ms), then the other panels)."""
+    panels ``first``, then the bellows at the tip, then the other panels)."""
     hot = [k for k in first if k < spec.panels]
     others = [k for k in range(spec.panels) if k not in first]
     return (
@@ -745,8 +745,8 @@ def _any_problem(spec: TailSpec, beta: float, first: tuple[int, ...] = ()) -> bo
 @lru_cache(maxsize=64)
 def max_feasible_taper_deg(spec: TailSpec) -> float:
     """Largest cone half-angle for which every panel keeps its webs (found by bisection over the
-    same rules the validation applies; a cone that breaks one is left at the first it breaks: 0.12
-    CPU s for the default tail instead of 0.21, the same angle)."""
+    same rules the validation applies; a cone that breaks one is left at the first it breaks: the
+    bisection needs only whether some rule breaks, not which)."""
     if _problems_at(spec, 0.0):
         return 0.0
     lo, hi = 0.0, math.radians(10.0)
@@ -1057,8 +1057,9 @@ def _panels_text(indices: list[int]) -> str:
 
 
 #: Candidate tails :func:`panel_rule_messages` judges, at most, before it stops looking for the next
-#: key's allowed values (a few ms each): a file whose rim cut through every feature named 18 keys,
-#: each of which alone could not mend it, and took 16-39 s to refuse, over the 10 s a load may take.
+#: key's allowed values: a file whose rim cuts through every feature names many keys, none of which
+#: alone can mend it, and without a bound its refusal waits for every key's whole search, past the
+#: 10 s a load may take (tests/test_feasibility.py).
 ALLOWED_SEARCH_BUDGET = 1200
 #: Candidates judged for one key before its first feasible value, at most: the search's values
 #: nearest the file's (1.6 % steps) from 0.27 to 3.7 times it, a new user's edit either way (a key

@@ -18,7 +18,7 @@ def write_analysis_pictures(res: AnalysisResults, root: Path, name: str) -> None
     that function's time, so the build's analyses' process draws them once its analyses are done,
     beside the build's own stages (:mod:`bvsr_cad.build._runtime.analyses_process`). Matplotlib is
     imported here, not with this module: the build's own process, which writes the analyses' files,
-    then imports it only when it draws them itself (``python -X importtime``: about 0.5 s of the
+    then imports it only when it draws them itself (matplotlib's import is a large part of the
     build's imports)."""
     from .plots import plot_clearance_map, plot_measurements, plot_workspace
 

@@ -32,9 +32,8 @@ HOW_TO_START = (
 
 
 #: Tessellation of a quick look: ocp_vscode's deviation (relative to each object's size; its default
-#: 0.1) and angular tolerance (rad; its default 0.2), as coarse as the report's view (0.6 rad). The
-#: default tail sent from fresh copies of its parts: 0.85-1.1 s against 2.0-2.2 s at the viewer's
-#: defaults (measured, one send per process, on two shared cores).
+#: 0.1) and angular tolerance (rad; its default 0.2), as coarse as the report's view (0.6 rad): a
+#: quick look is waited for after every save, and tessellation is most of a send's time.
 COARSE = {"deviation": 0.5, "angular_tolerance": 0.6}
 
 

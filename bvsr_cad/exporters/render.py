@@ -17,7 +17,7 @@ from ..parts._kernel import fresh_copy, mesh_arrays
 
 def offscreen_pyvista():
     """pyvista, set to draw off-screen (no display needed). VTK's logger comes from its own module:
-    ``import vtk`` loads every VTK module, 0.4-0.5 CPU s more than pyvista's own (measured)."""
+    ``import vtk`` loads every VTK module, far more than pyvista's own."""
     os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
     import pyvista as pv
     from vtkmodules.vtkCommonCore import vtkLogger
@@ -32,8 +32,8 @@ def offscreen_pyvista():
 @contextmanager
 def composing(plotter) -> Iterator[None]:
     """Set up a scene without drawing it: once a plotter has drawn a frame, pyvista draws another at
-    every actor added and every camera move (five frames per picture of the report's parts, 36 ms
-    each in software OpenGL), and its screenshot reads the last frame drawn. The block ends with the
+    every actor added and every camera move (several frames per picture, each in software OpenGL
+    without a display), and its screenshot reads the last frame drawn. The block ends with the
     one frame the picture needs (before a plotter's first frame pyvista draws nothing, and its
     screenshot draws)."""
     plotter.suppress_rendering = True

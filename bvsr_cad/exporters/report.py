@@ -137,8 +137,8 @@ def _render_parts(root: Path, items: list[tuple[str, str, str]], dst: Path) -> d
     plotter = pv.Plotter(off_screen=True, window_size=(360, 300))
     for name, rel, kind in items:
         # As read (process=False): merging the STL's repeated corners changes no pixel of a
-        # flat-shaded picture (every PNG of the default build compared byte for byte) and cost 0.6
-        # CPU s.
+        # flat-shaded picture (every PNG of the default build compared byte for byte), so it is
+        # work for nothing.
         mesh = trimesh.load(root / rel, file_type="stl", force="mesh", process=False)
         with composing(plotter):
             plotter.clear()

@@ -50,7 +50,19 @@ def write_robot(
     write_urdf(robot, folder / f"{name}.urdf", mesh_files)
     progress("ROS 2 description package")
     ros2 = write_ros2_package(folder / f"{name}.urdf", folder / "meshes", folder / "ros2", name)
-    act = robot.actuation
+    facts = _write_mjcf_models(robot, folder, mesh_files)
+    error_mm = chain_errors_mm(robot)
+    if cart is not None:
+        write_mjcf(folder / "scene_cart.xml", cart_scene_tree(robot, mesh_files, cart))
+    return {"robot": _robot_section(robot, mesh_files, ros2, facts, error_mm, cart is not None)}
+
+
+def _write_mjcf_models(
+    robot: RobotModel, folder: Path, mesh_files: dict[str, str]
+) -> dict[str, dict[str, Any]]:
+    """Write the three MJCF models (reduced chain, reduced chain per segment, exact chain), each
+    with the scene that includes it; returns each model's facts (:func:`mjcf_tree`) by file stem."""
+    name = robot.name
     facts = {}
     for per_segment, stem, scene, chain in (
         (False, name, "scene.xml", "reduced"),
@@ -60,107 +72,128 @@ def write_robot(
         tree, facts[stem] = mjcf_tree(robot, mesh_files, per_segment, chain=chain)
         write_mjcf(folder / f"{stem}.xml", tree)
         write_mjcf(folder / scene, scene_tree(f"{stem}.xml", stem))
-    error_mm = chain_errors_mm(robot)
-    if cart is not None:
-        write_mjcf(folder / "scene_cart.xml", cart_scene_tree(robot, mesh_files, cart))
+    return facts
+
+
+def _robot_section(
+    robot: RobotModel,
+    mesh_files: dict[str, str],
+    ros2: dict[str, Any],
+    facts: dict[str, dict[str, Any]],
+    error_mm: dict[str, float],
+    has_cart: bool,
+) -> dict[str, Any]:
+    """The manifest's ``robot`` section: the files written, each chain's accuracy, the actuation
+    and the links."""
+    name = robot.name
+    act = robot.actuation
     urdf_chord_err = max(
         float(-chord_joint_value(b.theta_max_rad, b.arc_length_m)) for b in robot.bending
     )
-    links = []
-    for link in robot.links.values():
-        I = link.inertial.inertia
-        links.append(
-            {
-                "name": link.name,
-                "role": link.role,
-                "mass_kg": link.inertial.mass_kg,
-                "com_m": list(link.inertial.com_m),
-                "inertia_kg_m2": I.tolist(),
-                "visuals": [
-                    {
-                        "mesh": f"robot/meshes/{mesh_files[v.name]}",
-                        "material": v.material,
-                        "density_g_cm3": v.density_g_cm3,
-                    }
-                    for v in link.visuals
-                ],
-            }
-        )
     return {
-        "robot": {
-            "urdf": f"robot/{name}.urdf",
-            "mjcf": "robot/scene.xml",
-            "mjcf_model": f"robot/{name}.xml",
-            "ros2_package": {
-                "path": f"robot/ros2/{ros2['name']}",
-                "urdf": ros2["urdf"],
-                "meshes": ros2["meshes"],
-            },
-            "mjcf_per_segment": "robot/scene_segments.xml",
-            "mjcf_exact": "robot/scene_exact.xml",
-            "mjcf_exact_model": f"robot/{name}_exact.xml",
-            # Each model file's chain, its step and its tip's largest distance from Eq 2 over the
-            # joint range; a reduced chain's bend limit (a polygon of fixed tendons, its largest
-            # overshoot past theta_max).
-            "chains": {
-                f"robot/{name}.urdf": {"chain": "exact", "tip_error_vs_eq2_mm": error_mm["exact"]},
-                **{
-                    f"robot/{stem}.xml": {
-                        "chain": f["chain"],
-                        "timestep_s": f["timestep_s"],
-                        "tip_error_vs_eq2_mm": error_mm[f["chain"]],
-                        **({"bend_limit": f["bend_limit"]} if f["bend_limit"] else {}),
-                    }
-                    for stem, f in facts.items()
-                },
-            },
-            "mjcf_cart": None if cart is None else "robot/scene_cart.xml",
-            "mjcf_per_segment_model": f"robot/{name}_segments.xml",
-            "units": "SI (m, kg, s, rad); actuator control: commanded gauge pressure in Pa (the "
-            "chamber "
-            "pressure lags it by supply_lag_s)",
-            "supply_lag_s": robot.supply_lag_s,
-            "mass_kg": robot.mass_kg,
-            "virtual_link_mass_kg": sum(
-                l.inertial.mass_kg for l in robot.links.values() if l.virtual
-            ),
-            "bending_joints": [
+        "urdf": f"robot/{name}.urdf",
+        "mjcf": "robot/scene.xml",
+        "mjcf_model": f"robot/{name}.xml",
+        "ros2_package": {
+            "path": f"robot/ros2/{ros2['name']}",
+            "urdf": ros2["urdf"],
+            "meshes": ros2["meshes"],
+        },
+        "mjcf_per_segment": "robot/scene_segments.xml",
+        "mjcf_exact": "robot/scene_exact.xml",
+        "mjcf_exact_model": f"robot/{name}_exact.xml",
+        "chains": _chain_entries(name, facts, error_mm),
+        "mjcf_cart": "robot/scene_cart.xml" if has_cart else None,
+        "mjcf_per_segment_model": f"robot/{name}_segments.xml",
+        "units": "SI (m, kg, s, rad); actuator control: commanded gauge pressure in Pa (the "
+        "chamber "
+        "pressure lags it by supply_lag_s)",
+        "supply_lag_s": robot.supply_lag_s,
+        "mass_kg": robot.mass_kg,
+        "virtual_link_mass_kg": sum(l.inertial.mass_kg for l in robot.links.values() if l.virtual),
+        "bending_joints": _bending_entries(robot),
+        "joint_limits": {
+            j.name: {
+                "lower": j.lower,
+                "upper": j.upper,
+                "velocity": j.velocity,
+                "effort": j.effort,
+            }
+            for j in robot.joints
+        },
+        "urdf_chord_max_error_m": urdf_chord_err,
+        "mjcf_chord_polynomial_max_error_m": max(
+            f["chord_polynomial_max_error_m"] for f in facts.values()
+        ),
+        "mjcf_actuators": {stem: f["actuators"] for stem, f in facts.items()},
+        "rod_bending_stiffness_nm_rad": act.rod_bending_stiffness_nm_rad,
+        "half_angle_hinge_stiffness_nm_rad": 2 * act.rod_bending_stiffness_nm_rad,
+        "links": _link_entries(robot, mesh_files),
+        "soa_actuators": [
+            {"name": s.name, "line": s.line, "rest_length_m": s.rest_length_m} for s in robot.soas
+        ],
+    }
+
+
+def _chain_entries(
+    name: str, facts: dict[str, dict[str, Any]], error_mm: dict[str, float]
+) -> dict[str, dict[str, Any]]:
+    """Each model file's chain, its step and its tip's largest distance from Eq 2 over the joint
+    range; a reduced chain's bend limit (a polygon of fixed tendons, its largest overshoot past
+    theta_max)."""
+    return {
+        f"robot/{name}.urdf": {"chain": "exact", "tip_error_vs_eq2_mm": error_mm["exact"]},
+        **{
+            f"robot/{stem}.xml": {
+                "chain": f["chain"],
+                "timestep_s": f["timestep_s"],
+                "tip_error_vs_eq2_mm": error_mm[f["chain"]],
+                **({"bend_limit": f["bend_limit"]} if f["bend_limit"] else {}),
+            }
+            for stem, f in facts.items()
+        },
+    }
+
+
+def _bending_entries(robot: RobotModel) -> list[dict[str, Any]]:
+    """The manifest's bending joints: each one's arc, the URDF joints that make it, its links and
+    how its chord joint's value reads."""
+    return [
+        {
+            "name": b.name,
+            "arc_length_m": b.arc_length_m,
+            "urdf_joints": list(b.urdf_joints),
+            "base_link": b.base_link,
+            "tip_link": b.tip_link,
+            "theta_max_rad": b.theta_max_rad,
+            "segment": b.segment,
+            "chord_joint": "value = chord - L (0 at rest); "
+            "bvsr_cad.assembly.robot.chord_joint_value(theta, L)",
+        }
+        for b in robot.bending
+    ]
+
+
+def _link_entries(robot: RobotModel, mesh_files: dict[str, str]) -> list[dict[str, Any]]:
+    """The manifest's links: each one's mass, centre of mass, inertia and visual meshes."""
+    return [
+        {
+            "name": link.name,
+            "role": link.role,
+            "mass_kg": link.inertial.mass_kg,
+            "com_m": list(link.inertial.com_m),
+            "inertia_kg_m2": link.inertial.inertia.tolist(),
+            "visuals": [
                 {
-                    "name": b.name,
-                    "arc_length_m": b.arc_length_m,
-                    "urdf_joints": list(b.urdf_joints),
-                    "base_link": b.base_link,
-                    "tip_link": b.tip_link,
-                    "theta_max_rad": b.theta_max_rad,
-                    "segment": b.segment,
-                    "chord_joint": "value = chord - L (0 at rest); "
-                    "bvsr_cad.assembly.robot.chord_joint_value(theta, L)",
+                    "mesh": f"robot/meshes/{mesh_files[v.name]}",
+                    "material": v.material,
+                    "density_g_cm3": v.density_g_cm3,
                 }
-                for b in robot.bending
-            ],
-            "joint_limits": {
-                j.name: {
-                    "lower": j.lower,
-                    "upper": j.upper,
-                    "velocity": j.velocity,
-                    "effort": j.effort,
-                }
-                for j in robot.joints
-            },
-            "urdf_chord_max_error_m": urdf_chord_err,
-            "mjcf_chord_polynomial_max_error_m": max(
-                f["chord_polynomial_max_error_m"] for f in facts.values()
-            ),
-            "mjcf_actuators": {stem: f["actuators"] for stem, f in facts.items()},
-            "rod_bending_stiffness_nm_rad": act.rod_bending_stiffness_nm_rad,
-            "half_angle_hinge_stiffness_nm_rad": 2 * act.rod_bending_stiffness_nm_rad,
-            "links": links,
-            "soa_actuators": [
-                {"name": s.name, "line": s.line, "rest_length_m": s.rest_length_m}
-                for s in robot.soas
+                for v in link.visuals
             ],
         }
-    }
+        for link in robot.links.values()
+    ]
 
 
 def chain_errors_mm(robot: RobotModel) -> dict[str, float]:

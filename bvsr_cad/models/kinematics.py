@@ -64,8 +64,8 @@ def _series_coefficients_one(t: float) -> tuple[float, float, float, float]:
     for an array of one: the same operations in the same order on Python floats, with numpy's sin,
     cos and power (the loops an array of one runs through) and ``t * t`` where numpy squares
     (tests/test_kinematics.py compares the two bit for bit). A joint's dynamics and statics ask for
-    one angle at a time (about 21,000 calls in a default build's analyses): the array path's 25
-    numpy calls took 32 us a call."""
+    one angle at a time, many thousands of times in a build's analyses, where the array path's
+    numpy calls cost far more than the arithmetic of one angle."""
     t2 = t * t
     if t < SERIES_BELOW_RAD:
         t6 = float(np.power(t2, 3.0))
@@ -289,8 +289,8 @@ def socket_lengths_and_jacobian(
     """Eq 1 and its derivative for socket centres ``base``/``moving`` (..., 5, 3), broadcast against
     the bending vectors (u, v) (...,): (l (..., 5), dl/dw (..., 5, 2)), in the sockets' length unit.
 
-    One bending vector (0-d ``u`` and ``v``: a joint's dynamics and statics, about 10,000 calls in a
-    default build's analyses) takes :func:`_one_twist_sockets`: the same quantities from Eq 2's
+    One bending vector (0-d ``u`` and ``v``: a joint's dynamics and statics, many thousands of calls
+    in a build's analyses) takes :func:`_one_twist_sockets`: the same quantities from Eq 2's
     entries in closed form, to rounding (tests/test_kinematics.py compares the two)."""
     if np.ndim(u) == 0 and np.ndim(v) == 0:
         return _one_twist_sockets(
@@ -313,8 +313,8 @@ def _one_twist_sockets(
     entry by entry (Omega = hat(-v, u, 0), Omega^2 = -[[uu, uv, 0], [uv, vv, 0], [0, 0, uu + vv]]
     and their derivatives, see :class:`_Twist`) as the rows of one (9, 3) matrix, and p, dp/du,
     dp/dv as its offsets, so that every socket's d = R m + p - b and dd/du, dd/dv come from one
-    product: about eight times faster than the twist's 3 x 3 products and three einsums on 15
-    sockets."""
+    product instead of the twist's 3 x 3 products and three einsums, whose numpy call overheads
+    outweigh the arithmetic on 15 sockets."""
     S, C, S1, C1 = _series_coefficients_one(math.hypot(u, v))
     uu, uv, vv, ww = u * u, u * v, v * v, u * u + v * v
     su, sv, cu, cv = S1 * u, S1 * v, C1 * u, C1 * v  # dS/du, dS/dv, dC/du, dC/dv

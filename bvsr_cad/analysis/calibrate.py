@@ -287,8 +287,7 @@ def compare_rows(
     # The protocol rows each in a thread of their own (their simulation runs in C, without the
     # interpreter's lock); every other row in one more thread, one after another: their Python takes
     # turns on the lock anyway, and more threads taking turns add only switching (and the taper's
-    # unlocked memo filled twice at once: six layouts solved for three). Eight threads for all rows
-    # used about 9 s more CPU, of about 130, for the same table.
+    # unlocked memo filled twice at once: six layouts solved for three), for the same table.
     sims = ThreadPoolExecutor(max(1, min(len(protocol), threads - 1)))
     rest = ThreadPoolExecutor(1) if threads > 1 else sims
     try:

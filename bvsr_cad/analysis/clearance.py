@@ -396,8 +396,8 @@ def _fcl_object(m: trimesh.Trimesh) -> fcl.CollisionObject:
 def _bvh(m: trimesh.Trimesh) -> fcl.BVHModel:
     bvh = fcl.BVHModel()
     bvh.beginModel(len(m.vertices), len(m.faces))
-    # Plain arrays: python-fcl reads them row by row, and trimesh's tracked arrays make that 10x
-    # slower.
+    # Plain arrays: python-fcl reads them row by row, and each row of trimesh's tracked arrays is a
+    # Python-level view.
     bvh.addSubModel(np.array(m.vertices, dtype=np.float64), np.array(m.faces, dtype=np.int32))
     bvh.endModel()
     return bvh
@@ -468,9 +468,8 @@ def attained_gap_mm(a: trimesh.Trimesh, b: trimesh.Trimesh) -> float | None:
 
     Two panels face each other across a joint's gap with parallel faces: every triangle pair of the
     two faces is at the same distance, and FCL's traversal, which prunes a bounding-volume pair only
-    when its bound is not below the distance found, visits them all (0.05-0.15 s a pair, measured;
-    58 of the default tail's 283 rest pairs are such ties, 0.8 of its 1.0 CPU s of rest
-    distances)."""
+    when its bound is not below the distance found, visits them all: a tail at rest has many such
+    pairs, and they take most of its rest distances' time."""
     va, vb = np.asarray(a.vertices, float), np.asarray(b.vertices, float)
     lo_a, hi_a, lo_b, hi_b = va.min(0), va.max(0), vb.min(0), vb.max(0)
     apart = np.maximum(lo_b - hi_a, lo_a - hi_b)

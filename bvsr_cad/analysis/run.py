@@ -226,10 +226,9 @@ def run_analyses(
 #: Threads predicting the measured rows in the build's second process: the workspace protocol's
 #: simulations one after the other, beside one thread for the other rows. The build's own stages
 #: keep the other core busy, and the kernel shares the cores by thread: with a thread per simulation
-#: (3 threads and this one against the build's one) this process ends its work about 2 s before the
-#: build has written the print files whose checks come next, and a core stands idle between
-#: (measured on the default tail, 2 cores: 32.2 s; with 2 threads 30.7-30.9 s and no idle core until
-#: the checks' end).
+#: (3 threads and this one against the build's one) this process ends its work before the build has
+#: written the print files whose checks come next, and a core stands idle between; with 2 threads
+#: both cores work until the checks' end.
 BESIDE_BUILD_THREADS = 2
 #: The same where the build's own stages are few (its geometry unchanged: the part files, previews
 #: and drawings come from the cache): the protocol's two simulations side by side, beside one thread

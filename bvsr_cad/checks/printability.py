@@ -533,9 +533,9 @@ def _in_features(
 
 class _SurfaceIndex:
     """Closest points on a triangle mesh (the distances ``trimesh.proximity.closest_point`` finds,
-    to rounding: the tests compare the two) from libigl's AABB tree, built once per mesh in C++. On
-    the twin and the BVSR at rest (380 000 and 630 000 triangles) the envelope check takes 2.4 CPU s
-    with it, 3.8 with a k-d tree bound and an R-tree search. A point equally near two triangles (an
+    to rounding: the tests compare the two) from libigl's AABB tree, built once per mesh in C++,
+    rather than trimesh's k-d tree bound and R-tree search in Python: the envelope check queries
+    the twin's and the tail's whole meshes at rest. A point equally near two triangles (an
     edge, a corner) gets either: :meth:`signed_distance` takes the sign from a triangle's normal
     only where the point lies over that triangle, which is right for either, and from ``contains``
     elsewhere."""
@@ -744,38 +744,53 @@ def check_print_item(
     exp: Export, job: dict[str, Any], it: dict[str, Any], fab: dict[str, Any]
 ) -> list[CheckResult]:
     """The printability checks of one STL of a print job."""
-    out: list[CheckResult] = []
     fdm = job["process"] == "FDM"
     rel, name = it["stl"], f"{job['name']}/{it['part']}"
     mesh = exp.mesh(rel)
+    return [
+        *_bed_checks(mesh, name, rel, job["build_volume_mm"]),
+        _overhang_check(mesh, name, rel, fab, fdm),
+        *_thickness_checks(mesh, name, rel, fab, fdm, it["kind"]),
+        _hole_check(mesh, name, rel, fab, fdm),
+    ]
+
+
+def _bed_checks(
+    mesh: trimesh.Trimesh, name: str, rel: str, volume_mm: list[float]
+) -> list[CheckResult]:
+    """The item fits the printer's build volume and stands on the bed on a flat base."""
     lo, hi = mesh.bounds
     size = hi - lo
-    out.append(
-        CheckResult(
-            f"print_fits_volume:{name}",
-            _fits(size, job["build_volume_mm"]),
-            [round(float(v), 2) for v in size],
-            job["build_volume_mm"],
-            "mm",
-            rel,
-        )
+    fits = CheckResult(
+        f"print_fits_volume:{name}",
+        _fits(size, volume_mm),
+        [round(float(v), 2) for v in size],
+        volume_mm,
+        "mm",
+        rel,
     )
     zmin = float(lo[2])
     down = (mesh.face_normals[:, 2] < -0.9999) & (
         np.abs(mesh.triangles[:, :, 2] - zmin).max(axis=1) < 1e-6
     )
     base = float(mesh.area_faces[down].sum())
-    out.append(
-        CheckResult(
-            f"print_flat_base:{name}",
-            abs(zmin) < BED_Z_TOL_MM and base >= MIN_BASE_AREA_MM2,
-            base,
-            MIN_BASE_AREA_MM2,
-            "mm2",
-            rel,
-            f"lowest z {zmin:.6f} mm",
-        )
+    flat = CheckResult(
+        f"print_flat_base:{name}",
+        abs(zmin) < BED_Z_TOL_MM and base >= MIN_BASE_AREA_MM2,
+        base,
+        MIN_BASE_AREA_MM2,
+        "mm2",
+        rel,
+        f"lowest z {zmin:.6f} mm",
     )
+    return [fits, flat]
+
+
+def _overhang_check(
+    mesh: trimesh.Trimesh, name: str, rel: str, fab: dict[str, Any], fdm: bool
+) -> CheckResult:
+    """No overhang wider than a bridge needs support (FDM; a powder bed supports itself, so there
+    the check only reports)."""
     regions = overhang_regions(mesh, fab["max_overhang_deg"])
     down_area = float(mesh.area_faces[mesh.face_normals[:, 2] < 0].sum())
     over = sum(r["area_mm2"] for r in regions)
@@ -797,25 +812,30 @@ def check_print_item(
         text += f"; widest {r['width_mm']:.2f} mm at {r['centre_mm']}"
     if not fdm:
         text = "powder bed (MJF): no support needed; " + text
-    out.append(
-        CheckResult(
-            f"print_overhang:{name}",
-            (len(support) == 0) if fdm else None,
-            sum(r["area_mm2"] for r in support),
-            0.0,
-            "mm2 needing support",
-            rel,
-            text,
-        )
+    return CheckResult(
+        f"print_overhang:{name}",
+        (len(support) == 0) if fdm else None,
+        sum(r["area_mm2"] for r in support),
+        0.0,
+        "mm2 needing support",
+        rel,
+        text,
     )
+
+
+def _thickness_checks(
+    mesh: trimesh.Trimesh, name: str, rel: str, fab: dict[str, Any], fdm: bool, kind: str
+) -> list[CheckResult]:
+    """The thinnest wall and the thinnest plate reach the process's minimum (a mold's own minimum
+    for molds and mold cores)."""
     wall, at = min_wall_mm(mesh)
     plate, at_plate = min_wall_mm(mesh, horizontal=True)
     wall_min = fab["fdm_min_wall_mm"] if fdm else fab["mjf_min_wall_mm"]
     plate_min = fab["fdm_min_plate_mm"] if fdm else fab["mjf_min_wall_mm"]
-    if it["kind"] in ("mold", "mold_core"):
+    if kind in ("mold", "mold_core"):
         wall_min = plate_min = fab["mold_min_wall_mm"]
     note = "" if fdm else f"; limit {fab.get('mjf_min_wall_note', '')}"
-    out.append(
+    return [
         CheckResult(
             f"print_min_wall:{name}",
             wall >= wall_min,
@@ -825,9 +845,7 @@ def check_print_item(
             rel,
             f"thinnest wall (faces within 45 deg of vertical) at {at}, rays inwards to a "
             f"parallel face{note}",
-        )
-    )
-    out.append(
+        ),
         CheckResult(
             f"print_min_plate:{name}",
             plate >= plate_min,
@@ -836,25 +854,28 @@ def check_print_item(
             "mm",
             rel,
             f"thinnest plate (faces within 45 deg of horizontal) at {at_plate}{note}",
-        )
-    )
+        ),
+    ]
+
+
+def _hole_check(
+    mesh: trimesh.Trimesh, name: str, rel: str, fab: dict[str, Any], fdm: bool
+) -> CheckResult:
+    """The smallest enclosed void is one the process can print open (its polygonal section
+    allowed for)."""
     hole, where = min_hole_mm(mesh)
     hole_min = fab["fdm_min_hole_mm"] if fdm else fab["mjf_min_hole_mm"]
-    ok = hole >= HOLE_POLYGON_FACTOR * hole_min
-    out.append(
-        CheckResult(
-            f"print_min_hole:{name}",
-            ok,
-            hole if np.isfinite(hole) else None,
-            hole_min,
-            "mm",
-            rel,
-            f"smallest enclosed void (4 A / P) at {where}"
-            if where
-            else "no enclosed void in any section",
-        )
+    return CheckResult(
+        f"print_min_hole:{name}",
+        hole >= HOLE_POLYGON_FACTOR * hole_min,
+        hole if np.isfinite(hole) else None,
+        hole_min,
+        "mm",
+        rel,
+        f"smallest enclosed void (4 A / P) at {where}"
+        if where
+        else "no enclosed void in any section",
     )
-    return out
 
 
 def check_printability(

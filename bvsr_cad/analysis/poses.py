@@ -305,8 +305,8 @@ def twin_scene(
     ``meshes_mm``: each piece's mesh in the tail frame (vertices mm, triangles) where the caller has
     one (the build: the rigid robot's visual meshes, so the viewer shows the twin as a simulator
     does); otherwise each piece is meshed here at the viewer's tolerance from a copy (by then the
-    build has meshed the pieces for print, 0.01 mm, and OCCT would hand that mesh back: 40 times the
-    triangles)."""
+    build has meshed the pieces for print, 0.01 mm, and OCCT would hand that mesh back, far finer
+    than a view needs)."""
     base = np.array(rgb("rigid_tail"))
     if meshes_mm is None:
         placed = [(_fresh_mesh(p.solid), piece_transform_mm(p)) for p in pieces]

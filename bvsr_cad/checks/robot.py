@@ -565,10 +565,9 @@ def _robot_second(exp: Export) -> list[CheckResult]:
     return [*check_mujoco(exp, MUJOCO_FILES[2:]), *check_pybullet(exp), *check_fk(exp)]
 
 
-#: :func:`check_robot` in two parts of about the same time (1.0 and 1.2 CPU s on the default tail),
-#: in its order: a build's two processes each take one when they are free
-#: (``checks.run.claim_robot_checks``), where the whole took its last 2 s on one core while the
-#: other stood idle (an edit that moves no solid).
+#: :func:`check_robot` in two parts of about the same time, in its order: a build's two processes
+#: each take one when they are free (``checks.run.claim_robot_checks``), where the whole would run
+#: on one core at the build's end while the other stood idle (an edit that moves no solid).
 ROBOT_PARTS = (
     (_robot_first, "robot descriptions (inertias, URDF tools, MuJoCo: URDF, MJCF)"),
     (_robot_second, "robot descriptions (MuJoCo: per-segment, exact chain; PyBullet, FK)"),

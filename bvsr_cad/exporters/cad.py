@@ -15,8 +15,8 @@ from ..parts._kernel import mesh_absolute
 #: Tessellation for print STLs, absolute: no facet strays more than 0.01 mm from the surface (ten
 #: times finer than the printers' resolution) nor turns more than 0.1 rad; the mesh volume stays
 #: within 0.05 % of the B-rep volume on every part (checked by `bvsr check`). Absolute, because a
-#: deflection relative to each edge's size meshed the large flat panels far finer than any printer
-#: resolves: about three times the meshing time and twice the facets for nothing a print shows.
+#: deflection relative to each edge's size meshes the large flat panels far finer than any printer
+#: resolves: meshing time and facets for nothing a print shows.
 STL_LINEAR_TOLERANCE_MM = 0.01
 STL_ANGULAR_TOLERANCE_RAD = 0.1
 

@@ -492,6 +492,26 @@ def draw_sheet(
         h - MARGIN_MM - 12.0,
     )
     scale, offsets = _layout(boxes, views, region, 22.0)
+    top = h - MARGIN_MM - 10.0  # the hole table's top edge
+    x_cols = np.cumsum([TABLE_X_MM, *COLUMNS_MM])
+    svg = _sheet_svg()
+    dims = _draw_views(svg, projected, boxes, scale, offsets)
+    _draw_table_grid(svg, len(rows), top, x_cols)
+    buf = io.BytesIO()
+    svg.write(buf)
+    ET.register_namespace("", SVG_NS)
+    root = ET.fromstring(buf.getvalue())
+    root.set("id", f"drawing-{name}")
+    _label_views(root, boxes, scale, offsets, rows)
+    _dimensions(root, dims)
+    _hole_table_text(root, rows, top, x_cols)
+    ET.indent(root, "  ")
+    return ET.tostring(root, encoding="unicode").encode() + b"\n", len(rows)
+
+
+def _sheet_svg() -> _SheetSVG:
+    """An empty sheet: its layers (frame, grid, visible, hidden) and its edge and frame lines."""
+    w, h = SHEET_MM
     svg = _SheetSVG(unit=bd.Unit.MM, margin=0.0, fit_to_stroke=False)
     svg.add_layer("frame", line_weight=0.5)
     svg.add_layer("grid", line_weight=0.18)
@@ -501,6 +521,18 @@ def draw_sheet(
     )
     svg.add_shape(_rect(0.0, 0.0, w, h), "grid")
     svg.add_shape(_rect(MARGIN_MM, MARGIN_MM, w - MARGIN_MM, h - MARGIN_MM), "frame")
+    return svg
+
+
+def _draw_views(
+    svg: _SheetSVG,
+    projected: dict[str, tuple[list[bd.Edge], list[bd.Edge]]],
+    boxes: dict[str, tuple[float, float, float, float]],
+    scale: float,
+    offsets: dict[str, tuple[float, float]],
+) -> list[Dimension]:
+    """Draw each view's visible and hidden edges and its dimensions' extension lines; returns the
+    dimensions (drawn as text later)."""
     dims: list[Dimension] = []
     for view, (vis, hid) in projected.items():
         off = offsets[view]
@@ -519,26 +551,33 @@ def draw_sheet(
             dims.append(Dimension(_sheet(a2, scale, off), _sheet(b2, scale, off), math.dist(a, b)))
             ext = [bd.Edge.make_line(p, (p[0] + 1.15 * dx, p[1] + 1.15 * dy)) for p in (a, b)]
             svg.add_shape(_placed(ext, scale, off), "grid")
-    # Hole table grid.
-    top = h - MARGIN_MM - 10.0
-    x_cols = np.cumsum([TABLE_X_MM, *COLUMNS_MM])
-    bottom = top - ROW_MM * (len(rows) + 1)
+    return dims
+
+
+def _draw_table_grid(svg: _SheetSVG, n_rows: int, top: float, x_cols: np.ndarray) -> None:
+    """The hole table's ruling: its outline, a line under each row and between the columns."""
+    bottom = top - ROW_MM * (n_rows + 1)
     grid = _rect(TABLE_X_MM, bottom, x_cols[-1], top)
     grid += [
         bd.Edge.make_line((TABLE_X_MM, top - ROW_MM * i), (x_cols[-1], top - ROW_MM * i))
-        for i in range(1, len(rows) + 1)
+        for i in range(1, n_rows + 1)
     ]
     grid += [bd.Edge.make_line((x, bottom), (x, top)) for x in x_cols[1:-1]]
     svg.add_shape(grid, "grid")
-    buf = io.BytesIO()
-    svg.write(buf)
-    ET.register_namespace("", SVG_NS)
-    root = ET.fromstring(buf.getvalue())
-    root.set("id", f"drawing-{name}")
+
+
+def _label_views(
+    root: ET.Element,
+    boxes: dict[str, tuple[float, float, float, float]],
+    scale: float,
+    offsets: dict[str, tuple[float, float]],
+    rows: list[HoleRow],
+) -> None:
+    """Each view's caption (direction and scale) and, on the top view, each hole row's id where
+    its bore begins."""
     labels = ET.SubElement(root, f"{{{SVG_NS}}}g", {"id": "views", "font-family": "DejaVu Sans"})
-    for view in projected:
+    for view, (bx0, _, bx1, by1) in boxes.items():
         off = offsets[view]
-        bx0, by0, bx1, by1 = boxes[view]
         _text(
             labels,
             off[0] + scale * (bx0 + bx1) / 2,
@@ -558,7 +597,10 @@ def draw_sheet(
                     1.8,
                     fill="#0645ad",
                 )
-    _dimensions(root, dims)
+
+
+def _hole_table_text(root: ET.Element, rows: list[HoleRow], top: float, x_cols: np.ndarray) -> None:
+    """The hole table's caption, header and rows."""
     table = ET.SubElement(
         root, f"{{{SVG_NS}}}g", {"id": "hole-table", "font-family": "DejaVu Sans"}
     )
@@ -581,8 +623,6 @@ def draw_sheet(
                 FONT_MM,
                 **({"font-weight": "bold"} if i == 0 else {}),
             )
-    ET.indent(root, "  ")
-    return ET.tostring(root, encoding="unicode").encode() + b"\n", len(rows)
 
 
 def _towards(view: str) -> str:

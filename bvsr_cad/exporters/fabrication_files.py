@@ -32,6 +32,7 @@ from ..assembly.build import Assembly, rod_span_mm
 from ..assembly.fabrication import MadeItem, made_items
 from ..assembly.products import RIGID_MATERIAL, RigidRobot, piece_transform_mm
 from ..colors import rgb, rgba
+from ..parameters.tables import TailSpec
 from ..parameters.twin import rigid_joining
 from ..parts._kernel import location, mesh_arrays
 from ..parts.mold import MoldSet
@@ -158,17 +159,36 @@ def _visual_meshes(solids_mm: list[bd.Shape]) -> list[trimesh.Trimesh]:
 def _rigid_robot(rigid: RigidRobot, root: Path, visual: list[trimesh.Trimesh]) -> dict[str, Any]:
     """URDF and MJCF of the rigid twin's one-link model: one body fixed to the robot's mount."""
     name = rigid.name
-    mass_kg = rigid.inertial.mass_kg
-    com = rigid.inertial.com
-    inertia = rigid.inertial.inertia  # about the centre of mass, tail axes
     folder = root / "robot"
     (folder / "meshes").mkdir(parents=True, exist_ok=True)
     mesh_rel = f"meshes/{name}.stl"
     # The visual mesh is coarse (MuJoCo takes at most 200000 faces); the inertia above is from the
     # print STLs.
     trimesh.util.concatenate(visual).export(folder / mesh_rel)
+    urdf_rel = f"robot/{name}.urdf"
+    robot = _rigid_urdf(rigid, mesh_rel)
+    ET.ElementTree(robot).write(root / urdf_rel, encoding="utf-8", xml_declaration=True)
+    mjcf_rel = f"robot/{name}.xml"
+    mj = _rigid_mjcf(rigid)
+    ET.ElementTree(mj).write(root / mjcf_rel, encoding="utf-8", xml_declaration=True)
+    return {
+        "urdf": urdf_rel,
+        "mjcf": mjcf_rel,
+        "mesh": f"robot/{mesh_rel}",
+        "mass_kg": rigid.inertial.mass_kg,
+        "com_m": rigid.inertial.com.tolist(),
+        "inertia_kg_m2": rigid.inertial.inertia.tolist(),
+        "note": "one rigid body fixed to the mount; solid PLA density (the printed infill lowers "
+        "the mass: "
+        "weigh the print and scale)",
+    }
 
-    robot = ET.Element("robot", name=name)
+
+def _rigid_urdf(rigid: RigidRobot, mesh_rel: str) -> ET.Element:
+    """The rigid twin's URDF: the link ``rigid_tail`` (inertia about its centre of mass, tail
+    axes; the mesh ``mesh_rel`` as visual and collision) fixed to a massless ``mount``."""
+    inertia = rigid.inertial.inertia
+    robot = ET.Element("robot", name=rigid.name)
     # MuJoCo makes a URDF's root link its world: the twin hangs from a massless "mount" by a fixed
     # joint, kept as its own body (fusestatic off) so simulators see the twin's mass and inertia.
     mj_ext = ET.SubElement(robot, "mujoco")
@@ -185,8 +205,8 @@ def _rigid_robot(rigid: RigidRobot, root: Path, visual: list[trimesh.Trimesh]) -
     ET.SubElement(m, "color", rgba=_vec(rgba("rigid_tail")))
     link = ET.SubElement(robot, "link", name="rigid_tail")
     inertial = ET.SubElement(link, "inertial")
-    ET.SubElement(inertial, "origin", xyz=_vec(com), rpy="0 0 0")
-    ET.SubElement(inertial, "mass", value=_f(mass_kg))
+    ET.SubElement(inertial, "origin", xyz=_vec(rigid.inertial.com), rpy="0 0 0")
+    ET.SubElement(inertial, "mass", value=_f(rigid.inertial.mass_kg))
     ET.SubElement(
         inertial,
         "inertia",
@@ -209,9 +229,13 @@ def _rigid_robot(rigid: RigidRobot, root: Path, visual: list[trimesh.Trimesh]) -
     ET.SubElement(fixed, "parent", link="mount")
     ET.SubElement(fixed, "child", link="rigid_tail")
     ET.indent(robot)
-    urdf_rel = f"robot/{name}.urdf"
-    ET.ElementTree(robot).write(root / urdf_rel, encoding="utf-8", xml_declaration=True)
+    return robot
 
+
+def _rigid_mjcf(rigid: RigidRobot) -> ET.Element:
+    """The rigid twin's MJCF: one body welded to the world, its mesh a visual only."""
+    name = rigid.name
+    inertia = rigid.inertial.inertia
     mj = ET.Element("mujoco", model=name)
     ET.SubElement(mj, "compiler", angle="radian", meshdir="meshes")
     ET.SubElement(mj, "option", timestep=_f(rigid.timestep_s), gravity="0 -9.81 0")
@@ -219,14 +243,13 @@ def _rigid_robot(rigid: RigidRobot, root: Path, visual: list[trimesh.Trimesh]) -
     ET.SubElement(asset, "mesh", name="rigid_tail", file=f"{name}.stl")
     world = ET.SubElement(mj, "worldbody")
     ET.SubElement(world, "light", pos="0 0.5 0.3", dir="0 -1 0")
-    body = ET.SubElement(
-        world, "body", name="rigid_tail", pos="0 0 0"
-    )  # no joint: welded to the mount
+    # No joint: welded to the mount.
+    body = ET.SubElement(world, "body", name="rigid_tail", pos="0 0 0")
     ET.SubElement(
         body,
         "inertial",
-        pos=_vec(com),
-        mass=_f(mass_kg),
+        pos=_vec(rigid.inertial.com),
+        mass=_f(rigid.inertial.mass_kg),
         fullinertia=_vec(
             (
                 inertia[0, 0],
@@ -248,19 +271,7 @@ def _rigid_robot(rigid: RigidRobot, root: Path, visual: list[trimesh.Trimesh]) -
         conaffinity="0",
     )
     ET.indent(mj)
-    mjcf_rel = f"robot/{name}.xml"
-    ET.ElementTree(mj).write(root / mjcf_rel, encoding="utf-8", xml_declaration=True)
-    return {
-        "urdf": urdf_rel,
-        "mjcf": mjcf_rel,
-        "mesh": f"robot/{mesh_rel}",
-        "mass_kg": mass_kg,
-        "com_m": com.tolist(),
-        "inertia_kg_m2": inertia.tolist(),
-        "note": "one rigid body fixed to the mount; solid PLA density (the printed infill lowers "
-        "the mass: "
-        "weigh the print and scale)",
-    }
+    return mj
 
 
 def _layout_3mf(items: list[tuple[str, Path]], path: Path) -> list[list[float]]:
@@ -377,8 +388,6 @@ def write_fabrication(
     writers wrote (by part and mold-part name); ``memo``: the print jobs' layouts
     (:func:`_print_jobs`). Returns keys to merge into the manifest (``rigid_parts``: the twin's
     entries of the manifest's ``parts``)."""
-    spec = asm.spec
-    fp = spec.fabrication_package
     rigid = _rigid_parts(asm, pieces)
     progress("rigid tail robot description")
     robot_rigid = _rigid_robot(rigid_robot, root, visual)
@@ -388,8 +397,26 @@ def write_fabrication(
     stl_of |= {p["name"]: p["files"]["stl"] for p in rigid}
     stl_of |= {f"mold_{name}": f["stl"] for name, f in mold_files.items()}
     jobs = _print_jobs(asm, root, items, stl_of, memo)
-    joining = rigid_joining(spec)
-    rigid_section = {
+    fragment: dict[str, Any] = {
+        "rigid_parts": rigid,
+        "rigid_tail": _rigid_tail_section(asm, rigid, robot_rigid),
+        "print_jobs": jobs,
+        "fabrication": _fabrication_limits(asm.spec),
+    }
+    progress("bill of materials")
+    rows = bom_rows(asm, pieces, mold_set)
+    fragment["bom"] = write_bom(root, rows)
+    return fragment
+
+
+def _rigid_tail_section(
+    asm: Assembly, rigid: list[dict[str, Any]], robot_rigid: dict[str, Any]
+) -> dict[str, Any]:
+    """The manifest's ``rigid_tail``: the twin's pieces, how it is split, joined and simplified, its
+    solid mass and its robot description."""
+    fp = asm.spec.fabrication_package
+    joining = rigid_joining(asm.spec)
+    return {
         "pieces": [p["name"] for p in rigid],
         "printer_volume_mm": [fp.printer_x_mm, fp.printer_y_mm, fp.printer_z_mm],
         "split": "one piece per joint at each panel's lower face (panel on the bed, SOA columns "
@@ -420,29 +447,25 @@ def write_fabrication(
         "mass_g_solid": sum(p["mass_g"] for p in rigid),
         "robot": robot_rigid,
     }
-    fragment: dict[str, Any] = {
-        "rigid_parts": rigid,
-        "rigid_tail": rigid_section,
-        "print_jobs": jobs,
-        "fabrication": {
-            "max_overhang_deg": fp.max_overhang_deg,
-            "max_bridge_mm": fp.max_bridge_mm,
-            "fdm_min_wall_mm": fp.fdm_min_wall_mm,
-            "fdm_min_plate_mm": fp.fdm_min_plate_mm,
-            "fdm_min_hole_mm": fp.fdm_min_hole_mm,
-            "mjf_min_hole_mm": fp.mjf_min_hole_mm,
-            # The pocket rim lips are allowed thinner than other webs by the layout rules
-            # (fabrication.min_rim_lip_mm): they only locate a flange.
-            "mjf_min_wall_mm": min(spec.fabrication.min_wall_mm, spec.fabrication.min_rim_lip_mm),
-            "mjf_min_wall_note": "fabrication.min_rim_lip_mm = "
-            f"{spec.fabrication.min_rim_lip_mm:g} "
-            f"(pocket rim lips); other webs >= {spec.fabrication.min_wall_mm:g} "
-            "by the layout validation",
-            "mold_min_wall_mm": spec.casting.min_print_wall_mm,
-            "slicer_timeout_s": fp.slicer_timeout_s,
-        },
+
+
+def _fabrication_limits(spec: TailSpec) -> dict[str, Any]:
+    """The manifest's ``fabrication``: the printability limits the checks hold each print to."""
+    fp = spec.fabrication_package
+    return {
+        "max_overhang_deg": fp.max_overhang_deg,
+        "max_bridge_mm": fp.max_bridge_mm,
+        "fdm_min_wall_mm": fp.fdm_min_wall_mm,
+        "fdm_min_plate_mm": fp.fdm_min_plate_mm,
+        "fdm_min_hole_mm": fp.fdm_min_hole_mm,
+        "mjf_min_hole_mm": fp.mjf_min_hole_mm,
+        # The pocket rim lips are allowed thinner than other webs by the layout rules
+        # (fabrication.min_rim_lip_mm): they only locate a flange.
+        "mjf_min_wall_mm": min(spec.fabrication.min_wall_mm, spec.fabrication.min_rim_lip_mm),
+        "mjf_min_wall_note": "fabrication.min_rim_lip_mm = "
+        f"{spec.fabrication.min_rim_lip_mm:g} "
+        f"(pocket rim lips); other webs >= {spec.fabrication.min_wall_mm:g} "
+        "by the layout validation",
+        "mold_min_wall_mm": spec.casting.min_print_wall_mm,
+        "slicer_timeout_s": fp.slicer_timeout_s,
     }
-    progress("bill of materials")
-    rows = bom_rows(asm, pieces, mold_set)
-    fragment["bom"] = write_bom(root, rows)
-    return fragment

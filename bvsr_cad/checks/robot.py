@@ -279,104 +279,107 @@ def check_mujoco(exp: Export, keys: tuple[str, ...] = MUJOCO_FILES) -> list[Chec
     with _quiet_cwd(exp.root):
         for key in keys:
             rel = robot.get(key)
-            if rel is None:
-                continue
-            path = exp.root / rel
-            # A URDF cannot carry the rod's springs, so under gravity it would fold onto its
-            # limits: it is stepped without gravity and must not move at all.
-            gravity = key != "urdf"
-            try:
-                import mujoco
-
-                compiled = mujoco.MjModel.from_xml_path(str(path))
-                if (
-                    key == "urdf"
-                ):  # its contacts at rest, before it is stepped (which changes the model)
-                    out.append(_urdf_self_contacts(compiled, rel))
-                # MuJoCo's URDF import collides every two links but a parent and its child: the
-                # exact chain puts four links between neighbouring panels, whose SOA and rod halves
-                # meet (and overlap by their tilt) at mid-gap in every pose. The MJCF turns the
-                # tail's self-contacts off (conaffinity 0); the URDF cannot say so to MuJoCo, so it
-                # is stepped with the same rule.
-                m, d, warn, eq, at_limit, drift = _step(
-                    compiled, gravity=gravity, self_contacts=key != "urdf"
-                )
-            except Exception as exc:  # noqa: BLE001 - the compiler's message is the result
-                out.append(CheckResult(f"mujoco_compile:{key}", False, 0, 1, "", rel, str(exc)))
-                continue
-            out.append(
-                CheckResult(
-                    f"mujoco_compile:{key}",
-                    True,
-                    1,
-                    1,
-                    "",
-                    rel,
-                    f"{m.nbody} bodies, {m.njnt} joints, {m.neq} equalities, {m.nu} actuators",
-                )
-            )
-            out.append(
-                CheckResult(
-                    f"mujoco_warnings_1s:{key}",
-                    warn == 0,
-                    warn,
-                    0,
-                    "warnings",
-                    rel,
-                    "1 s from rest " + ("under gravity" if gravity else "without gravity"),
-                )
-            )
-            tol = (
-                EQUALITY_TOLERANCE if key in ("urdf", "mjcf_exact") else EQUALITY_TOLERANCE_REDUCED
-            )
-            out.append(
-                CheckResult(
-                    f"mujoco_couplings_held:{key}",
-                    eq <= tol,
-                    eq,
-                    tol,
-                    "rad or m",
-                    rel,
-                    "largest mimic/chord equality residual while stepping",
-                )
-            )
-            out.append(
-                CheckResult(
-                    f"mujoco_no_joint_at_limit:{key}",
-                    not at_limit,
-                    len(at_limit),
-                    0,
-                    "joints or bend-limit tendons",
-                    rel,
-                    ", ".join(at_limit),
-                )
-            )
-            if not gravity:
-                out.append(
-                    CheckResult(
-                        f"mujoco_no_drift:{key}",
-                        drift <= 1e-9,
-                        drift,
-                        1e-9,
-                        "rad or m",
-                        rel,
-                        "largest joint displacement after 1 s at rest without gravity",
-                    )
-                )
-            else:
-                qvel = float(np.max(np.abs(d.qvel)))
-                out.append(
-                    CheckResult(
-                        f"mujoco_settled_1s:{key}",
-                        qvel <= SETTLE_QVEL_RAD_S,
-                        qvel,
-                        SETTLE_QVEL_RAD_S,
-                        "rad/s or m/s",
-                        rel,
-                        "largest joint speed 1 s after release under gravity",
-                    )
-                )
+            if rel is not None:
+                out += _check_mujoco_file(exp.root / rel, key, rel)
     return out
+
+
+def _check_mujoco_file(path: Path, key: str, rel: str) -> list[CheckResult]:
+    """One robot description (manifest key ``key``, export path ``rel``) compiled and stepped for
+    1 s: it compiles (the URDF: and its links touch only where they should), then
+    :func:`_stepped_results`."""
+    # A URDF cannot carry the rod's springs, so under gravity it would fold onto its limits: it is
+    # stepped without gravity and must not move at all.
+    gravity = key != "urdf"
+    out = []
+    try:
+        import mujoco
+
+        compiled = mujoco.MjModel.from_xml_path(str(path))
+        if key == "urdf":  # its contacts at rest, before it is stepped (which changes the model)
+            out.append(_urdf_self_contacts(compiled, rel))
+        # MuJoCo's URDF import collides every two links but a parent and its child: the exact
+        # chain puts four links between neighbouring panels, whose SOA and rod halves meet (and
+        # overlap by their tilt) at mid-gap in every pose. The MJCF turns the tail's self-contacts
+        # off (conaffinity 0); the URDF cannot say so to MuJoCo, so it is stepped with the same
+        # rule.
+        stepped = _step(compiled, gravity=gravity, self_contacts=key != "urdf")
+    except Exception as exc:  # noqa: BLE001 - the compiler's message is the result
+        out.append(CheckResult(f"mujoco_compile:{key}", False, 0, 1, "", rel, str(exc)))
+        return out
+    return out + _stepped_results(key, rel, gravity, *stepped)
+
+
+def _stepped_results(
+    key: str, rel: str, gravity: bool, m, d, warn: int, eq: float, at_limit: list[str], drift: float
+) -> list[CheckResult]:
+    """What 1 s of stepping (:func:`_step`) showed: the model compiled, MuJoCo gave no warning, the
+    couplings held, no joint or bend limit was reached, and :func:`_rest_result`."""
+    tol = EQUALITY_TOLERANCE if key in ("urdf", "mjcf_exact") else EQUALITY_TOLERANCE_REDUCED
+    return [
+        CheckResult(
+            f"mujoco_compile:{key}",
+            True,
+            1,
+            1,
+            "",
+            rel,
+            f"{m.nbody} bodies, {m.njnt} joints, {m.neq} equalities, {m.nu} actuators",
+        ),
+        CheckResult(
+            f"mujoco_warnings_1s:{key}",
+            warn == 0,
+            warn,
+            0,
+            "warnings",
+            rel,
+            "1 s from rest " + ("under gravity" if gravity else "without gravity"),
+        ),
+        CheckResult(
+            f"mujoco_couplings_held:{key}",
+            eq <= tol,
+            eq,
+            tol,
+            "rad or m",
+            rel,
+            "largest mimic/chord equality residual while stepping",
+        ),
+        CheckResult(
+            f"mujoco_no_joint_at_limit:{key}",
+            not at_limit,
+            len(at_limit),
+            0,
+            "joints or bend-limit tendons",
+            rel,
+            ", ".join(at_limit),
+        ),
+        _rest_result(key, rel, gravity, d, drift),
+    ]
+
+
+def _rest_result(key: str, rel: str, gravity: bool, d, drift: float) -> CheckResult:
+    """Without gravity the model must not have moved at all; under gravity it must have settled
+    within the 1 s."""
+    if not gravity:
+        return CheckResult(
+            f"mujoco_no_drift:{key}",
+            drift <= 1e-9,
+            drift,
+            1e-9,
+            "rad or m",
+            rel,
+            "largest joint displacement after 1 s at rest without gravity",
+        )
+    qvel = float(np.max(np.abs(d.qvel)))
+    return CheckResult(
+        f"mujoco_settled_1s:{key}",
+        qvel <= SETTLE_QVEL_RAD_S,
+        qvel,
+        SETTLE_QVEL_RAD_S,
+        "rad/s or m/s",
+        rel,
+        "largest joint speed 1 s after release under gravity",
+    )
 
 
 def _urdf_self_contacts(m, rel: str) -> CheckResult:

@@ -15,8 +15,13 @@ def _diff(computed: float, reported: float) -> str:
 
 
 def check_paper(exp: Export) -> list[CheckResult]:
+    """The export's masses, size and SOA fold against what the paper reports."""
     m = exp.manifest
-    out: list[CheckResult] = []
+    return [*_mass_results(m), *_size_results(m), *_soa_fold_results(m)]
+
+
+def _mass_results(m: dict) -> list[CheckResult]:
+    """A standalone segment's mass and the tail's against the paper's weighings."""
     seg = float(m["mass_g"]["segment_standalone"])
     ref = paper.SEGMENT_STANDALONE_MASS
     within = abs(seg - ref.value) <= paper.SEGMENT_MASS_TOLERANCE * ref.value
@@ -27,22 +32,20 @@ def check_paper(exp: Export) -> list[CheckResult]:
         "has no "
         "fittings, tubes, adhesive or fasteners"
     )
-    out.append(
-        CheckResult(
-            "paper:segment_standalone_mass",
-            None,
-            seg,
-            ref.value,
-            "g",
-            ref.where,
-            f"{_diff(seg, ref.value)}; {why}",
-        )
+    segment = CheckResult(
+        "paper:segment_standalone_mass",
+        None,
+        seg,
+        ref.value,
+        "g",
+        ref.where,
+        f"{_diff(seg, ref.value)}; {why}",
     )
     tail = float(m["mass_g"]["tail"])
-    segments = int(m["segments"])
-    ref_mass = paper.paper_tail_mass(segments)
+    ref_mass = paper.paper_tail_mass(int(m["segments"]))
     if ref_mass is None:
-        out.append(
+        return [
+            segment,
             CheckResult(
                 "paper:tail_mass",
                 None,
@@ -51,24 +54,29 @@ def check_paper(exp: Export) -> list[CheckResult]:
                 "g",
                 paper.TAIL_MASS.where,
                 f"the paper weighs only the 2-segment tail ({paper.TAIL_MASS.value:g} g)",
-            )
-        )
-    else:
-        out.append(
-            CheckResult(
-                "paper:tail_mass",
-                None,
-                tail,
-                ref_mass.value,
-                "g",
-                ref_mass.where,
-                _diff(tail, ref_mass.value) + "; the model has panels, SOAs and rods only: "
-                "push-in fittings, tubes, adhesive, inserts and bolts are not modelled",
-            )
-        )
-    ref_len = paper.paper_length(segments)
+            ),
+        ]
+    return [
+        segment,
+        CheckResult(
+            "paper:tail_mass",
+            None,
+            tail,
+            ref_mass.value,
+            "g",
+            ref_mass.where,
+            _diff(tail, ref_mass.value) + "; the model has panels, SOAs and rods only: "
+            "push-in fittings, tubes, adhesive, inserts and bolts are not modelled",
+        ),
+    ]
+
+
+def _size_results(m: dict) -> list[CheckResult]:
+    """The tail's length against Table I's and its taper against Table I's tilt angle."""
+    ref_len = paper.paper_length(int(m["segments"]))
     length = float(m["length_mm"])
-    out.append(
+    taper = m["taper"]
+    return [
         CheckResult(
             "paper:tail_length",
             None,
@@ -77,10 +85,7 @@ def check_paper(exp: Export) -> list[CheckResult]:
             "mm",
             ref_len.where,
             _diff(length, ref_len.value) + "; Table I gives N H_a + (N + 1) x 6 mm",
-        )
-    )
-    taper = m["taper"]
-    out.append(
+        ),
         CheckResult(
             "paper:taper_half_angle",
             None,
@@ -90,10 +95,15 @@ def check_paper(exp: Export) -> list[CheckResult]:
             "Table I alpha_2 - 90",
             f"built {taper['half_angle_deg']:.3f} deg; the paper's 1.23 deg makes the flange "
             f"pockets of neighbouring SOAs overlap; limited by: {taper['limited_by']}",
-        )
-    )
+        ),
+    ]
+
+
+def _soa_fold_results(m: dict) -> list[CheckResult]:
+    """How far Table II's SOA dimensions are from closing: the fold's height from its dihedral
+    angle, and the rounded square's span against D."""
     fold = m["soa_fold"]
-    out.append(
+    return [
         CheckResult(
             "soa_fold_residual",
             None,
@@ -105,9 +115,7 @@ def check_paper(exp: Export) -> list[CheckResult]:
             f"{fold['origami_height_from_dihedral_mm']:.3f} mm against H_o = "
             f"{fold['origami_height_mm']:.2f} mm; alpha that closes it: "
             f"{fold['implied_dihedral_deg']:.2f} deg; built from {fold['built_from']}",
-        )
-    )
-    out.append(
+        ),
         CheckResult(
             "soa_circumcircle_residual",
             None,
@@ -117,6 +125,5 @@ def check_paper(exp: Export) -> list[CheckResult]:
             "Table II D",
             f"square b rounded at R spans {fold['circumcircle_computed_mm']:.3f} mm "
             f"against D = {fold['circumcircle_table_mm']:.2f} mm",
-        )
-    )
-    return out
+        ),
+    ]

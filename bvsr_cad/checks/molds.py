@@ -226,9 +226,26 @@ def check_cavity(
     """The closed mold's void, minus the channels, is the cast part. ``part_solids`` and ``closed``
     (the parts as solids and their union) save converting them again."""
     cast_m = to_manifold(cast)
-    cast_v = cast_m.volume()
     part_m = part_solids if part_solids is not None else [to_manifold(p.assembled) for p in parts]
     closed = closed if closed is not None else _union(part_m)
+    limit = INTRUSION_TOLERANCE * cast_m.volume()
+    return [
+        _cavity_volume_result(cast_m, closed, channels, where),
+        _intrusion_result(cast_m, parts, part_m, limit, where),
+        _overlap_result(parts, part_m, limit, where),
+        _surface_formed_result(samples, channels, where),
+    ]
+
+
+def _cavity_volume_result(
+    cast_m: manifold3d.Manifold,
+    closed: manifold3d.Manifold,
+    channels: list[trimesh.Trimesh],
+    where: str,
+) -> CheckResult:
+    """The void of the ``closed`` mold that meets the cast, minus the channels, has the cast's
+    volume."""
+    cast_v = cast_m.volume()
     lo, hi = closed.bounding_box()[:3], closed.bounding_box()[3:]
     box = manifold3d.Manifold.cube(tuple(float(b - a) for a, b in zip(lo, hi))).translate(
         tuple(map(float, lo))
@@ -245,52 +262,68 @@ def check_cavity(
     cavity = void - _union([to_manifold(c) for c in channels]) if channels else void
     cavity_v = cavity.volume()
     rel = (cavity_v - cast_v) / cast_v
-    out = [
-        CheckResult(
-            "mold_cavity_volume",
-            abs(rel) <= CAVITY_VOLUME_TOLERANCE,
-            100.0 * rel,
-            100.0 * CAVITY_VOLUME_TOLERANCE,
-            "% of cast volume",
-            where,
-            f"void minus channels {cavity_v:.1f} mm3 against the cast {cast_v:.1f} mm3; "
-            f"{len(touching)} cavity region(s); {len(others)} other void(s) (around the rotated "
-            "block, bolt holes, pin clearances) "
-            f"of {sum(r.volume() for r in others):.1f} mm3 do not reach the cast",
-        )
-    ]
+    return CheckResult(
+        "mold_cavity_volume",
+        abs(rel) <= CAVITY_VOLUME_TOLERANCE,
+        100.0 * rel,
+        100.0 * CAVITY_VOLUME_TOLERANCE,
+        "% of cast volume",
+        where,
+        f"void minus channels {cavity_v:.1f} mm3 against the cast {cast_v:.1f} mm3; "
+        f"{len(touching)} cavity region(s); {len(others)} other void(s) (around the rotated "
+        "block, bolt holes, pin clearances) "
+        f"of {sum(r.volume() for r in others):.1f} mm3 do not reach the cast",
+    )
+
+
+def _intrusion_result(
+    cast_m: manifold3d.Manifold,
+    parts: list[MoldMesh],
+    part_m: list[manifold3d.Manifold],
+    limit: float,
+    where: str,
+) -> CheckResult:
+    """No mold part reaches into the cast by more than ``limit`` mm3."""
     intrusions = {p.name: _shared_volume(m, cast_m) for p, m in zip(parts, part_m)}
     worst = max(intrusions, key=intrusions.get)
-    limit = INTRUSION_TOLERANCE * cast_v
-    out.append(
-        CheckResult(
-            "mold_intrusion",
-            intrusions[worst] <= limit,
-            intrusions[worst],
-            limit,
-            "mm3",
-            f"{where}:{worst}",
-            "largest volume of mold material inside the cast: "
-            + ", ".join(f"{k} {v:.3f}" for k, v in intrusions.items()),
-        )
+    return CheckResult(
+        "mold_intrusion",
+        intrusions[worst] <= limit,
+        intrusions[worst],
+        limit,
+        "mm3",
+        f"{where}:{worst}",
+        "largest volume of mold material inside the cast: "
+        + ", ".join(f"{k} {v:.3f}" for k, v in intrusions.items()),
     )
+
+
+def _overlap_result(
+    parts: list[MoldMesh], part_m: list[manifold3d.Manifold], limit: float, where: str
+) -> CheckResult:
+    """No two parts of the closed mold share more than ``limit`` mm3."""
     overlap, pair = 0.0, "-"
     for i in range(len(parts)):
         for j in range(i + 1, len(parts)):
             vol = _shared_volume(part_m[i], part_m[j])
             if vol > overlap:
                 overlap, pair = vol, f"{parts[i].name}/{parts[j].name}"
-    out.append(
-        CheckResult(
-            "mold_parts_overlap",
-            overlap <= limit,
-            overlap,
-            limit,
-            "mm3",
-            f"{where}:{pair}",
-            "largest volume shared by two mold parts of the closed mold",
-        )
+    return CheckResult(
+        "mold_parts_overlap",
+        overlap <= limit,
+        overlap,
+        limit,
+        "mm3",
+        f"{where}:{pair}",
+        "largest volume shared by two mold parts of the closed mold",
     )
+
+
+def _surface_formed_result(
+    samples: CastSamples, channels: list[trimesh.Trimesh], where: str
+) -> CheckResult:
+    """Every piece of the cast surface is formed by exactly one mold part or opens into a
+    channel."""
     total = float(samples.areas.sum())
     several = float(samples.areas[samples.owner == -2].sum())
     free = samples.owner == -1
@@ -303,18 +336,15 @@ def check_cavity(
     else:
         uncovered = float(samples.areas[free].sum())
     bad = (uncovered + several) / total
-    out.append(
-        CheckResult(
-            "mold_cast_surface_formed",
-            bad <= BLOCKED_LIMIT,
-            100.0 * bad,
-            100.0 * BLOCKED_LIMIT,
-            "% of cast surface",
-            where,
-            f"{uncovered:.3f} mm2 touch no part and no channel, {several:.3f} mm2 touch two parts",
-        )
+    return CheckResult(
+        "mold_cast_surface_formed",
+        bad <= BLOCKED_LIMIT,
+        100.0 * bad,
+        100.0 * BLOCKED_LIMIT,
+        "% of cast surface",
+        where,
+        f"{uncovered:.3f} mm2 touch no part and no channel, {several:.3f} mm2 touch two parts",
     )
-    return out
 
 
 def draft_and_blocking(

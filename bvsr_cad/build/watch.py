@@ -18,6 +18,7 @@ import functools
 import threading
 import tomllib
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -73,6 +74,29 @@ def _bytes(path: Path | None) -> bytes | None:
         return None
 
 
+@dataclass
+class _Watched:
+    """What the watcher last acted on: the parameter file (``params``) as parsed (``last``), the
+    calibration data file it names (``data``) and that file's bytes, and the bytes of both files
+    (``seen``, read before a build: a save during it is new)."""
+
+    params: Path
+    last: dict[str, Any]
+    data: Path | None
+    data_bytes: bytes | None
+    seen: tuple[bytes | None, bytes | None]
+
+    @classmethod
+    def read(cls, params: Path) -> _Watched:
+        last = _read(params) or {}
+        data = _data_file(params, last)
+        data_bytes = _bytes(data)
+        return cls(params, last, data, data_bytes, (_bytes(params), data_bytes))
+
+    def files(self) -> set[Path]:
+        return {self.params} | ({self.data} if self.data else set())
+
+
 def watch(
     params: str | Path,
     out_dir: str | Path | None,
@@ -89,88 +113,108 @@ def watch(
     from watchfiles import watch as watch_files
 
     params = Path(params).resolve()
-    last = _read(params) or {}
     if on_assembly is not None:
         build = functools.partial(build, on_assembly=on_assembly)
-
-    def rebuild() -> None:
-        try:
-            res = build(params, out_dir, progress)
-        except (ParamError, OutputError, GeometryError) as exc:
-            say(f"not rebuilt, the last good export stays: {' '.join(str(exc).split())}")
-            return
-        failed = [r for r in res.results if r.passed is False]
-        reused = [s["stage"] for s in res.stages if s["status"] == "reused"]
-        built = [s["stage"] for s in res.stages if s["status"] == "built"]
-        say(
-            f"wrote {res.out_dir}/ in {res.seconds:.1f} s; {len(failed)} failed checks; "
-            f"rebuilt: {', '.join(built) or 'nothing'}; reused: {', '.join(reused) or 'nothing'}"
-        )
-
-    data = _data_file(params, last)
-    data_bytes = _bytes(data)
-    seen = (
-        _bytes(params),
-        data_bytes,
-    )  # the bytes last acted on (read before the build: a save during it is new)
+    rebuild = functools.partial(_rebuild, build, params, out_dir, progress, say)
+    state = _Watched.read(params)
     try:
         rebuild()
-        say(f"watching {params}" + (f" and {data}" if data else "") + " (Ctrl-C stops)")
-        while True:
-            files = {params} | ({data} if data else set())
-            folders = sorted({f.parent for f in files if f.parent.is_dir()})
-            retarget = False
-            for changes in watch_files(
-                *folders,
-                debounce=debounce_ms,
-                stop_event=stop,
-                raise_interrupt=False,
-                recursive=False,  # the files sit in these folders, not below
-                watch_filter=lambda _change, path, files=files: Path(path).resolve() in files,
-                rust_timeout=CATCH_UP_MS,
-                yield_on_timeout=True,
-            ):
-                now = (_bytes(params), _bytes(data))
-                if not changes and now == seen:
-                    continue  # no event, and the files are as last acted on
-                seen = now
-                new = _read(params)
-                diff = (
-                    changed_keys(last, new)
-                    if new is not None
-                    else [
-                        "(the file is not valid TOML yet)"
-                        if params.exists()
-                        else "(the file is gone)"
-                    ]
-                )
-                new_data = _data_file(params, new) if new is not None else data
-                new_bytes = _bytes(new_data)
-                data_changed = new_data == data and new_bytes != data_bytes
-                if new is not None and not diff and not data_changed:
-                    continue  # saved without a change
-                if diff:
-                    say(f"{params.name} changed: " + "; ".join(diff))
-                if data_changed:
-                    say(
-                        f"{data.name} (calibration data) changed"
-                        if new_bytes is not None
-                        else f"{data.name} (calibration data) is gone"
-                    )
-                if new is not None:
-                    last = new
-                data_bytes = new_bytes
-                rebuild()
-                if new_data != data:
-                    data, retarget = new_data, True
-                    say(f"now watching {params}" + (f" and {data}" if data else ""))
-                    break
-            if not retarget:
-                break
+        say(f"watching {params}" + (f" and {state.data}" if state.data else "") + " (Ctrl-C stops)")
+        while _watch_until_retarget(state, watch_files, stop, debounce_ms, rebuild, say):
+            say(f"now watching {params}" + (f" and {state.data}" if state.data else ""))
     except KeyboardInterrupt:
         pass
     say("stopped")
     return 0
+
+
+def _rebuild(
+    build: Callable[..., BuildResult],
+    params: Path,
+    out_dir: str | Path | None,
+    progress: Callable[[str], None] | None,
+    say: Callable[[str], None],
+) -> None:
+    """One build, and a line saying what it wrote, its failed checks and the stages it rebuilt
+    and reused; a bad edit says why and leaves the last good export."""
+    try:
+        res = build(params, out_dir, progress)
+    except (ParamError, OutputError, GeometryError) as exc:
+        say(f"not rebuilt, the last good export stays: {' '.join(str(exc).split())}")
+        return
+    failed = [r for r in res.results if r.passed is False]
+    reused = [s["stage"] for s in res.stages if s["status"] == "reused"]
+    built = [s["stage"] for s in res.stages if s["status"] == "built"]
+    say(
+        f"wrote {res.out_dir}/ in {res.seconds:.1f} s; {len(failed)} failed checks; "
+        f"rebuilt: {', '.join(built) or 'nothing'}; reused: {', '.join(reused) or 'nothing'}"
+    )
+
+
+def _watch_until_retarget(
+    state: _Watched,
+    watch_files: Callable[..., Any],
+    stop: threading.Event | None,
+    debounce_ms: int,
+    rebuild: Callable[[], None],
+    say: Callable[[str], None],
+) -> bool:
+    """Watch the files of ``state``, rebuilding after each edit, until stopped (False) or until an
+    edit names another calibration data file (True: watch again, with that one)."""
+    files = state.files()
+    folders = sorted({f.parent for f in files if f.parent.is_dir()})
+    for changes in watch_files(
+        *folders,
+        debounce=debounce_ms,
+        stop_event=stop,
+        raise_interrupt=False,
+        recursive=False,  # the files sit in these folders, not below
+        watch_filter=lambda _change, path: Path(path).resolve() in files,
+        rust_timeout=CATCH_UP_MS,
+        yield_on_timeout=True,
+    ):
+        if _on_save(state, changes, rebuild, say):
+            return True
+    return False
+
+
+def _on_save(
+    state: _Watched, changes: set, rebuild: Callable[[], None], say: Callable[[str], None]
+) -> bool:
+    """Act on one batch of file events (none: a catch-up look at the files): say what changed and
+    rebuild, unless nothing did. True when the edit names another calibration data file."""
+    params, data = state.params, state.data
+    now = (_bytes(params), _bytes(data))
+    if not changes and now == state.seen:
+        return False  # no event, and the files are as last acted on
+    state.seen = now
+    new = _read(params)
+    diff = (
+        changed_keys(state.last, new)
+        if new is not None
+        else ["(the file is not valid TOML yet)" if params.exists() else "(the file is gone)"]
+    )
+    new_data = _data_file(params, new) if new is not None else data
+    new_bytes = _bytes(new_data)
+    data_changed = new_data == data and new_bytes != state.data_bytes
+    if new is not None and not diff and not data_changed:
+        return False  # saved without a change
+    if diff:
+        say(f"{params.name} changed: " + "; ".join(diff))
+    if data_changed:
+        say(
+            f"{data.name} (calibration data) changed"
+            if new_bytes is not None
+            else f"{data.name} (calibration data) is gone"
+        )
+    if new is not None:
+        state.last = new
+    state.data_bytes = new_bytes
+    rebuild()
+    if new_data == data:
+        return False
+    state.data = new_data
+    return True
 
 
 __all__ = ["watch", "changed_keys"]

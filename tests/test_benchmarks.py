@@ -232,44 +232,156 @@ def test_sim_bench_refuses_a_profile_of_no_rows(capsys):
     assert "--profile-rows must be at least 1, got 0" in capsys.readouterr().err
 
 
-def test_sim_bench_runs_on_the_cpu_and_says_profile_needs_cuda(bvsr_export, capsys, monkeypatch):
-    """The benchmark end to end on a machine without a CUDA GPU (CI): CPU MuJoCo's rate at the
-    exported step, Warp's CPU batch checked against CPU MuJoCo, and --profile declining in one
-    line."""
+def test_sim_bench_refuses_a_missing_baseline_before_any_work(capsys):
+    bench = benchmark_script("sim_bench")
+    with pytest.raises(SystemExit) as done:
+        bench.main(["/nonexistent-export", "--baseline", "/nonexistent/scene.xml"])
+    assert done.value.code == 2
+    assert "--baseline /nonexistent/scene.xml: no such MJCF file" in capsys.readouterr().err
+
+
+def test_sim_bench_stage_summary_counts_each_scope_once():
+    """A stage's time is its outermost scope's: the solver's inner ``mul_m`` is not added to
+    ``solve`` again, and what no stage names is ``other``."""
+    bench = benchmark_script("sim_bench")
+    times = {
+        ("step",): 10.0,
+        ("step", "forward"): 8.0,
+        ("step", "forward", "fwd_position"): 5.0,
+        ("step", "forward", "fwd_position", "fwd_kinematics", "tendon"): 1.0,
+        ("step", "forward", "fwd_position", "collision"): 0.75,
+        ("step", "forward", "fwd_position", "make_constraint"): 0.5,
+        ("step", "forward", "fwd_velocity", "passive"): 0.25,
+        ("step", "forward", "fwd_velocity", "tendon_bias"): 0.125,
+        ("step", "forward", "solve"): 2.0,
+        ("step", "forward", "solve", "mul_m"): 0.5,
+        ("step", "implicit"): 1.5,
+        ("step", "implicit", "deriv_smooth_vel"): 1.0,
+    }
+    assert bench.stage_summary(times) == {
+        "tendon": 1.125,
+        "collision": 0.75,
+        "constraint": 2.5,
+        "passive": 0.25,
+        "integrator": 1.5,
+        "other": 10.0 - 1.125 - 0.75 - 2.5 - 0.25 - 1.5,
+        "step": 10.0,
+    }
+    total = {}
+    bench._add_trace(total, {"step": ((1.0, 2.0), {"forward": ((0.5,), {})})})
+    bench._add_trace(total, {"step": ((4.0,), {})})
+    assert total == {("step",): 7.0, ("step", "forward"): 0.5}
+
+
+def test_sim_bench_held_patterns_follow_the_soa_layout(bvsr_export, bvsr_spec):
+    """The side of soa1 is the SOAs less than 90 deg round the axis from it (the layout's angles,
+    72 deg apart: soa1, soa2, soa5), in every joint; the alternating pattern takes that side in the
+    odd joints and the other side in the even ones; each line alone is that SOA in every joint."""
+    import mujoco
+    import numpy as np
+
+    from bvsr_cad.parameters.layout import soa_angles_deg
+    from bvsr_cad.simulation import sim_gpu
+
+    bench = benchmark_script("sim_bench")
+    model = mujoco.MjModel.from_xml_path(str(sim_gpu.scene_path(bvsr_export)))
+    angles = np.radians(soa_angles_deg())
+    near = {f"soa{i + 1}" for i, a in enumerate(angles) if np.cos(a - angles[0]) > 0}
+    far = {f"soa{i + 1}" for i in range(len(angles))} - near
+    joints = bvsr_spec.segments * bvsr_spec.joints_per_segment
+    top = model.actuator_ctrlrange[:, 1]
+
+    def pressed(ctrl):
+        assert set(ctrl[ctrl != 0]) <= set(top)
+        return {model.actuator(i).name for i in np.flatnonzero(ctrl)}
+
+    def every_joint(lines, which=range(1, joints + 1)):
+        return {f"j{k}_{line}" for k in which for line in lines}
+
+    patterns = dict(bench.held_patterns(model))
+    assert near == {"soa1", "soa2", "soa5"}
+    assert pressed(patterns["soa1's side"]) == every_joint(near)
+    assert pressed(patterns["opposite soa1's side"]) == every_joint(far)
+    odd, even = range(1, joints + 1, 2), range(2, joints + 1, 2)
+    assert pressed(patterns["sides alternating"]) == every_joint(near, odd) | every_joint(far, even)
+    assert pressed(patterns["all lines"]) == every_joint(near | far)
+    for line in near | far:
+        assert pressed(patterns[f"{line} alone"]) == every_joint({line})
+    assert not patterns["rest"].any()
+    assert (patterns["all lines, vacuum"] == model.actuator_ctrlrange[:, 0]).all()
+
+
+def test_sim_bench_runs_on_the_cpu_beside_a_baseline(bvsr_export, tmp_path, capsys, monkeypatch):
+    """The benchmark end to end on a machine without a CUDA GPU (CI), the export's scene against
+    itself as the baseline: the counts read the MJCF file's elements (tendons by kind, equality
+    rows: a joint equality is one row, all active from rest); CPU MuJoCo's and Warp's CPU rates per
+    round, their ratios the medians'; Warp's CPU batches checked against CPU MuJoCo; the stages
+    timed by the host clock, which leaves MuJoCo Warp's Warp as it was; graph capture and
+    --profile's kernels declined in a line each."""
     pytest.importorskip("warp", reason="needs the optional extra .[gpu]")
     pytest.importorskip("mujoco_warp", reason="needs the optional extra .[gpu]")
+    import json
+    import statistics
+    import xml.etree.ElementTree as ET
+
     import mujoco
+    import warp
+    from mujoco_warp._src import warp_util
 
     from bvsr_cad.simulation import sim_gpu
 
     bench = benchmark_script("sim_bench")
     monkeypatch.setattr(bench, "cuda_present", lambda: None)
-    assert (
-        bench.main(
-            [
-                str(bvsr_export),
-                "--no-mjx",
-                "--cpu-batches",
-                "2",
-                "--steps",
-                "3",
-                "--cpu-seconds",
-                "0.2",
-                "--profile",
-            ]
-        )
-        == 0
-    )
+    scene = sim_gpu.scene_path(bvsr_export)
+    report = tmp_path / "sim.json"
+    argv = [str(bvsr_export), "--baseline", str(scene), "--no-mjx", "--json", str(report)]
+    argv += ["--cpu-batches", "2", "--steps", "3", "--stage-steps", "2", "--rounds", "2"]
+    argv += ["--cpu-seconds", "0.2", "--warp-cpu-batch", "2", "--warp-cpu-steps", "3", "--profile"]
+    assert bench.main(argv) == 0
     out = capsys.readouterr().out
-    step_ms = mujoco.MjModel.from_xml_path(str(sim_gpu.scene_path(bvsr_export))).opt.timestep * 1e3
-    assert (
-        f"time step {step_ms:g} ms" in out and "real-time factor" in out and "WARNINGS" not in out
-    )
-    warp_line = next(line for line in out.splitlines() if "warp  batch     2:" in line)
-    assert (
-        float(warp_line.rsplit("max|dqpos| ", 1)[1].split()[0]) < 1e-5
-        and "PROBLEMS" not in warp_line
-    )
+    figures = json.loads(report.read_text())
+    assert warp_util.wp is warp
+
+    model = mujoco.MjModel.from_xml_path(str(scene))
+    tree = ET.parse(scene.parent / "bvsr.xml").getroot()
+    fixed, spatial = tree.findall("tendon/fixed"), tree.findall("tendon/spatial")
+    counts = figures["scenes"]["scene"]["counts"]
+    assert counts == figures["scenes"]["baseline"]["counts"]
+    assert (counts["fixed_tendons"], counts["spatial_tendons"]) == (len(fixed), len(spatial))
+    assert counts["damped_tendons"] == sum(float(t.get("damping", 0)) > 0 for t in fixed + spatial)
+    assert counts["limited_tendons"] == sum(t.get("range") is not None for t in fixed + spatial)
+    equality_rows = len(tree.findall("equality/joint")) + 3 * len(tree.findall("equality/connect"))
+    assert counts["rows"]["equality"] == equality_rows > 0
+    assert counts["rows"]["all"] == max(counts["rows_by_pattern"].values()) >= equality_rows
+    assert counts["nv"] == model.nv and counts["warnings"] == []
+
+    cpu = figures["cpu"]
+    for engine, key in (("mujoco", "mujoco_steps"), ("warp", "warp_cpu_steps")):
+        rates = cpu[engine]
+        assert len(rates["scene"]) == len(rates["baseline"]) == 2
+        ratio = statistics.median(rates["scene"]) / statistics.median(rates["baseline"])
+        assert cpu["ratios"][key] == pytest.approx(ratio, rel=1e-12)
+    step_ms = model.opt.timestep * 1e3
+    assert f"time step {step_ms:g} ms" in out and "real-time factor" in out
+    assert "WARNINGS" not in out and "pinned to CPU" in out
+    assert "CUDA-graph capture needs a CUDA device: skipped" in out
+
+    batches = figures["batches"]
+    assert {(r["scene"], r["engine"], r["nworld"]) for r in batches} == {
+        ("scene", "warp", 2),
+        ("baseline", "warp", 2),
+    }
+    for row in batches:
+        assert row["world0_max_dqpos"] < 1e-5 and row["problems"] == []
+
+    for label in ("scene", "baseline"):
+        stages = figures["stages"][label]
+        summary, scopes = stages["summary_ms"], stages["ms_per_step"]
+        assert stages["nworld"] == 2 and stages["clock"].startswith("host wall time on cpu")
+        assert summary["step"] == scopes["step"] > scopes["step.forward"] > 0
+        assert summary["constraint"] > 0 and summary["integrator"] > 0
+    assert "kernels named after tendons: Warp times kernels on CUDA devices only: skipped" in out
     assert out.rstrip().endswith(
-        "--profile: per-kernel times need MuJoCo Warp on a CUDA GPU; skipped"
+        "--profile: per-kernel times need MuJoCo Warp on a CUDA GPU; skipped\n\n"
+        f"figures written to {report}"
     )

@@ -1,0 +1,61 @@
+"""The default simulation scene's budget for batched stepping: the counts that set what a MuJoCo
+Warp step costs every world stay at or below what the scene has. A change to the writer that adds
+tendons, DoFs or constraint rows to the default scene fails here, not in a benchmark someone forgot
+to run (``benchmarks/sim_bench.py`` measures what they cost; figures in benchmarks/RESULTS.md).
+
+Each ceiling is per bending joint of the tail (``segments`` x ``joints_per_segment`` of the
+parameters: 6 in the default tail) and is the default scene's own count, as
+``benchmarks/sim_bench.py`` measured it:
+
+- DoFs: 4 per joint, the two pivot hinges of the pseudo-rigid-body chain about each of the two
+  bending axes;
+- tendons: 15 per joint, one spatial tendon per SOA (5), two shear springs and 8 bend-limit faces;
+- constraint rows: 2 per joint, the most in any step of 0.3 s of any held pressure pattern from
+  rest (:func:`sim_bench.held_patterns`), all of them the two pivots' equalities: held pressures
+  bend the tail to at most 38 % of its limits, so no limit row appears.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import pytest
+
+from bvsr_cad.simulation import sim_gpu
+
+from .conftest import benchmark_script
+
+DOFS_PER_JOINT = 4
+TENDONS_PER_JOINT = 15
+ROWS_PER_JOINT = 2
+
+
+@pytest.fixture(scope="module")
+def budget(bvsr_export, bvsr_spec):
+    """The default scene, its counts and the tail's number of bending joints."""
+    model = mujoco.MjModel.from_xml_path(str(sim_gpu.scene_path(bvsr_export)))
+    counts = benchmark_script("sim_bench").scene_counts(model)
+    return model, counts, bvsr_spec.segments * bvsr_spec.joints_per_segment
+
+
+def test_default_scene_dofs_within_budget(budget):
+    model, _, joints = budget
+    assert model.nv <= DOFS_PER_JOINT * joints
+
+
+def test_default_scene_tendons_within_budget(budget):
+    model, _, joints = budget
+    assert model.ntendon <= TENDONS_PER_JOINT * joints
+
+
+def test_default_scene_constraint_rows_within_budget(budget):
+    """The most rows under any held pattern, which the rows of the scene's equalities (one a joint
+    equality, all active from rest) bound from below: the count sees every row."""
+    model, counts, joints = budget
+    rows = counts["rows"]
+    equality_rows = sum(
+        {mujoco.mjtEq.mjEQ_JOINT: 1, mujoco.mjtEq.mjEQ_CONNECT: 3, mujoco.mjtEq.mjEQ_WELD: 6}[t]
+        for t in map(mujoco.mjtEq, model.eq_type)
+    )
+    assert counts["warnings"] == []
+    assert rows["equality"] == equality_rows
+    assert equality_rows <= rows["all"] <= ROWS_PER_JOINT * joints

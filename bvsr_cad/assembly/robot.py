@@ -342,15 +342,33 @@ def _bending_joint(
     spec = asm.spec
     j = f"j{k}"
     seg = (k - 1) // spec.joints_per_segment + 1
-    t_mm = spec.joint.panel_thickness_mm
     L = units.mm_to_m(spec.joint.gap_mm)
-    t = units.mm_to_m(t_mm)
+    body, visuals = _deformable_body(asm, k, rod_in_gap)
+    links = _joint_links(j, body, visuals, L)
+    joints = _joint_chain(j, k, th, limits, L, spec.joint.panel_thickness_mm)
+    bend = BendingJoint(
+        j,
+        L,
+        tuple(f"{j}_{n}" for n in ("phi", "theta_a", "chord", "theta_b", "phi_b")),
+        f"panel{k - 1}",
+        f"panel{k}",
+        th,
+        seg,
+    )
+    return links, joints, bend
+
+
+def _deformable_body(asm: Assembly, k: int, rod_in_gap) -> tuple[Inertial, list[Visual]]:
+    """Joint k's deformable body at rest in its arc-start frame (the centre of panel k-1's distal
+    face): the five SOAs and the rod piece in the gap, as one inertial and their visuals."""
+    spec = asm.spec
+    j = f"j{k}"
+    t_mm = spec.joint.panel_thickness_mm
     rod_mat = spec.materials.get(spec.vertebra.material)
     soa_mat = spec.material(spec.use.soa)
     z_start_mm = asm.panel_layouts[k - 1].z0_mm + t_mm
     T_start_inv = np.eye(4)
     T_start_inv[2, 3] = -z_start_mm
-    # Deformable body at rest in the arc-start frame: five SOAs and the rod in the gap.
     soa_solids = []
     soa_inertials = []
     for inst in asm.soas_of_joint(k):
@@ -373,9 +391,20 @@ def _bending_joint(
         visuals.append(
             Visual(f"{j}_rod", spec.vertebra.material, rod_mat.density_g_cm3, rgba("rod"), rod_gap)
         )
-    half_a, half_b = split_deformable(compose(parts), L)
-    names = (f"{j}_after_phi", f"{j}_after_theta_a", f"{j}_after_chord", f"{j}_after_theta_b")
-    links = {
+    return compose(parts), visuals
+
+
+def _chain_link_names(j: str) -> tuple[str, str, str, str]:
+    """Joint j's four links, named by the joint before each along the chain."""
+    return (f"{j}_after_phi", f"{j}_after_theta_a", f"{j}_after_chord", f"{j}_after_theta_b")
+
+
+def _joint_links(j: str, body: Inertial, visuals: list[Visual], L: float) -> dict[str, Link]:
+    """Joint j's four links in chain order: a virtual link after phi, the deformable body's two
+    halves after theta_a and after the chord (arc length L, m), a virtual link after theta_b."""
+    half_a, half_b = split_deformable(body, L)
+    names = _chain_link_names(j)
+    return {
         names[0]: Link(
             names[0], Inertial.point(VIRTUAL_MASS_KG, VIRTUAL_INERTIA_KG_M2), role="virtual"
         ),
@@ -385,11 +414,21 @@ def _bending_joint(
             names[3], Inertial.point(VIRTUAL_MASS_KG, VIRTUAL_INERTIA_KG_M2), role="virtual"
         ),
     }
+
+
+def _joint_chain(
+    j: str, k: int, th: float, limits: _JointLimits, L: float, t_mm: float
+) -> list[Joint]:
+    """Joint j's five joints from panel k-1 to panel k, Rz(phi) Ry(theta/2) Tz(chord) Ry(theta/2)
+    Rz(-phi), starting on panel k-1's distal face (t_mm above its frame), bending up to th (rad)
+    over an arc of length L (m)."""
+    names = _chain_link_names(j)
+    t = units.mm_to_m(t_mm)
     half_lim = th / 2.0
     velocity_limit_rad_s, effort_limit_nm = limits.velocity_rad_s, limits.effort_nm
     v_half = velocity_limit_rad_s / 2.0
     chord_lo = float(chord_joint_value(th, L))
-    joints = [
+    return [
         Joint(
             f"{j}_phi",
             "continuous",
@@ -450,16 +489,6 @@ def _bending_joint(
             mimic=Mimic(f"{j}_phi", -1.0),
         ),
     ]
-    bend = BendingJoint(
-        j,
-        L,
-        tuple(f"{j}_{n}" for n in ("phi", "theta_a", "chord", "theta_b", "phi_b")),
-        f"panel{k - 1}",
-        f"panel{k}",
-        th,
-        seg,
-    )
-    return links, joints, bend
 
 
 def _soa_sockets(asm: Assembly, k: int) -> tuple[list[Site], list[SoaActuator]]:

@@ -104,33 +104,66 @@ def _canonical_presentation(data: bytes) -> bytes:
     one line. The entities, their references and what they mean are unchanged. A file without such a
     section, one whose section has a cycle of references, or one whose entities before it refer into
     it (never seen: renumbering would break them), is returned as it is."""
-    import hashlib
+    found = _presentation_section(data)
+    if found is None:
+        return data
+    start, end, bodies = found
+    inner = {n: [r for r in _references(body) if r in bodies] for n, body in bodies.items()}
+    try:
+        roots = _roots_by_digest(bodies, inner)
+    except (ValueError, RecursionError):
+        return data
+    new = _depth_first_numbers(roots, inner, min(bodies))
+    if len(new) != len(bodies):
+        return data
+    renumbered = {
+        new[n]: _outside_strings(
+            body,
+            lambda t: _REF.sub(lambda m: b"#%d" % new.get(int(m.group(1)), int(m.group(1))), t),
+        )
+        for n, body in bodies.items()
+    }
+    out = b"".join(b"#%d = %s\n" % (n, renumbered[n]) for n in sorted(renumbered))
+    return data[:start] + out + data[end + 1 :]
 
+
+def _presentation_section(data: bytes) -> tuple[int, int, dict[int, bytes]] | None:
+    """Where the presentation section of a STEP file begins and ends (the newline before
+    ``ENDSEC;``) and its entities' bodies by number, each on one line; None where there is no such
+    section or it cannot be renumbered: an entity without its end, numbers that do not run on from
+    the first, or an entity before it that refers into it."""
     start = data.find(_PRESENTATION)
     if start < 0:
-        return data
+        return None
     start = data.rfind(b"\n", 0, start) + 1
     end = data.find(b"\nENDSEC;", start)
     if end < 0:
-        return data
+        return None
     section = data[start : end + 1]
     heads = list(_ENTITY_START.finditer(section))
     if not heads or heads[0].start() != 0:
-        return data
+        return None
     bodies: dict[int, bytes] = {}
     for head, nxt in zip(heads, heads[1:] + [None]):
         body = section[head.end() : nxt.start() if nxt else len(section)].rstrip()
         if not body.endswith(b";"):
-            return data
+            return None
         bodies[int(head.group(1))] = _outside_strings(body, _unwrapped)
     first = min(bodies)
     if first != int(heads[0].group(1)) or len(bodies) != len(heads):
-        return data
+        return None
     digits = len(str(first))
     if any(int(r) >= first for r in re.findall(rb"#(\d{%d,})" % digits, data[:start])):
-        return data
+        return None
+    return start, end, bodies
 
-    inner = {n: [r for r in _references(body) if r in bodies] for n, body in bodies.items()}
+
+def _roots_by_digest(bodies: dict[int, bytes], inner: dict[int, list[int]]) -> list[int]:
+    """The section's roots (the entities no other of it refers to) in the order of their digests: a
+    digest is of an entity's text with its references into the section (``inner``) replaced by
+    theirs. Raises ValueError (or RecursionError) on a cycle of references."""
+    import hashlib
+
     digests: dict[int, bytes] = {}
     walking: set[int] = set()
 
@@ -152,35 +185,25 @@ def _canonical_presentation(data: bytes) -> bytes:
             digests[number] = hashlib.sha256(text).hexdigest().encode()
         return digests[number]
 
-    try:
-        referenced = {r for refs in inner.values() for r in refs}
-        roots = sorted((n for n in bodies if n not in referenced), key=digest)
-    except (ValueError, RecursionError):
-        return data
-    new: dict[int, int] = {}
+    referenced = {r for refs in inner.values() for r in refs}
+    return sorted((n for n in bodies if n not in referenced), key=digest)
 
-    def walk(number: int) -> None:
-        stack = [number]
+
+def _depth_first_numbers(
+    roots: list[int], inner: dict[int, list[int]], first: int
+) -> dict[int, int]:
+    """Each entity's new number, from ``first`` on, in the order a depth-first walk from the
+    ``roots`` (in their order) through the references ``inner`` first reaches it."""
+    new: dict[int, int] = {}
+    for root in roots:
+        stack = [root]
         while stack:
             n = stack.pop()
             if n in new:
                 continue
             new[n] = first + len(new)
             stack.extend(reversed(inner[n]))
-
-    for root in roots:
-        walk(root)
-    if len(new) != len(bodies):
-        return data
-    renumbered = {
-        new[n]: _outside_strings(
-            body,
-            lambda t: _REF.sub(lambda m: b"#%d" % new.get(int(m.group(1)), int(m.group(1))), t),
-        )
-        for n, body in bodies.items()
-    }
-    out = b"".join(b"#%d = %s\n" % (n, renumbered[n]) for n in sorted(renumbered))
-    return data[:start] + out + data[end + 1 :]
+    return new
 
 
 def fix_step(path: Path) -> bool:

@@ -22,6 +22,7 @@ from ..assembly.fabrication import made_items
 from ..assembly.pneumatic_lines import line_tube_lengths_mm, tube_routes_mm
 from ..assembly.products import RIGID_MATERIAL
 from ..parameters.standard_parts import metric, size_for_clearance_hole, size_for_tap_drill
+from ..parameters.tables import FabricationPackage
 from ..parameters.twin import rigid_joining
 from ..parts.mold import MoldSet
 from ..parts.rigid_tail import RigidPiece
@@ -268,26 +269,35 @@ def _pneumatic_rows(asm: Assembly, roles: dict[str, int]) -> tuple[list[BomRow],
     """The fittings, each line's tube, tees or manifolds and valves; the tubes' total length, mm,
     and the number of lines."""
     spec = asm.spec
-    fp = spec.fabrication_package
     lines = spec.segments * 5
     d_tube = spec.tubes.outer_diameter_mm
-    rows = [
-        BomRow(
-            "pneumatics",
-            "pneumatic",
-            "root fitting",
-            f"push-in fitting M5 x tube {d_tube:g} mm, straight",
-            roles.get("port", 0),
-            "pcs",
-            "",
-            "bought",
-            None,
-            None,
-            "segment 1's five lines, in the root mount's tapped ports",
-        )
-    ]
+    fitting = BomRow(
+        "pneumatics",
+        "pneumatic",
+        "root fitting",
+        f"push-in fitting M5 x tube {d_tube:g} mm, straight",
+        roles.get("port", 0),
+        "pcs",
+        "",
+        "bought",
+        None,
+        None,
+        "segment 1's five lines, in the root mount's tapped ports",
+    )
+    tubes, total_tube = _tube_rows(asm)
+    valves = _valve_rows(spec.fabrication_package, lines, d_tube)
+    return [fitting, *tubes, *valves], total_tube, lines
+
+
+def _tube_rows(asm: Assembly) -> tuple[list[BomRow], float]:
+    """Each line's tube, cut to its route inside the tail with a bending allowance and a lead to
+    the valves; their total length, mm."""
+    spec = asm.spec
+    fp = spec.fabrication_package
+    d_tube = spec.tubes.outer_diameter_mm
     routes = tube_routes_mm(asm)
     cut = line_tube_lengths_mm(asm)
+    rows = []
     total_tube = 0.0
     for line, inside in routes.items():
         length = cut[line]
@@ -308,7 +318,12 @@ def _pneumatic_rows(asm: Assembly, roles: dict[str, int]) -> tuple[list[BomRow],
                 f"bending) + {fp.tube_lead_mm:g} mm lead to the valves",
             )
         )
-    rows.append(
+    return rows, total_tube
+
+
+def _valve_rows(fp: FabricationPackage, lines: int, d_tube: float) -> list[BomRow]:
+    """What joins each line to its valves (a tee for two, else a manifold) and the valves."""
+    joiner = (
         BomRow(
             "pneumatics",
             "pneumatic",
@@ -337,22 +352,20 @@ def _pneumatic_rows(asm: Assembly, roles: dict[str, int]) -> tuple[list[BomRow],
             "joins each line to its valves",
         )
     )
-    rows.append(
-        BomRow(
-            "pneumatics",
-            "pneumatic",
-            "solenoid valve",
-            "2/2-way solenoid valve, 24 V DC",
-            lines * fp.valves_per_line,
-            "pcs",
-            "",
-            "bought",
-            None,
-            None,
-            f"{fp.valves_per_line} per line x {lines} lines (paper: 20 valves for 10 channels)",
-        )
+    valves = BomRow(
+        "pneumatics",
+        "pneumatic",
+        "solenoid valve",
+        "2/2-way solenoid valve, 24 V DC",
+        lines * fp.valves_per_line,
+        "pcs",
+        "",
+        "bought",
+        None,
+        None,
+        f"{fp.valves_per_line} per line x {lines} lines (paper: 20 valves for 10 channels)",
     )
-    return rows, total_tube, lines
+    return [joiner, valves]
 
 
 def _rigid_tail_rows(spec, items, pieces: Sequence[RigidPiece]) -> tuple[list[BomRow], float]:

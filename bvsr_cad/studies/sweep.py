@@ -385,17 +385,8 @@ def run_study(
     say = say or (lambda _m: None)
     t0 = time.perf_counter()
     pl = plan(study)
-    base_problem = infeasible_reason(study.variant({}, "base"))
-    if base_problem:
-        raise StudyError(
-            study.path,
-            [f"base = {str(study.base_path)!r} with [set] is not a buildable tail: {base_problem}"],
-        )
-    out = Path(out_dir) if out_dir is not None else Path("exports") / "studies" / study.name
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise SweepError(f"cannot use {str(out)!r} as the study folder: {exc}") from None
+    _require_buildable_base(study)
+    out = _study_folder(study, out_dir)
     journal = out / JOURNAL
     # What a rerun keeps: results and impossible tails. A timeout or an error is tried again (with a
     # longer time_limit_s, or after a fix), so a rerun finishes what an earlier one could not.
@@ -418,27 +409,9 @@ def run_study(
                 study, pl, cluster, journal, done, export_root, progress, n_workers
             )
         else:
-            variants = study.variants()
-            todo = [v for v in variants if v.key not in done]
-            reused = len(variants) - len(todo)
-            tasks = []
-            for v in todo:  # an impossible tail is found here, at once, without a worker
-                task = payload(study, v, pl, export_root)
-                reason = infeasible_reason(v)
-                if reason:
-                    row = _row(task, "infeasible", reason)
-                    _append(journal, row)
-                    done[v.key] = row
-                else:
-                    tasks.append(task)
-            say(
-                f"{len(variants)} variants: {reused} already in {journal.name}, "
-                f"{len(todo) - len(tasks)} infeasible "
-                f"(recorded with the reason), {len(tasks)} to run"
+            rows, reused = _listed_variants(
+                study, pl, cluster, journal, done, export_root, progress, say
             )
-            new = _run_many(cluster, tasks, journal, progress, study.name)
-            done.update(new)
-            rows = [done[v.key] for v in variants]
             best = None
     finally:
         if cluster is not None:
@@ -456,6 +429,63 @@ def run_study(
         files,
         best,
     )
+
+
+def _require_buildable_base(study: Study) -> None:
+    """Raise StudyError when the study's base with its [set] is not a buildable tail."""
+    base_problem = infeasible_reason(study.variant({}, "base"))
+    if base_problem:
+        raise StudyError(
+            study.path,
+            [f"base = {str(study.base_path)!r} with [set] is not a buildable tail: {base_problem}"],
+        )
+
+
+def _study_folder(study: Study, out_dir: str | Path | None) -> Path:
+    """The study's output folder, created (default exports/studies/<name>); SweepError if it
+    cannot be."""
+    out = Path(out_dir) if out_dir is not None else Path("exports") / "studies" / study.name
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise SweepError(f"cannot use {str(out)!r} as the study folder: {exc}") from None
+    return out
+
+
+def _listed_variants(
+    study: Study,
+    pl: Plan,
+    cluster: _Cluster,
+    journal: Path,
+    done: dict[str, dict[str, Any]],
+    export_root: Path | None,
+    progress: bool,
+    say: Callable[[str], None],
+) -> tuple[list[dict[str, Any]], int]:
+    """A grid or random study: every listed variant not yet in ``done`` runs on the cluster, an
+    infeasible one is recorded without a worker. Its rows in the study's order and how many were
+    reused from the journal."""
+    variants = study.variants()
+    todo = [v for v in variants if v.key not in done]
+    reused = len(variants) - len(todo)
+    tasks = []
+    for v in todo:  # an impossible tail is found here, at once, without a worker
+        task = payload(study, v, pl, export_root)
+        reason = infeasible_reason(v)
+        if reason:
+            row = _row(task, "infeasible", reason)
+            _append(journal, row)
+            done[v.key] = row
+        else:
+            tasks.append(task)
+    say(
+        f"{len(variants)} variants: {reused} already in {journal.name}, "
+        f"{len(todo) - len(tasks)} infeasible "
+        f"(recorded with the reason), {len(tasks)} to run"
+    )
+    new = _run_many(cluster, tasks, journal, progress, study.name)
+    done.update(new)
+    return [done[v.key] for v in variants], reused
 
 
 def _terminate_as_interrupt():
@@ -543,6 +573,70 @@ def _optuna(
     progress: bool,
     slots: int,
 ):
+    """An Optuna study: trials are asked and run on the cluster, up to ``slots`` at a time, until
+    ``study.trials`` have finished; a tail already in ``done`` answers its trial without running.
+    Its rows, how many were reused and the best trial(s)."""
+    from optuna.trial import TrialState
+
+    ost = _optuna_study(study, journal)
+    # Trials that count towards the study: those whose tail has a row (a trial interrupted before
+    # its row was written does not count, and is asked again).
+    finished = [
+        t
+        for t in ost.get_trials(deepcopy=False)
+        if t.state in (TrialState.COMPLETE, TrialState.FAIL) and t.user_attrs.get("variant") in done
+    ]
+    rows = {t.user_attrs["variant"]: done[t.user_attrs["variant"]] for t in finished}
+    reused = len(rows)
+    in_flight: dict[Any, tuple[Any, Variant, dict]] = {}
+
+    with _bar(study.trials, progress, study.name) as bar:
+        bar.update(len(finished))
+        count = len(finished)
+
+        def finish(trial, v: Variant, row: dict[str, Any], new: bool) -> None:
+            """Record a trial's row (appended to the journal when it is new) and tell Optuna."""
+            nonlocal count, reused
+            row = {**row, "trial": trial.number}
+            if new:
+                _append(journal, row)
+                done[v.key] = rows[v.key] = row
+            else:  # one row per tail: a tail asked again keeps its first trial's row
+                reused += v.key not in rows
+                rows.setdefault(v.key, row)
+            _tell(study, ost, trial, row)
+            count += 1
+            bar.set_postfix_str(f"trial {trial.number}: {row['status']}")
+            bar.update(1)
+
+        while count + len(in_flight) < study.trials or in_flight:
+            while len(in_flight) < slots and count + len(in_flight) < study.trials:
+                trial = ost.ask()
+                over = _suggest(study, trial)
+                v = study.variant(over, "base" if trial.user_attrs.get("baseline") else None)
+                trial.set_user_attr("variant", v.key)
+                task = payload(study, v, pl, export_root)
+                reason = "" if v.key in done else infeasible_reason(v)
+                if v.key in done:
+                    # the same tail ran before (an earlier trial or run): its row answers
+                    finish(trial, v, done[v.key], new=False)
+                elif reason:
+                    finish(trial, v, _row(task, "infeasible", reason), new=True)
+                else:
+                    fut = cluster.client.submit(
+                        evaluate, task, key=f"bvsr-trial-{trial.number}-{v.key}", pure=False
+                    )
+                    in_flight[fut] = (trial, v, task)
+            for fut in _first_done(in_flight) if in_flight else ():
+                trial, v, task = in_flight.pop(fut)
+                finish(trial, v, _result(fut, task), new=True)
+    return list(rows.values()), reused, _best(study, ost)
+
+
+def _optuna_study(study: Study, journal: Path):
+    """The study's Optuna study in its journal file next to ``journal``, created or loaded: the
+    trials an interrupted run left running are failed, and a new study with ``baseline`` asks the
+    base tail first."""
     import optuna
     from optuna.storages import JournalStorage
     from optuna.storages.journal import JournalFileBackend
@@ -562,86 +656,45 @@ def _optuna(
         load_if_exists=True,
         directions=[o.direction for o in study.objectives],
     )
-    for t in ost.get_trials(
-        deepcopy=False, states=(TrialState.RUNNING,)
-    ):  # left by an interrupted run
+    for t in ost.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
         ost.tell(t.number, state=TrialState.FAIL)
-    # Trials that count towards the study: those whose tail has a row (a trial interrupted before
-    # its row was written does not count, and is asked again).
-    finished = [
-        t
-        for t in ost.get_trials(deepcopy=False)
-        if t.state in (TrialState.COMPLETE, TrialState.FAIL) and t.user_attrs.get("variant") in done
-    ]
     if study.baseline and not ost.get_trials(deepcopy=False):
         base = {d.key: get_path(study.base_data, d.key) for d in study.space}
         ost.enqueue_trial(
             {k: v for k, v in base.items() if v is not None}, user_attrs={"baseline": True}
         )
-    rows = {t.user_attrs["variant"]: done[t.user_attrs["variant"]] for t in finished}
-    reused = len(rows)
-    in_flight: dict[Any, tuple[Any, Variant, dict]] = {}
+    return ost
 
-    with _bar(study.trials, progress, study.name) as bar:
-        bar.update(len(finished))
-        count = len(finished)
 
-        def finish(trial, v: Variant, row: dict[str, Any], new: bool) -> None:
-            """Record a trial's row (appended to the journal when it is new) and tell Optuna."""
-            nonlocal count, reused
-            row = {**row, "trial": trial.number}
-            if new:
-                _append(journal, row)
-                done[v.key] = rows[v.key] = row
-            else:  # one row per tail: a tail asked again keeps its first trial's row
-                reused += v.key not in rows
-                rows.setdefault(v.key, row)
-            values = [row.get(o.metric) for o in study.objectives]
-            if row["status"] == "ok" and all(
-                isinstance(x, (int, float)) and math.isfinite(x) for x in values
-            ):
-                violations = [c.violation(row.get(c.metric)) for c in study.constraints]
-                for c, x in zip(study.constraints, violations):
-                    trial.set_constraint(c.metric, x)  # how the sampler learns feasibility
-                trial.set_user_attr("constraints", violations)
-                ost.tell(trial, values)
-            else:
-                trial.set_user_attr("failure", f"{row['status']}: {row.get('reason', '')}"[:500])
-                ost.tell(trial, state=TrialState.FAIL)
-            count += 1
-            bar.set_postfix_str(f"trial {trial.number}: {row['status']}")
-            bar.update(1)
+def _suggest(study: Study, trial) -> dict[str, Any]:
+    """The trial's value of each of the study's design variables (a choice or a float range)."""
+    return {
+        d.key: (
+            trial.suggest_categorical(d.key, list(d.choices))
+            if d.choices is not None
+            else trial.suggest_float(d.key, d.low, d.high, step=d.step, log=d.log)
+        )
+        for d in study.space
+    }
 
-        while count + len(in_flight) < study.trials or in_flight:
-            while len(in_flight) < slots and count + len(in_flight) < study.trials:
-                trial = ost.ask()
-                over = {
-                    d.key: (
-                        trial.suggest_categorical(d.key, list(d.choices))
-                        if d.choices is not None
-                        else trial.suggest_float(d.key, d.low, d.high, step=d.step, log=d.log)
-                    )
-                    for d in study.space
-                }
-                v = study.variant(over, "base" if trial.user_attrs.get("baseline") else None)
-                trial.set_user_attr("variant", v.key)
-                task = payload(study, v, pl, export_root)
-                reason = "" if v.key in done else infeasible_reason(v)
-                if (
-                    v.key in done
-                ):  # the same tail ran before (an earlier trial or run): its row answers
-                    finish(trial, v, done[v.key], new=False)
-                elif reason:
-                    finish(trial, v, _row(task, "infeasible", reason), new=True)
-                else:
-                    fut = cluster.client.submit(
-                        evaluate, task, key=f"bvsr-trial-{trial.number}-{v.key}", pure=False
-                    )
-                    in_flight[fut] = (trial, v, task)
-            for fut in _first_done(in_flight) if in_flight else ():
-                trial, v, task = in_flight.pop(fut)
-                finish(trial, v, _result(fut, task), new=True)
-    return list(rows.values()), reused, _best(study, ost)
+
+def _tell(study: Study, ost, trial, row: dict[str, Any]) -> None:
+    """Tell Optuna a trial's outcome: its objectives and constraint violations when the tail ran
+    and every objective is a finite number, else a failure with the row's status and reason."""
+    from optuna.trial import TrialState
+
+    values = [row.get(o.metric) for o in study.objectives]
+    if row["status"] == "ok" and all(
+        isinstance(x, (int, float)) and math.isfinite(x) for x in values
+    ):
+        violations = [c.violation(row.get(c.metric)) for c in study.constraints]
+        for c, x in zip(study.constraints, violations):
+            trial.set_constraint(c.metric, x)  # how the sampler learns feasibility
+        trial.set_user_attr("constraints", violations)
+        ost.tell(trial, values)
+    else:
+        trial.set_user_attr("failure", f"{row['status']}: {row.get('reason', '')}"[:500])
+        ost.tell(trial, state=TrialState.FAIL)
 
 
 def _best(study: Study, ost) -> dict[str, Any] | None:

@@ -211,11 +211,13 @@ def _column_narrowest_mm(spec: TailSpec, z0: float, z1: float) -> tuple[float, f
 def twin_problems(spec: TailSpec) -> list[str]:
     """Every reason the rigid twin cannot be built or printed, naming the key, its value, the
     derived dimension that breaks and what is allowed (empty when it can)."""
+    return _printer_problems(spec) + _dowel_pin_problems(spec) + _tie_rod_problems(spec)
+
+
+def _printer_problems(spec: TailSpec) -> list[str]:
+    """The widest and the tallest rigid twin piece against the printer's bed and height."""
     fp = spec.fabrication_package
-    j = spec.joint
-    t = j.panel_thickness_mm
     out: list[str] = []
-    # The printer: the widest and the tallest piece.
     envs = piece_envelopes(spec)
     lo_key = "printer_x_mm" if fp.printer_x_mm <= fp.printer_y_mm else "printer_y_mm"
     wide = max(envs, key=lambda e: e.radius_mm)
@@ -242,7 +244,16 @@ def twin_problems(spec: TailSpec) -> list[str]:
             f"more than the printer; one joint per piece is the smallest split that prints without "
             f"support; allowed: >= {tall.height_mm:.2f} mm (or a smaller joint.joint_height_mm)"
         )
-    # Dowel pins: every panel holds the pin's lower half under a floor.
+    return out
+
+
+def _dowel_pin_problems(spec: TailSpec) -> list[str]:
+    """The dowel pins: every panel holds a pin's lower half under a floor, and each SOA column its
+    upper half with fabrication_package.fdm_min_wall_mm around the hole."""
+    fp = spec.fabrication_package
+    j = spec.joint
+    t = j.panel_thickness_mm
+    out: list[str] = []
     panel_depth, column_depth = pin_depths_mm(spec, t)
     if panel_depth - PIN_HOLE_EXTRA_MM <= 0:
         out.append(
@@ -254,7 +265,6 @@ def twin_problems(spec: TailSpec) -> list[str]:
             "panels "
             f"thicker than {PANEL_PIN_FLOOR_MM + PIN_HOLE_EXTRA_MM:g} mm"
         )
-    # ... and each SOA column its upper half, with fdm_min_wall_mm around the hole.
     d_pin = pin_hole_mm(spec)
     depth = (spec.soa.built_height_mm - j.gap_mm) / 2.0  # the SOA's flange seat in each panel
     z_top = spec.soa.built_height_mm - depth  # the piece's top face in the SOA frame
@@ -277,7 +287,14 @@ def twin_problems(spec: TailSpec) -> list[str]:
                 "wall that thick)"
             )
         )
-    # The tie rod through the rod column, and its nuts in the root and tip panels.
+    return out
+
+
+def _tie_rod_problems(spec: TailSpec) -> list[str]:
+    """The tie rod through the rod column, and its nuts' pockets in the root and tip panels."""
+    fp = spec.fabrication_package
+    t = spec.joint.panel_thickness_mm
+    out: list[str] = []
     d_tie = tie_rod_hole_mm(spec)
     rod_web = (spec.vertebra.diameter_mm - d_tie) / 2.0
     if rod_web < fp.fdm_min_wall_mm:

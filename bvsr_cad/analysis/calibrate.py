@@ -166,8 +166,6 @@ def calibrate(
 ) -> CalibrationResult:
     """Fit ``parameters`` (default: :func:`default_parameters`) to the fit rows; predict every row
     before and after."""
-    from scipy.optimize import least_squares
-
     say = progress or (lambda _m: None)
     names = parameters if parameters is not None else default_parameters(spec, rows)
     unknown = [n for n in names if n not in CALIBRATABLE]
@@ -180,57 +178,8 @@ def calibrate(
     base = uncalibrated(spec)
     pred = predictor.with_spec(base) if predictor is not None else Predictor.from_spec(base)
     start = {n: table_value(spec, n) for n in names}
-    lo_hi = [_bounds(n) for n in names]
-    # Unknowns: x = log(value), starting at the tables' values; the Jacobian steps 1 % in each
-    # value.
-    x0 = np.array(
-        [
-            math.log(min(max(start[n], lo * 1.000001), hi * 0.999999))
-            for n, (lo, hi) in zip(names, lo_hi)
-        ]
-    )
-    count = [0]
-
-    def residuals(x: np.ndarray) -> np.ndarray:
-        count[0] += 1
-        values = {n: float(math.exp(v)) for n, v in zip(names, x)}
-        p = pred.with_spec(with_values(spec, values))
-        out = []
-        for m in fit_rows:
-            try:
-                out.append(_relative(p.predict(m), m.value))
-            except (
-                RuntimeError
-            ):  # a model that does not converge at these values: a large, finite miss
-                out.append(10.0)
-        r = np.nan_to_num(np.array(out), nan=10.0)
-        say(
-            f"calibrate: evaluation {count[0]}: rms {math.sqrt(np.mean(r**2)):.4f} at "
-            + ", ".join(f"{n}={v:.4g}" for n, v in values.items())
-        )
-        return r
-
-    if names:
-        sol = least_squares(
-            residuals,
-            x0,
-            bounds=([math.log(a) for a, _ in lo_hi], [math.log(b) for _, b in lo_hi]),
-            x_scale=1.0,
-            diff_step=0.01 / np.maximum(1.0, np.abs(x0)),
-            xtol=1e-4,
-            ftol=1e-6,
-            max_nfev=60,
-        )
-        x, jac, res, message = sol.x, sol.jac, sol.fun, sol.message
-        m, n = len(res), len(x)
-        s2 = float(res @ res) / (m - n if m > n else max(m, 1))
-        try:
-            cov = s2 * np.linalg.pinv(jac.T @ jac)
-            sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-        except np.linalg.LinAlgError:
-            sd = np.full(n, np.inf)
-    else:
-        x, sd, message = np.array([]), np.array([]), "nothing to fit"
+    residuals = _FitResiduals(spec, pred, names, fit_rows, say)
+    x, sd, message = _fit_logs(residuals, names, start)
     fitted = {
         name: FittedValue(
             math.exp(v), math.exp(v - 1.96 * s), math.exp(v + 1.96 * s), UNITS[name], start[name]
@@ -252,9 +201,82 @@ def calibrate(
         rms("fit", "rel_uncalibrated"),
         rms("holdout", "rel_uncalibrated"),
         calibrated,
-        count[0],
+        residuals.evaluations,
         str(message),
     )
+
+
+class _FitResiduals:
+    """The fit rows' relative misses with the fitted parameters at x = log(value), counting its
+    evaluations and reporting each one."""
+
+    def __init__(
+        self,
+        spec: TailSpec,
+        pred: Predictor,
+        names: list[str],
+        fit_rows: list[Measurement],
+        say: Callable[[str], None],
+    ):
+        self.spec, self.pred, self.names, self.fit_rows, self.say = spec, pred, names, fit_rows, say
+        self.evaluations = 0
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        self.evaluations += 1
+        values = {n: float(math.exp(v)) for n, v in zip(self.names, x)}
+        p = self.pred.with_spec(with_values(self.spec, values))
+        out = []
+        for m in self.fit_rows:
+            try:
+                out.append(_relative(p.predict(m), m.value))
+            except RuntimeError:
+                # a model that does not converge at these values: a large, finite miss
+                out.append(10.0)
+        r = np.nan_to_num(np.array(out), nan=10.0)
+        self.say(
+            f"calibrate: evaluation {self.evaluations}: rms {math.sqrt(np.mean(r**2)):.4f} at "
+            + ", ".join(f"{n}={v:.4g}" for n, v in values.items())
+        )
+        return r
+
+
+def _fit_logs(
+    residuals: Callable[[np.ndarray], np.ndarray], names: list[str], start: dict[str, float]
+) -> tuple[np.ndarray, np.ndarray, str]:
+    """Least squares on x = log(value) within each parameter's bounds, from the tables' values
+    ``start``: x, its standard deviations (from the Jacobian, the residuals' variance) and the
+    solver's message."""
+    from scipy.optimize import least_squares
+
+    if not names:
+        return np.array([]), np.array([]), "nothing to fit"
+    lo_hi = [_bounds(n) for n in names]
+    # The Jacobian steps 1 % in each value.
+    x0 = np.array(
+        [
+            math.log(min(max(start[n], lo * 1.000001), hi * 0.999999))
+            for n, (lo, hi) in zip(names, lo_hi)
+        ]
+    )
+    sol = least_squares(
+        residuals,
+        x0,
+        bounds=([math.log(a) for a, _ in lo_hi], [math.log(b) for _, b in lo_hi]),
+        x_scale=1.0,
+        diff_step=0.01 / np.maximum(1.0, np.abs(x0)),
+        xtol=1e-4,
+        ftol=1e-6,
+        max_nfev=60,
+    )
+    x, jac, res, message = sol.x, sol.jac, sol.fun, sol.message
+    m, n = len(res), len(x)
+    s2 = float(res @ res) / (m - n if m > n else max(m, 1))
+    try:
+        cov = s2 * np.linalg.pinv(jac.T @ jac)
+        sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    except np.linalg.LinAlgError:
+        sd = np.full(n, np.inf)
+    return x, sd, message
 
 
 #: Threads predicting a table's rows, at most: the workspace protocol's rows step in MuJoCo without

@@ -306,14 +306,19 @@ def test_reduced_bend_limit_holds_in_every_bending_direction(robot_export, model
     rows appear just past each face's touching point (a bend of theta_max, the manifest's, which the
     exact chain's theta_a range halves) and just past each vertex (theta_max (1 + the manifest's
     overshoot)), and not just short of either; bent by Eq 2's pivot angles in each of 72 planes,
-    never at theta_max and always at theta_max (1 + overshoot). The hinges carry no limits of their
-    own (a square of +-theta_max / 2 let a diagonal bend reach 39 % past theta_max)."""
-    from bvsr_cad.exporters.mjcf import BEND_LIMIT_DIRECTIONS
+    never at theta_max and always at theta_max (1 + overshoot), which stays under 3 %. The hinges
+    carry no limits of their own (a square of +-theta_max / 2 let a diagonal bend reach 39 % past
+    theta_max)."""
+    from bvsr_cad.exporters.mjcf import BEND_LIMIT_DIRECTIONS, BEND_LIMIT_DIRECTIONS_PER_SEGMENT
     from bvsr_cad.models.kinematics import PrbLimitPolygon, prb_angles, prb_bend_angle
 
     manifest = json.loads((robot_export / "manifest.json").read_text())["robot"]
     limit = manifest["chains"][f"robot/{model}"]["bend_limit"]
-    assert limit["faces"] == 2 * BEND_LIMIT_DIRECTIONS and 0.01 < limit["max_overshoot"] < 0.03
+    directions = {
+        "bvsr.xml": BEND_LIMIT_DIRECTIONS,
+        "bvsr_segments.xml": BEND_LIMIT_DIRECTIONS_PER_SEGMENT,
+    }[model]
+    assert limit["faces"] == 2 * directions and 0.01 < limit["max_overshoot"] < 0.03
     exact = mujoco.MjModel.from_xml_path(str(robot_export / "robot" / "bvsr_exact.xml"))
     m = mujoco.MjModel.from_xml_path(str(robot_export / "robot" / model))
     assert not m.jnt_limited.any()
@@ -329,7 +334,7 @@ def test_reduced_bend_limit_holds_in_every_bending_direction(robot_export, model
     for joint in manifest["bending_joints"]:
         name, theta_max = joint["name"], joint["theta_max_rad"]
         assert exact.joint(f"{name}_theta_a").range[1] == pytest.approx(theta_max / 2, rel=1e-12)
-        poly = PrbLimitPolygon.make(theta_max, BEND_LIMIT_DIRECTIONS)
+        poly = PrbLimitPolygon.make(theta_max, directions)
         assert (
             prb_bend_angle(*poly.vertex_ab.T).max() / theta_max - 1
             <= limit["max_overshoot"] + 1e-12
@@ -344,6 +349,43 @@ def test_reduced_bend_limit_holds_in_every_bending_direction(robot_export, model
             assert (
                 rows(name, *prb_angles(theta_max * (1 + limit["max_overshoot"] + 1e-7), phi)) >= 1
             ), (name, phi)
+
+
+def test_default_mjcf_hinges_damp_as_the_soa_dampers(robot_export, bvsr_spec):
+    """The default file carries no damped tendon and no damped actuator: its SOA dampers sit on the
+    pivot hinges, which Euler integrates implicitly. Bending each joint from rest about X and about
+    Y (each pivot at half the rate), the hinges dissipate what the SOA dampers would, the parameter
+    file's c times the sum of the squared stretch rates of the joint's SOA tendons (MuJoCo's
+    own tendon velocities, to 1e-6). In the shear (the pivots turning opposite ways) they dissipate
+    the closed form's c N r^2 / 2 per unit shear rate squared (the N SOAs at the radius r of the
+    joint's lower sockets), to 2 % (the lever arms of an SOA's two sockets differ by the taper)."""
+    from bvsr_cad.models.actuator import soa_force_law
+
+    c = soa_force_law(bvsr_spec).damping_n_s_per_m
+    m = mujoco.MjModel.from_xml_path(str(robot_export / "robot" / "bvsr.xml"))
+    assert m.opt.integrator == mujoco.mjtIntegrator.mjINT_EULER
+    assert not m.tendon_damping.any() and not m.actuator_biasprm[:, 2].any()
+    d = mujoco.MjData(m)
+    for joint in json.loads((robot_export / "manifest.json").read_text())["robot"][
+        "bending_joints"
+    ]:
+        name = joint["name"]
+        soas = [
+            m.tendon(i).id for i in range(m.ntendon) if m.tendon(i).name.startswith(name + "_soa")
+        ]
+        assert len(soas) == 5
+        sockets = [m.site(f"{m.tendon(i).name[: -len('_tendon')]}_bottom").id for i in soas]
+        r2 = np.mean(np.sum(m.site_pos[sockets, :2] ** 2, axis=1))
+        for axis in "xy":
+            dofs = [m.joint(f"{name}_{pivot}{axis}").dofadr[0] for pivot in "ab"]
+            d.qpos[:], d.qvel[:] = m.qpos0, 0.0
+            d.qvel[dofs] = 0.5  # a unit bend rate, half on each pivot
+            mujoco.mj_forward(m, d)
+            hinges = float(np.sum(m.dof_damping * d.qvel**2))
+            assert hinges == pytest.approx(c * np.sum(d.ten_velocity[soas] ** 2), rel=1e-6)
+            d.qvel[dofs] = (0.5, -0.5)  # a unit shear rate a - b
+            hinges = float(np.sum(m.dof_damping * d.qvel**2))
+            assert hinges == pytest.approx(c * len(soas) * r2 / 2, rel=0.02)
 
 
 def _bends_under_tip_moment(path, moment_nm: float, psi_rad: float, seconds: float = 1.0):
@@ -376,7 +418,7 @@ def _bends_under_tip_moment(path, moment_nm: float, psi_rad: float, seconds: flo
 def test_reduced_bend_limit_holds_under_a_large_tip_moment(robot_export):
     """A moment on the tip panel, 1.2 times the one that bends the tail's SOAs and rod to its
     limits, about the tail's X axis (a bend along one hinge axis: a face of the limit polygon),
-    11.25 deg off it (near a vertex) and about the diagonal (both hinges): at the exported 2 ms,
+    half a face off it (a vertex) and about the diagonal (both hinges): at the exported 2 ms,
     with no warning, every joint stops past theta_max by at most 10 % along the axis (the limits are
     soft constraints: measured 2.2 % at the root to 6.2 % at the tip, the give growing with the
     moment each joint carries; 10 % tells a held limit from the failures below, 39 % and more, with
@@ -387,7 +429,8 @@ def test_reduced_bend_limit_holds_under_a_large_tip_moment(robot_export):
     MuJoCo's default softness at its 0.2 ms, passes its limits by 25-39 %."""
     manifest = json.loads((robot_export / "manifest.json").read_text())["robot"]
     theta_max = np.array([j["theta_max_rad"] for j in manifest["bending_joints"]])
-    overshoot = manifest["chains"]["robot/bvsr.xml"]["bend_limit"]["max_overshoot"]
+    limit = manifest["chains"]["robot/bvsr.xml"]["bend_limit"]
+    overshoot, vertex_deg = limit["max_overshoot"], 180.0 / limit["faces"]
     path = robot_export / "robot" / "bvsr.xml"
     probe_nm = 0.5
     bends, _ = _bends_under_tip_moment(path, probe_nm, 0.0)
@@ -398,7 +441,7 @@ def test_reduced_bend_limit_holds_under_a_large_tip_moment(robot_export):
     assert warned == 0 and (axis > theta_max).all() and (axis < 1.10 * theta_max).all(), (
         axis / theta_max - 1
     )
-    for psi in np.radians([11.25, 45.0]):
+    for psi in np.radians([vertex_deg, 45.0]):
         bends, warned = _bends_under_tip_moment(path, moment_nm, psi)
         assert (
             warned == 0 and (bends > theta_max).all() and (bends < axis * (1 + overshoot)).all()

@@ -17,7 +17,10 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from bvsr_cad.exporters.mjcf import BEND_LIMIT_DIRECTIONS  # noqa: E402
+from bvsr_cad.exporters.mjcf import (  # noqa: E402
+    BEND_LIMIT_DIRECTIONS,
+    BEND_LIMIT_DIRECTIONS_PER_SEGMENT,
+)
 from bvsr_cad.simulation import sim_gpu  # noqa: E402
 
 SKIP = f"needs {sim_gpu.GPU_EXTRA}"
@@ -126,7 +129,11 @@ def test_constraint_buffers_cover_random_held_pressures(scenes):
         # Every joint bent diagonally past its bend limit (a = b = 0.4 rad on both pivots: three
         # faces each).
         joints = model.njnt // 4
-        assert buffers.limit_rows == BEND_LIMIT_DIRECTIONS * joints == model.tendon_limited.sum()
+        directions = {
+            "scene.xml": BEND_LIMIT_DIRECTIONS,
+            "scene_segments.xml": BEND_LIMIT_DIRECTIONS_PER_SEGMENT,
+        }[name]
+        assert buffers.limit_rows == directions * joints == model.tendon_limited.sum()
         mujoco.mj_resetData(model, data)
         data.qpos[:] = 0.4
         mujoco.mj_forward(model, data)

@@ -368,6 +368,23 @@ FAULTS: list[Fault] = [
         catchers=("tests/test_truth.py::test_mujoco_soa_actuator_is_eq3_by_hand",),
     ),
     Fault(
+        "mjcf_hinge_damping_halved",
+        "bvsr_cad/exporters/mjcf.py",
+        "return {axis: 2.0 * c * float(np.sum(np.square(a))) for axis, a in arms.items()}",
+        "return {axis: 1.0 * c * float(np.sum(np.square(a))) for axis, a in arms.items()}",
+        "the default MJCF's pivot hinges carry half the SOAs' damping",
+        catchers=("tests/test_robot.py::test_default_mjcf_hinges_damp_as_the_soa_dampers",),
+    ),
+    Fault(
+        "mjcf_hinge_damping_lever_from_arc_start",
+        "bvsr_cad/exporters/mjcf.py",
+        "m = np.array([0.0, 0.0, t_m + b.arc_length_m / 2])",
+        "m = np.array([0.0, 0.0, t_m])",
+        "the SOAs' lever arms for the hinge damping taken about the arc's start, not the pivots' "
+        "midpoint",
+        catchers=("tests/test_robot.py::test_default_mjcf_hinges_damp_as_the_soa_dampers",),
+    ),
+    Fault(
         "kinematics_xy_swapped",
         "bvsr_cad/models/kinematics.py",
         "trans = length_mm * np.stack([self.u * C, self.v * C, S], -1)",

@@ -10,15 +10,29 @@ rotation is Eq 2's exactly, the end point within 3.5e-4 L theta^4). Each hinge c
 (the two pivots' energies add up to (1/2)(E I / L) theta^2). The pivots turning opposite ways (a
 shear the exact chain does not have) are held by the equalities alone, and the SOAs' thrust pushes
 them over: stepped at 2 ms with the links' own inertia that mode grows. A fixed tendon per axis,
-``jk_shear_x`` = ``jk_ax`` - ``jk_bx`` (zero whenever the equalities hold), damps it with the SOAs'
-own bending damping c N r^2 / 2 and resists it with what resists it in the real joint, the rod's and
-SOAs' bending as fixed-guided columns (:func:`shear_stiffness_nm_rad`), so it adds nothing to the
-constant-curvature motion and holds with a soft rod or none. The per-segment model's series SOA
-tendons lose the SOAs' resistance to a segment's joints bending unalike: fixed ``spread`` tendons
-put it back (:func:`_segment_spread_tendons`). The hinges carry no limits: each joint's bend limit
-theta <= theta_max holds in every bending direction through fixed tendons on the two pivots' summed
-angles, a polygon circumscribing the exact limit (:func:`_bend_limit_tendons`). The *exact* chain
-(``robot/bvsr_exact.xml``) is the URDF's, stepped at ``robot.timestep_s``.
+``jk_shear_x`` = ``jk_ax`` - ``jk_bx`` (zero whenever the equalities hold), resists it with what
+resists it in the real joint, the rod's and SOAs' bending as fixed-guided columns
+(:func:`shear_stiffness_nm_rad`), so it adds nothing to the constant-curvature motion and holds
+with a soft rod or none; the mode is damped by the SOAs' own bending damping c N r^2 / 2. The
+per-segment model's series SOA tendons lose the SOAs' resistance to a segment's joints bending
+unalike: fixed ``spread`` tendons put it back (:func:`_segment_spread_tendons`). The hinges carry
+no limits: each joint's bend limit theta <= theta_max holds in every bending direction through
+fixed tendons on the two pivots' summed angles, a polygon circumscribing the exact limit
+(:func:`_bend_limit_tendons`). The *exact* chain (``robot/bvsr_exact.xml``) is the URDF's,
+stepped at ``robot.timestep_s``.
+
+The default file (reduced chain, one actuator per SOA) is built for batched stepping (MuJoCo Warp,
+MJX), where every tendon costs each world a pass of the tendon kernels and a limited one a
+constraint row: its dampers sit on the hinges, not on tendons or actuators. The SOAs' damping c
+along each SOA and the shear tendons' damping are, to first order in the joint's motion, the
+same dissipation as a damping on each pivot hinge of twice c times the summed squares of the
+joint's SOAs' lever arms, about c N r^2 (:func:`hinge_damping_nms`; the N SOAs evenly round the
+axis make it the same in every bending direction). With every damper on a joint, MuJoCo's Euler
+integrator integrates the damping implicitly, as implicitfast does, without implicitfast's pass
+over every tendon and actuator for their velocity derivatives; the step is otherwise the same
+(implicitfast, too, leaves the inertial forces' velocity derivatives out). Its bend-limit polygon
+has :data:`BEND_LIMIT_DIRECTIONS` directions. The per-segment and exact files keep their dampers
+on the shear and spread tendons and the actuators, integrated by implicitfast.
 
 The exact chain of every bending joint is the URDF's, with equality constraints:
 ``jk_theta_b`` = ``jk_theta_a``, ``jk_phi_b`` = -``jk_phi``, and ``jk_chord``
@@ -35,7 +49,8 @@ it through a general actuator whose control is the gauge pressure in Pa:
           = P A - (m_a P + n_a)(l - l0) - c dl/dt          (Eq 3-4 and the SOA damper)
 
 so the SOA's stiffness and damping live in the actuator alone and are not
-counted again on the joints. The pressure P in the chamber is the actuator's
+counted again on the joints (in the default file the actuator carries the stiffness and the
+hinges the damping, see above). The pressure P in the chamber is the actuator's
 activation, a first-order lag of the commanded (supply) pressure u,
 P' = (u - P) / tau (``dyntype="filterexact"``), with each line's tau the
 least-squares fit to the supply model's fill curve
@@ -96,16 +111,16 @@ REDUCED_PER_SEGMENT_TIMESTEP_S = 1e-3
 #: it holds a tail with a soft rod or none (largest residual under gravity, no rod: 7.1 mrad per
 #: joint against 10.3 at dmax 0.95, 5.7 per segment against 11.9; checks/robot.py's limit is 10).
 EQUALITY_SOLIMP = (0.9, 0.96, 0.001, 0.5, 2.0)
-#: The reduced chain's bend limit: fixed tendons along this many directions per joint (twice as many
+#: The default file's bend limit: fixed tendons along this many directions per joint (twice as many
 #: faces), a polygon circumscribing the exact limit theta <= theta_max
-#: (:func:`_bend_limit_tendons`). 8 (16 faces): a bend reaches at most 2.1 % past theta_max between
-#: faces (4 directions: 8.1 %, 6: 3.6 %, 12: 0.9 %; the hinges' own limits before: 39 %). Measured,
-#: 8 is where the polygon stops mattering: under a large moment the soft limits themselves give
-#: 2.6-6.9 % (:data:`LIMIT_SOLIMP`), so more directions add rows (MJX allocates one per limit,
-#: Warp's buffers reserve one) for nothing seen; with 8, CPU MuJoCo steps the default scene as fast
-#: as with the hinge limits (32,900 steps/s against 32,300) and MJX compiles its step as fast (29-31
-#: s of CPU against 32-34 s).
-BEND_LIMIT_DIRECTIONS = 8
+#: (:func:`_bend_limit_tendons`). 7 (14 faces) is the fewest that keeps a bend between faces
+#: within 3 % past theta_max (2.6 %; 6 directions: 3.6 %, 8: 2.1 %, 4: 8.1 %; the hinges' own
+#: limits: 39 %): every direction is a limited tendon in every world of a batch (a pass of the
+#: tendon kernels and a reserved constraint row), and under a large moment the soft limits
+#: themselves give more than the polygon (:data:`LIMIT_SOLIMP`).
+BEND_LIMIT_DIRECTIONS = 7
+#: The per-segment file's: 8 (16 faces, 2.1 %), as the measurement table's protocol runs step it.
+BEND_LIMIT_DIRECTIONS_PER_SEGMENT = 8
 #: The bend limits' impedance (solimplimit; their solreflimit is the equalities', two steps). With
 #: MuJoCo's defaults (0.9, 0.95, 0.001, 0.5, 2; 0.02 s) a tip moment 1.5 times the rod's own at
 #: theta_max (the SOAs' stiffness off) pushed the default tail's joints 38-49 % past their limits
@@ -180,18 +195,25 @@ def mjcf_tree(
         if chain == "exact"
         else (REDUCED_PER_SEGMENT_TIMESTEP_S if per_segment else REDUCED_CHAIN_TIMESTEP_S)
     )
-    ET.SubElement(root, "option", timestep=_f(timestep_s), integrator="implicitfast")
+    # The default file: every damper on a hinge (module docstring), which Euler integrates
+    # implicitly.
+    hinge_dampers = chain == "reduced" and not per_segment
+    integrator = "Euler" if hinge_dampers else "implicitfast"
+    ET.SubElement(root, "option", timestep=_f(timestep_s), integrator=integrator)
     _mjcf_defaults(root, model)
     _mjcf_assets(root, robot, mesh_files)
-    _mjcf_worldbody(root, robot, model, chain)
+    _mjcf_worldbody(root, robot, model, chain, hinge_dampers)
     # As stiff as the step allows (MuJoCo needs a time constant of at least two steps).
     solref = _vec((2.0 * timestep_s, 1.0))
     chord_err = _mjcf_equalities(root, robot, chain, per_segment, solref)
     tendon = ET.SubElement(root, "tendon")
+    directions = BEND_LIMIT_DIRECTIONS_PER_SEGMENT if per_segment else BEND_LIMIT_DIRECTIONS
     bend_overshoot = (
-        _mjcf_joint_tendons(tendon, robot, per_segment, solref) if chain == "reduced" else None
+        _mjcf_joint_tendons(tendon, robot, per_segment, solref, directions, not hinge_dampers)
+        if chain == "reduced"
+        else None
     )
-    actuators = _mjcf_actuators(root, tendon, robot, per_segment)
+    actuators = _mjcf_actuators(root, tendon, robot, per_segment, soa_dampers=not hinge_dampers)
     ET.indent(root)
     lags = sorted(set(robot.supply_lag_s.values()))
     facts = {
@@ -205,14 +227,15 @@ def mjcf_tree(
         "per_segment": per_segment,
         "chain": chain,
         "timestep_s": timestep_s,
+        "integrator": integrator,
         "bend_limit": None
         if bend_overshoot is None
         else {
-            "faces": 2 * BEND_LIMIT_DIRECTIONS,
+            "faces": 2 * directions,
             "max_overshoot": bend_overshoot,
             "tendons": "jk_bend_limit_<i>: cos(phi_i) (jk_ax + jk_bx) + sin(phi_i) (jk_ay + "
             "jk_by), "
-            f"phi_i = 180 i / {BEND_LIMIT_DIRECTIONS} deg",
+            f"phi_i = 180 i / {directions} deg",
         },
     }
     return ET.ElementTree(root), facts
@@ -253,8 +276,11 @@ def _mjcf_assets(root: ET.Element, robot: RobotModel, mesh_files: dict[str, str]
         ET.SubElement(asset, "material", name=name, rgba=_vec(rgba))
 
 
-def _mjcf_worldbody(root: ET.Element, robot: RobotModel, model: str, chain: str) -> None:
-    """The ``worldbody`` section: the mount, then the tail's bodies as the chain nests them."""
+def _mjcf_worldbody(
+    root: ET.Element, robot: RobotModel, model: str, chain: str, hinge_dampers: bool = False
+) -> None:
+    """The ``worldbody`` section: the mount, then the tail's bodies as the chain nests them
+    (``hinge_dampers``: the reduced chain's pivot hinges carry :func:`hinge_damping_nms`)."""
     world = ET.SubElement(root, "worldbody")
     mount = ET.SubElement(
         world,
@@ -275,7 +301,7 @@ def _mjcf_worldbody(root: ET.Element, robot: RobotModel, model: str, chain: str)
     else:
         root_body = ET.SubElement(mount, "body", name=robot.root)
         _link_contents(root_body, robot.links[robot.root], sites_by_link)
-        _reduced_bodies(root_body, robot, 1, sites_by_link)
+        _reduced_bodies(root_body, robot, 1, sites_by_link, hinge_dampers)
 
 
 def _link_contents(
@@ -360,16 +386,22 @@ def _exact_body(
 
 
 def _reduced_bodies(
-    parent_el: ET.Element, robot: RobotModel, k: int, sites_by_link: dict[str, list]
+    parent_el: ET.Element,
+    robot: RobotModel,
+    k: int,
+    sites_by_link: dict[str, list],
+    hinge_dampers: bool = False,
 ) -> None:
     """The reduced chain from joint k on: its middle link (the whole deformable body) and panel k on
-    it, then the rest."""
+    it, then the rest; with ``hinge_dampers`` each pivot hinge carries :func:`hinge_damping_nms`."""
     stiff_half = 2.0 * robot.actuation.rod_bending_stiffness_nm_rad
     b = robot.bending[k - 1]
     d = PRB_PIVOT_FRACTION * b.arc_length_m
     t_m = np.asarray(
         next(j for j in robot.joints if j.child == f"{b.name}_after_phi").T_parent_joint
     )[2, 3]
+    damping = hinge_damping_nms(robot, k, t_m) if hinge_dampers else {}
+    damped = {axis: {"damping": _f(damping[axis])} if damping else {} for axis in "xy"}
     half_a, half_b = robot.links[f"{b.name}_after_theta_a"], robot.links[f"{b.name}_after_chord"]
     soft = dataclasses.replace(
         half_a,
@@ -377,9 +409,8 @@ def _reduced_bodies(
         inertial=rest_pair(half_a.inertial, half_b.inertial, b.arc_length_m),
     )
     body = ET.SubElement(parent_el, "body", name=soft.name, pos=_vec((0, 0, t_m)))
-    for (
-        axis
-    ) in "xy":  # no range: the joint's bend limit is the fixed tendons of _bend_limit_tendons
+    # No range: the joint's bend limit is the fixed tendons of _bend_limit_tendons.
+    for axis in "xy":
         ET.SubElement(
             body,
             "joint",
@@ -388,6 +419,7 @@ def _reduced_bodies(
             axis=_AXES[axis],
             pos=_vec((0, 0, d)),
             stiffness=_f(stiff_half),
+            **damped[axis],
         )
     _link_contents(body, soft, sites_by_link)
     panel = ET.SubElement(body, "body", name=b.tip_link, pos=_vec((0, 0, b.arc_length_m)))
@@ -400,10 +432,11 @@ def _reduced_bodies(
             axis=_AXES[axis],
             pos=_vec((0, 0, -d)),
             stiffness=_f(stiff_half),
+            **damped[axis],
         )
     _link_contents(panel, robot.links[b.tip_link], sites_by_link)
     if k < len(robot.bending):
-        _reduced_bodies(panel, robot, k + 1, sites_by_link)
+        _reduced_bodies(panel, robot, k + 1, sites_by_link, hinge_dampers)
 
 
 def _mjcf_equalities(
@@ -481,34 +514,39 @@ def _mjcf_equalities(
 
 
 def _mjcf_joint_tendons(
-    tendon: ET.Element, robot: RobotModel, per_segment: bool, solref: str
+    tendon: ET.Element,
+    robot: RobotModel,
+    per_segment: bool,
+    solref: str,
+    directions: int,
+    shear_damped: bool,
 ) -> float:
-    """The reduced chain's fixed tendons: each joint's shear between its halves, a segment's spread
-    and the bend limits. Returns the bend limit polygon's largest overshoot
+    """The reduced chain's fixed tendons: each joint's shear between its halves (damped with
+    ``shear_damped``; otherwise the hinges carry its damping), a segment's spread and the bend
+    limits along ``directions``. Returns the bend limit polygon's largest overshoot
     (:func:`_bend_limit_tendons`)."""
-    shear_damping = _f(_soa_bending_damping(robot))
-    shear_stiffness = _f(shear_stiffness_nm_rad(robot))
+    shear = {"damping": _f(_soa_bending_damping(robot))} if shear_damped else {}
+    shear["stiffness"] = _f(shear_stiffness_nm_rad(robot))
     for b in robot.bending:
         for axis in "xy":
-            fixed = ET.SubElement(
-                tendon,
-                "fixed",
-                name=f"{b.name}_shear_{axis}",
-                damping=shear_damping,
-                stiffness=shear_stiffness,
-            )
+            fixed = ET.SubElement(tendon, "fixed", name=f"{b.name}_shear_{axis}", **shear)
             ET.SubElement(fixed, "joint", joint=f"{b.name}_a{axis}", coef="1")
             ET.SubElement(fixed, "joint", joint=f"{b.name}_b{axis}", coef="-1")
     if per_segment:
         _segment_spread_tendons(tendon, robot)
-    return _bend_limit_tendons(tendon, robot, solref)
+    return _bend_limit_tendons(tendon, robot, solref, directions)
 
 
 def _mjcf_actuators(
-    root: ET.Element, tendon: ET.Element, robot: RobotModel, per_segment: bool
+    root: ET.Element,
+    tendon: ET.Element,
+    robot: RobotModel,
+    per_segment: bool,
+    soa_dampers: bool = True,
 ) -> int:
     """The ``actuator`` section: one pressure actuator per SOA (per line with ``per_segment``) on a
-    spatial tendon through its SOAs' sockets. Returns the number of actuators."""
+    spatial tendon through its SOAs' sockets, with the SOA's damper unless ``soa_dampers`` is off
+    (the hinges carry it). Returns the number of actuators."""
     act = robot.actuation
     actuator = ET.SubElement(root, "actuator")
     ctrl = _vec((act.pressure_min_pa, act.pressure_max_pa))
@@ -527,7 +565,7 @@ def _mjcf_actuators(
         law = act.law
         m_a = law.stiffness_slope_n_per_m_per_pa * k_share
         n_a = law.stiffness_offset_n_per_m * k_share
-        c = law.damping_n_s_per_m * k_share
+        c = law.damping_n_s_per_m * k_share if soa_dampers else 0.0
         lag = robot.supply_lag_s.get(soas[0].line)
         dyn = {"dyntype": "filterexact", "dynprm": _vec((lag,))} if lag else {}
         ET.SubElement(
@@ -595,19 +633,21 @@ def shear_stiffness_nm_rad(robot: RobotModel) -> float:
     return guided * n_soas * soa_ei_over_l + (guided - 1.0) * act.rod_bending_stiffness_nm_rad
 
 
-def _bend_limit_tendons(tendon: ET.Element, robot: RobotModel, solref: str) -> float:
+def _bend_limit_tendons(
+    tendon: ET.Element, robot: RobotModel, solref: str, directions: int
+) -> float:
     """Each reduced joint's bend limit theta <= theta_max, for every bending direction: fixed
     tendons ``jk_bend_limit_i`` = cos(phi_i) (``jk_ax`` + ``jk_bx``) + sin(phi_i) (``jk_ay`` +
     ``jk_by``) (twice a pivot's angle along phi_i while the equalities hold) limited to twice the
-    faces of :class:`~bvsr_cad.models.kinematics.PrbLimitPolygon`: a polygon of 2
-    :data:`BEND_LIMIT_DIRECTIONS` faces circumscribing the exact limit. Limits on the pivots' hinges
+    faces of :class:`~bvsr_cad.models.kinematics.PrbLimitPolygon`: a polygon of 2 ``directions``
+    faces circumscribing the exact limit. Limits on the pivots' hinges
     instead (a square) let a diagonal bend reach 1.39 theta_max, and they act on one pivot, whose
     light shear mode lets it through. Returns the largest overshoot over the joints (theta /
     theta_max - 1 at a vertex)."""
     solimp = _vec(LIMIT_SOLIMP)
     worst = 0.0
     for b in robot.bending:
-        poly = PrbLimitPolygon.make(b.theta_max_rad, BEND_LIMIT_DIRECTIONS)
+        poly = PrbLimitPolygon.make(b.theta_max_rad, directions)
         worst = max(worst, poly.overshoot)
         for i, (phi, half) in enumerate(zip(poly.direction_rad, poly.half_width_rad)):
             fixed = ET.SubElement(
@@ -639,6 +679,31 @@ def _soa_bending(robot: RobotModel, per_soa: float) -> float:
 def _soa_bending_damping(robot: RobotModel) -> float:
     """c N r^2 / 2 (N m s/rad): a joint's SOA dampers against bending."""
     return _soa_bending(robot, robot.actuation.law.damping_n_s_per_m)
+
+
+def hinge_damping_nms(robot: RobotModel, k: int, t_m: float) -> dict[str, float]:
+    """Damping (N m s/rad) on reduced joint k's pivot hinges about X and Y in the default file: its
+    SOAs' dampers moved onto the hinges (``t_m``: the arc's start in panel k-1's frame).
+
+    Per axis, the bend u = a + b and the shear s = a - b of the pivots' hinges a, b. A damping D on
+    each hinge dissipates D (a'^2 + b'^2) = (D / 2) (u'^2 + s'^2). Bending from rest at u' (u' / 2
+    about each pivot), an SOA's top socket p moves at u' axis x (p - m), m the pivots' midpoint,
+    so the SOA stretches at e . (axis x (p - m)) u' (e along it) and its damper c dissipates
+    c (e . (axis x (p - m)))^2 u'^2; D = 2 c sum over the joint's SOAs of (e . (axis x (p - m)))^2
+    dissipates as much. It is about c N r^2 (the N SOAs evenly round the axis at radius r), so
+    D / 2 is the shear tendon's c N r^2 / 2 (:func:`_soa_bending_damping`) as well.
+    """
+    b = robot.bending[k - 1]
+    pos = {s.name: np.asarray(s.pos_m) for s in robot.sites}
+    m = np.array([0.0, 0.0, t_m + b.arc_length_m / 2])
+    arms = {"x": [], "y": []}
+    for s in (s for s in robot.soas if s.joint == k):
+        top = pos[s.top_site] + [0.0, 0.0, t_m + b.arc_length_m]  # at rest, in panel k-1's frame
+        e = (top - pos[s.bottom_site]) / np.linalg.norm(top - pos[s.bottom_site])
+        for axis, unit in (("x", [1.0, 0.0, 0.0]), ("y", [0.0, 1.0, 0.0])):
+            arms[axis].append(float(e @ np.cross(unit, top - m)))
+    c = robot.actuation.law.damping_n_s_per_m
+    return {axis: 2.0 * c * float(np.sum(np.square(a))) for axis, a in arms.items()}
 
 
 def _segment_spread_tendons(tendon: ET.Element, robot: RobotModel) -> None:

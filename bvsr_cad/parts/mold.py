@@ -178,101 +178,127 @@ def _solids(features: list[Cyl]) -> list[bd.Solid]:
 
 def _mold_features(dims, c: Casting) -> _MoldFeatures:
     """The bolts, pins, sockets, gate, vents and flange pockets in the cast frame."""
-    z_lo, z_hi, z_bot, z_top = dims.z_lo_mm, dims.z_hi_mm, dims.z_bottom_mm, dims.z_top_mm
-    socket_d, rho_pin, bolt_uv, h = (
-        dims.socket_mm,
-        dims.pin_circle_mm,
-        dims.bolt_uv_mm,
-        dims.cast_height_mm,
-    )
-    r_gate = dims.channel_radius_mm(c.gate_diameter_mm)
-    r_vent = dims.channel_radius_mm(c.vent_diameter_mm)
-    pin_len, sock_len = c.pin_length_mm, c.pin_length_mm + SOCKET_EXTRA_DEPTH_MM
-    z_mid = (z_lo + z_hi) / 2.0
-    vents_xy = [(r_vent, 0.0), (0.0, r_vent), (-r_vent, 0.0), (0.0, -r_vent)]
+    z_lo, z_hi, h = dims.z_lo_mm, dims.z_hi_mm, dims.cast_height_mm
+    ab_pins, ab_sockets = _parting_pins(dims, c)
+    plate_pins, plate_sockets = _end_pins(dims, c, z_lo, 1.0, "plate_socket")
+    lid_pins, lid_sockets = _end_pins(dims, c, z_hi, -1.0, "lid_socket")
+    gate, vents_xy, vents = _pour_channels(dims, c)
     d_fl = 2.0 * dims.cast_flange_radius_mm
     return _MoldFeatures(
-        bolts=[
-            Cyl(
-                f"bolt_{i}",
-                "bolt",
-                _uez(su * bolt_uv, se * bolt_uv, z_bot - 1.0),
-                _uez(su * bolt_uv, se * bolt_uv, z_top + 1.0),
-                c.bolt_hole_diameter_mm,
-            )
-            for i, (su, se) in enumerate(((1, 1), (1, -1), (-1, 1), (-1, -1)), start=1)
-        ],
-        ab_pins=[
-            Cyl(
-                f"pin_{i}",
-                "pin",
-                _uez(PIN_ROOT_MM, se * rho_pin, z_mid),
-                _uez(-pin_len, se * rho_pin, z_mid),
-                c.pin_diameter_mm,
-            )
-            for i, se in enumerate((1, -1), start=1)
-        ],
-        ab_sockets=[
-            Cyl(
-                f"socket_{i}",
-                "pin_socket",
-                _uez(0.1, se * rho_pin, z_mid),
-                _uez(-sock_len, se * rho_pin, z_mid),
-                socket_d,
-            )
-            for i, se in enumerate((1, -1), start=1)
-        ],
-        plate_pins=[
-            Cyl(
-                f"pin_{i}",
-                "pin",
-                _uez(su * rho_pin, 0, z_lo - PIN_ROOT_MM),
-                _uez(su * rho_pin, 0, z_lo + pin_len),
-                c.pin_diameter_mm,
-            )
-            for i, su in enumerate((1, -1), 1)
-        ],
-        lid_pins=[
-            Cyl(
-                f"pin_{i}",
-                "pin",
-                _uez(su * rho_pin, 0, z_hi + PIN_ROOT_MM),
-                _uez(su * rho_pin, 0, z_hi - pin_len),
-                c.pin_diameter_mm,
-            )
-            for i, su in enumerate((1, -1), 1)
-        ],
-        plate_sockets=[
-            Cyl(
-                f"plate_socket_{i}",
-                "pin_socket",
-                _uez(su * rho_pin, 0, z_lo - 0.1),
-                _uez(su * rho_pin, 0, z_lo + sock_len),
-                socket_d,
-            )
-            for i, su in enumerate((1, -1), 1)
-        ],
-        lid_sockets=[
-            Cyl(
-                f"lid_socket_{i}",
-                "pin_socket",
-                _uez(su * rho_pin, 0, z_hi + 0.1),
-                _uez(su * rho_pin, 0, z_hi - sock_len),
-                socket_d,
-            )
-            for i, su in enumerate((1, -1), 1)
-        ],
-        gate=Cyl(
-            "gate", "gate", (r_gate, 0.0, z_bot - 1.0), (r_gate, 0.0, 0.0), c.gate_diameter_mm
-        ),
+        bolts=_bolts(dims, c),
+        ab_pins=ab_pins,
+        ab_sockets=ab_sockets,
+        plate_pins=plate_pins,
+        lid_pins=lid_pins,
+        plate_sockets=plate_sockets,
+        lid_sockets=lid_sockets,
+        gate=gate,
         vents_xy=vents_xy,
-        vents=[
-            Cyl(f"vent_{i}", "vent", (x, y, h), (x, y, z_top + 1.0), c.vent_diameter_mm)
-            for i, (x, y) in enumerate(vents_xy, start=1)
-        ],
+        vents=vents,
         plate_flange=Cyl("flange_pocket", "flange_pocket", (0.0, 0.0, 0.0), (0.0, 0.0, z_lo), d_fl),
         lid_flange=Cyl("flange_pocket", "flange_pocket", (0.0, 0.0, h), (0.0, 0.0, z_hi), d_fl),
     )
+
+
+def _bolts(dims, c: Casting) -> list[Cyl]:
+    """The four bolts that clamp the stack, through it from below the bottom plate to above the
+    lid, at the corners (+-u, +-e)."""
+    bolt_uv = dims.bolt_uv_mm
+    return [
+        Cyl(
+            f"bolt_{i}",
+            "bolt",
+            _uez(su * bolt_uv, se * bolt_uv, dims.z_bottom_mm - 1.0),
+            _uez(su * bolt_uv, se * bolt_uv, dims.z_top_mm + 1.0),
+            c.bolt_hole_diameter_mm,
+        )
+        for i, (su, se) in enumerate(((1, 1), (1, -1), (-1, 1), (-1, -1)), start=1)
+    ]
+
+
+def _parting_pins(dims, c: Casting) -> tuple[list[Cyl], list[Cyl]]:
+    """Half_a's two pins into half_b's sockets, on the parting plane either side of the cavity at
+    mid-height of the cast."""
+    rho_pin = dims.pin_circle_mm
+    z_mid = (dims.z_lo_mm + dims.z_hi_mm) / 2.0
+    sock_len = c.pin_length_mm + SOCKET_EXTRA_DEPTH_MM
+    pins = [
+        Cyl(
+            f"pin_{i}",
+            "pin",
+            _uez(PIN_ROOT_MM, se * rho_pin, z_mid),
+            _uez(-c.pin_length_mm, se * rho_pin, z_mid),
+            c.pin_diameter_mm,
+        )
+        for i, se in enumerate((1, -1), start=1)
+    ]
+    sockets = [
+        Cyl(
+            f"socket_{i}",
+            "pin_socket",
+            _uez(0.1, se * rho_pin, z_mid),
+            _uez(-sock_len, se * rho_pin, z_mid),
+            dims.socket_mm,
+        )
+        for i, se in enumerate((1, -1), start=1)
+    ]
+    return pins, sockets
+
+
+def _end_pins(
+    dims, c: Casting, z_face: float, inward: float, socket_name: str
+) -> tuple[list[Cyl], list[Cyl]]:
+    """The bottom plate's (``inward`` +1, its face at z_lo) or the lid's (-1, at z_hi) two pins,
+    one into each half on the pull axis, and the halves' sockets for them."""
+    rho_pin = dims.pin_circle_mm
+    sock_len = c.pin_length_mm + SOCKET_EXTRA_DEPTH_MM
+    pins = [
+        Cyl(
+            f"pin_{i}",
+            "pin",
+            _uez(su * rho_pin, 0, z_face - inward * PIN_ROOT_MM),
+            _uez(su * rho_pin, 0, z_face + inward * c.pin_length_mm),
+            c.pin_diameter_mm,
+        )
+        for i, su in enumerate((1, -1), 1)
+    ]
+    sockets = [
+        Cyl(
+            f"{socket_name}_{i}",
+            "pin_socket",
+            _uez(su * rho_pin, 0, z_face - inward * 0.1),
+            _uez(su * rho_pin, 0, z_face + inward * sock_len),
+            dims.socket_mm,
+        )
+        for i, su in enumerate((1, -1), 1)
+    ]
+    return pins, sockets
+
+
+def _pour_channels(dims, c: Casting) -> tuple[Cyl, list[tuple[float, float]], list[Cyl]]:
+    """The gate from below the bottom plate into the cavity's floor, and the four vents (their xy
+    and their channels) from the cast's top through the lid."""
+    r_gate = dims.channel_radius_mm(c.gate_diameter_mm)
+    r_vent = dims.channel_radius_mm(c.vent_diameter_mm)
+    vents_xy = [(r_vent, 0.0), (0.0, r_vent), (-r_vent, 0.0), (0.0, -r_vent)]
+    gate = Cyl(
+        "gate",
+        "gate",
+        (r_gate, 0.0, dims.z_bottom_mm - 1.0),
+        (r_gate, 0.0, 0.0),
+        c.gate_diameter_mm,
+    )
+    vents = [
+        Cyl(
+            f"vent_{i}",
+            "vent",
+            (x, y, dims.cast_height_mm),
+            (x, y, dims.z_top_mm + 1.0),
+            c.vent_diameter_mm,
+        )
+        for i, (x, y) in enumerate(vents_xy, start=1)
+    ]
+    return gate, vents_xy, vents
 
 
 _Z_AXIS = np.array([0.0, 0.0, 1.0])

@@ -114,12 +114,13 @@ EQUALITY_SOLIMP = (0.9, 0.96, 0.001, 0.5, 2.0)
 #: The default file's bend limit: fixed tendons along this many directions per joint (twice as many
 #: faces), a polygon circumscribing the exact limit theta <= theta_max
 #: (:func:`_bend_limit_tendons`). 7 (14 faces) is the fewest that keeps a bend between faces
-#: within 3 % past theta_max (2.6 %; 6 directions: 3.6 %, 8: 2.1 %, 4: 8.1 %; the hinges' own
-#: limits: 39 %): every direction is a limited tendon in every world of a batch (a pass of the
-#: tendon kernels and a reserved constraint row), and under a large moment the soft limits
-#: themselves give more than the polygon (:data:`LIMIT_SOLIMP`).
+#: within 3 % past theta_max (2.8 % at the default tail's limits; 6 directions: 3.6 %, 8: 2.1 %,
+#: 4: 8.1 %; the hinges' own limits: 39 %): every direction is a limited tendon in every world of
+#: a batch (a pass of the tendon kernels and a reserved constraint row), and under a large moment
+#: the soft limits themselves give more than the polygon (:data:`LIMIT_SOLIMP`).
 BEND_LIMIT_DIRECTIONS = 7
-#: The per-segment file's: 8 (16 faces, 2.1 %), as the measurement table's protocol runs step it.
+#: The per-segment file's: 8 (16 faces, 2.1 %). The measurement table's pulse rows (``bvsr
+#: simulate``) step that model, so it stays as they were validated with.
 BEND_LIMIT_DIRECTIONS_PER_SEGMENT = 8
 #: The bend limits' impedance (solimplimit; their solreflimit is the equalities', two steps). With
 #: MuJoCo's defaults (0.9, 0.95, 0.001, 0.5, 2; 0.02 s) a tip moment 1.5 times the rod's own at

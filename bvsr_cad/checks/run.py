@@ -339,78 +339,10 @@ class Checks:
             own = check_layout(exp) + check_paper(exp)
             say("analyses")
             own += check_analyses(exp)
-            printability = started = self._printability
-            # The robot's checks: each part from whichever process ran it, all on the files as they
-            # were when the second process started (else, or where a part is missing, all of them
-            # run here).
-            parts, state = dict(self._robot_own), self._robot_own_state
-            if self._robot_state is not None and printability is not None:
-                beside_robot = printability.robot()  # waits for the second process
-                if beside_robot is not None and (not parts or state == self._robot_state):
-                    parts, state = {**parts, **beside_robot}, self._robot_state
-                elif beside_robot is None:
-                    parts = {}
-            if len(parts) == len(ROBOT_PARTS):
-                self._robot = (state, [r for i in range(len(ROBOT_PARTS)) for r in parts[i]])
-            own += _kept(
-                self._robot,
-                exp,
-                robot_reads(exp),
-                lambda: check_robot(exp),
-                say,
-                "robot descriptions (URDF, MJCF, MuJoCo, PyBullet)",
-            )
-            beside = (
-                printability.part_meshes()
-                if self._mesh_state and printability is not None
-                else None
-            )
-            if beside is not None:
-                self._mesh = {
-                    name: (self._mesh_state[name], r)
-                    for name, r in beside[0].items()
-                    if name in self._mesh_state
-                }
-                self._masses = (self._masses_state, beside[1])
-            results: list[CheckResult] = []
-            for part in exp.parts:
-                reads = part_mesh_reads(part)
-                results.extend(
-                    _kept(
-                        self._mesh.get(part["name"]),
-                        exp,
-                        reads,
-                        lambda part=part: _part_mesh(exp, memo, part),
-                        say,
-                        f"mesh {part['name']}",
-                    )
-                )
-            results.extend(
-                _kept(
-                    self._masses,
-                    exp,
-                    masses_reads(exp),
-                    lambda: check_masses(exp, memo),
-                    say,
-                    "masses",
-                )
-            )
-            results.extend(own)
-            fresh = printability is not None and self._printability_reads == _printability_reads(
-                exp
-            )
-            if not fresh:
-                if printability is not None:
-                    printability.close()
-                printability = self._printability = _Printability(
-                    exp, self.sliced_now, say, None, memo
-                )
-            results.extend(printability.results())
-            if fresh and self._molds_state == _state(exp, molds_reads(exp)):
-                results.extend(printability.molds())
-            else:  # started on files that changed since: run on the export as it is now
-                say("molds")
-                results.extend(_mold_checks(exp, memo))
+            started = self._printability
+            own += self._robot_results(exp)
+            results = self._mesh_results(exp, memo) + own
+            results += self._printability_results(exp, memo)
             if started is not None and started.proc is not None:
                 self.cpu_s = started.proc.cpu_s
         finally:
@@ -418,6 +350,85 @@ class Checks:
             for claim in ROBOT_CLAIM_FILES:
                 (Path(self.root) / claim).unlink(missing_ok=True)
         return results
+
+    def _robot_results(self, exp: Export) -> list[CheckResult]:
+        """The robot's checks: each part from whichever process ran it, all on the files as they
+        were when the second process started (else, or where a part is missing, all of them run
+        here)."""
+        printability = self._printability
+        parts, state = dict(self._robot_own), self._robot_own_state
+        if self._robot_state is not None and printability is not None:
+            beside_robot = printability.robot()  # waits for the second process
+            if beside_robot is not None and (not parts or state == self._robot_state):
+                parts, state = {**parts, **beside_robot}, self._robot_state
+            elif beside_robot is None:
+                parts = {}
+        if len(parts) == len(ROBOT_PARTS):
+            self._robot = (state, [r for i in range(len(ROBOT_PARTS)) for r in parts[i]])
+        return _kept(
+            self._robot,
+            exp,
+            robot_reads(exp),
+            lambda: check_robot(exp),
+            self.say,
+            "robot descriptions (URDF, MJCF, MuJoCo, PyBullet)",
+        )
+
+    def _mesh_results(self, exp: Export, memo: CheckMemo) -> list[CheckResult]:
+        """The part meshes' and the masses' checks: from :meth:`start` or the second process where
+        their reads are unchanged, else run here."""
+        printability = self._printability
+        beside = (
+            printability.part_meshes() if self._mesh_state and printability is not None else None
+        )
+        if beside is not None:
+            self._mesh = {
+                name: (self._mesh_state[name], r)
+                for name, r in beside[0].items()
+                if name in self._mesh_state
+            }
+            self._masses = (self._masses_state, beside[1])
+        results: list[CheckResult] = []
+        for part in exp.parts:
+            results.extend(
+                _kept(
+                    self._mesh.get(part["name"]),
+                    exp,
+                    part_mesh_reads(part),
+                    lambda part=part: _part_mesh(exp, memo, part),
+                    self.say,
+                    f"mesh {part['name']}",
+                )
+            )
+        results.extend(
+            _kept(
+                self._masses,
+                exp,
+                masses_reads(exp),
+                lambda: check_masses(exp, memo),
+                self.say,
+                "masses",
+            )
+        )
+        return results
+
+    def _printability_results(self, exp: Export, memo: CheckMemo) -> list[CheckResult]:
+        """The printability and mold checks: the second process's where it started on the export
+        as it is now, else run here."""
+        printability = self._printability
+        fresh = printability is not None and self._printability_reads == _printability_reads(exp)
+        if not fresh:
+            if printability is not None:
+                printability.close()
+            printability = self._printability = _Printability(
+                exp, self.sliced_now, self.say, None, memo
+            )
+        results = printability.results()
+        if fresh and self._molds_state == _state(exp, molds_reads(exp)):
+            return results + printability.molds()
+        # Started on files that changed since: run on the export as it is now.
+        self.say("molds")
+        return results + _mold_checks(exp, memo)
 
     def close(self) -> None:
         """Stop the printability process if it still runs (a failed build) and drop the loaded

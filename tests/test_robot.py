@@ -164,17 +164,23 @@ def test_scene_contacts_are_the_panels_on_the_floor(robot_export, bvsr_spec, sce
     }
 
 
-def test_mjcf_rod_springs_add_up_to_ei_over_l(robot_export, bvsr_spec):
-    m = mujoco.MjModel.from_xml_path(str(robot_export / "robot" / "bvsr.xml"))
-    # Hand calculation from the parameter file: E I / L of a solid round rod, SI, or the file's
-    # calibrated E I where it has one (N mm^2 = 1e-6 N m^2).
-    rod = bvsr_spec.materials[bvsr_spec.vertebra.material]
-    d_m = bvsr_spec.vertebra.diameter_mm / 1000.0
-    ei = bvsr_spec.calibration.fitted.get("rod_flexural_rigidity_n_mm2")
+def _rod_ei_over_l(spec) -> float:
+    """Hand calculation from the parameter file: E I / L of a solid round rod, SI, or the file's
+    calibrated E I where it has one (N mm^2 = 1e-6 N m^2)."""
+    rod = spec.materials[spec.vertebra.material]
+    d_m = spec.vertebra.diameter_mm / 1000.0
+    ei = spec.calibration.fitted.get("rod_flexural_rigidity_n_mm2")
     ei_si = ei * 1e-6 if ei is not None else rod.youngs_modulus_mpa * 1e6 * math.pi * d_m**4 / 64.0
-    ei_l = ei_si / (bvsr_spec.joint.gap_mm / 1000.0)
+    return ei_si / (spec.joint.gap_mm / 1000.0)
+
+
+def test_mjcf_rod_springs_add_up_to_ei_over_l(robot_export, bvsr_spec):
+    """The rod's E I / L on the hinges of the per-segment reduced chain and the exact chain (the
+    default file's hinges carry more: test_default_mjcf_hinges_carry_the_soa_dampers_and_shear)."""
+    m = mujoco.MjModel.from_xml_path(str(robot_export / "robot" / "bvsr_segments.xml"))
+    ei_l = _rod_ei_over_l(bvsr_spec)
     theta = 0.2
-    # The default (reduced) chain: a pure extension turns both pivots' X hinges by theta / 2.
+    # The reduced chain: a pure extension turns both pivots' X hinges by theta / 2.
     k_a, k_b = (m.jnt_stiffness[m.joint(f"j1_{h}").id] for h in ("ax", "bx"))
     assert 0.5 * k_a * (theta / 2) ** 2 + 0.5 * k_b * (theta / 2) ** 2 == pytest.approx(
         0.5 * ei_l * theta**2
@@ -351,20 +357,47 @@ def test_reduced_bend_limit_holds_in_every_bending_direction(robot_export, model
             ), (name, phi)
 
 
-def test_default_mjcf_hinges_damp_as_the_soa_dampers(robot_export, bvsr_spec):
-    """The default file carries no damped tendon and no damped actuator: its SOA dampers sit on the
-    pivot hinges, which Euler integrates implicitly. Bending each joint from rest about X and about
-    Y (each pivot at half the rate), the hinges dissipate what the SOA dampers would, the parameter
-    file's c times the sum of the squared stretch rates of the joint's SOA tendons (MuJoCo's
-    own tendon velocities, to 1e-6). In the shear (the pivots turning opposite ways) they dissipate
-    the closed form's c N r^2 / 2 per unit shear rate squared (the N SOAs at the radius r of the
-    joint's lower sockets), to 2 % (the lever arms of an SOA's two sockets differ by the taper)."""
+def _bend_and_shear_forces(m, d, dofs, rate: bool) -> tuple[float, float]:
+    """Generalised forces on a joint's bend u = a + b and shear s = a - b about one axis (``dofs``:
+    its two hinges) from a unit bend and then a unit shear: rates (``rate``) or small angles."""
+    out = []
+    for mode, scale in (((0.5, 0.5), 1.0), ((0.5, -0.5), 1.0)):
+        d.qpos[:], d.qvel[:], d.ctrl[:], d.act[:] = m.qpos0, 0.0, 0.0, 0.0
+        if rate:
+            d.qvel[dofs] = mode
+        else:
+            d.qpos[dofs] = np.asarray(mode) * 1e-5
+            scale = 1e-5
+        mujoco.mj_forward(m, d)
+        q = d.qfrc_passive[dofs] + d.qfrc_actuator[dofs]
+        out.append(float(mode[0] * q[0] + mode[1] * q[1]) / scale)
+    return out[0], out[1]
+
+
+def test_default_mjcf_hinges_carry_the_soa_dampers_and_shear(robot_export, bvsr_spec):
+    """The default file carries no damped tendon, no damped actuator and no shear tendon: its SOAs'
+    dampers and its shear springs sit on the pivot hinges (Euler integrates their damping
+    implicitly), and the SOAs' springs give up what the shear springs add to the bend. About X and
+    about Y of every joint, from rest:
+
+    - bend rate: the hinges dissipate what the SOA dampers would, the parameter file's c times the
+      sum of the squared stretch rates of the joint's SOA tendons (MuJoCo's own tendon velocities,
+      to 1e-6); shear rate: the closed form's c N r^2 / 2 (the N SOAs at the radius r of the
+      joint's lower sockets), to 2 % (an SOA's two sockets' lever arms differ by the taper);
+    - bend: the stiffness of the rod's E I / L and of the SOAs' springs, the parameter file's n_a
+      times the summed squared stretch rates (to 1e-4: the finite difference); shear: E I / L and
+      the fixed-guided columns' (4/3) (N n_a A / (2 pi) + E I / L) - E I / L
+      (:func:`bvsr_cad.exporters.mjcf.shear_stiffness_nm_rad`, here from the parameter file),
+      to 2 % (the lever arms against r)."""
     from bvsr_cad.models.actuator import soa_force_law
 
-    c = soa_force_law(bvsr_spec).damping_n_s_per_m
+    law = soa_force_law(bvsr_spec)
+    ei_l = _rod_ei_over_l(bvsr_spec)
     m = mujoco.MjModel.from_xml_path(str(robot_export / "robot" / "bvsr.xml"))
+    m.opt.gravity[:] = 0.0
     assert m.opt.integrator == mujoco.mjtIntegrator.mjINT_EULER
     assert not m.tendon_damping.any() and not m.actuator_biasprm[:, 2].any()
+    assert not any("_shear_" in m.tendon(i).name for i in range(m.ntendon))
     d = mujoco.MjData(m)
     for joint in json.loads((robot_export / "manifest.json").read_text())["robot"][
         "bending_joints"
@@ -381,11 +414,48 @@ def test_default_mjcf_hinges_damp_as_the_soa_dampers(robot_export, bvsr_spec):
             d.qpos[:], d.qvel[:] = m.qpos0, 0.0
             d.qvel[dofs] = 0.5  # a unit bend rate, half on each pivot
             mujoco.mj_forward(m, d)
-            hinges = float(np.sum(m.dof_damping * d.qvel**2))
-            assert hinges == pytest.approx(c * np.sum(d.ten_velocity[soas] ** 2), rel=1e-6)
-            d.qvel[dofs] = (0.5, -0.5)  # a unit shear rate a - b
-            hinges = float(np.sum(m.dof_damping * d.qvel**2))
-            assert hinges == pytest.approx(c * len(soas) * r2 / 2, rel=0.02)
+            arms2 = float(np.sum(d.ten_velocity[soas] ** 2))
+            bend, shear = _bend_and_shear_forces(m, d, dofs, rate=True)
+            assert -bend == pytest.approx(law.damping_n_s_per_m * arms2, rel=1e-6)
+            assert -shear == pytest.approx(law.damping_n_s_per_m * len(soas) * r2 / 2, rel=0.02)
+            bend, shear = _bend_and_shear_forces(m, d, dofs, rate=False)
+            assert -bend == pytest.approx(ei_l + law.stiffness_offset_n_per_m * arms2, rel=1e-4)
+            columns = len(soas) * law.stiffness_offset_n_per_m * law.area_m2 / (2 * math.pi)
+            assert -shear == pytest.approx(4 / 3 * (columns + ei_l), rel=0.02)
+
+
+def test_default_mjcf_keeps_the_shear_spring_the_soas_cannot_give(tmp_path, data):
+    """A rod 30 times stiffer than the calibrated one: its share of the shear spring is more than
+    the SOAs' springs can give up to the bend, so the SOAs' actuators keep no spring and the rest
+    stays on the shear tendons (stiffness only); the joint's bend and shear stiffness are still the
+    rod's and the SOAs' of the parameter file (as in
+    test_default_mjcf_hinges_carry_the_soa_dampers_and_shear)."""
+    from bvsr_cad.exporters.mjcf import mjcf_tree, write_mjcf
+    from bvsr_cad.exporters.robot_files import write_robot_meshes
+    from bvsr_cad.models.actuator import soa_force_law
+    from bvsr_cad.parameters.load import spec_from_dict
+
+    data["calibration"]["fitted"]["rod_flexural_rigidity_n_mm2"] *= 30.0
+    spec = spec_from_dict(data)
+    law, ei_l = soa_force_law(spec), _rod_ei_over_l(spec)
+    robot = robot_model(build_assembly(spec), [THETA_MAX] * spec.joints)
+    assert robot.actuation.rod_bending_stiffness_nm_rad == pytest.approx(ei_l)
+    mesh_files = write_robot_meshes(robot, tmp_path / "meshes")
+    write_mjcf(tmp_path / "tail.xml", mjcf_tree(robot, mesh_files, per_segment=False)[0])
+    m = mujoco.MjModel.from_xml_path(str(tmp_path / "tail.xml"))
+    shear_tendons = [i for i in range(m.ntendon) if "_shear_" in m.tendon(i).name]
+    assert len(shear_tendons) == 2 * spec.joints and not m.tendon_damping.any()
+    assert np.allclose(m.actuator_biasprm[:, :3], 0.0, atol=1e-9)  # no spring, no damper left
+    d = mujoco.MjData(m)
+    soas = [m.tendon(f"j1_soa{i}_tendon").id for i in range(1, 6)]
+    dofs = [m.joint(f"j1_{pivot}x").dofadr[0] for pivot in "ab"]
+    d.qvel[dofs] = 0.5
+    mujoco.mj_forward(m, d)
+    arms2 = float(np.sum(d.ten_velocity[soas] ** 2))
+    bend, shear = _bend_and_shear_forces(m, d, dofs, rate=False)
+    assert -bend == pytest.approx(ei_l + law.stiffness_offset_n_per_m * arms2, rel=1e-4)
+    columns = len(soas) * law.stiffness_offset_n_per_m * law.area_m2 / (2 * math.pi)
+    assert -shear == pytest.approx(4 / 3 * (columns + ei_l), rel=0.02)
 
 
 def _bends_under_tip_moment(path, moment_nm: float, psi_rad: float, seconds: float = 1.0):
@@ -765,13 +835,13 @@ def test_collision_fits_and_robot_meshes_take_the_print_stls_triangulation_whate
 
     part = build_assembly(bvsr_spec).parts["panel1"]
     write_part_stl(part, tmp_path / "print.stl")
-    with_stl = collision._fit_cylinder(part.solid, np.eye(4))
+    with_stl = collision.fit_cylinder(part.solid, np.eye(4))
     _write_m(part.solid, tmp_path / "with_stl.stl")
     part.solid.bounding_box()  # clears the triangulation
-    cleared = collision._fit_cylinder(part.solid, np.eye(4))
+    cleared = collision.fit_cylinder(part.solid, np.eye(4))
     _write_m(part.solid, tmp_path / "cleared.stl")
     never = fresh_copy(part.solid)
-    untouched = collision._fit_cylinder(never, np.eye(4))
+    untouched = collision.fit_cylinder(never, np.eye(4))
     _write_m(never, tmp_path / "never.stl")
     for fit in (cleared, untouched):
         assert (fit.radius_mm, fit.z0_mm, fit.z1_mm, fit.max_radius_mm, fit.hull_volume_mm3) == (

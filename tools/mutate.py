@@ -370,19 +370,28 @@ FAULTS: list[Fault] = [
     Fault(
         "mjcf_hinge_damping_halved",
         "bvsr_cad/exporters/mjcf.py",
-        "return {axis: 2.0 * c * float(np.sum(np.square(a))) for axis, a in arms.items()}",
-        "return {axis: 1.0 * c * float(np.sum(np.square(a))) for axis, a in arms.items()}",
+        "axis: 2.0 * law.damping_n_s_per_m * a2 for axis, a2 in arms2.items()",
+        "axis: 1.0 * law.damping_n_s_per_m * a2 for axis, a2 in arms2.items()",
         "the default MJCF's pivot hinges carry half the SOAs' damping",
-        catchers=("tests/test_robot.py::test_default_mjcf_hinges_damp_as_the_soa_dampers",),
+        catchers=("tests/test_robot.py::test_default_mjcf_hinges_carry_the_soa_dampers_and_shear",),
     ),
     Fault(
         "mjcf_hinge_damping_lever_from_arc_start",
         "bvsr_cad/exporters/mjcf.py",
         "m = np.array([0.0, 0.0, t_m + b.arc_length_m / 2])",
         "m = np.array([0.0, 0.0, t_m])",
-        "the SOAs' lever arms for the hinge damping taken about the arc's start, not the pivots' "
+        "the SOAs' lever arms for the hinges' share taken about the arc's start, not the pivots' "
         "midpoint",
-        catchers=("tests/test_robot.py::test_default_mjcf_hinges_damp_as_the_soa_dampers",),
+        catchers=("tests/test_robot.py::test_default_mjcf_hinges_carry_the_soa_dampers_and_shear",),
+    ),
+    Fault(
+        "mjcf_shear_spring_counted_twice_in_the_bend",
+        "bvsr_cad/exporters/mjcf.py",
+        "soa_stiffness_offset_n_per_m=law.stiffness_offset_n_per_m - moved / mean2,",
+        "soa_stiffness_offset_n_per_m=law.stiffness_offset_n_per_m,",
+        "the shear spring moved onto the default MJCF's hinges stiffens the bend too (the SOAs' "
+        "springs keep all of n_a)",
+        catchers=("tests/test_robot.py::test_default_mjcf_hinges_carry_the_soa_dampers_and_shear",),
     ),
     Fault(
         "kinematics_xy_swapped",

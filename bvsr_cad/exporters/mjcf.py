@@ -23,16 +23,18 @@ stepped at ``robot.timestep_s``.
 
 The default file (reduced chain, one actuator per SOA) is built for batched stepping (MuJoCo Warp,
 MJX), where every tendon costs each world a pass of the tendon kernels and a limited one a
-constraint row: its dampers sit on the hinges, not on tendons or actuators. The SOAs' damping c
-along each SOA and the shear tendons' damping are, to first order in the joint's motion, the
-same dissipation as a damping on each pivot hinge of twice c times the summed squares of the
-joint's SOAs' lever arms, about c N r^2 (:func:`hinge_damping_nms`; the N SOAs evenly round the
-axis make it the same in every bending direction). With every damper on a joint, MuJoCo's Euler
-integrator integrates the damping implicitly, as implicitfast does, without implicitfast's pass
-over every tendon and actuator for their velocity derivatives; the step is otherwise the same
-(implicitfast, too, leaves the inertial forces' velocity derivatives out). Its bend-limit polygon
-has :data:`BEND_LIMIT_DIRECTIONS` directions. The per-segment and exact files keep their dampers
-on the shear and spread tendons and the actuators, integrated by implicitfast.
+constraint row: its dampers and shear springs sit on the pivot hinges (:class:`HingeShare`), with
+no damped tendon or actuator and no shear tendon (unless a rod far stiffer than the SOAs leaves
+some of its shear spring there). To first order in the joint's motion this is
+the same physics: each hinge's damping, twice c times the summed squares of the joint's SOAs'
+lever arms (about c N r^2), dissipates what the SOA dampers dissipate in the bend and the shear
+tendon's damper in the shear; the shear spring, on the hinges, stiffens the bend as much as the
+shear, and the SOAs' springs (their n_a) give that up. With every damper on a joint, MuJoCo's
+Euler integrator integrates the damping implicitly, as implicitfast does, without implicitfast's
+pass over every tendon and actuator for their velocity derivatives; the step is otherwise the
+same (implicitfast, too, leaves the inertial forces' velocity derivatives out). Its bend-limit
+polygon has :data:`BEND_LIMIT_DIRECTIONS` directions. The per-segment and exact files keep their
+dampers on the tendons and the actuators, integrated by implicitfast.
 
 The exact chain of every bending joint is the URDF's, with equality constraints:
 ``jk_theta_b`` = ``jk_theta_a``, ``jk_phi_b`` = -``jk_phi``, and ``jk_chord``
@@ -49,8 +51,8 @@ it through a general actuator whose control is the gauge pressure in Pa:
           = P A - (m_a P + n_a)(l - l0) - c dl/dt          (Eq 3-4 and the SOA damper)
 
 so the SOA's stiffness and damping live in the actuator alone and are not
-counted again on the joints (in the default file the actuator carries the stiffness and the
-hinges the damping, see above). The pressure P in the chamber is the actuator's
+counted again on the joints (in the default file the hinges carry the damping and part of the
+spring, see above). The pressure P in the chamber is the actuator's
 activation, a first-order lag of the commanded (supply) pressure u,
 P' = (u - P) / tau (``dyntype="filterexact"``), with each line's tau the
 least-squares fit to the supply model's fill curve
@@ -196,25 +198,27 @@ def mjcf_tree(
         if chain == "exact"
         else (REDUCED_PER_SEGMENT_TIMESTEP_S if per_segment else REDUCED_CHAIN_TIMESTEP_S)
     )
-    # The default file: every damper on a hinge (module docstring), which Euler integrates
-    # implicitly.
-    hinge_dampers = chain == "reduced" and not per_segment
-    integrator = "Euler" if hinge_dampers else "implicitfast"
+    # The default file: every damper and the shear springs on the hinges (module docstring); Euler
+    # integrates joint damping implicitly.
+    shares = None
+    if chain == "reduced" and not per_segment:
+        shares = {b.name: HingeShare.of(robot, k) for k, b in enumerate(robot.bending, 1)}
+    integrator = "Euler" if shares else "implicitfast"
     ET.SubElement(root, "option", timestep=_f(timestep_s), integrator=integrator)
     _mjcf_defaults(root, model)
     _mjcf_assets(root, robot, mesh_files)
-    _mjcf_worldbody(root, robot, model, chain, hinge_dampers)
+    _mjcf_worldbody(root, robot, model, chain, shares)
     # As stiff as the step allows (MuJoCo needs a time constant of at least two steps).
     solref = _vec((2.0 * timestep_s, 1.0))
     chord_err = _mjcf_equalities(root, robot, chain, per_segment, solref)
     tendon = ET.SubElement(root, "tendon")
     directions = BEND_LIMIT_DIRECTIONS_PER_SEGMENT if per_segment else BEND_LIMIT_DIRECTIONS
     bend_overshoot = (
-        _mjcf_joint_tendons(tendon, robot, per_segment, solref, directions, not hinge_dampers)
+        _mjcf_joint_tendons(tendon, robot, per_segment, solref, directions, shares)
         if chain == "reduced"
         else None
     )
-    actuators = _mjcf_actuators(root, tendon, robot, per_segment, soa_dampers=not hinge_dampers)
+    actuators = _mjcf_actuators(root, tendon, robot, per_segment, shares)
     ET.indent(root)
     lags = sorted(set(robot.supply_lag_s.values()))
     facts = {
@@ -278,10 +282,14 @@ def _mjcf_assets(root: ET.Element, robot: RobotModel, mesh_files: dict[str, str]
 
 
 def _mjcf_worldbody(
-    root: ET.Element, robot: RobotModel, model: str, chain: str, hinge_dampers: bool = False
+    root: ET.Element,
+    robot: RobotModel,
+    model: str,
+    chain: str,
+    shares: dict[str, HingeShare] | None = None,
 ) -> None:
     """The ``worldbody`` section: the mount, then the tail's bodies as the chain nests them
-    (``hinge_dampers``: the reduced chain's pivot hinges carry :func:`hinge_damping_nms`)."""
+    (``shares``: what the reduced chain's pivot hinges carry in the default file)."""
     world = ET.SubElement(root, "worldbody")
     mount = ET.SubElement(
         world,
@@ -302,7 +310,7 @@ def _mjcf_worldbody(
     else:
         root_body = ET.SubElement(mount, "body", name=robot.root)
         _link_contents(root_body, robot.links[robot.root], sites_by_link)
-        _reduced_bodies(root_body, robot, 1, sites_by_link, hinge_dampers)
+        _reduced_bodies(root_body, robot, 1, sites_by_link, shares)
 
 
 def _link_contents(
@@ -391,18 +399,17 @@ def _reduced_bodies(
     robot: RobotModel,
     k: int,
     sites_by_link: dict[str, list],
-    hinge_dampers: bool = False,
+    shares: dict[str, HingeShare] | None = None,
 ) -> None:
     """The reduced chain from joint k on: its middle link (the whole deformable body) and panel k on
-    it, then the rest; with ``hinge_dampers`` each pivot hinge carries :func:`hinge_damping_nms`."""
-    stiff_half = 2.0 * robot.actuation.rod_bending_stiffness_nm_rad
+    it, then the rest; with ``shares`` (the default file) the pivot hinges carry them."""
     b = robot.bending[k - 1]
+    share = shares[b.name] if shares else None
+    stiff_half = 2.0 * robot.actuation.rod_bending_stiffness_nm_rad
+    stiff_half += share.stiffness_nm_rad if share else 0.0
+    damped = {axis: {"damping": _f(share.damping_nms[axis])} if share else {} for axis in "xy"}
     d = PRB_PIVOT_FRACTION * b.arc_length_m
-    t_m = np.asarray(
-        next(j for j in robot.joints if j.child == f"{b.name}_after_phi").T_parent_joint
-    )[2, 3]
-    damping = hinge_damping_nms(robot, k, t_m) if hinge_dampers else {}
-    damped = {axis: {"damping": _f(damping[axis])} if damping else {} for axis in "xy"}
+    t_m = _arc_start_m(robot, b)
     half_a, half_b = robot.links[f"{b.name}_after_theta_a"], robot.links[f"{b.name}_after_chord"]
     soft = dataclasses.replace(
         half_a,
@@ -437,7 +444,7 @@ def _reduced_bodies(
         )
     _link_contents(panel, robot.links[b.tip_link], sites_by_link)
     if k < len(robot.bending):
-        _reduced_bodies(panel, robot, k + 1, sites_by_link, hinge_dampers)
+        _reduced_bodies(panel, robot, k + 1, sites_by_link, shares)
 
 
 def _mjcf_equalities(
@@ -520,16 +527,22 @@ def _mjcf_joint_tendons(
     per_segment: bool,
     solref: str,
     directions: int,
-    shear_damped: bool,
+    shares: dict[str, HingeShare] | None = None,
 ) -> float:
-    """The reduced chain's fixed tendons: each joint's shear between its halves (damped with
-    ``shear_damped``; otherwise the hinges carry its damping), a segment's spread and the bend
-    limits along ``directions``. Returns the bend limit polygon's largest overshoot
+    """The reduced chain's fixed tendons: each joint's shear between its halves (with ``shares``,
+    only what the hinges do not carry, if any), a segment's spread and the bend limits along
+    ``directions``. Returns the bend limit polygon's largest overshoot
     (:func:`_bend_limit_tendons`)."""
-    shear = {"damping": _f(_soa_bending_damping(robot))} if shear_damped else {}
-    shear["stiffness"] = _f(shear_stiffness_nm_rad(robot))
     for b in robot.bending:
-        for axis in "xy":
+        if shares is None:
+            shear = {
+                "damping": _f(_soa_bending_damping(robot)),
+                "stiffness": _f(shear_stiffness_nm_rad(robot)),
+            }
+        else:
+            left = shares[b.name].shear_tendon_nm_rad
+            shear = {"stiffness": _f(left)} if left > 0.0 else None
+        for axis in "xy" if shear else "":
             fixed = ET.SubElement(tendon, "fixed", name=f"{b.name}_shear_{axis}", **shear)
             ET.SubElement(fixed, "joint", joint=f"{b.name}_a{axis}", coef="1")
             ET.SubElement(fixed, "joint", joint=f"{b.name}_b{axis}", coef="-1")
@@ -543,11 +556,12 @@ def _mjcf_actuators(
     tendon: ET.Element,
     robot: RobotModel,
     per_segment: bool,
-    soa_dampers: bool = True,
+    shares: dict[str, HingeShare] | None = None,
 ) -> int:
     """The ``actuator`` section: one pressure actuator per SOA (per line with ``per_segment``) on a
-    spatial tendon through its SOAs' sockets, with the SOA's damper unless ``soa_dampers`` is off
-    (the hinges carry it). Returns the number of actuators."""
+    spatial tendon through its SOAs' sockets; with ``shares`` (the default file) without the SOA's
+    damper and with the part of its spring its joint's hinges do not carry. Returns the number of
+    actuators."""
     act = robot.actuation
     actuator = ET.SubElement(root, "actuator")
     ctrl = _vec((act.pressure_min_pa, act.pressure_max_pa))
@@ -566,7 +580,9 @@ def _mjcf_actuators(
         law = act.law
         m_a = law.stiffness_slope_n_per_m_per_pa * k_share
         n_a = law.stiffness_offset_n_per_m * k_share
-        c = law.damping_n_s_per_m * k_share if soa_dampers else 0.0
+        c = law.damping_n_s_per_m * k_share
+        if shares:
+            n_a, c = shares[robot.bending[soas[0].joint - 1].name].soa_stiffness_offset_n_per_m, 0.0
         lag = robot.supply_lag_s.get(soas[0].line)
         dyn = {"dyntype": "filterexact", "dynprm": _vec((lag,))} if lag else {}
         ET.SubElement(
@@ -682,19 +698,14 @@ def _soa_bending_damping(robot: RobotModel) -> float:
     return _soa_bending(robot, robot.actuation.law.damping_n_s_per_m)
 
 
-def hinge_damping_nms(robot: RobotModel, k: int, t_m: float) -> dict[str, float]:
-    """Damping (N m s/rad) on reduced joint k's pivot hinges about X and Y in the default file: its
-    SOAs' dampers moved onto the hinges (``t_m``: the arc's start in panel k-1's frame).
+def soa_lever_arms_m(robot: RobotModel, k: int) -> dict[str, np.ndarray]:
+    """Each of reduced joint k's SOAs' stretch per unit bend about X and about Y from rest, m/rad.
 
-    Per axis, the bend u = a + b and the shear s = a - b of the pivots' hinges a, b. A damping D on
-    each hinge dissipates D (a'^2 + b'^2) = (D / 2) (u'^2 + s'^2). Bending from rest at u' (u' / 2
-    about each pivot), an SOA's top socket p moves at u' axis x (p - m), m the pivots' midpoint,
-    so the SOA stretches at e . (axis x (p - m)) u' (e along it) and its damper c dissipates
-    c (e . (axis x (p - m)))^2 u'^2; D = 2 c sum over the joint's SOAs of (e . (axis x (p - m)))^2
-    dissipates as much. It is about c N r^2 (the N SOAs evenly round the axis at radius r), so
-    D / 2 is the shear tendon's c N r^2 / 2 (:func:`_soa_bending_damping`) as well.
-    """
+    Bending at u' (u' / 2 about each pivot), an SOA's top socket p moves at u' axis x (p - m), m
+    the pivots' midpoint, so the SOA stretches at e . (axis x (p - m)) u' (e along it). It is about
+    r sin or cos of the SOA's angle round the axis (r the sockets' radius)."""
     b = robot.bending[k - 1]
+    t_m = _arc_start_m(robot, b)
     pos = {s.name: np.asarray(s.pos_m) for s in robot.sites}
     m = np.array([0.0, 0.0, t_m + b.arc_length_m / 2])
     arms = {"x": [], "y": []}
@@ -703,8 +714,50 @@ def hinge_damping_nms(robot: RobotModel, k: int, t_m: float) -> dict[str, float]
         e = (top - pos[s.bottom_site]) / np.linalg.norm(top - pos[s.bottom_site])
         for axis, unit in (("x", [1.0, 0.0, 0.0]), ("y", [0.0, 1.0, 0.0])):
             arms[axis].append(float(e @ np.cross(unit, top - m)))
-    c = robot.actuation.law.damping_n_s_per_m
-    return {axis: 2.0 * c * float(np.sum(np.square(a))) for axis, a in arms.items()}
+    return {axis: np.array(a) for axis, a in arms.items()}
+
+
+@dataclasses.dataclass(frozen=True)
+class HingeShare:
+    """What the default file moves onto a reduced joint's four pivot hinges (module docstring).
+
+    Per axis, the bend u = a + b and the shear s = a - b of the pivots' hinges a, b: a damping D
+    on each hinge dissipates D (a'^2 + b'^2) = (D / 2) (u'^2 + s'^2), and a stiffness K stores
+    (K / 2) (a^2 + b^2) = (K / 4) (u^2 + s^2). The SOA dampers dissipate c sum(arm^2) u'^2
+    (:func:`soa_lever_arms_m`), about c N r^2 / 2, and the shear tendon damps s with c N r^2 / 2
+    (:func:`_soa_bending_damping`): D = 2 c sum(arm^2) dissipates both. The shear tendon's spring
+    k_s (:func:`shear_stiffness_nm_rad`) on each hinge as 2 k_s stores (k_s / 2) s^2 and as much in
+    the bend, which the SOAs' springs give up: their n_a sum(arm^2) u^2 / 2 (about n_a N r^2 / 4
+    u^2) loses k_s u^2 / 2 when n_a is reduced by k_s / sum(arm^2). The SOAs' springs cannot give
+    up more than they have: what is left of k_s (a very stiff rod's) stays on the shear tendon."""
+
+    damping_nms: dict[str, float]  # on each hinge, about X and about Y
+    stiffness_nm_rad: float  # added to each hinge's 2 E I / L
+    soa_stiffness_offset_n_per_m: float  # the joint's SOAs' n_a on their actuators
+    shear_tendon_nm_rad: float  # left on the shear tendons (0: none written)
+
+    @classmethod
+    def of(cls, robot: RobotModel, k: int) -> HingeShare:
+        law = robot.actuation.law
+        arms2 = {axis: float(np.sum(a**2)) for axis, a in soa_lever_arms_m(robot, k).items()}
+        mean2 = (arms2["x"] + arms2["y"]) / 2  # the same about both (the SOAs evenly round)
+        shear = shear_stiffness_nm_rad(robot)
+        moved = min(shear, law.stiffness_offset_n_per_m * mean2)
+        return cls(
+            damping_nms={axis: 2.0 * law.damping_n_s_per_m * a2 for axis, a2 in arms2.items()},
+            stiffness_nm_rad=2.0 * moved,
+            soa_stiffness_offset_n_per_m=law.stiffness_offset_n_per_m - moved / mean2,
+            shear_tendon_nm_rad=shear - moved,
+        )
+
+
+def _arc_start_m(robot: RobotModel, b) -> float:
+    """Where bending joint ``b``'s arc starts along panel k-1's axis (its frame), m."""
+    return float(
+        np.asarray(
+            next(j for j in robot.joints if j.child == f"{b.name}_after_phi").T_parent_joint
+        )[2, 3]
+    )
 
 
 def _segment_spread_tendons(tendon: ET.Element, robot: RobotModel) -> None:

@@ -607,10 +607,21 @@ def _segment_point_distance(p0, p1, q) -> float:
 
 def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
     """Every violated rule of one panel."""
+    out = (
+        _pocket_depth_problems(spec, lay)
+        + _cut_problems(spec, lay)
+        + _collar_problems(spec, lay)
+        + _passage_problems(spec, lay)
+    )
+    return [found._replace(panel=lay.index) for found in out]
+
+
+def _pocket_depth_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
+    """The flange pockets from both faces plus a floor must fit in the panel, and the SOA must
+    reach across the gap (a pocket of positive depth)."""
     fab = spec.fabrication
     out: list[LayoutProblem] = []
     t = lay.thickness_mm
-    # Pockets from both faces plus a floor must fit in the panel.
     depth_total = lay.pocket_depth_mm * (int(lay.lower_pockets) + int(lay.upper_pockets))
     if depth_total + fab.socket_floor_mm > t + 1e-9:
         out.append(
@@ -632,6 +643,15 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
                 ("pocket_depth",),
             )
         )
+    return out
+
+
+def _cut_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
+    """Each cut's lip to the panel's rim, and the web between it and every cut near it at the same
+    height (set screws aside, nested cuts aside)."""
+    fab = spec.fabrication
+    out: list[LayoutProblem] = []
+    t = lay.thickness_mm
     cuts = list(lay.cuts)
     near = _near_pairs(cuts, max(fab.min_pocket_gap_mm, fab.min_wall_mm))
     for i, a in enumerate(cuts):
@@ -665,6 +685,15 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
                         (a.name, b.name),
                     )
                 )
+    return out
+
+
+def _collar_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
+    """The wall between each set-screw collar and the cuts at its height (the rod's and the set
+    screw's own aside)."""
+    fab = spec.fabrication
+    out: list[LayoutProblem] = []
+    cuts = list(lay.cuts)
     for boss in lay.bosses:
         for b in cuts:
             if b.role in ("rod", "setscrew"):
@@ -681,13 +710,22 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
                         (boss.name, b.name),
                     )
                 )
+    return out
+
+
+def _passage_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
+    """The wall between each pneumatic passage and the cuts at its height (its own line's port
+    and feed, and the shallow pockets, aside)."""
+    fab = spec.fabrication
+    out: list[LayoutProblem] = []
+    cuts = list(lay.cuts)
     for p in lay.passages:
         line = p.name.split("_", 1)[1]
         for b in cuts:
             if b.name.endswith(line) and b.role in ("tube_port", "feed"):
                 continue
             if b.role == "pocket":
-                continue  # pockets are shallow; the floor rule above keeps them apart
+                continue  # pockets are shallow; _pocket_depth_problems' floor keeps them apart
             lo, hi = b.z_range
             if hi < p.p0[2] - p.diameter_mm / 2 or lo > p.p0[2] + p.diameter_mm / 2:
                 continue
@@ -701,7 +739,7 @@ def panel_problems(spec: TailSpec, lay: PanelLayout) -> list[LayoutProblem]:
                         (p.name, b.name),
                     )
                 )
-    return [found._replace(panel=lay.index) for found in out]
+    return out
 
 
 def _problems_at(spec: TailSpec, beta: float) -> list[LayoutProblem]:
@@ -830,26 +868,42 @@ def _axial_problems(spec: TailSpec) -> list[str]:
     """What cannot stack along the axis: the gap in the joint, the SOA's shape and interior, its
     flanges' pockets in the panels, the number of joints and segments, the tube ports' depth. Each
     of the first rules stops the others (their numbers are meaningless past it)."""
-    problems: list[str] = []
+    blocker = _shape_blocker(spec)
+    if blocker:
+        return [blocker]
+    problems = _soa_interior_problems(spec)
+    blocker = _pocket_blocker(spec)
+    if blocker:
+        return problems + [blocker]
+    return problems + _chain_length_problems(spec) + _tube_port_problems(spec)
+
+
+def _shape_blocker(spec: TailSpec) -> str | None:
+    """The first broken rule among those every other axial number rests on: the gap within the
+    joint's height, the SOA's long side over its short side, its origami within its height."""
     j = spec.joint
     if j.gap_mm >= j.joint_height_mm:
-        problems.append(
+        return (
             f"joint.gap_mm = {j.gap_mm}: must be below joint.joint_height_mm = {j.joint_height_mm} "
             "(the difference is the panel thickness)"
         )
-        return problems
     if spec.soa.long_side_mm <= spec.soa.short_side_mm:
-        problems.append(
+        return (
             f"soa.long_side_mm = {spec.soa.long_side_mm}: must exceed soa.short_side_mm = "
             f"{spec.soa.short_side_mm}"
         )
-        return problems
     if spec.soa.origami_height_mm >= spec.soa.height_mm:
-        problems.append(
+        return (
             f"soa.origami_height_mm = {spec.soa.origami_height_mm}: must be below soa.height_mm "
             f"= {spec.soa.height_mm} (the rest is the two flanges)"
         )
-        return problems
+    return None
+
+
+def _soa_interior_problems(spec: TailSpec) -> list[str]:
+    """The SOA's interior at the valleys (what the wall's offset leaves of the short side) and its
+    fillets within the short side."""
+    problems: list[str] = []
     inner = spec.soa.short_side_mm - 2 * spec.soa.wall_offset_mm
     if inner <= 0.5:
         soa = spec.soa
@@ -866,10 +920,17 @@ def _axial_problems(spec: TailSpec) -> list[str]:
             f"soa.fillet_radius_mm = {spec.soa.fillet_radius_mm}: must be below half of "
             f"soa.short_side_mm = {spec.soa.short_side_mm}"
         )
+    return problems
+
+
+def _pocket_blocker(spec: TailSpec) -> str | None:
+    """The SOA's flanges in the panels' pockets: the SOA as built reaches across the gap, and two
+    pockets plus a floor fit in a panel (either broken stops the later rules)."""
+    j = spec.joint
     depth = pocket_depth_mm(spec)
     floor = spec.fabrication.socket_floor_mm
     if depth < 0:
-        problems.append(
+        return (
             f"soa.height_mm = {spec.soa.height_mm}: the SOA as built "
             f"({spec.soa.built_height_mm:.3f} mm, "
             f"soa.fold_height_from = {spec.soa.fold_height_from!r}) is {-2 * depth:.3f} mm shorter "
@@ -878,9 +939,8 @@ def _axial_problems(spec: TailSpec) -> list[str]:
             "allowed: an SOA at "
             "least as long as the gap (change soa.height_mm, soa.origami_height_mm or joint.gap_mm)"
         )
-        return problems
     if 2 * depth + floor > j.panel_thickness_mm + 1e-9:
-        problems.append(
+        return (
             f"joint.joint_height_mm = {j.joint_height_mm}: flange pockets deeper than the panel: "
             "two pockets of "
             f"(H - H_a) / 2 = {depth:.3f} mm plus a {floor} mm floor need {2 * depth + floor:.3f} "
@@ -889,7 +949,13 @@ def _axial_problems(spec: TailSpec) -> list[str]:
             "joint.gap_mm, "
             "soa.height_mm or fabrication.socket_floor_mm)"
         )
-        return problems
+    return None
+
+
+def _chain_length_problems(spec: TailSpec) -> list[str]:
+    """The number of segments the tube rings serve and the number of joints the exported MJCF
+    holds together."""
+    problems: list[str] = []
     if spec.segments > 3:
         problems.append(
             f"segments = {spec.segments}: tube rings exist for the distal tubes of at most 3 "
@@ -905,6 +971,13 @@ def _axial_problems(spec: TailSpec) -> list[str]:
             "to 0.011 rad, "
             "limit 0.01, and still moved 0.22 rad/s 1 s after release, limit 0.1; 12 joints worse)"
         )
+    return problems
+
+
+def _tube_port_problems(spec: TailSpec) -> list[str]:
+    """The tube ports reach the panel's mid-plane passage and keep a floor under them."""
+    j = spec.joint
+    problems: list[str] = []
     if (
         spec.tubes.port_depth_mm < j.panel_thickness_mm / 2
         or spec.tubes.port_depth_mm > j.panel_thickness_mm - spec.fabrication.socket_floor_mm

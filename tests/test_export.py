@@ -212,6 +212,33 @@ def test_mold_checks_in_the_second_process_see_a_mold_file_changed_before_they_f
     assert {r.name for r in kept} >= names
 
 
+def test_checks_handed_the_manifest_need_no_manifest_file(bvsr_export, tmp_path):
+    """A build hands its checks the manifest as its file will hold it and writes the file once, at
+    the end: checks started, given the robot's and finished on a folder without manifest.json, the
+    manifest handed to both processes, give the verdicts of one run of every check on the published
+    export (which reads its file)."""
+    import os
+
+    from bvsr_cad.build._runtime.checks_process import finish_checks, run_checks, start_checks
+
+    copy = tmp_path / "copy"
+    shutil.copytree(bvsr_export, copy)
+    manifest = json.loads((copy / "manifest.json").read_text())
+    (copy / "manifest.json").unlink()
+    said: list[str] = []
+    checks = start_checks(
+        copy, said.append, meshes_beside=True, robot_beside=True, manifest=manifest
+    )
+    checks.robot_ahead(manifest)
+    got = finish_checks(checks, None, manifest)
+    if (os.cpu_count() or 1) >= 2:
+        assert any(m.startswith("printability and molds: done in the second process") for m in said)
+    assert not (copy / "manifest.json").exists()
+    assert [r.to_json() for r in got] == [
+        r.to_json() for r in run_checks(bvsr_export, parallel=False)
+    ]
+
+
 def test_check_moved_pocket_fails_the_pentagon(bvsr_export, tmp_path, capsys):
     moved = tmp_path / "moved"
     shutil.copytree(bvsr_export, moved)

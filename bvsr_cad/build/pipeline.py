@@ -31,7 +31,7 @@ from ..exporters.drawings import stamp_drawings, write_drawing_sheets
 from ..exporters.fabrication_files import write_fabrication, write_rigid_files
 from ..exporters.gltf import scene_glb, write_scenes
 from ..exporters.manifest import manifest_dict
-from ..exporters.manifest_file import write_manifest
+from ..exporters.manifest_file import as_written, write_manifest
 from ..exporters.mold_files import molds_manifest, write_mold_files
 from ..exporters.render import render_previews
 from ..exporters.report import report_pictures, write_report
@@ -265,15 +265,17 @@ def build_opened(
         limits = analyses.limits_ahead()
         with run.timed(ROBOT_FILES):
             robot = _robot_files(run, asm, limits) if limits is not None else None
-        with run.timed(
-            CHECKS
-        ):  # they read the files as published: the manifest so far, fixed time stamps
-            write_manifest(tmp, {**manifest, **(robot or {})})
+        with run.timed(CHECKS):  # they read the files as published: fixed time stamps
             fixed: set[Path] = set()
             make_reproducible(tmp, fixed)
             say("checks of the CAD files")
             checks = start_checks(
-                tmp, say, cache=opened.cache, meshes_beside=True, robot_beside=robot is not None
+                tmp,
+                say,
+                cache=opened.cache,
+                meshes_beside=True,
+                robot_beside=robot is not None,
+                manifest=as_written({**manifest, **(robot or {})}),
             )
         run.run(DRAWINGS, lambda folder: _drawings(asm, mold_set, folder))
         manifest.update(stamp_drawings(tmp, asm, mold_set, params_sha256(params)))
@@ -299,11 +301,12 @@ def build_opened(
                 },
             )
         )
-        write_manifest(tmp, manifest)
         make_reproducible(
             tmp, fixed
         )  # STEP and 3MF time stamps of the files written since the first go
-        verdicts = run.run(CHECKS, lambda _f: finish_checks(checks, opened.cache))
+        verdicts = run.run(
+            CHECKS, lambda _f: finish_checks(checks, opened.cache, as_written(manifest))
+        )
         run.log.process("checks", checks.cpu_s)
         manifest["checks"] = [r.to_json() for r in verdicts]
         manifest.update(
@@ -457,11 +460,7 @@ def _robot_before_wait(
                 return None
             robot = _robot_files(run, asm, limits)
     with run.timed(CHECKS):
-        if late:
-            write_manifest(
-                run.folder, {**manifest, **robot}
-            )  # written again, in its order, at the end
-        checks.robot_ahead()
+        checks.robot_ahead(as_written({**manifest, **robot}))
     return robot
 
 

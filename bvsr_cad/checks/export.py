@@ -22,17 +22,22 @@ class Export:
     manifest: dict[str, Any]
 
     @classmethod
-    def open(cls, root: str | Path) -> Export:
+    def open(cls, root: str | Path, manifest: dict[str, Any] | None = None) -> Export:
+        """The export at ``root``; ``manifest``: its manifest as a build hands it to its checks
+        before the file is written (None: read from ``root/manifest.json``)."""
         root = Path(root).resolve()  # checks may change the working folder (MuJoCo logs)
         path = root / "manifest.json"
         if not root.is_dir():
             raise ExportError(f"{root}: not a folder; expected an export made by `bvsr build`")
-        if not path.is_file():
-            raise ExportError(f"{root}: no manifest.json; expected an export made by `bvsr build`")
-        try:
-            manifest = json.loads(path.read_text())
-        except json.JSONDecodeError as exc:
-            raise ExportError(f"{path}: not valid JSON ({exc})") from None
+        if manifest is None:
+            if not path.is_file():
+                raise ExportError(
+                    f"{root}: no manifest.json; expected an export made by `bvsr build`"
+                )
+            try:
+                manifest = json.loads(path.read_text())
+            except json.JSONDecodeError as exc:
+                raise ExportError(f"{path}: not valid JSON ({exc})") from None
         for key in ("name", "parts", "mass_g"):
             if key not in manifest:
                 raise ExportError(f"{path}: missing key {key!r}")

@@ -37,12 +37,13 @@ def _mesh_checks(exp: Export, memo: CheckMemo) -> dict[str, list[CheckResult]]:
     return {part["name"]: _part_mesh(exp, memo, part) for part in exp.parts}
 
 
-#: Starts the printability checks' second process: ``beside(root, sliced_now, meshes, robot)`` runs
-#: :func:`printability_groups` on the export at ``root`` in another process and returns its handle
+#: Starts the printability checks' second process: ``beside(root, sliced_now, meshes, robot,
+#: manifest)`` runs :func:`printability_groups` on the export at ``root`` whose manifest is
+#: ``manifest`` in another process and returns its handle
 #: (``result_or(here, say, what)``, ``close()``, ``cpu_s``), or None where it could not start. The
 #: build hands one to :class:`Checks` (:mod:`bvsr_cad.build._runtime.checks_process`); the checks
 #: start no process.
-StartBeside = Callable[[Path, Collection[str], bool, bool], Any]
+StartBeside = Callable[[Path, Collection[str], bool, bool, dict[str, Any]], Any]
 
 
 def printability_groups(
@@ -95,7 +96,7 @@ def claim_robot_checks(root: str | Path, part: int) -> bool:
 
 class _Printability:
     """The printability checks, the slowest group, and the mold checks in a second process (given
-    only the export's path, it opens the export itself) while the other groups run here; with
+    the export's path and its manifest) while the other groups run here; with
     ``meshes`` the part meshes' and the masses' checks too, after them. On one core, or when the
     process fails, they run here."""
 
@@ -114,7 +115,7 @@ class _Printability:
         self.proc = None
         self._got: dict[str, Any] | None = None
         if beside is not None:
-            self.proc = beside(exp.root, sliced_now, meshes, robot)
+            self.proc = beside(exp.root, sliced_now, meshes, robot, exp.manifest)
             if self.proc is not None:
                 after = [
                     what
@@ -238,7 +239,10 @@ class Checks:
     for a build that wrote its robot files before it started the checks, they go to whichever
     process is free first (run here after the build's own stages, they took its last seconds on one
     core while the other processes had ended; run there, the second process was the one left alone).
-    :meth:`finish` runs this process's groups before it waits."""
+    :meth:`finish` runs this process's groups before it waits.
+
+    ``manifest`` (here, in :meth:`robot_ahead` and :meth:`finish`): the export's manifest as it is
+    then, for a build that writes its file once, at the end (None: read from the folder)."""
 
     def __init__(
         self,
@@ -250,6 +254,7 @@ class Checks:
         store: VerdictStore | None = None,
         meshes_beside: bool = False,
         robot_beside: bool = False,
+        manifest: dict[str, Any] | None = None,
     ):
         self.root, self.say, self.store = root, progress or (lambda _m: None), store
         self.beside, self.meshes_beside, self.robot_beside = beside, meshes_beside, robot_beside
@@ -274,7 +279,7 @@ class Checks:
         self._printability_reads = ""
         #: The CPU seconds of the second process, once :meth:`finish` has its verdicts (else None).
         self.cpu_s: float | None = None
-        exp = Export.open(root)
+        exp = Export.open(root, manifest)
         if run_slicer:
             self.sliced_now = slice_stls(exp, progress=self.say)
         self._exp = exp
@@ -313,12 +318,12 @@ class Checks:
             raise
         return run
 
-    def robot_ahead(self) -> None:
+    def robot_ahead(self, manifest: dict[str, Any] | None = None) -> None:
         """The robot descriptions' checks now, on the export as it is (a build that wrote its robot
         files before its analyses were in); :meth:`finish` keeps their results while their reads are
         unchanged. Where they went to the second process too (``robot_beside``), only the parts it
         has not begun (:func:`claim_robot_checks`)."""
-        exp = Export.open(self.root)
+        exp = Export.open(self.root, manifest)
         if "robot" not in exp.manifest:
             return
         state = _state(exp, robot_reads(exp))
@@ -328,10 +333,10 @@ class Checks:
                 self._robot_own[i] = part(exp)
         self._robot_own_state = state
 
-    def finish(self) -> list[CheckResult]:
+    def finish(self, manifest: dict[str, Any] | None = None) -> list[CheckResult]:
         """Every result, in the order of :func:`run_checks`."""
         say = self.say
-        exp = Export.open(self.root)  # the export as it is now (the manifest may have grown)
+        exp = Export.open(self.root, manifest)  # as it is now (the manifest may have grown)
         memo = CheckMemo(exp, self.store)
         try:
             # This process's own groups first, then what the second process ran (waited for here).

@@ -7,6 +7,7 @@ verdicts kept in the artifact cache while what it reads is unchanged. The checks
 from __future__ import annotations
 
 import json
+import threading
 from collections.abc import Callable, Collection
 from pathlib import Path
 from typing import Any
@@ -25,26 +26,36 @@ MODULE = "bvsr_cad.build._runtime.checks_process"
 
 def beside(cache: ArtifactCache | None) -> StartBeside:
     """What starts the printability checks' second process, its verdicts kept in ``cache`` (None:
-    none kept). It works in the export's folder: MuJoCo may write its log into the working
-    folder."""
+    none kept). It works in the export's folder: MuJoCo may write its log into the working folder.
+    The manifest goes on its input (too long for its command line), from a thread: the process
+    reads it once its imports are done, and the caller goes on meanwhile."""
     root = str(cache.root) if cache is not None else ""
 
     def start(
-        export: Path, sliced_now: Collection[str], meshes: bool, robot: bool
+        export: Path, sliced_now: Collection[str], meshes: bool, robot: bool, manifest: dict
     ) -> SecondProcess | None:
-        return SecondProcess.start(
-            MODULE,
-            [
+        proc = SecondProcess.start(MODULE, [], Path(export), standby=True)
+        if proc is not None:
+            work = [
                 str(export),
                 json.dumps(sorted(sliced_now)),
                 root,
                 "1" if meshes else "",
                 "1" if robot else "",
-            ],
-            Path(export),
-        )
+                json.dumps(manifest),
+            ]
+            threading.Thread(target=_hand, args=(proc, work, Path(export)), daemon=True).start()
+        return proc
 
     return start
+
+
+def _hand(proc: SecondProcess, work: list[str], cwd: Path) -> None:
+    """Give the waiting process its work; one closed meanwhile (a failed build) gets none."""
+    try:
+        proc.begin(work, cwd)
+    except (AttributeError, ValueError):  # closed while this thread wrote
+        pass
 
 
 def start_checks(
@@ -62,10 +73,12 @@ def start_checks(
     )
 
 
-def finish_checks(checks: Checks, cache: ArtifactCache | None) -> list[CheckResult]:
-    """:meth:`bvsr_cad.checks.run.Checks.finish`, then the cache trimmed to its size once (after the
-    groups' small entries)."""
-    results = checks.finish()
+def finish_checks(
+    checks: Checks, cache: ArtifactCache | None, manifest: dict[str, Any] | None = None
+) -> list[CheckResult]:
+    """:meth:`bvsr_cad.checks.run.Checks.finish` (``manifest``: as there), then the cache trimmed to
+    its size once (after the groups' small entries)."""
+    results = checks.finish(manifest)
     if cache is not None:
         cache.evict()
     return results
@@ -88,13 +101,14 @@ def run_checks(
 
 
 def _printability(
-    root: str, sliced_now: str, cache_root: str = "", meshes: str = "", robot: str = ""
+    root: str, sliced_now: str, cache_root: str, meshes: str, robot: str, manifest: str
 ) -> dict[str, Any]:
     """The second process's work (``python -m bvsr_cad.build._runtime.worker
-    bvsr_cad.build._runtime.checks_process - ROOT SLICED CACHE MESHES ROBOT``):
-    :func:`bvsr_cad.checks.run.printability_groups` of the export at ``root``, the verdicts kept in
-    the artifact cache at ``cache_root`` (when given)."""
-    exp = Export.open(root)
+    bvsr_cad.build._runtime.checks_process --standby``, given ``[ROOT, SLICED, CACHE, MESHES, ROBOT,
+    MANIFEST]`` on its input): :func:`bvsr_cad.checks.run.printability_groups` of the export at
+    ``root`` whose manifest is ``manifest`` (JSON), the verdicts kept in the artifact cache at
+    ``cache_root`` (when given)."""
+    exp = Export.open(root, json.loads(manifest))
     store = verdict_store(ArtifactCache(Path(cache_root)) if cache_root else None)
     return printability_groups(
         exp, json.loads(sliced_now), CheckMemo(exp, store), bool(meshes), bool(robot)

@@ -530,6 +530,20 @@ FAULTS: list[Fault] = [
         "the SOA's polyurethane is 1.15 g/cm^3 (datasheets: 1.04-1.06): every SOA 10 % heavier",
         catchers=("tests/test_truth.py::test_soa_and_tail_masses_within_the_datasheets_densities",),
     ),
+    # -- the simulation scene's cost -----------------------------------------------------------
+    Fault(
+        "mjcf_idle_tendon_per_joint",
+        "bvsr_cad/exporters/mjcf.py",
+        '            ET.SubElement(fixed, "joint", joint=f"{b.name}_b{axis}", coef="-1")\n'
+        "    if per_segment:\n",
+        '            ET.SubElement(fixed, "joint", joint=f"{b.name}_b{axis}", coef="-1")\n'
+        '        idle = ET.SubElement(tendon, "fixed", name=f"{b.name}_idle")\n'
+        '        ET.SubElement(idle, "joint", joint=f"{b.name}_ax", coef="1")\n'
+        "    if per_segment:\n",
+        "the writer adds a tendon per joint that does nothing: the same physics, one more tendon "
+        "for every world of a batch to pass over each step",
+        catchers=("tests/test_scene_budget.py::test_default_scene_tendons_within_budget",),
+    ),
 ]
 
 

@@ -224,17 +224,22 @@ def counts_table(scenes: list[Scene], counts: dict[str, dict]) -> str:
 # --- CPU, one core -------------------------------------------------------------------------------
 
 
-def cpu_rate(model: mujoco.MjModel, ctrl: np.ndarray, seconds: float) -> tuple[float, list[str]]:
-    """Steps per wall second of one CPU MuJoCo, stepping for about ``seconds``, and its warnings."""
+def cpu_rate(
+    model: mujoco.MjModel, ctrl: np.ndarray, seconds: float
+) -> tuple[float, float, list[str]]:
+    """Steps of one CPU MuJoCo per wall second and per CPU second of this process, stepping for
+    about ``seconds``, and its warnings. On a shared machine the wall rate is the CPU share the
+    process got; the CPU rate is the step's own cost."""
     data = mujoco.MjData(model)
     data.ctrl[:] = ctrl
-    steps, start = 0, time.perf_counter()
+    steps, start, cpu = 0, time.perf_counter(), time.process_time()
     while time.perf_counter() - start < seconds:
         for _ in range(500):
             mujoco.mj_step(model, data)
         steps += 500
-    rate = steps / (time.perf_counter() - start)
-    return rate, [mujoco.mjtWarning(i).name for i, w in enumerate(data.warning) if w.number]
+    wall, cpu = time.perf_counter() - start, time.process_time() - cpu
+    warned = [mujoco.mjtWarning(i).name for i, w in enumerate(data.warning) if w.number]
+    return steps / wall, steps / cpu, warned
 
 
 @contextlib.contextmanager
@@ -256,10 +261,12 @@ def one_core(cpu: int | None):
 
 
 def compare_cpu(scenes: list[Scene], args) -> dict:
-    """CPU MuJoCo's and MuJoCo Warp's CPU steps/s of each scene on one core, the scenes
-    alternated over ``args.rounds`` rounds (the order flips each round)."""
-    result = {"rounds": args.rounds, "mujoco": {s.label: [] for s in scenes}, "warnings": {}}
+    """Steps per wall second and per CPU second of CPU MuJoCo and of MuJoCo Warp's CPU batch, for
+    each scene on one core, the scenes alternated over ``args.rounds`` rounds (the order flips
+    each round): ``rates[series][scene label]``, one figure a round."""
+    series = ["mujoco", "mujoco_cpu"]
     batches = {}
+    result = {"rounds": args.rounds, "warnings": {}}
     with one_core(args.pin_cpu) as where:
         result["where"] = where
         if args.warp_cpu_batch:
@@ -271,73 +278,75 @@ def compare_cpu(scenes: list[Scene], args) -> dict:
                     batch = sim_gpu.warp_batch(s.model, s.ctrl, fields, buffers, "cpu", graph=False)
                     batch.step(1)  # compiles
                     batches[s.label] = batch
-                result["warp"] = {s.label: [] for s in scenes}
+                series += ["warp", "warp_cpu"]
             except ImportError as exc:
                 result["warp_skipped"] = str(exc)
+        rates = {key: {s.label: [] for s in scenes} for key in series}
         for r in range(args.rounds):
             order = scenes if r % 2 == 0 else scenes[::-1]
             for s in order:
-                rate, warned = cpu_rate(s.model, s.ctrl, args.cpu_seconds)
-                result["mujoco"][s.label].append(rate)
+                wall, cpu, warned = cpu_rate(s.model, s.ctrl, args.cpu_seconds)
+                rates["mujoco"][s.label].append(wall)
+                rates["mujoco_cpu"][s.label].append(cpu)
                 if warned:
                     result["warnings"][s.label] = warned
             for s in order if batches else ():
-                start = time.perf_counter()
+                start, cpu = time.perf_counter(), time.process_time()
                 batches[s.label].step(args.warp_cpu_steps)
-                wall = time.perf_counter() - start
-                result["warp"][s.label].append(args.warp_cpu_batch * args.warp_cpu_steps / wall)
+                steps = args.warp_cpu_batch * args.warp_cpu_steps
+                rates["warp"][s.label].append(steps / (time.perf_counter() - start))
+                rates["warp_cpu"][s.label].append(steps / (time.process_time() - cpu))
         for s in scenes if batches else ():
             problems = batches[s.label].check()
             if problems:
                 result["warnings"].setdefault(s.label, []).extend(problems)
-    return result
+    return result | {"rates": rates}
 
 
 def _spread(rates: list[float], scale: float = 1.0) -> str:
     rates = [r * scale for r in rates]
     med = statistics.median(rates)
-    if len(rates) == 1:
-        return f"{med:,.4g}" if med < 100 else f"{med:,.0f}"
     fmt = (lambda x: f"{x:,.4g}") if med < 100 else (lambda x: f"{x:,.0f}")
-    return f"{fmt(med)} [{fmt(min(rates))}-{fmt(max(rates))}]"
+    return fmt(med) if len(rates) == 1 else f"{fmt(med)} [{fmt(min(rates))}-{fmt(max(rates))}]"
 
 
 def cpu_table(scenes: list[Scene], cpu: dict, args) -> tuple[str, dict]:
     """The CPU comparison as lines (median [range] of the rounds), and the scene's ratios to the
-    baseline (medians)."""
-    dt = {s.label: s.model.opt.timestep for s in scenes}
-    rows = [
-        ("CPU MuJoCo steps/s", cpu["mujoco"], 1.0),
-        ("  real-time factor", cpu["mujoco"], None),
+    baseline, of the medians: ``<series>`` of the steps, ``<series>_simulated`` of the simulated
+    seconds (the same unless the time steps differ)."""
+    rows = [  # (label, series, simulated seconds rather than steps)
+        (f"CPU MuJoCo {mujoco.__version__}: steps per wall s", "mujoco", False),
+        ("  steps per CPU s", "mujoco_cpu", False),
+        ("  real-time factor", "mujoco", True),
+        ("  real-time factor per CPU s", "mujoco_cpu", True),
+        (f"MuJoCo Warp CPU, batch {args.warp_cpu_batch}: steps per wall s", "warp", False),
+        ("  steps per CPU s", "warp_cpu", False),
+        ("  simulated s per wall s", "warp", True),
+        ("  simulated s per CPU s", "warp_cpu", True),
     ]
-    if "warp" in cpu:
-        rows += [
-            (f"MuJoCo Warp CPU, batch {args.warp_cpu_batch}: steps/s", cpu["warp"], 1.0),
-            ("  simulated s per wall s", cpu["warp"], None),
-        ]
+    dt = {s.label: s.model.opt.timestep for s in scenes}
     base = scenes[1].label if len(scenes) > 1 else None
-    header = f"{'':38s}" + "".join(f"{s.label:>24s}" for s in scenes)
     lines = [
         f"CPU, one core ({cpu['where']}), {cpu['rounds']} round(s) alternated, median [range]:",
-        header + (f"{scenes[0].label + ' / ' + base:>24s}" if base else ""),
+        f"{'':40s}"
+        + "".join(f"{s.label:>24s}" for s in scenes)
+        + (f"{scenes[0].label + ' / ' + base:>20s}" if base else ""),
     ]
     ratios = {}
-    for label, rates, scale in rows:
-        cells = [_spread(rates[s.label], scale or dt[s.label]) for s in scenes]
-        line = f"{label:38s}" + "".join(f"{c:>24s}" for c in cells)
-        if base and scale is None:
-            ratio = (
-                statistics.median(rates[scenes[0].label])
-                * dt[scenes[0].label]
-                / (statistics.median(rates[base]) * dt[base])
+    for label, key, simulated in rows:
+        if key not in cpu["rates"]:
+            continue
+        rates = cpu["rates"][key]
+        scale = {s.label: dt[s.label] if simulated else 1.0 for s in scenes}
+        line = f"{label:40s}" + "".join(
+            f"{_spread(rates[s.label], scale[s.label]):>24s}" for s in scenes
+        )
+        if base:
+            ratio = (statistics.median(rates[scenes[0].label]) * scale[scenes[0].label]) / (
+                statistics.median(rates[base]) * scale[base]
             )
-            key = "mujoco_rtf" if rates is cpu["mujoco"] else "warp_cpu_simulated"
-            ratios[key] = ratio
-            line += f"{ratio:>24.2f}"
-        elif base:
-            ratio = statistics.median(rates[scenes[0].label]) / statistics.median(rates[base])
-            ratios["mujoco_steps" if rates is cpu["mujoco"] else "warp_cpu_steps"] = ratio
-            line += f"{ratio:>24.2f}"
+            ratios[key + ("_simulated" if simulated else "")] = ratio
+            line += f"{ratio:>20.2f}"
         lines.append(line)
     if "warp_skipped" in cpu:
         lines.append(f"MuJoCo Warp CPU skipped: {cpu['warp_skipped']}")
@@ -645,7 +654,7 @@ def main(argv=None) -> int:
 
     cpu = compare_cpu(scenes, args)
     text, ratios = cpu_table(scenes, cpu, args)
-    print("\n" + text.replace("CPU MuJoCo", f"CPU MuJoCo {mujoco.__version__}", 1))
+    print("\n" + text)
     report["cpu"] = cpu | {"ratios": ratios, "warp_batch": args.warp_cpu_batch}
 
     gpu = cuda_present()

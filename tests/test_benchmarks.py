@@ -315,9 +315,9 @@ def test_sim_bench_runs_on_the_cpu_beside_a_baseline(bvsr_export, tmp_path, caps
     """The benchmark end to end on a machine without a CUDA GPU (CI), the export's scene against
     itself as the baseline: the counts read the MJCF file's elements (tendons by kind, equality
     rows: a joint equality is one row, all active from rest); CPU MuJoCo's and Warp's CPU rates per
-    round, their ratios the medians'; Warp's CPU batches checked against CPU MuJoCo; the stages
-    timed by the host clock, which leaves MuJoCo Warp's Warp as it was; graph capture and
-    --profile's kernels declined in a line each."""
+    round, their ratios the medians' (the time steps equal, those of the simulated seconds too);
+    Warp's CPU batches checked against CPU MuJoCo; the stages timed by the host clock, which leaves
+    MuJoCo Warp's Warp as it was; graph capture and --profile's kernels declined in a line each."""
     pytest.importorskip("warp", reason="needs the optional extra .[gpu]")
     pytest.importorskip("mujoco_warp", reason="needs the optional extra .[gpu]")
     import json
@@ -356,11 +356,12 @@ def test_sim_bench_runs_on_the_cpu_beside_a_baseline(bvsr_export, tmp_path, caps
     assert counts["nv"] == model.nv and counts["warnings"] == []
 
     cpu = figures["cpu"]
-    for engine, key in (("mujoco", "mujoco_steps"), ("warp", "warp_cpu_steps")):
-        rates = cpu[engine]
+    assert set(cpu["rates"]) == {"mujoco", "mujoco_cpu", "warp", "warp_cpu"}
+    for series, rates in cpu["rates"].items():
         assert len(rates["scene"]) == len(rates["baseline"]) == 2
         ratio = statistics.median(rates["scene"]) / statistics.median(rates["baseline"])
-        assert cpu["ratios"][key] == pytest.approx(ratio, rel=1e-12)
+        assert cpu["ratios"][series] == pytest.approx(ratio, rel=1e-12)
+        assert cpu["ratios"][f"{series}_simulated"] == pytest.approx(ratio, rel=1e-12)
     step_ms = model.opt.timestep * 1e3
     assert f"time step {step_ms:g} ms" in out and "real-time factor" in out
     assert "WARNINGS" not in out and "pinned to CPU" in out

@@ -568,6 +568,51 @@ def posed_tail(
     kin = TailKinematics.from_spec(spec)
     cutoff = spec.joint.joint_height_mm if cutoff_mm is None else cutoff_mm
     say("clearance: meshing the instances")
+    names, coarse, meshes = _instance_meshes(asm)
+    index = {n: i for i, n in enumerate(names)}
+    hj, t = spec.joint.joint_height_mm, spec.joint.panel_thickness_mm
+    gaps = np.array([[k * hj + t, (k + 1) * hj] for k in range(spec.joints)])
+    pairs, rest, span, support = [], [], [], []
+    h_edge = _edge_supports(meshes)
+    rest_gap = _RestGaps(coarse, _axis_turns(list(asm.instances)))
+    say("clearance: exact rest distances of the candidate pairs")
+    for a, b in must_not_touch(asm):
+        ma, mb = meshes[index[a]], meshes[index[b]]
+        lo = np.maximum(ma.bounds[0], mb.bounds[0])
+        hi = np.minimum(ma.bounds[1], mb.bounds[1])
+        if np.linalg.norm(np.maximum(lo - hi, 0.0)) > cutoff:
+            continue
+        zlo = min(ma.bounds[0, 2], mb.bounds[0, 2])
+        zhi = max(ma.bounds[1, 2], mb.bounds[1, 2])
+        pairs.append((index[a], index[b]))
+        rest.append(rest_gap(index[a], index[b]))
+        span.append((gaps[:, 1] > zlo) & (gaps[:, 0] < zhi))
+        h = np.maximum(h_edge[index[a]], h_edge[index[b]])
+        hb = np.maximum(h[:-1], h[1:])
+        support.append(np.where(hb > 0, hb / np.cos(np.pi / SUPPORT_BINS), hb))
+    levels = np.sort(gaps.ravel())
+    return PosedTail(
+        kin,
+        names,
+        meshes,
+        hj,
+        np.array(pairs),
+        np.array(rest),
+        np.array(span),
+        np.array(support),
+        coarse,
+        [_cut_at_z(m, levels) for m in coarse],
+        rest_bvh=rest_gap.rest_bvh,
+        instances=list(asm.instances),
+    )
+
+
+def _instance_meshes(
+    asm: Assembly,
+) -> tuple[list[str], list[trimesh.Trimesh], list[trimesh.Trimesh]]:
+    """Each instance's name and its two meshes in the tail frame, each part meshed once: the
+    coarse one (the part's tessellation, for rest distances and sections) and the one to pose (an
+    SOA's subdivided so that it bends smoothly)."""
     part_mesh: dict[str, tuple[trimesh.Trimesh, trimesh.Trimesh]] = {}
     coarse = []
     names, meshes = [], []
@@ -587,67 +632,48 @@ def posed_tail(
         m.apply_transform(np.asarray(inst.transform, float))
         names.append(inst.name)
         meshes.append(m)
-    index = {n: i for i, n in enumerate(names)}
-    hj, t = spec.joint.joint_height_mm, spec.joint.panel_thickness_mm
-    gaps = np.array([[k * hj + t, (k + 1) * hj] for k in range(spec.joints)])
-    pairs, rest, span, support = [], [], [], []
-    # Support functions at the bin edges; over a bin of width d a support function is at most
-    # max(edges) / cos(d / 2) (sublinearity), or max(edges) where that is negative.
+    return names, coarse, meshes
+
+
+def _edge_supports(meshes: list[trimesh.Trimesh]) -> dict[int, np.ndarray]:
+    """Each mesh's support function in the XY plane at the SUPPORT_BINS + 1 bin edges. Over a bin
+    of width d a support function is at most max(edges) / cos(d / 2) (sublinearity), or
+    max(edges) where that is negative."""
     edges = np.linspace(-np.pi, np.pi, SUPPORT_BINS + 1)
     dirs = np.c_[np.cos(edges), np.sin(edges)]
-    h_edge = {i: (m.vertices[:, :2] @ dirs.T).max(axis=0) for i, m in enumerate(meshes)}
-    rest_bvh: dict[int, fcl.BVHModel] = {}
-    # An SOA is a turned copy of its joint's first (see _axis_turns): its rest BVH is that one's
-    # under the turn, and a pair that is a turned copy of an earlier pair is at that one's distance.
-    turns = _axis_turns(list(asm.instances))
-    turned_rest: dict[tuple, float] = {}
-    say("clearance: exact rest distances of the candidate pairs")
-    for a, b in must_not_touch(asm):
-        ma, mb = meshes[index[a]], meshes[index[b]]
-        lo = np.maximum(ma.bounds[0], mb.bounds[0])
-        hi = np.minimum(ma.bounds[1], mb.bounds[1])
-        if np.linalg.norm(np.maximum(lo - hi, 0.0)) > cutoff:
-            continue
-        zlo = min(ma.bounds[0, 2], mb.bounds[0, 2])
-        zhi = max(ma.bounds[1, 2], mb.bounds[1, 2])
-        pairs.append((index[a], index[b]))
-        gap = attained_gap_mm(coarse[index[a]], coarse[index[b]])
-        if gap is None:
-            key = _turned_pair(turns, index[a], index[b])
-            if key not in turned_rest:
-                objs = []
-                for i in (index[a], index[b]):
-                    ref, rot = turns[i]
-                    if ref not in rest_bvh:
-                        rest_bvh[ref] = _bvh(coarse[ref])
-                    objs.append(
-                        fcl.CollisionObject(
-                            rest_bvh[ref],
-                            fcl.Transform() if ref == i else fcl.Transform(rot, np.zeros(3)),
-                        )
+    return {i: (m.vertices[:, :2] @ dirs.T).max(axis=0) for i, m in enumerate(meshes)}
+
+
+class _RestGaps:
+    """The exact rest distance of a pair of instances (by index): the distance the coarse meshes
+    attain, else FCL's between rest BVHs. An SOA is a turned copy of its joint's first (see
+    _axis_turns): its rest BVH is that one's under the turn, and a pair that is a turned copy of
+    an earlier pair is at that one's distance."""
+
+    def __init__(self, coarse: list[trimesh.Trimesh], turns: list[tuple[int, np.ndarray]]):
+        self.coarse, self.turns = coarse, turns
+        self.rest_bvh: dict[int, fcl.BVHModel] = {}
+        self.turned_rest: dict[tuple, float] = {}
+
+    def __call__(self, ia: int, ib: int) -> float:
+        gap = attained_gap_mm(self.coarse[ia], self.coarse[ib])
+        if gap is not None:
+            return gap
+        key = _turned_pair(self.turns, ia, ib)
+        if key not in self.turned_rest:
+            objs = []
+            for i in (ia, ib):
+                ref, rot = self.turns[i]
+                if ref not in self.rest_bvh:
+                    self.rest_bvh[ref] = _bvh(self.coarse[ref])
+                objs.append(
+                    fcl.CollisionObject(
+                        self.rest_bvh[ref],
+                        fcl.Transform() if ref == i else fcl.Transform(rot, np.zeros(3)),
                     )
-                turned_rest[key] = _fcl_distance(*objs)
-            gap = turned_rest[key]
-        rest.append(gap)
-        span.append((gaps[:, 1] > zlo) & (gaps[:, 0] < zhi))
-        h = np.maximum(h_edge[index[a]], h_edge[index[b]])
-        hb = np.maximum(h[:-1], h[1:])
-        support.append(np.where(hb > 0, hb / np.cos(np.pi / SUPPORT_BINS), hb))
-    levels = np.sort(gaps.ravel())
-    return PosedTail(
-        kin,
-        names,
-        meshes,
-        hj,
-        np.array(pairs),
-        np.array(rest),
-        np.array(span),
-        np.array(support),
-        coarse,
-        [_cut_at_z(m, levels) for m in coarse],
-        rest_bvh=rest_bvh,
-        instances=list(asm.instances),
-    )
+                )
+            self.turned_rest[key] = _fcl_distance(*objs)
+        return self.turned_rest[key]
 
 
 @dataclass(frozen=True)

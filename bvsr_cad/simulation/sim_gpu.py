@@ -8,7 +8,8 @@ Shared by the tests (``tests/test_sim_gpu.py``) and the benchmark (``benchmarks/
   runs of the same model under held pressures, with a margin, plus a row for every limit (which held
   pressures do not reach).
 - :func:`randomised_fields`: domain randomisation as a learning team needs it: per world, the
-  hinges' spring stiffness (the rod's bending stiffness) and damping scaled, and a tip payload (a
+  hinges' spring stiffness (the rod's bending stiffness; in the default scene also the shear
+  springs) and damping (in the default scene the SOAs' damping) scaled, and a tip payload (a
   point mass at the tip body's centre of mass, so its centre of mass and rotational inertia are
   unchanged and only ``body_mass`` and the ancestors' ``body_subtreemass`` change).
 - :func:`mjx_batch` / :func:`warp_batch`: the batched model (those fields with one row per world)

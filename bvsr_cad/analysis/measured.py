@@ -24,6 +24,7 @@ from pathlib import Path
 
 from ..assembly.build import Assembly
 from ..parameters.measurements import Measurement, MeasurementError, data_sha256, load_measurements
+from ..parameters.tables import TailSpec
 from .calibrate import COMPARE_THREADS, compare_rows, rms_relative, uncalibrated
 from .predict import Predictor, WorkspaceSim
 
@@ -86,47 +87,14 @@ def compare_measurements(
         return None
     fitted = dict(cal.fitted)
     inherited = bool(cal.measured_tail) and cal.measured_tail != spec.name
-    inherited_note = (
-        f"fitted values inherited from the {cal.measured_tail} tail's calibration; its report "
-        "compares the rows that measured it"
-    )
-    rod = (spec.vertebra.material, float(spec.vertebra.diameter_mm))
-    if cal.rod_material and (cal.rod_material, float(cal.rod_diameter_mm)) != rod:
-        return MeasuredComparison(
-            cal.data_file,
-            f"the data measured a tail with a {cal.rod_material} "
-            f"{cal.rod_diameter_mm:g} mm rod and this file's rod is {rod[0]} {rod[1]:g} mm: "
-            "another tail, so its rows are not compared (the fitted values carry over, the "
-            "rod's E I by the ratio of the tables' values)",
-            fitted=fitted,
-        )
-    if not cal.data_file or params_path is None:
-        return MeasuredComparison(
-            cal.data_file, "the calibration names no data file", fitted=fitted
-        )
-    data = Path(params_path).resolve().parent / cal.data_file
-    if not data.is_file():
-        return MeasuredComparison(
-            cal.data_file,
-            f"data file {data} not found (it is resolved relative to the parameter file)",
-            fitted=fitted,
-        )
-    if cal.data_sha256 and data_sha256(data) != cal.data_sha256:
-        return MeasuredComparison(
-            cal.data_file,
-            "the data file changed since the calibration (SHA-256 differs): "
-            "run `bvsr calibrate` again",
-            fitted=fitted,
-        )
-    try:
-        rows = load_measurements(data)
-    except MeasurementError as exc:
-        return MeasuredComparison(cal.data_file, f"data file unreadable: {exc}", fitted=fitted)
-    rows, others = rows_of_tail(rows, spec.segments, inherited)
+    loaded = _calibration_rows(spec, params_path)
+    if isinstance(loaded, str):
+        return MeasuredComparison(cal.data_file, loaded, fitted=fitted)
+    rows, others = rows_of_tail(loaded, spec.segments, inherited)
     if not rows:
         return MeasuredComparison(
             cal.data_file,
-            inherited_note if inherited else f"no row of {cal.data_file} measured this tail",
+            _inherited_note(spec) if inherited else f"no row of {cal.data_file} measured this tail",
             fitted=fitted,
         )
     pred = Predictor(asm, spec, workspace_sim)
@@ -139,14 +107,56 @@ def compare_measurements(
         None if progress is None else (lambda m: progress(f"measurements: {m}")),
         threads,
     )
+    return MeasuredComparison(cal.data_file, _rows_note(spec, inherited, others), table, fitted)
+
+
+def _calibration_rows(spec: TailSpec, params_path: str | Path | None) -> list[Measurement] | str:
+    """Every row of the calibration's data file, or why none is compared: a tail with another rod
+    than the data measured, no data file, a missing or changed one, an unreadable one."""
+    cal = spec.calibration
+    rod = (spec.vertebra.material, float(spec.vertebra.diameter_mm))
+    if cal.rod_material and (cal.rod_material, float(cal.rod_diameter_mm)) != rod:
+        return (
+            f"the data measured a tail with a {cal.rod_material} "
+            f"{cal.rod_diameter_mm:g} mm rod and this file's rod is {rod[0]} {rod[1]:g} mm: "
+            "another tail, so its rows are not compared (the fitted values carry over, the "
+            "rod's E I by the ratio of the tables' values)"
+        )
+    if not cal.data_file or params_path is None:
+        return "the calibration names no data file"
+    data = Path(params_path).resolve().parent / cal.data_file
+    if not data.is_file():
+        return f"data file {data} not found (it is resolved relative to the parameter file)"
+    if cal.data_sha256 and data_sha256(data) != cal.data_sha256:
+        return (
+            "the data file changed since the calibration (SHA-256 differs): "
+            "run `bvsr calibrate` again"
+        )
+    try:
+        return load_measurements(data)
+    except MeasurementError as exc:
+        return f"data file unreadable: {exc}"
+
+
+def _inherited_note(spec: TailSpec) -> str:
+    """Where a tail that takes another tail's fitted values finds its rows compared."""
+    return (
+        f"fitted values inherited from the {spec.calibration.measured_tail} tail's "
+        "calibration; its report compares the rows that measured it"
+    )
+
+
+def _rows_note(spec: TailSpec, inherited: bool, others: list[Measurement]) -> str:
+    """What the compared rows are, and where the data file's other rows are compared."""
+    data_file = spec.calibration.data_file
     what = (
-        f"the rows of {cal.data_file} that measured a {spec.segments}-segment tail"
+        f"the rows of {data_file} that measured a {spec.segments}-segment tail"
         if inherited
-        else f"every row of {cal.data_file} that measured this tail"
+        else f"every row of {data_file} that measured this tail"
     )
     note = f"{what}, predicted with the tables' values and with the fitted ones"
     if inherited:
-        note += f"; {inherited_note} ({len(others)} rows)"
+        note += f"; {_inherited_note(spec)} ({len(others)} rows)"
     elif others:
         counts = sorted({int(m.condition("segments")) for m in others})
         note += (
@@ -155,7 +165,7 @@ def compare_measurements(
             "tail that takes these fitted values compares them (`bvsr calibrate` fits and reports "
             "over every row)"
         )
-    return MeasuredComparison(cal.data_file, note, table, fitted)
+    return note
 
 
 def rows_of_tail(

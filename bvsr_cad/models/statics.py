@@ -286,26 +286,11 @@ class TailStatics:
         Raises:
             RuntimeError: Newton did not converge (a pressure set beyond the model's range).
         """
-        line_kpa = np.asarray(line_kpa, float)
-        lead = line_kpa.shape[:-2]
         n = self.kin.n_joints
-        w = (
-            np.zeros(lead + (n, 2))
-            if w0 is None
-            else np.array(np.broadcast_to(w0, lead + (n, 2)), float)
-        )
         free = np.ones(2 * n, bool) if fixed is None else ~np.repeat(np.asarray(fixed, bool), 2)
-        eye = np.eye(2 * n)
         # Newton on the samples still moving only: one sample's slow convergence costs only itself.
-        count = int(np.prod(lead, dtype=int))
-        flat_w = w.reshape((count, n, 2))
-        flat_p = np.broadcast_to(line_kpa, lead + line_kpa.shape[-2:]).reshape(
-            (count,) + line_kpa.shape[-2:]
-        )
-        force = None if tip_force_n is None else np.asarray(tip_force_n, float)
-        per_sample = force is not None and force.ndim > 1
-        if per_sample:
-            force = np.broadcast_to(force, lead + (3,)).reshape((count, 3))
+        w, flat_w, flat_p, force, per_sample = self._samples(line_kpa, tip_force_n, w0)
+        count = flat_w.shape[0]
         active = np.arange(count)
         last = 0.0
         loaded = self.masses is not None or tip_force_n is not None
@@ -320,24 +305,13 @@ class TailStatics:
             fa = force[active] if per_sample else force
             pj = np.repeat(pa, self.kin.joints_per_segment, axis=-2)
             q0 = self.load_forces(wa, fa)
-            r = (self._actuator_residual(wa, pj) + self.rod_nmm_per_rad * wa - q0).reshape(
-                (active.size, 2 * n)
-            )
             if loaded:
                 fresh = np.nonzero(~reuse[active])[0]
                 if fresh.size:
                     loads[active[fresh]] = self._load_hessian(
                         wa[fresh], fa[fresh] if per_sample else fa, q0[fresh]
                     )
-                hess = self._hessian(wa, pj, fa, q0, loads=loads[active])
-            else:
-                hess = self._hessian(wa, pj, fa, q0)
-            hess = 0.5 * (hess + np.swapaxes(hess, -1, -2))  # a Hessian: symmetric up to rounding
-            hess = np.where(free[:, None] & free[None, :], hess, eye)
-            r = np.where(free, r, 0.0)
-            step = -np.linalg.solve(hess, r[..., None])[..., 0]
-            big = np.max(np.abs(step), -1, keepdims=True)
-            step = step * np.minimum(1.0, 0.2 / np.maximum(big, 1e-300))  # at most 0.2 rad per step
+            step = self._newton_step(wa, pj, fa, q0, free, loads[active] if loaded else None)
             flat_w[active] = wa + step.reshape(wa.shape)
             size = np.max(np.abs(step), -1)
             reuse[active] = (size < LOAD_HESSIAN_REUSE_BELOW_RAD) & (size < step_was[active])
@@ -350,6 +324,56 @@ class TailStatics:
         if last < 1e-8:
             return flat_w.reshape(w.shape)
         raise RuntimeError(f"forward statics did not converge (last step {last:.2e} rad)")
+
+    def _samples(
+        self, line_kpa: np.ndarray, tip_force_n: np.ndarray | None, w0: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, bool]:
+        """The pressure sets (..., n_segments, 5) on one sample axis: the start poses w (...,
+        n_joints, 2) from ``w0`` (zeros by default) and their flat view (count, n_joints, 2), the
+        pressures (count, n_segments, 5), the tip force (count, 3) and True where it is given per
+        sample, else as given and False."""
+        line_kpa = np.asarray(line_kpa, float)
+        lead = line_kpa.shape[:-2]
+        n = self.kin.n_joints
+        w = (
+            np.zeros(lead + (n, 2))
+            if w0 is None
+            else np.array(np.broadcast_to(w0, lead + (n, 2)), float)
+        )
+        count = int(np.prod(lead, dtype=int))
+        flat_w = w.reshape((count, n, 2))
+        flat_p = np.broadcast_to(line_kpa, lead + line_kpa.shape[-2:]).reshape(
+            (count,) + line_kpa.shape[-2:]
+        )
+        force = None if tip_force_n is None else np.asarray(tip_force_n, float)
+        per_sample = force is not None and force.ndim > 1
+        if per_sample:
+            force = np.broadcast_to(force, lead + (3,)).reshape((count, 3))
+        return w, flat_w, flat_p, force, per_sample
+
+    def _newton_step(
+        self,
+        w: np.ndarray,
+        p_joint: np.ndarray,
+        tip_force_n: np.ndarray | None,
+        q0: np.ndarray,
+        free: np.ndarray,
+        loads: np.ndarray | None,
+    ) -> np.ndarray:
+        """One Newton step (m, 2n) of the poses ``w`` (m, n, 2) towards equilibrium, in the
+        ``free`` components only (a held one steps 0), at most 0.2 rad in any component. ``q0``:
+        the load forces at ``w``; ``loads``: the loads' Hessian where kept (:meth:`_hessian`)."""
+        n = self.kin.n_joints
+        r = (self._actuator_residual(w, p_joint) + self.rod_nmm_per_rad * w - q0).reshape(
+            (w.shape[0], 2 * n)
+        )
+        hess = self._hessian(w, p_joint, tip_force_n, q0, loads=loads)
+        hess = 0.5 * (hess + np.swapaxes(hess, -1, -2))  # a Hessian: symmetric up to rounding
+        hess = np.where(free[:, None] & free[None, :], hess, np.eye(2 * n))
+        r = np.where(free, r, 0.0)
+        step = -np.linalg.solve(hess, r[..., None])[..., 0]
+        big = np.max(np.abs(step), -1, keepdims=True)
+        return step * np.minimum(1.0, 0.2 / np.maximum(big, 1e-300))  # at most 0.2 rad per step
 
     def forward_theta_phi(
         self, line_kpa: np.ndarray, tip_force_n: np.ndarray | None = None

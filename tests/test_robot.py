@@ -490,7 +490,7 @@ def test_reduced_bend_limit_holds_under_a_large_tip_moment(robot_export):
     limits, about the tail's X axis (a bend along one hinge axis: a face of the limit polygon),
     half a face off it (a vertex) and about the diagonal (both hinges): at the exported 2 ms,
     with no warning, every joint stops past theta_max by at most 10 % along the axis (the limits are
-    soft constraints: measured 2.2 % at the root to 6.2 % at the tip, the give growing with the
+    soft constraints: measured 2.1 % at the root to 6.1 % at the tip, the give growing with the
     moment each joint carries; 10 % tells a held limit from the failures below, 39 % and more, with
     room for a design change), and in the other directions at most the polygon's overshoot further
     than along the axis. Measured before, with limits on the hinges (a square per pivot, MuJoCo's

@@ -9,8 +9,8 @@ parameters: 6 in the default tail) and is the default scene's own count, as
 
 - DoFs: 4 per joint, the two pivot hinges of the pseudo-rigid-body chain about each of the two
   bending axes;
-- tendons: 14 per joint, one spatial tendon per SOA (5), a shear spring per bending axis (2) and
-  a bend-limit tendon per direction of the limit polygon (7);
+- tendons: 12 per joint, one spatial tendon per SOA (5) and a bend-limit tendon per direction of
+  the limit polygon (7); the shear springs and all the dampers are on the hinges;
 - constraint rows: 2 per joint, the most in any step of 0.3 s of any held pressure pattern from
   rest (:func:`sim_bench.held_patterns`), all of them the two pivots' equalities: held pressures
   bend the tail to at most 38 % of its limits, so no limit row appears.
@@ -26,7 +26,7 @@ from bvsr_cad.simulation import sim_gpu
 from .conftest import benchmark_script
 
 DOFS_PER_JOINT = 4
-TENDONS_PER_JOINT = 14
+TENDONS_PER_JOINT = 12
 ROWS_PER_JOINT = 2
 
 

@@ -172,8 +172,7 @@ def run_analyses(
         The analyses' results, handed to the exporters and the robot model.
     """
     say = progress or (lambda _m: None)
-    spec = asm.spec
-    cfg = spec.analysis
+    cfg = asm.spec.analysis
     t0 = time.perf_counter()
     if rest is not None:
         asm.remember_properties(rest.properties)  # before anything integrates (or makes) a solid
@@ -185,26 +184,8 @@ def run_analyses(
         measuring = pool.submit(
             compare_measurements, asm, params_path, say, workspace_sim, limits.result, threads
         )
-        try:
-            say("analysis: clearance")
-            pt = rest.posed if rest is not None else posed_tail(asm, say)
-            if rest is None and on_rest is not None:
-                on_rest(RestGeometry.of(asm, pt))
-            geo = geometry if geometry is not None else geometry_analyses(asm, pt, say)
-            limits.set_result(per_joint_rad(geo.limits))
-            if geometry is None and on_geometry is not None:
-                on_geometry(geo)
-        except BaseException as exc:
-            limits.set_exception(exc)
-            raise
-        say("analysis: workspace")
-        ws = run_workspace(asm, cfg.build_workspace_samples, cfg.seed, say)
-        if empty := empty_problems(ws, spec):
-            raise UselessResultError(f"tail {spec.name!r}", empty)
-        quasi = quasi_static_table(asm, (1.0, 2.0))
-        rng = np.random.default_rng(cfg.seed)
-        idx = rng.integers(0, ws.samples, cfg.build_clearance_poses)
-        clearance = clearance_over(pt, ws.w[idx])
+        pt, geo = _rest_and_geometry(asm, say, geometry, on_geometry, rest, on_rest, limits)
+        ws, quasi, clearance = _workspace_and_clearance(asm, pt, say)
         measured = measuring.result()
     seconds = time.perf_counter() - t0
     say(f"analysis: {seconds:.1f} s")
@@ -221,6 +202,51 @@ def run_analyses(
         seconds,
         0.0 if geometry is not None else geo.seconds,
     )
+
+
+def _rest_and_geometry(
+    asm: Assembly,
+    say: Callable[[str], None],
+    geometry: GeometryAnalyses | None,
+    on_geometry: Callable[[GeometryAnalyses], None] | None,
+    rest: RestGeometry | None,
+    on_rest: Callable[[RestGeometry], None] | None,
+    limits: Future,
+) -> tuple[PosedTail, GeometryAnalyses]:
+    """The posed tail and the geometry analyses, each the one given or made here and handed to
+    ``on_rest`` / ``on_geometry``. The joints' limits are set on ``limits`` as soon as they are
+    known, before ``on_geometry``; a failure is set there instead, for the measurements that wait
+    on them."""
+    try:
+        say("analysis: clearance")
+        pt = rest.posed if rest is not None else posed_tail(asm, say)
+        if rest is None and on_rest is not None:
+            on_rest(RestGeometry.of(asm, pt))
+        geo = geometry if geometry is not None else geometry_analyses(asm, pt, say)
+        limits.set_result(per_joint_rad(geo.limits))
+        if geometry is None and on_geometry is not None:
+            on_geometry(geo)
+    except BaseException as exc:
+        limits.set_exception(exc)
+        raise
+    return pt, geo
+
+
+def _workspace_and_clearance(
+    asm: Assembly, pt: PosedTail, say: Callable[[str], None]
+) -> tuple[Workspace, list[dict], ClearanceResult]:
+    """The sampled workspace (UselessResultError when it is empty), the quasi-static table and the
+    certified clearance over poses resampled from the workspace's samples."""
+    spec = asm.spec
+    cfg = spec.analysis
+    say("analysis: workspace")
+    ws = run_workspace(asm, cfg.build_workspace_samples, cfg.seed, say)
+    if empty := empty_problems(ws, spec):
+        raise UselessResultError(f"tail {spec.name!r}", empty)
+    quasi = quasi_static_table(asm, (1.0, 2.0))
+    rng = np.random.default_rng(cfg.seed)
+    idx = rng.integers(0, ws.samples, cfg.build_clearance_poses)
+    return ws, quasi, clearance_over(pt, ws.w[idx])
 
 
 #: Threads predicting the measured rows in the build's second process: the workspace protocol's

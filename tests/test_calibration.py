@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import json
 
+import numpy as np
 import pytest
 
 from bvsr_cad.cli import main
@@ -183,12 +184,17 @@ def test_shipped_fitted_rigidity_reaches_the_mjcf(bvsr_data, bvsr_spec):
     """Both MJCF chains carry the file's fitted E I (hand calculation, SI): the exact chain's
     half-angle hinges 2 E I / L each, and the reduced chain's four pivot hinges per joint 2 E I / L
     each (a pure bend turns both pivots' hinges by theta / 2: their energies add up to (1/2)(E I /
-    L) theta^2)."""
+    L) theta^2). The per-segment file's hinges carry exactly that. The default file's hinges carry
+    the joint's shear spring besides (:class:`bvsr_cad.exporters.mjcf.HingeShare`), whose rod part
+    is the fixed-guided beam's beyond the pivots' bend: (g - 1) E I / L with g = 3 (1 - 2 f)^2 =
+    4/3 for pivots at f = L/6, and 2 of it on each hinge. So E I reaches each of those hinges as 2 g
+    E I / L = 8/3 E I / L, seen here as the difference E I makes (doubled), while the SOAs' springs
+    can give up the whole shear spring (none left on a shear tendon)."""
     import mujoco
 
     from bvsr_cad.assembly.build import build_assembly
     from bvsr_cad.assembly.robot import robot_model
-    from bvsr_cad.exporters.mjcf import mjcf_tree
+    from bvsr_cad.exporters.mjcf import HingeShare, mjcf_tree
 
     from .test_truth import _mesh_files, _without_meshes
 
@@ -196,18 +202,33 @@ def test_shipped_fitted_rigidity_reaches_the_mjcf(bvsr_data, bvsr_spec):
     ei_l = ei_nmm2 * 1e-6 / (bvsr_data["joint"]["gap_mm"] / 1000.0)  # N mm^2 = 1e-6 N m^2
     robot = robot_model(build_assembly(bvsr_spec), [0.5] * bvsr_spec.joints)
     n = bvsr_spec.joints
-    hinges = {
-        "exact": ["j1_theta_a", "j1_theta_b", f"j{n}_theta_a", f"j{n}_theta_b"],
-        "reduced": [f"j{k}_{h}" for k in (1, n) for h in ("ax", "ay", "bx", "by")],
-    }
-    for chain, names in hinges.items():
-        tree, _ = mjcf_tree(robot, _mesh_files(robot), False, chain=chain)
+    reduced = [f"j{k}_{h}" for k in (1, n) for h in ("ax", "ay", "bx", "by")]
+
+    def stiffness(robot, per_segment, chain, names):
+        tree, _ = mjcf_tree(robot, _mesh_files(robot), per_segment, chain=chain)
         m = mujoco.MjModel.from_xml_string(_without_meshes(tree.getroot()))
-        for name in names:
-            assert m.jnt_stiffness[m.joint(name).id] == pytest.approx(2 * ei_l, rel=1e-9), (
-                chain,
-                name,
-            )
+        return np.array([m.jnt_stiffness[m.joint(name).id] for name in names])
+
+    exact = ["j1_theta_a", "j1_theta_b", f"j{n}_theta_a", f"j{n}_theta_b"]
+    np.testing.assert_allclose(stiffness(robot, False, "exact", exact), 2 * ei_l, rtol=1e-9)
+    np.testing.assert_allclose(stiffness(robot, True, "reduced", reduced), 2 * ei_l, rtol=1e-9)
+    # the default file: the rod's part is the difference that E I makes
+    stiffer = dataclasses.replace(
+        robot,
+        actuation=dataclasses.replace(
+            robot.actuation,
+            rod_bending_stiffness_nm_rad=2 * robot.actuation.rod_bending_stiffness_nm_rad,
+        ),
+    )
+    assert all(
+        HingeShare.of(r, k).shear_tendon_nm_rad == 0.0 for r in (robot, stiffer) for k in (1, n)
+    )
+    g = 3 * (1 - 2 / 6) ** 2
+    np.testing.assert_allclose(
+        stiffness(stiffer, False, "reduced", reduced) - stiffness(robot, False, "reduced", reduced),
+        2 * g * ei_l,
+        rtol=1e-9,
+    )
 
 
 def test_inherited_calibration_compares_only_the_rows_of_its_own_tail(bvsr_spec):

@@ -686,13 +686,13 @@ def test_ctrl_c_leaves_a_waiting_standby_process_quietly(tmp_path):
 
 def test_an_interrupt_is_held_through_imports_that_catch_base_exception():
     """trimesh's optional imports catch ``BaseException``: a Ctrl-C landing in one was swallowed and
-    ``bvsr build`` ran on. :func:`~bvsr_cad.build._runtime.worker.interrupts_held` delivers it when
+    ``bvsr build`` ran on. :func:`~bvsr_cad.build._runtime.worker.library_imports` delivers it when
     the block ends."""
     import os
     import signal
     import threading
 
-    from bvsr_cad.build._runtime.worker import interrupts_held
+    from bvsr_cad.build._runtime.worker import library_imports
 
     def optional_import() -> (
         bool
@@ -713,21 +713,21 @@ def test_an_interrupt_is_held_through_imports_that_catch_base_exception():
         assert optional_import()  # the premise: unheld, the interrupt is lost in the library
         swallowed = None
         with pytest.raises(KeyboardInterrupt):
-            with interrupts_held():
+            with library_imports():
                 swallowed = optional_import()
         assert swallowed is False
         assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
-        with interrupts_held():  # no interrupt: nothing raised
+        with library_imports():  # no interrupt: nothing raised
             pass
         with pytest.raises(
             KeyboardInterrupt
         ) as info:  # an interrupt wins over the block's own error
-            with interrupts_held():
+            with library_imports():
                 optional_import()
                 raise ImportError("a library's import failed after the Ctrl-C")
         assert isinstance(info.value.__context__, ImportError)
         with pytest.raises(ImportError):  # without one, the block's error as it was
-            with interrupts_held():
+            with library_imports():
                 raise ImportError("a library's import failed")
     finally:
         signal.signal(signal.SIGINT, before)

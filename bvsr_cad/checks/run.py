@@ -233,13 +233,13 @@ class Checks:
 
     ``meshes_beside``: the part meshes' and the masses' checks go to the second process too, after
     its own groups, for a caller with work of its own until :meth:`finish` (a build: its drawings,
-    views and robot files; the second process, started later on the print files, ended ~4 s before
-    the build's process, which then ran alone). ``robot_beside``: the robot descriptions' checks go
-    there too, last, unless :meth:`robot_ahead` takes them here first (:func:`claim_robot_checks`):
-    for a build that wrote its robot files before it started the checks, they go to whichever
-    process is free first (run here after the build's own stages, they took its last seconds on one
-    core while the other processes had ended; run there, the second process was the one left alone).
-    :meth:`finish` runs this process's groups before it waits.
+    views and robot files; the second process, started later on the print files, would otherwise end
+    before the build's process and leave it to work alone). ``robot_beside``: the robot
+    descriptions' checks go there too, last, unless :meth:`robot_ahead` takes them here first
+    (:func:`claim_robot_checks`): for a build that wrote its robot files before it started the
+    checks, they go to whichever process is free first (run here after the build's own stages, they
+    took its last seconds on one core while the other processes had ended; run there, the second
+    process was the one left alone). :meth:`finish` runs this process's groups before it waits.
 
     ``manifest`` (here, in :meth:`robot_ahead` and :meth:`finish`): the export's manifest as it is
     then, for a build that writes its file once, at the end (None: read from the folder)."""

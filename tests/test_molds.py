@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from bvsr_cad.checks.export import Export, clear_cache
+from bvsr_cad.checks.export import Export
 from bvsr_cad.checks.molds import (
     MoldMesh,
     cast_samples,
@@ -44,8 +44,7 @@ def _export_molds(spec, root: Path) -> Export:
 @pytest.fixture(scope="module")
 def default_molds(tmp_path_factory, bvsr_spec):
     exp = _export_molds(bvsr_spec, tmp_path_factory.mktemp("molds"))
-    yield exp, check_molds(exp)
-    clear_cache()
+    return exp, check_molds(exp)
 
 
 def _by_name(results):
@@ -144,7 +143,6 @@ def test_variant_with_three_pleats_and_thinner_wall_passes(tmp_path, data):
     spec = spec_from_dict(data)
     exp = _export_molds(spec, tmp_path / "variant")
     results = check_molds(exp)
-    clear_cache()
     failed = [r.line() for r in results if r.passed is False]
     assert not failed, failed
     by = _by_name(results)

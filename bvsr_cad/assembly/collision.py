@@ -27,7 +27,6 @@ mesh (the exporters write its convex hull) instead of its cylinder.
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 
 import build123d as bd
@@ -82,45 +81,9 @@ class CylinderFit:
         return float(np.pi * self.radius_mm**2 * self.length_mm)
 
 
-#: piece -> {T_axis_mm bytes: its fit}: a robot model per spec of one geometry (the calibration's
-#: predictions, the workspace protocol) fits each part once.
-_FITS: weakref.WeakKeyDictionary[bd.Shape, dict[bytes, CylinderFit]] = weakref.WeakKeyDictionary()
-
-
 def fit_cylinder(piece: bd.Shape, T_axis_mm: np.ndarray) -> CylinderFit:
     """The smallest cylinder about the axis frame ``T_axis_mm`` (its z) holding ``piece`` (mm)."""
     T = np.asarray(T_axis_mm, float)
-    fits = _FITS.setdefault(piece, {})
-    key = T.tobytes()
-    if key not in fits:
-        fits[key] = _fit_cylinder(piece, T)
-    return fits[key]
-
-
-#: The parts whose solids :func:`panel_collisions` fits (about their own axis, the identity frame).
-FITTED_KINDS = ("panel", "soa")
-
-
-def part_fits(asm: Assembly) -> dict[str, CylinderFit]:
-    """Part name -> the fit about its own axis that :func:`panel_collisions` made of its solid
-    (those it made: call it first). What a build keeps in its cache beside the robot's meshes."""
-    key = np.eye(4).tobytes()
-    return {
-        name: _FITS[part.solid][key]
-        for name, part in asm.parts.items()
-        if part.kind in FITTED_KINDS and key in _FITS.get(part.solid, {})
-    }
-
-
-def remember_fits(asm: Assembly, fits: dict[str, CylinderFit]) -> None:
-    """Give ``asm``'s part solids the fits :func:`part_fits` took from a build of the same geometry:
-    the collision shapes are then made without meshing a part."""
-    key = np.eye(4).tobytes()
-    for name, fit in fits.items():
-        _FITS.setdefault(asm.parts[name].solid, {})[key] = fit
-
-
-def _fit_cylinder(piece: bd.Shape, T: np.ndarray) -> CylinderFit:
     # An absolute deflection: the part's print STL triangulation (the same tolerances), whichever
     # stages ran before (build123d's bounding_box clears a triangulation; OCCT makes the same one
     # again).
@@ -185,10 +148,21 @@ def _mesh(name: str, covers: str, solid: bd.Shape) -> Collision:
 
 
 def panel_collisions(
-    asm: Assembly, rod_in_gap: dict[int, list[tuple[float, float]]], geometry: str = "primitives"
+    asm: Assembly,
+    rod_in_gap: dict[int, list[tuple[float, float]]],
+    geometry: str = "primitives",
+    fits: dict[str, CylinderFit] | None = None,
 ) -> dict[int, list[Collision]]:
     """Per panel index, its link's collision shapes (see the module docstring); ``rod_in_gap``:
-    the tail-frame z ranges of rod in each gap."""
+    the tail-frame z ranges of rod in each gap; ``fits``: the panels' and the SOA's fits about their
+    own axes by part name, those missing made here and added (a build keeps them in its cache)."""
+    fits = {} if fits is None else fits
+
+    def fit_of(part) -> CylinderFit:
+        if part.name not in fits:
+            fits[part.name] = fit_cylinder(part.solid, np.eye(4))
+        return fits[part.name]
+
     if geometry not in COLLISION_GEOMETRIES:
         raise ValueError(
             f"robot.collision_geometry = {geometry!r}: allowed {', '.join(COLLISION_GEOMETRIES)}"
@@ -198,14 +172,14 @@ def panel_collisions(
     t = spec.joint.panel_thickness_mm
     out: dict[int, list[Collision]] = {}
     for lay in asm.panel_layouts:
-        solid = asm.part_of(asm.panel(lay.index)).solid
-        fit = fit_cylinder(solid, np.eye(4))
+        panel = asm.part_of(asm.panel(lay.index))
+        solid = panel.solid
+        fit = fit_of(panel)
         out[lay.index] = [
             _mesh(f"panel{lay.index}", "panel", solid)
             if convex
             else _cylinder(f"panel{lay.index}", "panel", fit, np.eye(4), fit.z0_mm, fit.z1_mm)
         ]
-    soa_fits: dict[str, CylinderFit] = {}
     r_rod = spec.vertebra.diameter_mm / 2
     rod_fit = CylinderFit(r_rod, 0.0, 1.0, np.eye(4), r_rod, np.pi * r_rod**2)
     for k in range(1, spec.panels):
@@ -215,9 +189,7 @@ def panel_collisions(
         halves = ((k - 1, lo.z0_mm, g0, mid, "lower"), (k, hi.z0_mm, mid, g1, "upper"))
         for inst in asm.soas_of_joint(k):
             part = asm.part_of(inst)
-            fit = soa_fits.get(part.name) or soa_fits.setdefault(
-                part.name, fit_cylinder(part.solid, np.eye(4))
-            )
+            fit = fit_of(part)
             T_tail = np.asarray(inst.transform)
             d = T_tail[:3, 2]
             # Along the SOA's axis, a plane z = c of the tail cuts the column within +-r tan(tilt)

@@ -8,7 +8,6 @@ the B-rep (:func:`bvsr_cad.parts.soa.soa_interior`).
 
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
@@ -65,13 +64,8 @@ def line_tube_lengths_mm(asm: Assembly) -> dict[str, float]:
 
 def soa_air_volume_mm3(asm: Assembly) -> float:
     """One SOA's air space at rest: the inner loft between the two panel faces (B-rep volume)."""
-    return _soa_air_volume_mm3(asm.spec.soa, asm.spec.joint.base_diameter_mm)
-
-
-@functools.lru_cache(maxsize=64)
-def _soa_air_volume_mm3(soa, base_diameter_mm: float) -> float:
-    # Every robot model asks for it per line (ten lofts a model): made once per SOA geometry.
-    return float(soa_interior(soa, base_diameter_mm, beyond_ends_mm=0.0).volume)
+    spec = asm.spec
+    return float(soa_interior(spec.soa, spec.joint.base_diameter_mm, beyond_ends_mm=0.0).volume)
 
 
 def line_supply(

@@ -37,7 +37,7 @@ from ..parameters.layout import N_SOA
 from ..parameters.tables import TailSpec
 from ..parts.vertebra import rod
 from .build import Assembly, Instance, rod_span_mm
-from .collision import Collision, panel_collisions
+from .collision import Collision, CylinderFit, panel_collisions
 from .inertia import Inertial, compose, from_solid
 from .pneumatic_lines import line_supply
 
@@ -231,10 +231,13 @@ def _rod_solid(
     return pieces[0] if len(pieces) == 1 else bd.Compound(pieces)
 
 
-def collision_shapes(asm: Assembly) -> dict[int, list[Collision]]:
+def collision_shapes(
+    asm: Assembly, fits: dict[str, CylinderFit] | None = None
+) -> dict[int, list[Collision]]:
     """Per panel index, its link's collision shapes (``robot.collision_geometry``): geometry alone,
-    so a build makes them while its analyses (the joints' limits) are still running."""
-    return panel_collisions(asm, _rod_pieces(asm)[1], asm.spec.robot.collision_geometry)
+    so a build makes them while its analyses (the joints' limits) are still running. ``fits``: as
+    in :func:`~bvsr_cad.assembly.collision.panel_collisions`."""
+    return panel_collisions(asm, _rod_pieces(asm)[1], asm.spec.robot.collision_geometry, fits)
 
 
 def robot_model(

@@ -20,7 +20,7 @@ from .. import units
 from ..analysis.poses import mold_scene, twin_scene, viewer_scenes
 from ..analysis.run import run_analyses
 from ..assembly.build import Assembly, build_assembly
-from ..assembly.collision import part_fits, remember_fits
+from ..assembly.collision import CylinderFit
 from ..assembly.inertia import SolidProperties
 from ..assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs, rigid_robot_model
 from ..assembly.robot import collision_shapes, robot_model
@@ -233,9 +233,10 @@ def build_opened(
         }
         geometry_cached = run.hit(PART_FILES) is not None or run.hit(ROBOT_GEOMETRY) is not None
         run.run(PART_FILES, lambda folder: _part_files(asm, files, folder, say))
+        fits: dict = {}  # the collision shapes' fits by part: the robot geometry stage's product
         with run.timed(ROBOT_GEOMETRY):
             if not geometry_cached:  # on the print STLs' triangulation, while the solids hold it
-                collision_shapes(asm)
+                collision_shapes(asm, fits)
         shutil.copyfile(params, tmp / "params.toml")
         manifest = manifest_dict(asm, params_sha256(params), files, "step/assembly.step")
         manifest[
@@ -264,7 +265,7 @@ def build_opened(
         )
         limits = analyses.limits_ahead()
         with run.timed(ROBOT_FILES):
-            robot = _robot_files(run, asm, limits) if limits is not None else None
+            robot = _robot_files(run, asm, limits, fits) if limits is not None else None
         with run.timed(CHECKS):  # they read the files as published: fixed time stamps
             fixed: set[Path] = set()
             make_reproducible(tmp, fixed)
@@ -284,7 +285,7 @@ def build_opened(
         with run.timed(REPORT):
             say("report pictures")
             pictures = report_pictures(tmp, manifest, run.memo)
-        robot = _robot_before_wait(run, asm, analyses, checks, manifest, robot)
+        robot = _robot_before_wait(run, asm, analyses, checks, manifest, robot, fits)
         results, drawn = analyses.results(
             lambda geometry: run_analyses(asm, say, str(params), protocol_radius_mm, geometry)
         )
@@ -296,7 +297,7 @@ def build_opened(
                     **(
                         robot
                         if robot is not None
-                        else _robot_files(run, asm, results.theta_max_per_joint())
+                        else _robot_files(run, asm, results.theta_max_per_joint(), fits)
                     ),
                 },
             )
@@ -413,7 +414,9 @@ def _fabrication(
     return {**molds, **fabrication}
 
 
-def _robot_files(run: Runner, asm: Assembly, theta_max_rad: list[float]) -> dict:
+def _robot_files(
+    run: Runner, asm: Assembly, theta_max_rad: list[float], fits: dict[str, CylinderFit]
+) -> dict:
     """The robot descriptions for these joint limits. Their meshes and collision fits read the
     geometry alone (and which shapes: ``robot.collision_geometry``): one cached stage, so that an
     edit that moves no solid (a material, the robot's limits) neither meshes a part nor fits one.
@@ -423,17 +426,15 @@ def _robot_files(run: Runner, asm: Assembly, theta_max_rad: list[float]) -> dict
 
     def make(folder: Path) -> tuple:
         run.say("robot meshes and collision fits")
-        made["robot"] = robot_model(asm, theta_max_rad, shapes=collision_shapes(asm))
-        return part_fits(asm), write_robot_meshes(made["robot"], folder / "robot" / "meshes")
+        made["robot"] = robot_model(asm, theta_max_rad, shapes=collision_shapes(asm, fits))
+        return dict(fits), write_robot_meshes(made["robot"], folder / "robot" / "meshes")
 
-    fits, mesh_files = run.run(ROBOT_GEOMETRY, make)
-    if "robot" not in made:
-        remember_fits(asm, fits)
+    kept, mesh_files = run.run(ROBOT_GEOMETRY, make)
     run.say("robot model (B-rep inertials)")
     robot = (
         made["robot"]
         if "robot" in made
-        else robot_model(asm, theta_max_rad, shapes=collision_shapes(asm))
+        else robot_model(asm, theta_max_rad, shapes=collision_shapes(asm, kept))
     )
     return write_robot(robot, run.folder, run.say, asm.spec.cart, mesh_files)
 
@@ -445,6 +446,7 @@ def _robot_before_wait(
     checks: Checks,
     manifest: dict,
     robot: dict | None,
+    fits: dict[str, CylinderFit],
 ) -> dict | None:
     """Before the wait for the analyses: the robot's files if the joint limits have come since the
     checks started (else the collision fits now, what needs no limits, and the files after the
@@ -456,9 +458,9 @@ def _robot_before_wait(
             limits = analyses.limits_ahead()
             if limits is None:
                 if run.hit(ROBOT_GEOMETRY) is None:
-                    collision_shapes(asm)
+                    collision_shapes(asm, fits)
                 return None
-            robot = _robot_files(run, asm, limits)
+            robot = _robot_files(run, asm, limits, fits)
     with run.timed(CHECKS):
         checks.robot_ahead(as_written({**manifest, **robot}))
     return robot

@@ -48,29 +48,13 @@ class Export:
         return list(self.manifest["parts"])
 
     def mesh(self, rel: str) -> trimesh.Trimesh:
-        return _load(str(self.root / rel))
+        # process=False keeps the file's own vertices: a check must see what a slicer sees.
+        mesh = trimesh.load(self.root / rel, file_type="stl", force="mesh", process=False)
+        mesh.merge_vertices()
+        return mesh
 
     def part_frame_mesh(self, part: dict[str, Any]) -> trimesh.Trimesh:
         """The part's STL moved back from print orientation into the part frame."""
-        mesh = self.mesh(part["files"]["stl"]).copy()
+        mesh = self.mesh(part["files"]["stl"])
         mesh.apply_transform(np.linalg.inv(np.asarray(part["print_transform"], float)))
         return mesh
-
-
-#: Meshes read, by path and the file's size and modification time (a file rewritten is read again).
-_CACHE: dict[tuple[str, int, int], trimesh.Trimesh] = {}
-
-
-def _load(path: str) -> trimesh.Trimesh:
-    st = Path(path).stat()
-    key = (path, st.st_size, st.st_mtime_ns)
-    if key not in _CACHE:
-        # process=False keeps the file's own vertices: a check must see what a slicer sees.
-        mesh = trimesh.load(path, file_type="stl", force="mesh", process=False)
-        mesh.merge_vertices()
-        _CACHE[key] = mesh
-    return _CACHE[key]
-
-
-def clear_cache() -> None:
-    _CACHE.clear()

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from .analyses import check_analyses
-from .export import Export, clear_cache
+from .export import Export
 from .layout import check_layout
 from .mass import check_masses, masses_reads
 from .memo import CheckMemo, VerdictStore
@@ -436,11 +436,9 @@ class Checks:
         return results + _mold_checks(exp, memo)
 
     def close(self) -> None:
-        """Stop the printability process if it still runs (a failed build) and drop the loaded
-        meshes."""
+        """Stop the printability process if it still runs (a failed build)."""
         if self._printability is not None:
             self._printability.close()
-        clear_cache()
 
 
 def run_checks(

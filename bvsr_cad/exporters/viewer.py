@@ -24,7 +24,6 @@ import base64
 import gzip
 import json
 from collections.abc import Mapping, Sequence
-from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -75,7 +74,6 @@ def _module(file: str) -> str:
     return text
 
 
-@cache
 def viewer_js() -> str:
     """``report/viewer.js``: the loader with three.js's modules and the viewer's module filled
     in."""

@@ -30,10 +30,9 @@ exported model keeps working in plain MuJoCo.
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -220,14 +219,7 @@ def first_order_time_constant_s(supply: LineSupply) -> float:
     ``dynprm``).
 
     At rest every SOA place stretches alike (not at all), so which places a line feeds does not
-    change its fill: the fit is made once per supply with its places in a canonical order (a robot
-    model asks for each of a segment's five lines, whose tubes are often alike: 10 fits -> 2 for the
-    default tail, the same lags to the bit)."""
-    return _time_constant_s(replace(supply, lines=tuple(sorted(supply.lines, reverse=True))))
-
-
-@functools.lru_cache(maxsize=256)
-def _time_constant_s(supply: LineSupply) -> float:
+    change its fill."""
     from scipy.optimize import minimize_scalar
 
     p0 = supply.source_pa_abs - supply.atmospheric_pa

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import tomllib
 from dataclasses import dataclass
-from functools import cache
 from importlib import resources
 
 
@@ -27,14 +26,16 @@ class MetricSize:
         return f"M{self.diameter_mm:g}"
 
 
-@cache
-def iso_metric() -> dict[float, MetricSize]:
-    """Every size in the table, by nominal diameter (mm)."""
+def _read_iso_metric() -> dict[float, MetricSize]:
     text = resources.files(__package__).joinpath("data/iso_metric.toml").read_text(encoding="utf-8")
     return {
         float(row["diameter_mm"]): MetricSize(**{k: float(v) for k, v in row.items()})
         for row in tomllib.loads(text).values()
     }
+
+
+#: Every size in the table, by nominal diameter (mm).
+ISO_METRIC: dict[float, MetricSize] = _read_iso_metric()
 
 
 def metric(diameter_mm: float) -> MetricSize:
@@ -43,23 +44,22 @@ def metric(diameter_mm: float) -> MetricSize:
     Raises:
         KeyError: the table has no such size (naming the sizes it has).
     """
-    table = iso_metric()
     try:
-        return table[float(diameter_mm)]
+        return ISO_METRIC[float(diameter_mm)]
     except KeyError:
         raise KeyError(
             f"M{diameter_mm:g} is not in data/iso_metric.toml; sizes: "
-            + ", ".join(s.designation for s in table.values())
+            + ", ".join(s.designation for s in ISO_METRIC.values())
         ) from None
 
 
 def size_for_tap_drill(tap_drill_mm: float) -> MetricSize:
     """The size whose tap drill is nearest to ``tap_drill_mm`` (a parameter file's set-screw
     drill)."""
-    return min(iso_metric().values(), key=lambda s: abs(s.tap_drill_mm - tap_drill_mm))
+    return min(ISO_METRIC.values(), key=lambda s: abs(s.tap_drill_mm - tap_drill_mm))
 
 
 def size_for_clearance_hole(hole_mm: float) -> MetricSize:
     """The size whose ISO 273 medium clearance hole is nearest to ``hole_mm`` (a bolt
     through-hole)."""
-    return min(iso_metric().values(), key=lambda s: abs(s.clearance_hole_mm - hole_mm))
+    return min(ISO_METRIC.values(), key=lambda s: abs(s.clearance_hole_mm - hole_mm))

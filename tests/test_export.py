@@ -316,11 +316,11 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
     with pytest.raises(ParamError, match=r"edited.toml(.|\n)*changed while the build was running"):
         proc.result()
     assert not proc.running
-    # With the CPU seconds it used (its imports of the pipeline), as the kernel counted them but for
-    # its last steps (pickling the answer, leaving).
+    # With the CPU seconds it used, its imports of the pipeline included (over 0.5 s), as the kernel
+    # counted them but for its end (pickling the answer, the interpreter's teardown).
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     counted = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
-    assert counted > 0.5 and counted - 0.2 <= proc.cpu_s <= counted, (proc.cpu_s, counted)
+    assert 0.5 < proc.cpu_s <= counted, (proc.cpu_s, counted)
     # A process that dies without a result: the work runs here instead.
     monkeypatch.setattr(worker.sys, "executable", shutil.which("false") or "/bin/false")
     lost = worker.SecondProcess.start("bvsr_cad.build._runtime.analyses_process", [], tmp_path)
@@ -394,62 +394,6 @@ def test_the_standby_head_start_is_used_only_for_the_bytes_it_was_built_from(tmp
         built.spec.name == "edited"
         and built is not pipeline._PREPARED[str(params.resolve()), first]
     )
-
-
-def test_the_build_and_its_analyses_process_make_each_part_solid_once(tmp_path, monkeypatch):
-    """A cold build's two processes share the parts' solids through a folder of BRep files
-    (:class:`~bvsr_cad.build._runtime.analyses_process.SharedSolids`): the build makes its parts
-    from the first, the analyses' process from the last, and each reads what the other made instead
-    of making it again. Every solid is the one its bytes give back, so a part read from the other
-    process equals, to the byte, the one made here, and both equal a plain assembly's; the build
-    removes the folder once the analyses are in."""
-    from bvsr_cad.analysis import run
-    from bvsr_cad.assembly import build as build_mod
-    from bvsr_cad.assembly.build import build_assembly
-    from bvsr_cad.build._runtime import analyses_process
-    from bvsr_cad.build._runtime.analyses_process import SharedSolids
-    from bvsr_cad.parameters.load import load_spec, params_sha256
-    from bvsr_cad.parts._kernel import brep_bytes
-
-    params = tmp_path / "tail.toml"
-    shutil.copyfile(PARAMS / "bvsr.toml", params)
-    spec = load_spec(params)
-    plain = build_assembly(spec)
-    want = {name: brep_bytes(p.solid) for name, p in plain.parts.items()}
-    made: list[str] = []
-    real_panel = build_mod.panel
-    monkeypatch.setattr(build_mod, "panel", lambda lay: made.append(lay.name) or real_panel(lay))
-    (tmp_path / "build").mkdir()  # the build's temporary folder
-    folder = tmp_path / "build" / analyses_process.SHARED_SOLIDS_FOLDER
-    # The build has made the first three panels when the analyses' work comes.
-    first = build_assembly(spec, solids=False, shared=SharedSolids(folder))
-    for name in ("panel0", "panel1", "panel2"):
-        first.parts[name].solid  # noqa: B018
-    assert made == ["panel0", "panel1", "panel2"]
-    monkeypatch.setattr(
-        run, "run_analyses", lambda asm, *_a, **_k: asm
-    )  # the analyses' input, handed back
-    monkeypatch.setattr(
-        "bvsr_cad.exporters.analysis_files.write_analysis_pictures", lambda *_a: None
-    )
-    monkeypatch.setattr(analyses_process, "_PREPARED", {})
-    made.clear()
-    used, _drawn = analyses_process._analyses_process(
-        str(params), params_sha256(params), "", "", str(tmp_path / "build"), "tail"
-    )
-    assert made == ["panel6", "panel5", "panel4", "panel3"]  # from the last; the first three read
-    assert sorted(p.name for p in folder.glob("*.brep")) == sorted(f"{n}.brep" for n in plain.parts)
-    # The build's remaining parts are read, not made; every solid is the plain assembly's to the
-    # byte.
-    made.clear()
-    assert (
-        {n: brep_bytes(p.solid) for n, p in first.parts.items()}
-        == want
-        == {n: brep_bytes(p.solid) for n, p in used.parts.items()}
-    )
-    assert made == []
-    analyses_process.drop_geometry_ahead(tmp_path / "build")
-    assert not folder.exists()
 
 
 def test_the_analyses_process_leaves_the_joint_limits_before_its_other_analyses(

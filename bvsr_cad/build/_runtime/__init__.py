@@ -1,3 +1,2 @@
 """The build's second processes (:mod:`~bvsr_cad.build._runtime.worker`, the analyses' and the
-checks'), the part solids they share and the process settings of the ``bvsr`` command's own
-processes: nowhere else does bvsr_cad start a process or change one."""
+checks') and the part solids they share: nowhere else does bvsr_cad start a process."""

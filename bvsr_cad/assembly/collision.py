@@ -27,6 +27,7 @@ mesh (the exporters write its convex hull) instead of its cylinder.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import build123d as bd
@@ -173,15 +174,8 @@ def panel_collisions(
     out: dict[int, list[Collision]] = {}
     for lay in asm.panel_layouts:
         panel = asm.part_of(asm.panel(lay.index))
-        solid = panel.solid
-        fit = fit_of(panel)
-        out[lay.index] = [
-            _mesh(f"panel{lay.index}", "panel", solid)
-            if convex
-            else _cylinder(f"panel{lay.index}", "panel", fit, np.eye(4), fit.z0_mm, fit.z1_mm)
-        ]
-    r_rod = spec.vertebra.diameter_mm / 2
-    rod_fit = CylinderFit(r_rod, 0.0, 1.0, np.eye(4), r_rod, np.pi * r_rod**2)
+        out[lay.index] = [_panel_shape(f"panel{lay.index}", panel.solid, fit_of(panel), convex)]
+    r_rod_mm = spec.vertebra.diameter_mm / 2
     for k in range(1, spec.panels):
         lo, hi = asm.panel_layouts[k - 1], asm.panel_layouts[k]
         g0, g1 = lo.z0_mm + t, hi.z0_mm
@@ -189,56 +183,66 @@ def panel_collisions(
         halves = ((k - 1, lo.z0_mm, g0, mid, "lower"), (k, hi.z0_mm, mid, g1, "upper"))
         for inst in asm.soas_of_joint(k):
             part = asm.part_of(inst)
-            fit = fit_of(part)
-            T_tail = np.asarray(inst.transform)
-            d = T_tail[:3, 2]
-            # Along the SOA's axis, a plane z = c of the tail cuts the column within +-r tan(tilt)
-            # of the axis.
-            overhang = fit.radius_mm * float(np.hypot(d[0], d[1]) / d[2])
-            for panel, z_panel, a, b, which in halves:
-                name = f"{inst.name}_{which}"
-                T_link = _translation_mm(-z_panel) @ T_tail
-                if convex:
-                    out[panel].append(
-                        _mesh(
-                            name,
-                            "soa",
-                            slab(part.solid.moved(location(T_tail)), a, b).moved(
-                                bd.Location((0, 0, -z_panel))
-                            ),
-                        )
-                    )
-                    continue
-                s0, s1 = ((c - T_tail[2, 3]) / d[2] for c in (a, b))
-                out[panel].append(
-                    _cylinder(
-                        name,
-                        "soa",
-                        fit,
-                        T_link,
-                        max(fit.z0_mm, s0 - overhang),
-                        min(fit.z1_mm, s1 + overhang),
-                    )
-                )
-        for n, (z0, z1) in enumerate(rod_in_gap.get(k, [])):
-            for panel, z_panel, a, b, which in halves:
-                lo_z, hi_z = max(z0, a), min(z1, b)
-                if hi_z - lo_z <= 1e-9:
-                    continue
-                name = f"j{k}_rod{n}_{which}"
-                if convex:
-                    out[panel].append(
-                        _mesh(
-                            name,
-                            "rod",
-                            rod(2 * r_rod, hi_z - lo_z).moved(bd.Location((0, 0, lo_z - z_panel))),
-                        )
-                    )
-                else:
-                    out[panel].append(
-                        _cylinder(name, "rod", rod_fit, np.eye(4), lo_z - z_panel, hi_z - z_panel)
-                    )
+            for panel, shape in _soa_halves(inst, part.solid, fit_of(part), halves, convex):
+                out[panel].append(shape)
+        for panel, shape in _rod_halves(k, rod_in_gap.get(k, []), r_rod_mm, halves, convex):
+            out[panel].append(shape)
     return out
+
+
+#: A joint's gap split at its middle, per half: (panel index, the panel's z0, the half's tail-frame
+#: z range, "lower" or "upper"), mm.
+_Halves = tuple[tuple[int, float, float, float, str], ...]
+
+
+def _panel_shape(name: str, solid: bd.Shape, fit: CylinderFit, convex: bool) -> Collision:
+    """A panel's own shape: its solid (convex) or the cylinder of its fit."""
+    if convex:
+        return _mesh(name, "panel", solid)
+    return _cylinder(name, "panel", fit, np.eye(4), fit.z0_mm, fit.z1_mm)
+
+
+def _soa_halves(
+    inst, solid: bd.Shape, fit: CylinderFit, halves: _Halves, convex: bool
+) -> Iterator[tuple[int, Collision]]:
+    """An SOA's column in each half of its joint's gap, on the panel that half belongs to: the
+    slab of its solid (convex), or its fit's cylinder cut where the half's planes cross the axis."""
+    T_tail = np.asarray(inst.transform)
+    d = T_tail[:3, 2]
+    # Along the SOA's axis, a plane z = c of the tail cuts the column within +-r tan(tilt) of the
+    # axis.
+    overhang = fit.radius_mm * float(np.hypot(d[0], d[1]) / d[2])
+    for panel, z_panel, a, b, which in halves:
+        name = f"{inst.name}_{which}"
+        if convex:
+            cut = slab(solid.moved(location(T_tail)), a, b)
+            yield panel, _mesh(name, "soa", cut.moved(bd.Location((0, 0, -z_panel))))
+            continue
+        s0, s1 = ((c - T_tail[2, 3]) / d[2] for c in (a, b))
+        z0, z1 = max(fit.z0_mm, s0 - overhang), min(fit.z1_mm, s1 + overhang)
+        yield panel, _cylinder(name, "soa", fit, _translation_mm(-z_panel) @ T_tail, z0, z1)
+
+
+def _rod_halves(
+    k: int, rod_ranges_mm: list[tuple[float, float]], r_rod_mm: float, halves: _Halves, convex: bool
+) -> Iterator[tuple[int, Collision]]:
+    """Joint k's rod pieces (tail-frame z ranges) in each half of the gap they reach into: a rod
+    solid (convex) or a cylinder of the rod's radius."""
+    rod_fit = CylinderFit(r_rod_mm, 0.0, 1.0, np.eye(4), r_rod_mm, np.pi * r_rod_mm**2)
+    for n, (z0, z1) in enumerate(rod_ranges_mm):
+        for panel, z_panel, a, b, which in halves:
+            lo_z, hi_z = max(z0, a), min(z1, b)
+            if hi_z - lo_z <= 1e-9:
+                continue
+            name = f"j{k}_rod{n}_{which}"
+            if convex:
+                piece = rod(2 * r_rod_mm, hi_z - lo_z).moved(bd.Location((0, 0, lo_z - z_panel)))
+                yield panel, _mesh(name, "rod", piece)
+            else:
+                yield (
+                    panel,
+                    _cylinder(name, "rod", rod_fit, np.eye(4), lo_z - z_panel, hi_z - z_panel),
+                )
 
 
 def _si(T_mm: np.ndarray) -> tuple[tuple[float, ...], ...]:

@@ -595,7 +595,9 @@ def parse(argv) -> argparse.Namespace:
     )
     ap.add_argument("--profile-rows", type=int, default=15, help="kernels --profile lists")
     ap.add_argument(
-        "--no-mjx", action="store_true", help="skip MJX (its CPU compile takes 25-40 s a batch)"
+        "--no-mjx",
+        action="store_true",
+        help="skip MJX (its CPU compile takes tens of seconds a batch)",
     )
     ap.add_argument("--json", type=Path, help="also write every figure to this JSON file")
     args = ap.parse_args(argv)

@@ -149,8 +149,8 @@ _AXES = {"x": "1 0 0", "y": "0 1 0"}
 #: at the limits), so a floor pressed by a bent tail sinks into its SOAs by that much. A geom that
 #: must reach between the panels (the impact scene's ball) adds :data:`COLUMN_CONTACT_BIT` to its
 #: conaffinity. It keeps the default scene's contact set to the seven panels against the floor:
-#: MJX's compile of the step took 253 s of CPU with all 79 shapes against the floor, 57 s with the
-#: panels only (a shared 2-core machine).
+#: every shape that may touch the floor is a contact MJX compiles into the step, several times the
+#: compile time with all 79 shapes than with the panels alone (benchmarks/RESULTS.md).
 COLUMN_CONTACT_BIT = 2
 CONTACT_TYPE = {
     "panel": 1 | COLUMN_CONTACT_BIT,

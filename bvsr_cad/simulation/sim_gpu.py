@@ -54,16 +54,13 @@ def import_mjx():
 #: XLA options for compiling MJX's step on JAX's CPU backend (DebugOptions fields, passed per
 #: function through ``jax.jit(compiler_options=...)``, so nothing else in the process changes).
 #: XLA:CPU's loop fusion copies the step's long chains of dependent arithmetic (the tail is 14
-#: bodies and 24 hinges deep) into every consumer, so its kernels nest thousands of calls deep: on
-#: the default scene (a shared 2-core machine, JAX 0.10.2, MJX 3.17) ``compile()`` of one step took
-#: 64 s of CPU at float32 (over 7 min at float64) and the first step then ran for minutes. Without
-#: fusion (each operation its own kernel) one step compiles in 29-33 s of CPU and runs in
-#: milliseconds; with XLA's backend optimisation level 0 and LLVM's expensive passes off as well, 23
-#: s (float32). :func:`mjx_batch` (two worlds, float64, compile and the first 25 steps): 40-50 s of
-#: CPU without fusion, 35-38 s with all three, whose steps then run 2.4 times slower, which matters
-#: little: MJX on a CPU is for trying and testing (CPU MuJoCo steps this scene 50-100 times faster
-#: per world). A GPU's fusion is what makes it fast: these are for CPU devices only
-#: (:func:`compiler_options`).
+#: bodies and 24 hinges deep) into every consumer, so its kernels nest thousands of calls deep and
+#: one step's compile takes minutes of CPU, and its first step minutes more. Without fusion each
+#: operation is its own kernel: the step compiles in a fraction of that and runs in milliseconds;
+#: XLA's backend optimisation level 0 and LLVM's expensive passes off shorten the compile further,
+#: at the cost of slower steps, which matters little: MJX on a CPU is for trying and testing (CPU
+#: MuJoCo is the fast path there). A GPU's fusion is what makes it fast: these are for CPU devices
+#: only (:func:`compiler_options`). The compile times behind this are in benchmarks/RESULTS.md.
 CPU_COMPILER_OPTIONS = {
     "xla_disable_hlo_passes": "fusion",
     "xla_backend_optimization_level": 0,

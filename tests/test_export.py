@@ -429,17 +429,10 @@ def test_the_analyses_process_leaves_the_joint_limits_before_its_other_analyses(
             str(params), params_sha256(params), "", "", str(tmp_path), "bvsr"
         )
     names, geo = seen
-    # Beside it the rest geometry (for the build's cache) and the part solids it shared with the
-    # build, and no part file left beside either.
-    shared = analyses_process.SHARED_SOLIDS_FOLDER
-    assert names == sorted(
-        [analyses_process.GEOMETRY_AHEAD_FILE, analyses_process.REST_AHEAD_FILE, shared]
-    )
+    # Beside it the rest geometry (for the build's cache), and no part file left beside either.
+    assert names == sorted([analyses_process.GEOMETRY_AHEAD_FILE, analyses_process.REST_AHEAD_FILE])
     assert isinstance(geo, run.GeometryAnalyses)
-    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
-        [analyses_process.REST_AHEAD_FILE, shared]
-    )
-    assert not [p.name for p in (tmp_path / shared).iterdir() if not p.name.endswith(".brep")]
+    assert [p.name for p in tmp_path.iterdir()] == [analyses_process.REST_AHEAD_FILE]
     limits = per_joint_rad(geo.limits)
     assert len(limits) == load_spec(params).joints and all(
         0 < t <= run.THETA_SEARCH_MAX_RAD for t in limits

@@ -12,7 +12,6 @@ import math
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Protocol
 
 import build123d as bd
 import numpy as np
@@ -28,7 +27,7 @@ from ..parameters.layout import (
 )
 from ..parameters.standard_parts import metric
 from ..parameters.tables import TailSpec
-from ..parts._kernel import PrintPosed, brep_bytes, location, solid_from_brep
+from ..parts._kernel import PrintPosed, location
 from ..parts.panel import panel
 from ..parts.soa import soa_body
 from ..parts.vertebra import rod
@@ -109,13 +108,6 @@ class Assembly:
     panel_layouts: list[PanelLayout]
     taper_half_angle_deg: float
     _properties: dict = field(default_factory=dict, init=False, repr=False, compare=False)
-    _source: object = field(default=None, init=False, repr=False, compare=False)
-
-    def share_solids(self, shared: SolidStore) -> None:
-        """From now on take the parts not yet made from ``shared`` (made here and offered there when
-        it has none), and offer it the parts made already."""
-        if self._source is not None:
-            self._source.share(shared)
 
     def part_of(self, inst: Instance) -> PartDef:
         return self.parts[inst.part]
@@ -209,42 +201,10 @@ def _print_transform_panel(lay: PanelLayout) -> np.ndarray:
     return translation(z=lay.thickness_mm) @ flip
 
 
-class SolidStore(Protocol):
-    """Where a build's part solids may come from instead of being made (see
-    :class:`bvsr_cad.build._runtime.analyses_process.SharedSolids`): part ``name``'s BRep bytes
-    (:func:`bvsr_cad.parts._kernel.brep_bytes`), of a solid made by ``make`` where it has none."""
-
-    def brep(self, name: str, make: Callable[[], bd.Solid]) -> bytes: ...
-
-    def offer(self, name: str, data: bytes) -> None: ...
-
-
-class _SolidSource:
-    """Where :func:`build_assembly`'s parts take their solids: the BRep bytes of the solid made
-    here, or of the one a :class:`SolidStore` holds; each part's bytes are kept, to be offered when
-    sharing starts later (:meth:`Assembly.share_solids`)."""
-
-    def __init__(self, shared: SolidStore | None = None):
-        self.shared = shared
-        self.made: dict[str, bytes] = {}
-
-    def make(self, name: str, solid: Callable[[], bd.Solid]) -> bd.Solid:
-        shared = self.shared
-        data = brep_bytes(solid()) if shared is None else shared.brep(name, solid)
-        self.made[name] = data
-        return solid_from_brep(data)
-
-    def share(self, shared: SolidStore) -> None:
-        self.shared = shared
-        for name, data in list(self.made.items()):
-            shared.offer(name, data)
-
-
 def build_assembly(
     spec: TailSpec,
     progress: Progress | None = None,
     solids: bool = True,
-    shared: SolidStore | None = None,
 ) -> Assembly:
     """Make every unique part and place every instance of the tail at rest.
 
@@ -254,25 +214,11 @@ def build_assembly(
         solids: False makes each part's solid when it is first read, not now (the analyses' process
             of a build whose geometry analyses, posed tail and parts' mass properties come from the
             cache reads none: an edit that moves no solid makes none there).
-        shared: where the build's other process leaves the parts it made (and this one leaves its
-            own; :class:`bvsr_cad.build._runtime.analyses_process.SharedSolids`).
-
-    Every part's solid is the one its BRep bytes give back
-    (:func:`bvsr_cad.parts._kernel.brep_bytes`, :func:`~bvsr_cad.parts._kernel.solid_from_brep`):
-    the round trip moves some unit directions in their last bits (OCCT normalises them on reading: a
-    STEP entity's 3.4e-21 becomes 5.1e-21), so a part read from the build's other process
-    (``shared``) is the one made here to the bit, whichever process made it.
     """
     say = (progress or (lambda _msg: None)) if solids else (lambda _msg: None)
-    source = _SolidSource(shared)
 
     def part(*, solid: Callable[[], bd.Solid], **fields) -> PartDef:
-        name = fields["name"]
-        return (
-            PartDef(solid=source.make(name, solid), **fields)
-            if solids
-            else _SolidOnUse(lambda: source.make(name, solid), **fields)
-        )
+        return PartDef(solid=solid(), **fields) if solids else _SolidOnUse(solid, **fields)
 
     beta = half_angle_rad(spec)
     layouts = [panel_layout(spec, k, beta) for k in range(spec.panels)]
@@ -288,7 +234,6 @@ def build_assembly(
         panel_layouts=layouts,
         taper_half_angle_deg=math.degrees(beta),
     )
-    asm._source = source
     return asm
 
 

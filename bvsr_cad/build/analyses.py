@@ -20,8 +20,6 @@ from ..analysis.run import BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS
 from ..parameters.load import params_sha256
 from ..parts._kernel import kernel_threads
 from ._runtime.analyses_process import (
-    SHARED_SOLIDS_FOLDER,
-    SharedSolids,
     drop_geometry_ahead,
     keep_rest,
     take_geometry_ahead,
@@ -92,13 +90,6 @@ class Analyses:
                 # Both cores are busy from here to the end: OCCT's own threads would only contend.
                 self._kernel_before = kernel_threads(1)
         return self
-
-    def shared_solids(self) -> SharedSolids | None:
-        """Where the build and the analyses' process share the tail's solids: both need every one
-        where the geometry analyses are not cached (made once)."""
-        if self.process is None or self.geometry_hit is not None:
-            return None
-        return SharedSolids(self.run.folder / SHARED_SOLIDS_FOLDER)
 
     def limits_ahead(self) -> list[float] | None:
         """The joint limits, if the cache or the analyses' process has given them by now (None where

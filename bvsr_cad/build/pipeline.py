@@ -223,9 +223,7 @@ def build_opened(
             "panels"
         )
         analyses = Analyses.begin(run, ANALYSES, GEOMETRY_ANALYSES, params, standby)
-        asm = run.run(
-            ASSEMBLY, lambda _f: build_assembly(spec, say, shared=analyses.shared_solids())
-        )
+        asm = run.run(ASSEMBLY, lambda _f: build_assembly(spec, say))
         if on_assembly is not None:
             on_assembly(asm)
         files = {

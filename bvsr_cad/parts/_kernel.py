@@ -179,30 +179,6 @@ def fresh_copy(shape: bd.Shape) -> bd.Shape:
     return type(shape)(BRepBuilderAPI_Copy(shape.wrapped, True, False).Shape())
 
 
-def brep_bytes(solid: bd.Solid) -> bytes:
-    """``solid`` in OCCT's binary BRep format (its geometry, topology and tolerances; no
-    triangulation unless it has one)."""
-    import io
-
-    from OCP.BinTools import BinTools
-
-    out = io.BytesIO()
-    BinTools.Write_s(solid.wrapped, out)
-    return out.getvalue()
-
-
-def solid_from_brep(data: bytes) -> bd.Solid:
-    """The solid :func:`brep_bytes` wrote."""
-    import io
-
-    from OCP.BinTools import BinTools
-    from OCP.TopoDS import TopoDS, TopoDS_Shape
-
-    shape = TopoDS_Shape()
-    BinTools.Read_s(shape, io.BytesIO(data))
-    return bd.Solid(TopoDS.Solid_s(shape))
-
-
 #: Solids :func:`remembered` keeps per function: a `bvsr watch` session that tries many SOA tables
 #: keeps the most recently used ones, not every one it saw.
 REMEMBERED_MAX = 8
@@ -212,7 +188,8 @@ def remembered(make: Callable[..., bd.Shape]) -> Callable[..., bd.Shape]:
     """``make`` (a pure function of hashable arguments returning a solid) made once per arguments in
     a process (the :data:`REMEMBERED_MAX` most recently used are kept); each call gets a
     :func:`fresh_copy`, so no caller sees another's triangulation or label. The SOA's solids are
-    asked for by the assembly, the mold set and the rigid twin alike."""
+    asked for by the assembly, the mold set, the rigid twin and every supply model's air volume: a
+    memo of one process, not a stage cache (docs/architecture.md, The cache)."""
     made: OrderedDict[tuple, bd.Shape] = OrderedDict()
     lock = threading.Lock()
 

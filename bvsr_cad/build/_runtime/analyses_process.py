@@ -13,54 +13,12 @@ from __future__ import annotations
 import os
 import pickle
 import sys
-import threading
-from collections.abc import Callable
 from pathlib import Path
 
 from ...analysis.run import BESIDE_BUILD_THREADS, GeometryAnalyses, RestGeometry
 from ...parameters.load import load_spec, params_sha256
-from ...parts._kernel import brep_bytes, kernel_threads
+from ...parts._kernel import kernel_threads
 from ...simulation.sim import protocol_radius_mm
-
-#: In the build's temporary folder: the part solids the build and this process share
-#: (:class:`SharedSolids`); the build removes it once the analyses are in.
-SHARED_SOLIDS_FOLDER = ".solids"
-
-
-class SharedSolids:
-    """The part solids of one build, shared by its two processes (the build's and its analyses')
-    through a folder of BRep files (:func:`bvsr_cad.parts._kernel.brep_bytes`): a part is made by
-    whichever process asks for it first, which writes it (atomically); the other reads it (a
-    millisecond) instead of making it again (0.06-0.37 CPU s a part of the default tail, 1.5 s in
-    all, measured). The build makes its parts from the first, the analyses' process from the last,
-    so that they meet in the middle. What either uses is the solid its bytes give back, made or read
-    (see :func:`bvsr_cad.assembly.build.build_assembly`)."""
-
-    def __init__(self, folder: Path):
-        self.folder = Path(folder)
-        self.folder.mkdir(exist_ok=True)  # not its parent: a build's folder that is gone stays gone
-
-    def _path(self, name: str) -> Path:
-        return self.folder / f"{name}.brep"
-
-    def brep(self, name: str, make: Callable[[], object]) -> bytes:
-        """Part ``name``'s BRep bytes: read, or those of the solid ``make`` makes (then written)."""
-        try:
-            return self._path(name).read_bytes()
-        except FileNotFoundError:
-            data = brep_bytes(make())
-            self.offer(name, data)
-            return data
-
-    def offer(self, name: str, data: bytes) -> None:
-        """Write part ``name``'s BRep bytes unless the folder has them (a part both processes made
-        at once is written twice, the same bytes: the rename makes either whole)."""
-        path = self._path(name)
-        if not path.exists():
-            _replace_whole(
-                path, data, path.with_name(f".{name}.{os.getpid()}.{threading.get_ident()}.part")
-            )
-
 
 #: In the build's temporary folder: the geometry analyses, pickled by the analyses' second process
 #: as soon as it has them (:func:`write_geometry_ahead`), so that the build writes and checks the
@@ -69,17 +27,11 @@ class SharedSolids:
 GEOMETRY_AHEAD_FILE = ".analysis-geometry.pkl"
 
 
-def _replace_whole(path: Path, data: bytes, part: Path | None = None) -> None:
-    """``data`` into ``path``, whole or not at all: written beside (``part``, by default ``path``
-    with ``.part`` added; a name of its own where two writers may race), then renamed."""
-    part = part or path.with_name(path.name + ".part")
-    part.write_bytes(data)
-    os.replace(part, path)
-
-
 def _write_whole(path: Path, value) -> None:
-    """``value`` pickled into ``path``, whole or not at all."""
-    _replace_whole(path, pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL))
+    """``value`` pickled into ``path``, whole or not at all: written beside, then renamed."""
+    part = path.with_name(path.name + ".part")
+    part.write_bytes(pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL))
+    os.replace(part, path)
 
 
 def write_geometry_ahead(folder: Path, geo: GeometryAnalyses) -> None:
@@ -137,9 +89,7 @@ def take_geometry_ahead(folder: Path) -> GeometryAnalyses | None:
 def drop_geometry_ahead(folder: Path) -> None:
     """Remove what :func:`write_geometry_ahead` and :func:`write_rest_ahead` may have left in
     ``folder`` (a file or its half-written part; the rest geometry once the build has moved it into
-    its cache, or where it has none), and the solids it shared (:data:`SHARED_SOLIDS_FOLDER`)."""
-    import shutil
-
+    its cache, or where it has none)."""
     for name in (
         GEOMETRY_AHEAD_FILE,
         GEOMETRY_AHEAD_FILE + ".part",
@@ -147,7 +97,6 @@ def drop_geometry_ahead(folder: Path) -> None:
         REST_AHEAD_FILE + ".part",
     ):
         (folder / name).unlink(missing_ok=True)
-    shutil.rmtree(folder / SHARED_SOLIDS_FOLDER, ignore_errors=True)
 
 
 #: The standby analyses process's head start (:func:`_prepare_analyses`): (params path, SHA-256) ->
@@ -168,7 +117,7 @@ def _prepare_analyses(params: str) -> None:
         return
     asm, sha256 = read
     _PREPARED[str(Path(params).resolve()), sha256] = asm
-    for part in reversed(list(asm.parts.values())):  # the build makes its parts from the first
+    for part in asm.parts.values():
         if _work_waiting():
             return
         part.solid  # noqa: B018 - made now, a head start
@@ -229,13 +178,6 @@ def _analyses_process(
             params, sha256
         )  # None: changed since the build read it (from_params says so)
         asm = read[0] if read is not None else None
-    if asm is not None and folder and given is None:
-        # Every solid is needed (the clearance meshes them all): the ones the build has not made
-        # yet, from the last (it makes them from the first), each read where the build made it
-        # already.
-        asm.share_solids(SharedSolids(Path(folder) / SHARED_SOLIDS_FOLDER))
-        for part in reversed(list(asm.parts.values())):
-            part.solid  # noqa: B018
     results = from_params(
         params,
         sha256,

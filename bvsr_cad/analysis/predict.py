@@ -101,10 +101,6 @@ class Predictor:
     _limits: dict = field(
         default_factory=dict
     )  # segments -> the joints' limits (geometry only), rad
-    #: Motions already solved for this spec: rows that share one (a root torque and force at the
-    #: same pressure and payload, a peak velocity and both exponents at 6 bar, the cart's lift and
-    #: angle) integrate it once.
-    _solved: dict = field(default_factory=dict, repr=False)
     #: Predictions may run in threads (:func:`bvsr_cad.analysis.calibrate.compare_rows`): each memo
     #: entry is made once, under its own lock; shared with the Predictors of other specs
     #: (``with_spec``).
@@ -164,26 +160,15 @@ class Predictor:
             model, None, seconds, phi0_rad=phi, supply=supply, stop_angle_deg=stop_angle_deg
         )
 
-    def _once(self, key: tuple, solve: Callable[[], object]):
-        return self._locks.once(self._solved, key, solve)
-
     def segment_pulse(self, motion: str, pressure_bar: float) -> Trajectory:
-        def solve() -> Trajectory:
-            model = self.joint_model(1, self.spec.joints_per_segment)
-            return self.pulse(model, motion, pressure_bar, stop_angle_deg=VELOCITY_WINDOW_DEG)
-
-        return self._once(("segment", motion, float(pressure_bar)), solve)
+        model = self.joint_model(1, self.spec.joints_per_segment)
+        return self.pulse(model, motion, pressure_bar, stop_angle_deg=VELOCITY_WINDOW_DEG)
 
     def tail_pulse(
         self, motion: str, pressure_bar: float, payload_g: float, seconds: float = PULSE_SECONDS
     ) -> tuple[JointModel, Trajectory]:
-        def solve() -> tuple[JointModel, Trajectory]:
-            model = self.joint_model(1, self.spec.joints, payload_g)
-            return model, self.pulse(model, motion, pressure_bar, seconds)
-
-        return self._once(
-            ("tail", motion, float(pressure_bar), float(payload_g), float(seconds)), solve
-        )
+        model = self.joint_model(1, self.spec.joints, payload_g)
+        return model, self.pulse(model, motion, pressure_bar, seconds)
 
     # -- quantities ----------------------------------------------------------
     def segment_max_angle(self, motion: str) -> float:
@@ -248,15 +233,7 @@ class Predictor:
             ),
         )
         asm, limits = self.workspace_geometry(int(segments))
-        return self._once(
-            (
-                "workspace",
-                int(segments),
-                float(pressurised_max_kpa_abs),
-                float(depressurised_min_kpa_abs),
-            ),
-            lambda: float(self.workspace_sim(asm, spec, limits)),
-        )
+        return float(self.workspace_sim(asm, spec, limits))
 
     def workspace_geometry(self, segments: int) -> tuple[Assembly, list[float]]:
         """(the assembly, its joints' limits) of this tail with ``segments`` segments: what the
@@ -318,11 +295,6 @@ class Predictor:
         return self.root_wrench(motion, pressure_bar, payload_g)[1]
 
     def cart_motion(self, pressure_bar: float, motion: str):
-        return self._once(
-            ("cart", float(pressure_bar), motion), lambda: self._cart_motion(pressure_bar, motion)
-        )
-
-    def _cart_motion(self, pressure_bar: float, motion: str):
         cart = self.spec.cart
         model, tr = self.tail_pulse(motion, pressure_bar, 0.0, seconds=0.5)
         body = model.body

@@ -142,6 +142,7 @@ def distribution_versions() -> dict[str, str | None]:
     return {"python": sys.version, **{name: version(name) for name in RESULT_DISTRIBUTIONS}}
 
 
+# Once per process: every key it makes names the code it runs, even if a file is edited meanwhile.
 @lru_cache(maxsize=1)
 def code_fingerprint() -> str:
     """SHA-256 over this package's source and data files (path and bytes, sorted) and the versions

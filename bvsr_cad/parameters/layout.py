@@ -780,6 +780,8 @@ def _any_problem(spec: TailSpec, beta: float, first: tuple[int, ...] = ()) -> bo
     )
 
 
+# A memo of one process, not a stage cache: the validation and the layout ask it of each spec again
+# (docs/architecture.md, The cache).
 @lru_cache(maxsize=64)
 def max_feasible_taper_deg(spec: TailSpec) -> float:
     """Largest cone half-angle for which every panel keeps its webs (found by bisection over the

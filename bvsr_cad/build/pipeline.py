@@ -212,36 +212,78 @@ def build_opened(
     Raises:
         GeometryError: the CAD kernel failed.
     """
-    spec, params = opened.spec, opened.params
-    run = Runner(spec, opened.data, opened.cache, temporary_folder(opened.out), opened.log)
-    tmp, say = run.folder, run.say
-    analyses: Analyses | None = None
-    checks: Checks | None = None
+    run = Runner(opened.spec, opened.data, opened.cache, temporary_folder(opened.out), opened.log)
+    build = _Build(opened, run)
     try:
-        say(
+        build.cad_files(standby, on_assembly)
+        build.start_checks()
+        pictures = build.views()
+        verdicts = build.finish(pictures)
+        _publish(opened, run, build.manifest)
+    except BaseException:
+        for running in (build.analyses, build.checks):
+            if running is not None:
+                running.close()
+        shutil.rmtree(run.folder, ignore_errors=True)
+        raise
+    finally:
+        if build.analyses is not None:
+            build.analyses.restore()
+    return BuildResult(
+        opened.out,
+        verdicts,
+        time.perf_counter() - opened.t0,
+        run.log.stages,
+        build.manifest["volatile"]["cpu_seconds"],
+    )
+
+
+class _Build:
+    """One build's phases in their order, and what they hand on: the CAD files (the analyses
+    started beside them), the checks of those files started, the drawings and views, then the
+    analyses' results, the robot's and analyses' files, the checks' verdicts and the report. The
+    analyses and the checks are attributes from their start, so that a failure closes them."""
+
+    def __init__(self, opened: OpenedBuild, run: Runner):
+        self.opened, self.run = opened, run
+        self.spec, self.params = opened.spec, opened.params
+        self.analyses: Analyses | None = None
+        self.checks: Checks | None = None
+        self.fits: dict[str, CylinderFit] = {}  # the collision shapes' fits: robot geometry's
+        self.robot: dict | None = None  # the robot files' manifest entries, once written
+        self.fixed: set[Path] = set()  # the files whose time stamps are fixed
+
+    def cad_files(
+        self, standby: SecondProcess | None, on_assembly: Callable[[Assembly], None] | None
+    ) -> None:
+        """The analyses started, the assembly, its parts' files and collision fits, the manifest
+        so far, the molds, the rigid twin and the print jobs with the BOM."""
+        spec, run = self.spec, self.run
+        run.say(
             f"building {spec.name}: {spec.segments} segments, {spec.joints} joints, {spec.panels} "
             "panels"
         )
-        analyses = Analyses.begin(run, ANALYSES, GEOMETRY_ANALYSES, params, standby)
-        asm = run.run(ASSEMBLY, lambda _f: build_assembly(spec, say))
+        self.analyses = Analyses.begin(run, ANALYSES, GEOMETRY_ANALYSES, self.params, standby)
+        asm = self.asm = run.run(ASSEMBLY, lambda _f: build_assembly(spec, run.say))
         if on_assembly is not None:
             on_assembly(asm)
         files = {
             name: {"step": f"step/{name}.step", "stl": f"stl/{name}.stl"} for name in asm.parts
         }
         geometry_cached = run.hit(PART_FILES) is not None or run.hit(ROBOT_GEOMETRY) is not None
-        run.run(PART_FILES, lambda folder: _part_files(asm, files, folder, say))
-        fits: dict = {}  # the collision shapes' fits by part: the robot geometry stage's product
+        run.run(PART_FILES, lambda folder: _part_files(asm, files, folder, run.say))
         with run.timed(ROBOT_GEOMETRY):
             if not geometry_cached:  # on the print STLs' triangulation, while the solids hold it
-                collision_shapes(asm, fits)
-        shutil.copyfile(params, tmp / "params.toml")
-        manifest = manifest_dict(asm, params_sha256(params), files, "step/assembly.step")
-        manifest[
-            "previews"
-        ] = {}  # rendered once the checks of the print files have started (below)
-        mold_set, mold_entries, mold_view = run.run(MOLDS, lambda folder: _molds(asm, folder, say))
-        pieces, visual, twin_view, twin_props = run.run(
+                collision_shapes(asm, self.fits)
+        shutil.copyfile(self.params, run.folder / "params.toml")
+        manifest = self.manifest = manifest_dict(
+            asm, params_sha256(self.params), files, "step/assembly.step"
+        )
+        manifest["previews"] = {}  # rendered once the checks of the print files have started
+        self.mold_set, mold_entries, self.mold_view = run.run(
+            MOLDS, lambda folder: _molds(asm, folder, run.say)
+        )
+        pieces, visual, self.twin_view, twin_props = run.run(
             RIGID_TWIN, lambda folder: _rigid_twin(asm, folder)
         )
         manifest.update(
@@ -250,84 +292,92 @@ def build_opened(
                 lambda folder: _fabrication(
                     asm,
                     files,
-                    molds_manifest(spec, mold_set, *mold_entries),
+                    molds_manifest(spec, self.mold_set, *mold_entries),
                     pieces,
                     visual,
                     twin_props,
                     manifest,
-                    mold_set,
+                    self.mold_set,
                     folder,
                     run,
                 ),
             )
         )
-        limits = analyses.limits_ahead()
+
+    def start_checks(self) -> None:
+        """The robot's files if the joint limits are in already, then the checks of the files so
+        far, as published (fixed time stamps), started beside the rest of the build."""
+        run = self.run
+        limits = self.analyses.limits_ahead()
         with run.timed(ROBOT_FILES):
-            robot = _robot_files(run, asm, limits, fits) if limits is not None else None
-        with run.timed(CHECKS):  # they read the files as published: fixed time stamps
-            fixed: set[Path] = set()
-            make_reproducible(tmp, fixed)
-            say("checks of the CAD files")
-            checks = start_checks(
-                tmp,
-                say,
-                cache=opened.cache,
+            if limits is not None:
+                self.robot = _robot_files(run, self.asm, limits, self.fits)
+        with run.timed(CHECKS):
+            make_reproducible(run.folder, self.fixed)
+            run.say("checks of the CAD files")
+            self.checks = start_checks(
+                run.folder,
+                run.say,
+                cache=self.opened.cache,
                 meshes_beside=True,
-                robot_beside=robot is not None,
-                manifest=as_written({**manifest, **(robot or {})}),
+                robot_beside=self.robot is not None,
+                manifest=as_written({**self.manifest, **(self.robot or {})}),
             )
-        run.run(DRAWINGS, lambda folder: _drawings(asm, mold_set, folder))
-        manifest.update(stamp_drawings(tmp, asm, mold_set, params_sha256(params)))
-        manifest.update(run.run(VIEW, lambda folder: _view(asm, mold_view, twin_view, folder, say)))
+
+    def views(self) -> dict:
+        """The drawings (stamped with this build), the interactive 3D view, the previews and the
+        report's pictures, which it returns."""
+        run, asm, manifest = self.run, self.asm, self.manifest
+        run.run(DRAWINGS, lambda folder: _drawings(asm, self.mold_set, folder))
+        manifest.update(stamp_drawings(run.folder, asm, self.mold_set, params_sha256(self.params)))
+        manifest.update(
+            run.run(
+                VIEW, lambda folder: _view(asm, self.mold_view, self.twin_view, folder, run.say)
+            )
+        )
         manifest["previews"] = run.run(PREVIEWS, lambda folder: render_previews(asm, folder))
         with run.timed(REPORT):
-            say("report pictures")
-            pictures = report_pictures(tmp, manifest, run.memo)
-        robot = _robot_before_wait(run, asm, analyses, checks, manifest, robot, fits)
-        results, drawn = analyses.results(
-            lambda geometry: run_analyses(asm, say, str(params), protocol_radius_mm, geometry)
+            run.say("report pictures")
+            return report_pictures(run.folder, manifest, run.memo)
+
+    def finish(self, pictures: dict) -> list:
+        """The analyses' results, their files and the robot's, the checks' verdicts and the report;
+        returns the verdicts."""
+        run, asm, manifest = self.run, self.asm, self.manifest
+        self.robot = _robot_before_wait(
+            run, asm, self.analyses, self.checks, manifest, self.robot, self.fits
         )
+        results, drawn = self.analyses.results(
+            lambda geometry: run_analyses(
+                asm, run.say, str(self.params), protocol_radius_mm, geometry
+            )
+        )
+        robot = self.robot
         manifest.update(
             run.run(
                 ROBOT_FILES,
                 lambda folder: {
-                    **write_analyses(results, folder, spec.name, pictures=not drawn),
+                    **write_analyses(results, folder, self.spec.name, pictures=not drawn),
                     **(
                         robot
                         if robot is not None
-                        else _robot_files(run, asm, results.theta_max_per_joint(), fits)
+                        else _robot_files(run, asm, results.theta_max_per_joint(), self.fits)
                     ),
                 },
             )
         )
-        make_reproducible(
-            tmp, fixed
-        )  # STEP and 3MF time stamps of the files written since the first go
+        # STEP and 3MF time stamps of the files written since the checks started
+        make_reproducible(run.folder, self.fixed)
         verdicts = run.run(
-            CHECKS, lambda _f: finish_checks(checks, opened.cache, as_written(manifest))
+            CHECKS,
+            lambda _f: finish_checks(self.checks, self.opened.cache, as_written(manifest)),
         )
-        run.log.process("checks", checks.cpu_s)
+        run.log.process("checks", self.checks.cpu_s)
         manifest["checks"] = [r.to_json() for r in verdicts]
         manifest.update(
             run.run(REPORT, lambda folder: write_report(folder, manifest, run.memo, pictures))
         )
-        _publish(opened, run, manifest)
-    except BaseException:
-        for running in (analyses, checks):
-            if running is not None:
-                running.close()
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    finally:
-        if analyses is not None:
-            analyses.restore()
-    return BuildResult(
-        opened.out,
-        verdicts,
-        time.perf_counter() - opened.t0,
-        run.log.stages,
-        manifest["volatile"]["cpu_seconds"],
-    )
+        return verdicts
 
 
 def _publish(opened: OpenedBuild, run: Runner, manifest: dict) -> None:

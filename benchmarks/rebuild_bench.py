@@ -124,10 +124,11 @@ def main() -> None:
     work = Path(tempfile.mkdtemp(prefix="bvsr-rebuild-bench-"))
     users_cache = os.environ.get("BVSR_CACHE")
     os.environ["BVSR_CACHE"] = str(work / "cache")
-    from bvsr_cad.build._runtime.worker import SecondProcess, library_imports
+    from bvsr_cad.build._runtime.worker import SecondProcess, library_imports, tune_process
     from bvsr_cad.build.cache import process_start
 
-    with library_imports():  # as the `bvsr` command imports the pipeline
+    tune_process()  # as the `bvsr` command does, and its imports
+    with library_imports():
         from bvsr_cad.build.pipeline import build_export
     base = Path(args.params).resolve()
     text = base.read_text()

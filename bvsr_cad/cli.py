@@ -8,13 +8,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import threading
 import time
 from pathlib import Path
 
 from . import __version__
-from .build._runtime.worker import SecondProcess, library_imports
+from .build._runtime.worker import SecondProcess, library_imports, tune_process
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -862,6 +863,11 @@ def _generator_failure(args, exc: BaseException) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    # A command runs its own processes and threads side by side (the build's analyses and checks, a
+    # sweep's workers): BLAS's worker threads beside them only spin, for the same files. Set before
+    # numpy loads, for this process and every process it starts; a user's
+    # value stands.
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     try:
         args = make_parser().parse_args(argv)
     except (
@@ -940,9 +946,19 @@ def _error_classes() -> tuple[tuple[type[Exception], ...], type[Exception] | Non
 
 
 def console() -> None:
-    """The ``bvsr`` command (and ``python -m bvsr_cad.cli``): :func:`main`, its exit code the
-    process's. Called in-process (tests, scripts), :func:`main` returns its exit code instead."""
-    sys.exit(main())
+    """The ``bvsr`` command (and ``python -m bvsr_cad.cli``): :func:`main`, then the process ends
+    without the interpreter's teardown, which frees every object of the CAD kernel, MuJoCo and the
+    rest one by one, after a build's "wrote" line, with its work published, its second processes
+    stopped and nothing left to write (what it printed is flushed first). A bug's
+    traceback ends it the usual way. Called in-process (tests, scripts), :func:`main` returns its
+    exit code instead. The process is tuned as every ``bvsr`` process
+    (:func:`bvsr_cad.build._runtime.worker.tune_process`: freed memory kept for reuse, its libraries
+    frozen out of the garbage collector, no OpenGL for MuJoCo, OpenBLAS on one thread)."""
+    tune_process()
+    code = main()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
 
 
 if __name__ == "__main__":

@@ -316,11 +316,11 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
     with pytest.raises(ParamError, match=r"edited.toml(.|\n)*changed while the build was running"):
         proc.result()
     assert not proc.running
-    # With the CPU seconds it used, its imports of the pipeline included (over 0.5 s), as the kernel
-    # counted them but for its end (pickling the answer, the interpreter's teardown).
+    # With the CPU seconds it used (its imports of the pipeline), as the kernel counted them but for
+    # its last steps (pickling the answer, leaving).
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     counted = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
-    assert 0.5 < proc.cpu_s <= counted, (proc.cpu_s, counted)
+    assert counted > 0.5 and counted - 0.2 <= proc.cpu_s <= counted, (proc.cpu_s, counted)
     # A process that dies without a result: the work runs here instead.
     monkeypatch.setattr(worker.sys, "executable", shutil.which("false") or "/bin/false")
     lost = worker.SecondProcess.start("bvsr_cad.build._runtime.analyses_process", [], tmp_path)
@@ -623,13 +623,13 @@ def test_ctrl_c_leaves_a_waiting_standby_process_quietly(tmp_path):
 
 def test_an_interrupt_is_held_through_imports_that_catch_base_exception():
     """trimesh's optional imports catch ``BaseException``: a Ctrl-C landing in one was swallowed and
-    ``bvsr build`` ran on. :func:`~bvsr_cad.build._runtime.worker.library_imports` delivers it when
+    ``bvsr build`` ran on. :func:`~bvsr_cad.build._runtime.worker.interrupts_held` delivers it when
     the block ends."""
     import os
     import signal
     import threading
 
-    from bvsr_cad.build._runtime.worker import library_imports
+    from bvsr_cad.build._runtime.worker import interrupts_held
 
     def optional_import() -> (
         bool
@@ -650,21 +650,21 @@ def test_an_interrupt_is_held_through_imports_that_catch_base_exception():
         assert optional_import()  # the premise: unheld, the interrupt is lost in the library
         swallowed = None
         with pytest.raises(KeyboardInterrupt):
-            with library_imports():
+            with interrupts_held():
                 swallowed = optional_import()
         assert swallowed is False
         assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
-        with library_imports():  # no interrupt: nothing raised
+        with interrupts_held():  # no interrupt: nothing raised
             pass
         with pytest.raises(
             KeyboardInterrupt
         ) as info:  # an interrupt wins over the block's own error
-            with library_imports():
+            with interrupts_held():
                 optional_import()
                 raise ImportError("a library's import failed after the Ctrl-C")
         assert isinstance(info.value.__context__, ImportError)
         with pytest.raises(ImportError):  # without one, the block's error as it was
-            with library_imports():
+            with interrupts_held():
                 raise ImportError("a library's import failed")
     finally:
         signal.signal(signal.SIGINT, before)

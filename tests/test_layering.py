@@ -4,9 +4,6 @@ upward."""
 from __future__ import annotations
 
 import ast
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 PKG = Path(__file__).resolve().parents[1] / "bvsr_cad"
@@ -153,33 +150,3 @@ def test_nothing_below_the_exporters_writes_a_file():
                 ):
                     bad.append(f"{rel}:{node.lineno} {name}")
     assert not bad, bad
-
-
-LIBRARY = r"""
-import gc, os, signal, sys
-finders, gc_on, env = list(sys.meta_path), gc.isenabled(), dict(os.environ)
-sigint = signal.getsignal(signal.SIGINT)
-import bvsr_cad, bvsr_cad.api
-assert sys.meta_path == finders, sys.meta_path
-assert gc.isenabled() == gc_on and gc.get_freeze_count() == 0
-assert signal.getsignal(signal.SIGINT) is sigint
-# The libraries' own settings aside (OpenMP's KMP_*, which scikit-learn sets at its import).
-changed = {k for k in set(os.environ) | set(env) if os.environ.get(k) != env.get(k)}
-assert all(k.startswith("KMP_") for k in changed), changed
-print("ok")
-"""
-
-
-def test_importing_the_library_changes_nothing_in_the_process():
-    """``import bvsr_cad`` (and its API) installs no import hook and leaves the garbage collector,
-    Ctrl-C's handler and the environment as they were: a library changes nothing in the process
-    that imports it."""
-    out = subprocess.run(
-        [sys.executable, "-c", LIBRARY],
-        cwd=PKG.parent,
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env={**os.environ, "PYTHONPATH": str(PKG.parent)},
-    )
-    assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr[-3000:]

@@ -3,6 +3,7 @@ exit code 2 and a message naming the file, the key and what is allowed."""
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import subprocess
@@ -258,8 +259,9 @@ def test_a_bad_file_is_refused_before_the_pipeline_is_imported(tmp_path):
 
 
 def test_the_command_ends_with_mains_exit_code_and_all_it_printed(tmp_path):
-    """`python -m bvsr_cad.cli` (as the `bvsr` script, :func:`bvsr_cad.cli.console`) ends with
-    main's exit code, and every line it printed on either stream."""
+    """`python -m bvsr_cad.cli` (as the `bvsr` script, :func:`bvsr_cad.cli.console`) ends without
+    the interpreter's teardown: with main's exit code, and every line it printed on either
+    stream."""
     bad = tmp_path / "bad.toml"
     bad.write_text((PARAMS / "bvsr.toml").read_text().replace("segments = 2", "segments = 0", 1))
     done = subprocess.run(
@@ -285,3 +287,170 @@ def test_the_command_ends_with_mains_exit_code_and_all_it_printed(tmp_path):
     # The whole help, to its last line (what is still buffered when main returns is flushed first).
     assert helped.returncode == 0 and helped.stdout.startswith("usage: bvsr build")
     assert helped.stdout.rstrip().endswith("~/.cache/bvsr_cad/artifacts)")
+
+
+ALLOCATIONS = r"""
+import ctypes, sys
+import numpy as np
+fields = ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks", "uordblks",
+          "fordblks", "keepcost")
+class Info(ctypes.Structure):
+    _fields_ = [(name, ctypes.c_size_t) for name in fields]
+libc = ctypes.CDLL(None)
+libc.mallinfo2.restype = Info
+if sys.argv[1] == "tuned":
+    from bvsr_cad.build._runtime.worker import tune_allocator
+    assert tune_allocator()
+a = np.ones(2 << 20)  # 16 MiB, a build's large temporary
+mapped = libc.mallinfo2().hblkhd  # bytes in blocks of their own mapping
+del a
+kept = libc.mallinfo2().fordblks  # free bytes the heap keeps for the next allocation
+print(mapped, kept)
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt")
+def test_a_bvsr_process_reuses_freed_memory():
+    """:func:`bvsr_cad.build._runtime.worker.tune_allocator` (the command and its second processes):
+    a large array comes from the heap and, freed, stays there for the next one; with glibc's
+    defaults it is a mapping of its own, handed back to the kernel when freed, whose pages the
+    kernel zeroes again at the next one (a cold build's minor page faults 690,000-725,000 with the
+    defaults, 503,000-524,000 tuned). Read from glibc's own accounting (``mallinfo2``): page-fault
+    counts move with transparent huge pages."""
+    import ctypes
+
+    if not hasattr(ctypes.CDLL(None), "mallinfo2"):
+        pytest.skip("glibc before 2.33: no mallinfo2")
+    out = {
+        mode: [
+            int(x)
+            for x in subprocess.run(
+                [sys.executable, "-c", ALLOCATIONS, mode],
+                capture_output=True,
+                text=True,
+                check=True,
+                timeout=120,
+            ).stdout.split()
+        ]
+        for mode in ("default", "tuned")
+    }
+    (mapped_default, _), (mapped_tuned, kept_tuned) = out["default"], out["tuned"]
+    array_bytes = 16 << 20
+    assert (
+        mapped_default >= array_bytes and mapped_tuned < array_bytes and kept_tuned >= array_bytes
+    ), out
+
+
+COLLECTIONS = r"""
+import gc, sys
+from bvsr_cad.build._runtime import worker
+if sys.argv[1] == "entry":
+    worker.tune_process()  # what the entry points call
+def collections():
+    return sum(s["collections"] for s in gc.get_stats())
+before = collections()
+if sys.argv[1] == "plain":
+    import bvsr_cad.analysis.run
+    during = collections() - before
+else:
+    with worker.library_imports():
+        assert not gc.isenabled()
+        import bvsr_cad.analysis.run
+        during = collections() - before
+print(during, gc.isenabled(), gc.get_freeze_count())
+"""
+
+
+def test_library_imports_pause_the_garbage_collector():
+    """:func:`bvsr_cad.build._runtime.worker.library_imports`: the libraries' imports (the CAD
+    kernel, scipy, trimesh, ...) run without Python's cyclic collector, which ran hundreds of times
+    over them otherwise (0.4-0.5 CPU s a process); it runs again after, and only an entry point's
+    process (:func:`~bvsr_cad.build._runtime.worker.tune_collector`) freezes what was imported (a
+    library call in someone else's process leaves its collector as it was)."""
+    out = {
+        mode: subprocess.run(
+            [sys.executable, "-c", COLLECTIONS, mode],
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=300,
+        ).stdout.split()
+        for mode in ("plain", "library", "entry")
+    }
+    plain, library, entry = ((int(n), on == "True", int(frozen)) for n, on, frozen in out.values())
+    assert plain[0] > 100 and plain[1] and plain[2] == 0, out
+    assert library == (0, True, 0), out
+    assert entry[0] == 0 and entry[1] and entry[2] > 100_000, out
+
+
+MUJOCO_IMPORT = r"""
+import os, sys
+from bvsr_cad.build._runtime import worker
+if sys.argv[1] == "entry":
+    worker.tune_process()  # what the entry points call
+import mujoco
+print("glfw" in sys.modules, os.environ.get("MUJOCO_GL", "-"))
+"""
+
+
+@pytest.mark.parametrize("users", [None, "glfw"])
+def test_a_bvsr_process_loads_no_opengl_for_mujoco(users):
+    """:func:`bvsr_cad.build._runtime.worker.no_mujoco_rendering` (the command and its second
+    processes): ``import mujoco`` loads no GLFW, whose binding starts a Python interpreter at import
+    (0.1 s a process); an environment that names MuJoCo's OpenGL keeps it."""
+    env = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
+    if users:
+        env["MUJOCO_GL"] = users
+    out = {
+        mode: subprocess.run(
+            [sys.executable, "-c", MUJOCO_IMPORT, mode],
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=120,
+            env=env,
+        ).stdout.split()
+        for mode in ("plain", "entry")
+    }
+    if users is None:
+        assert out == {"plain": ["True", "-"], "entry": ["False", "disable"]}, out
+    else:
+        assert out == {"plain": ["True", users], "entry": ["True", users]}, out
+
+
+BLAS_THREADS = r"""
+import sys
+from bvsr_cad.build._runtime import worker
+if sys.argv[1] == "entry":
+    worker.tune_process()  # what the entry points call
+import numpy, scipy.linalg
+from threadpoolctl import threadpool_info
+print(sorted({i["num_threads"] for i in threadpool_info() if i["internal_api"] == "openblas"}))
+"""
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="OpenBLAS runs one thread on one core anyway")
+def test_a_bvsr_process_runs_openblas_on_one_thread():
+    """:func:`bvsr_cad.build._runtime.worker.one_blas_thread` (the command and its second
+    processes): numpy's and scipy's OpenBLAS on one thread, where they would take one per core; a
+    number the environment sets is kept."""
+    pytest.importorskip("threadpoolctl")
+    from bvsr_cad.build._runtime.worker import BLAS_THREAD_VARIABLES
+
+    env = {k: v for k, v in os.environ.items() if k not in BLAS_THREAD_VARIABLES}
+
+    def threads(mode: str, **extra: str) -> list[int]:
+        done = subprocess.run(
+            [sys.executable, "-c", BLAS_THREADS, mode],
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=120,
+            env={**env, **extra},
+        )
+        return json.loads(done.stdout)
+
+    assert threads("entry") == [1]
+    assert threads("plain")[0] > 1  # OpenBLAS's default: a thread per core
+    assert threads("entry", OPENBLAS_NUM_THREADS="2") == [2]
+    assert threads("entry", OMP_NUM_THREADS="2") == [2]

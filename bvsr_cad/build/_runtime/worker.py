@@ -21,6 +21,7 @@ with :meth:`SecondProcess.result` and always :meth:`SecondProcess.close`\\ s it
 
 from __future__ import annotations
 
+import gc
 import importlib
 import json
 import os
@@ -74,18 +75,65 @@ def _die_with_parent() -> None:
         os._exit(1)
 
 
+#: glibc's allocator settings of a ``bvsr`` process (:func:`tune_allocator`): (mallopt parameter,
+#: value). M_MMAP_THRESHOLD (-3) 64 MiB, M_TRIM_THRESHOLD (-1) 256 MiB, M_TOP_PAD (-2) 64 MiB.
+ALLOCATOR_SETTINGS = ((-3, 64 << 20), (-1, 256 << 20), (-2, 64 << 20))
+
+
+def tune_allocator() -> bool:
+    """Keep freed memory in the process for the next allocation instead of handing it back to the
+    kernel (glibc's ``mallopt``; elsewhere nothing changes, False). With the defaults, the many
+    large numpy temporaries of a build (meshes, pose batches) are each mapped fresh and unmapped
+    when freed, and the kernel zeroes every page again on first touch: a fifth of a build's minor
+    page faults and system CPU, for a few per cent more peak memory. Called by the entry points only
+    (the ``bvsr`` command, a second process), never by a library call in someone else's process."""
+    try:
+        import ctypes
+
+        mallopt = ctypes.CDLL(None).mallopt
+    except (OSError, AttributeError):
+        return False
+    return all(mallopt(param, value) == 1 for param, value in ALLOCATOR_SETTINGS)
+
+
+def no_mujoco_rendering() -> None:
+    """MuJoCo's OpenGL contexts off (``MUJOCO_GL=disable``) unless the environment names one:
+    nothing of bvsr_cad draws through MuJoCo (its pictures are pyvista's), and ``import mujoco``
+    otherwise loads GLFW, whose Python binding starts a Python interpreter to read the library's
+    version, in each of a build's three processes. Called by the entry points only (the ``bvsr``
+    command, a second process, which inherits it), as :func:`tune_allocator`."""
+    os.environ.setdefault("MUJOCO_GL", "disable")
+
+
+#: The variables OpenBLAS reads its number of threads from.
+BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")
+
+
+def one_blas_thread() -> None:
+    """numpy's and scipy's OpenBLAS on one thread (``OPENBLAS_NUM_THREADS=1``) unless the
+    environment sets a number OpenBLAS reads (:data:`BLAS_THREAD_VARIABLES`); before they are
+    imported. A build keeps both cores busy with its own processes: OpenBLAS's second thread only
+    takes CPU from them (cold default builds run two at a time, same machine phase: 71.3 and 80.1
+    CPU s against 73.0 and 81.0 with OpenBLAS's default of one thread per core) and the export is
+    the same (every file, the manifest's volatile section aside). Called by the entry points only
+    (the ``bvsr`` command, a second process, which inherits it), as :func:`tune_allocator`."""
+    if not any(os.environ.get(name) for name in BLAS_THREAD_VARIABLES):
+        os.environ["OPENBLAS_NUM_THREADS"] = "1"
+
+
 #: The first argument of a child started by :meth:`SecondProcess.standby`: its work comes on stdin.
 STANDBY = "--standby"
 
 
 @contextmanager
-def library_imports() -> Iterator[None]:
-    """The block that imports the libraries (the CAD kernel, MuJoCo, scipy, trimesh, ...): Ctrl-C
-    (SIGINT) held back while it runs and raised as KeyboardInterrupt when it ends. trimesh's
-    optional imports catch ``BaseException``, so an interrupt that lands in one is swallowed and the
-    build runs on to its end, and pybind11 turns one into OCP's ``ImportError: initialization
-    failed``. An interrupt that came wins over an error the block raised. Off the main thread, or
-    where SIGINT is not Python's own handler (ignored, or the caller's), the block runs as it is."""
+def interrupts_held() -> Iterator[None]:
+    """Ctrl-C (SIGINT) held back while the block runs and raised as KeyboardInterrupt when it ends:
+    for imports of the libraries. trimesh's optional imports catch ``BaseException``, so an
+    interrupt that lands in one is swallowed (a Ctrl-C during the pipeline's imports let the build
+    run on to the end), and pybind11 turns one into OCP's
+    ``ImportError: initialization failed``. An interrupt that came wins over an error the block
+    raised. Off the main thread, or where SIGINT is not Python's own handler (ignored, or the
+    caller's), the block runs as it is."""
     if (
         threading.current_thread() is not threading.main_thread()
         or signal.getsignal(signal.SIGINT) is not signal.default_int_handler
@@ -104,12 +152,68 @@ def library_imports() -> Iterator[None]:
             raise KeyboardInterrupt
 
 
+#: Entry points (:func:`tune_collector`) freeze what the libraries' imports made
+#: (:func:`library_imports`).
+_FREEZE_IMPORTS = False
+
+
+def tune_collector() -> None:
+    """This process's libraries, once :func:`library_imports` has imported them, are frozen out of
+    Python's cyclic garbage collector (``gc.freeze``: a full collection no longer walks their
+    million objects, again and again in a build that allocates as much as this one). Called by the
+    entry points only (the ``bvsr`` command, a second process), as
+    :func:`tune_allocator`: frozen objects are never freed (what the imports left in cycles stays
+    until the process ends), which a library call in someone else's process must not decide."""
+    global _FREEZE_IMPORTS
+    _FREEZE_IMPORTS = True
+
+
+@contextmanager
+def library_imports() -> Iterator[None]:
+    """The block that imports the libraries (the CAD kernel, MuJoCo, scipy, trimesh, ...): Ctrl-C
+    held back (:func:`interrupts_held`) and Python's cyclic garbage collector paused. Imports make
+    about a million objects and almost no garbage, yet the collector would run hundreds of times
+    over them in each process. It resumes when the block ends, if it ran before; in an entry point's
+    process (:func:`tune_collector`) what the block imported is frozen first."""
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        with interrupts_held():
+            yield
+    finally:
+        if was:
+            if _FREEZE_IMPORTS:
+                gc.freeze()
+            gc.enable()
+
+
+def tune_process() -> None:
+    """What a ``bvsr`` process sets at its start, before its imports: :func:`tune_allocator`,
+    :func:`tune_collector`, :func:`no_mujoco_rendering`, :func:`one_blas_thread` and scikit-learn's
+    clustering loaded when used (:func:`bvsr_cad.build._runtime.deferred.defer_sklearn_cluster`).
+    Called by the entry points only (the command, a second process, the rebuild benchmark's own
+    process), in one place so that they stay alike: ``import bvsr_cad`` changes nothing in the
+    importing process. They stay as two groups, each measured to save over a second of a cold build
+    (benchmarks/RESULTS.md): what the libraries' imports cost every process (the collector paused
+    and frozen, no GLFW, scikit-learn deferred) and the allocator's and OpenBLAS's settings; one by
+    one their savings are within a run's noise."""
+    from .deferred import defer_sklearn_cluster
+
+    tune_allocator()
+    tune_collector()
+    no_mujoco_rendering()
+    one_blas_thread()
+    defer_sklearn_cluster()
+
+
 def child_main(argv: list[str]) -> int:
     """A child's entry, ``python -m bvsr_cad.build._runtime.worker MODULE OUT ARGS...``: it dies
     with its parent from the start, imports MODULE in :func:`library_imports` (Ctrl-C held: an
-    interrupt during the imports ends it quietly with 130, its parent reports it) and serves the
-    module's ``SECOND_PROCESS``, ``(fn, prepare)`` (see :func:`serve`)."""
+    interrupt during the imports ends it quietly with 130, its parent reports it; the collector
+    paused, then what was imported frozen) and serves the module's ``SECOND_PROCESS``, ``(fn,
+    prepare)`` (see :func:`serve`)."""
     _die_with_parent()
+    tune_process()
     module, out, *args = argv
     try:
         with library_imports():
@@ -122,8 +226,8 @@ def child_main(argv: list[str]) -> int:
 def serve(
     _out: str, fn: Callable[..., Any], *args: Any, prepare: Callable[..., None] | None = None
 ) -> int:
-    """Run ``fn(*args)`` and pickle its result, or its exception, onto stdout (the child's side);
-    the child's exit code.
+    """Run ``fn(*args)``, pickle its result, or its exception, onto stdout and end the process at
+    once (the child's side; nothing after it runs).
 
     ``_out`` is the placeholder argument the parent passes (``-``), or :data:`STANDBY`: then the
     child, its modules imported, waits for one JSON line on stdin, ``{"args": [...], "cwd": ...}``,
@@ -165,7 +269,11 @@ def serve(
         )
     with os.fdopen(result_fd, "wb") as out:
         out.write(data)
-    return 0
+    # Its work is handed over: leave without the interpreter's teardown, which frees every object of
+    # the CAD kernel, MuJoCo and the rest one by one (the parent waits for this process's end, and
+    # on a busy machine it is CPU taken from the build).
+    sys.stderr.flush()
+    os._exit(0)
 
 
 def cpu_seconds() -> float:

@@ -41,6 +41,7 @@ from ._memo import Memo, now
 from .bom import bom_rows, write_bom
 from .cad import write_step, write_stl
 from .reproducible import write_reproducible_3mf
+from .urdf import inertial_element, mujoco_compiler
 from .xml import num as _f
 from .xml import vec as _vec
 
@@ -187,36 +188,15 @@ def _rigid_robot(rigid: RigidRobot, root: Path, visual: list[trimesh.Trimesh]) -
 def _rigid_urdf(rigid: RigidRobot, mesh_rel: str) -> ET.Element:
     """The rigid twin's URDF: the link ``rigid_tail`` (inertia about its centre of mass, tail
     axes; the mesh ``mesh_rel`` as visual and collision) fixed to a massless ``mount``."""
-    inertia = rigid.inertial.inertia
     robot = ET.Element("robot", name=rigid.name)
     # MuJoCo makes a URDF's root link its world: the twin hangs from a massless "mount" by a fixed
     # joint, kept as its own body (fusestatic off) so simulators see the twin's mass and inertia.
-    mj_ext = ET.SubElement(robot, "mujoco")
-    ET.SubElement(
-        mj_ext,
-        "compiler",
-        balanceinertia="false",
-        discardvisual="false",
-        fusestatic="false",
-        strippath="false",
-    )
+    mujoco_compiler(robot)
     ET.SubElement(robot, "link", name="mount")
     m = ET.SubElement(robot, "material", name=rigid.material)
     ET.SubElement(m, "color", rgba=_vec(rgba("rigid_tail")))
     link = ET.SubElement(robot, "link", name="rigid_tail")
-    inertial = ET.SubElement(link, "inertial")
-    ET.SubElement(inertial, "origin", xyz=_vec(rigid.inertial.com), rpy="0 0 0")
-    ET.SubElement(inertial, "mass", value=_f(rigid.inertial.mass_kg))
-    ET.SubElement(
-        inertial,
-        "inertia",
-        ixx=_f(inertia[0, 0]),
-        ixy=_f(inertia[0, 1]),
-        ixz=_f(inertia[0, 2]),
-        iyy=_f(inertia[1, 1]),
-        iyz=_f(inertia[1, 2]),
-        izz=_f(inertia[2, 2]),
-    )
+    inertial_element(link, rigid.inertial)
     for tag in ("visual", "collision"):
         el = ET.SubElement(link, tag, name=f"rigid_tail_{tag}")
         ET.SubElement(el, "origin", xyz="0 0 0", rpy="0 0 0")

@@ -27,19 +27,42 @@ from .xml import origin_attrs, write_tree
 from .xml import vec as _vec
 
 
-def urdf_tree(
-    robot: RobotModel, mesh_files: dict[str, str], mesh_prefix: str = "meshes/"
-) -> ET.ElementTree:
-    root = ET.Element("robot", name=robot.name)
-    mj = ET.SubElement(root, "mujoco")
+def mujoco_compiler(robot_el: ET.Element) -> None:
+    """The URDF's ``<mujoco>`` block: MuJoCo keeps the inertias, visuals, bodies and mesh paths as
+    written."""
     ET.SubElement(
-        mj,
+        ET.SubElement(robot_el, "mujoco"),
         "compiler",
         balanceinertia="false",
         discardvisual="false",
         fusestatic="false",
         strippath="false",
     )
+
+
+def inertial_element(link_el: ET.Element, inertial) -> None:
+    """A link's ``<inertial>``: centre of mass, mass and inertia about the centre of mass (SI)."""
+    el = ET.SubElement(link_el, "inertial")
+    ET.SubElement(el, "origin", xyz=_vec(inertial.com), rpy="0 0 0")
+    ET.SubElement(el, "mass", value=_f(inertial.mass_kg))
+    I = inertial.inertia
+    ET.SubElement(
+        el,
+        "inertia",
+        ixx=_f(I[0, 0]),
+        ixy=_f(I[0, 1]),
+        ixz=_f(I[0, 2]),
+        iyy=_f(I[1, 1]),
+        iyz=_f(I[1, 2]),
+        izz=_f(I[2, 2]),
+    )
+
+
+def urdf_tree(
+    robot: RobotModel, mesh_files: dict[str, str], mesh_prefix: str = "meshes/"
+) -> ET.ElementTree:
+    root = ET.Element("robot", name=robot.name)
+    mujoco_compiler(root)
     materials = {}
     for link in robot.links.values():
         for vis in link.visuals:
@@ -49,20 +72,7 @@ def urdf_tree(
         ET.SubElement(m, "color", rgba=_vec(rgba))
     for link in robot.links.values():
         el = ET.SubElement(root, "link", name=link.name)
-        inertial = ET.SubElement(el, "inertial")
-        ET.SubElement(inertial, "origin", xyz=_vec(link.inertial.com), rpy="0 0 0")
-        ET.SubElement(inertial, "mass", value=_f(link.inertial.mass_kg))
-        I = link.inertial.inertia
-        ET.SubElement(
-            inertial,
-            "inertia",
-            ixx=_f(I[0, 0]),
-            ixy=_f(I[0, 1]),
-            ixz=_f(I[0, 2]),
-            iyy=_f(I[1, 1]),
-            iyz=_f(I[1, 2]),
-            izz=_f(I[2, 2]),
-        )
+        inertial_element(el, link.inertial)
         for vis in link.visuals:
             v = ET.SubElement(el, "visual", name=vis.name)
             ET.SubElement(v, "origin", xyz="0 0 0", rpy="0 0 0")

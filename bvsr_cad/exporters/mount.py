@@ -271,22 +271,30 @@ def _tail_root(tail: mujoco.MjSpec, where: str):
     return root
 
 
-def _option_notes(host: mujoco.MjSpec, tail: mujoco.MjSpec) -> list[str]:
-    """Each option the tail's file sets (differs from MuJoCo's default) that the host's differs in:
-    what the tail's file asks for, what the combined model keeps."""
-    default = mujoco.MjSpec().option
+def _option_notes(host: mujoco.MjSpec, tail: mujoco.MjSpec, tail_path: Path) -> list[str]:
+    """Each option the tail's file states (its ``<option>`` attributes) that the host's differs
+    in: what the tail's file asks for, what the combined model keeps. The tail's spec then takes
+    the host's options, so attaching it raises no conflict."""
+    stated = ET.parse(tail_path).getroot().find("option")
     notes = []
-    for key in sorted(a for a in dir(default) if not a.startswith("_")):
-        t, h, d = (np.asarray(getattr(o, key)) for o in (tail.option, host.option, default))
-        if np.array_equal(t, d) or np.array_equal(t, h):
+    for key in sorted(stated.attrib if stated is not None else ()):
+        if not hasattr(tail.option, key):
+            notes.append(f"option {key}: the tail's file sets {stated.get(key)!r}; not compared")
             continue
-        text = f"option {key}: the tail's file sets {t.tolist()}, the host keeps {h.tolist()}"
+        t, h = np.asarray(getattr(tail.option, key)), np.asarray(getattr(host.option, key))
+        if np.array_equal(t, h):
+            continue
+        text = f"option {key}: the tail's file sets {stated.get(key)}, the host keeps {h.tolist()}"
+        if key == "integrator":
+            text += f" ({mujoco.mjtIntegrator(int(h)).name})"
         if key == "timestep" and float(h) > float(t):
             text += (
                 "; the tail's reduced chain holds its tip within 2 mm of a fine step at steps up "
                 f"to its own {float(t):g} s, not at a longer one"
             )
         notes.append(text)
+    for key in (a for a in dir(host.option) if not a.startswith("_")):
+        setattr(tail.option, key, getattr(host.option, key))
     return notes
 
 
@@ -330,7 +338,7 @@ def mount(
     parent, T = _parent_frame(spec, host_model, where, body, site, pose)
     tail_path = tail_model_path(tail_xml)
     tail, tail_where = _read(tail_path, "tail")
-    notes = _option_notes(spec, tail)
+    notes = _option_notes(spec, tail, tail_path)
     root = _tail_root(tail, tail_where)
     root.pos, root.quat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]
     quat = np.zeros(4)

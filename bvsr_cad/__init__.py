@@ -7,22 +7,31 @@ The Python API (:mod:`bvsr_cad.api`) is re-exported here::
     tail = bvsr_cad.load("params/bvsr.toml")
     rest = tail.assembly()
 
-It is imported on first use, so that ``import bvsr_cad.<layer>`` stays light.
+It is imported on first use, so that ``import bvsr_cad.<layer>`` stays light. So is
+``__version__``: :mod:`importlib.metadata` takes tens of milliseconds to import, and every process
+of a build imports this package first, before it can handle Ctrl-C quietly.
 """
-
-from importlib import metadata as _metadata
-
-try:  # one source: pyproject.toml's version, as installed (a wheel or an editable install)
-    __version__ = _metadata.version("bvsr_cad")
-except _metadata.PackageNotFoundError:  # the source tree on sys.path without an install
-    __version__ = "0+unknown"
 
 #: The public names of :mod:`bvsr_cad.api`, importable from the package.
 _API = ("ParamError", "SLICES_PER_GAP", "Tail", "load")
 __all__ = ["__version__", *_API]
 
 
+def _installed_version() -> str:
+    """pyproject.toml's version, as installed (a wheel or an editable install); ``0+unknown`` for
+    the source tree on sys.path without an install."""
+    from importlib import metadata
+
+    try:
+        return metadata.version("bvsr_cad")
+    except metadata.PackageNotFoundError:
+        return "0+unknown"
+
+
 def __getattr__(name: str):
+    if name == "__version__":
+        version = globals()["__version__"] = _installed_version()
+        return version
     if name in _API:
         from . import api
 
@@ -31,4 +40,4 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_API))
+    return sorted(set(globals()) | {"__version__", *_API})

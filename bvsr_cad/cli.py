@@ -14,7 +14,6 @@ import threading
 import time
 from pathlib import Path
 
-from . import __version__
 from .build._runtime.worker import SecondProcess, library_imports, tune_process
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
@@ -76,7 +75,7 @@ def _params_or_default(args, say) -> str:
     packaged = defaults.path(defaults.DEFAULT_PARAMS)
     say(
         f"no {defaults.DEFAULT_PARAMS} in this folder: building the default tail of bvsr_cad "
-        f"{__version__} "
+        f"{_version()} "
         f"({packaged}); `bvsr init` writes a copy to edit"
     )
     return str(packaged)
@@ -542,9 +541,9 @@ def cmd_init(args) -> int:
         return EXIT_BAD_INPUT
     rel = [p.relative_to(folder).as_posix() for p in written]
     if args.json:
-        print(json.dumps({"folder": str(folder), "files": rel, "version": __version__}))
+        print(json.dumps({"folder": str(folder), "files": rel, "version": _version()}))
         return EXIT_OK
-    print(f"wrote the default inputs of bvsr_cad {__version__} into {folder}/:")
+    print(f"wrote the default inputs of bvsr_cad {_version()} into {folder}/:")
     for name in rel:
         print(f"  {name:24} {_STARTER_FILES.get(name, '')}".rstrip())
     cd = [] if folder.resolve() == Path.cwd().resolve() else [f"  cd {args.folder}"]
@@ -570,7 +569,7 @@ def make_parser() -> argparse.ArgumentParser:
         prog="bvsr",
         description="Parametric CAD and fabrication pipeline for the BVSR soft robotic tail.",
     )
-    p.add_argument("--version", action="version", version=f"bvsr_cad {__version__}")
+    p.add_argument("--version", action="version", version=f"bvsr_cad {_version()}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
     # Every command takes these two.
     common = argparse.ArgumentParser(add_help=False)
@@ -1019,6 +1018,14 @@ def _error_classes() -> tuple[tuple[type[Exception], ...], type[Exception] | Non
     return bad, loaded("parts._kernel", "GeometryError")
 
 
+def _version() -> str:
+    """The installed version, looked up when printed: :mod:`importlib.metadata` takes tens of
+    milliseconds to import, and ``import bvsr_cad.cli`` is the start of every ``bvsr`` command."""
+    from . import __version__
+
+    return __version__
+
+
 def console() -> None:
     """The ``bvsr`` command (and ``python -m bvsr_cad.cli``): :func:`main`, then the process ends
     without the interpreter's teardown, which frees every object of the CAD kernel, MuJoCo and the
@@ -1028,8 +1035,16 @@ def console() -> None:
     exit code instead. The process is tuned as every ``bvsr`` process
     (:func:`bvsr_cad.build._runtime.worker.tune_process`: freed memory kept for reuse, its libraries
     frozen out of the garbage collector, no OpenGL for MuJoCo, OpenBLAS on one thread)."""
-    tune_process()
-    code = main()
+    import signal
+
+    try:
+        if getattr(signal.getsignal(signal.SIGINT), "bvsr_starting", False):  # bvsr_cad.__main__'s
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+        tune_process()
+        code = main()
+    except KeyboardInterrupt:  # before main's own handling: the process settings, the parser
+        print("bvsr: interrupted; nothing was published", file=sys.stderr)
+        code = 130
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)

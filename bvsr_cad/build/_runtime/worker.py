@@ -17,7 +17,10 @@ The parent starts it with :meth:`SecondProcess.start` (``None`` on one core
 or when it cannot start: the caller then does the work itself), collects it
 with :meth:`SecondProcess.result` and always :meth:`SecondProcess.close`\\ s it
 (which stops a child still running, for instance after Ctrl-C).
-"""
+The child runs in its own process group, so a terminal's Ctrl-C interrupts
+the parent alone, at whatever instant it comes: the parent stops its children
+and reports the interrupt once; the parent's death stops them too
+(:func:`_die_with_parent`)."""
 
 from __future__ import annotations
 
@@ -350,6 +353,11 @@ class SecondProcess:
                 stdin=subprocess.PIPE if standby else subprocess.DEVNULL,
                 stdout=subprocess.PIPE,
                 stderr=subprocess.DEVNULL if progress is None else subprocess.PIPE,
+                # Its own process group: a terminal's Ctrl-C (SIGINT to the foreground group)
+                # reaches this process only, which stops the child (close) and says so once. In the
+                # terminal's group, a child that was still starting (importing bvsr_cad, before it
+                # can hold the interrupt) printed a traceback among the build's lines.
+                process_group=0,
             )
         except OSError:
             return None

@@ -820,6 +820,139 @@ def _kill_child() -> None:
         children = list(_CHILDREN)
     for child in children:
         _stop(child)
+    with _CHILDREN_LOCK:
+        servers = list(_SERVERS.values())
+    for server in servers:
+        server.stop_run()
+
+
+#: ``--targeted``: the libraries a catcher's run imports before any code of bvsr_cad (a catcher
+#: run is mostly these imports: 4 to 5 CPU s of a trivial catcher's 7). Each copy of the tree has a
+#: server (:class:`_ForkServer`) that imports them once and forks a pytest run per fault: bvsr_cad
+#: itself, its tests and conftest are imported in the forked child, from the copy, as it is now.
+PRELOADED = (
+    "numpy",
+    "scipy.linalg",
+    "scipy.optimize",
+    "scipy.spatial",
+    "scipy.integrate",
+    "scipy.interpolate",
+    "networkx",
+    "shapely",
+    "trimesh",
+    "manifold3d",
+    "mujoco",
+    "OCP",
+    "build123d",
+    "hypothesis",
+    "pytest",
+)
+
+_SERVER = r"""
+import importlib, json, os, sys
+for name in sys.argv[1:]:
+    try:
+        importlib.import_module(name)
+    except Exception:  # a library missing here is imported (and fails) in the run instead
+        pass
+import pytest
+ours = ("bvsr_cad", "tests")
+assert not any(m.split(".")[0] in ours for m in sys.modules)
+answer = os.fdopen(os.dup(1), "w")
+null = os.open(os.devnull, os.O_RDWR)
+for line in sys.stdin:
+    request = json.loads(line)
+    pid = os.fork()
+    if pid == 0:
+        os.setsid()
+        out = os.open(request["out"], os.O_WRONLY | os.O_CREAT | os.O_TRUNC)
+        os.dup2(null, 0)
+        os.dup2(out, 1)
+        os.dup2(out, 2)
+        code = 3
+        try:
+            code = int(pytest.main(request["args"]))
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(code)
+    answer.write(json.dumps({"pid": pid}) + "\n")
+    answer.flush()
+    _, status = os.waitpid(pid, 0)
+    answer.write(json.dumps({"rc": os.waitstatus_to_exitcode(status)}) + "\n")
+    answer.flush()
+"""
+
+
+class _ForkServer:
+    """A Python process in ``root`` (a private copy of the tree) that has imported
+    :data:`PRELOADED` and forks one pytest run (``pytest.main``) per request, in a session of its
+    own, its output into a file. Started with the environment :func:`run_suite` gives a run."""
+
+    def __init__(self, root: Path, python: str, env: dict[str, str]):
+        self.out = Path(tempfile.mkstemp(prefix="bvsr-mutate-run-", suffix=".txt")[1])
+        env = {**env, "OPENBLAS_NUM_THREADS": env.get("OPENBLAS_NUM_THREADS", "1")}  # no threads
+        self.proc = subprocess.Popen(
+            [python, "-c", _SERVER, *PRELOADED],
+            cwd=root,
+            env=env,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            text=True,
+            start_new_session=True,
+        )
+        self.pid: int | None = None  # the run under way
+
+    def run(self, args: list[str], timeout_s: float) -> tuple[int | None, str]:
+        """(pytest's exit code, or None after ``timeout_s``; its output)."""
+        import select
+
+        assert self.proc.stdin is not None and self.proc.stdout is not None
+        self.proc.stdin.write(json.dumps({"args": args, "out": str(self.out)}) + "\n")
+        self.proc.stdin.flush()
+        line = self.proc.stdout.readline()
+        if not line:
+            raise RuntimeError("the fork server ended")
+        self.pid = json.loads(line)["pid"]
+        ready, _, _ = select.select([self.proc.stdout], [], [], timeout_s)
+        if not ready:
+            self.stop_run()
+        line = self.proc.stdout.readline()
+        self.pid = None
+        if not line:
+            raise RuntimeError("the fork server ended")
+        rc = json.loads(line)["rc"]
+        return (rc if ready else None), self.out.read_text(errors="replace")
+
+    def stop_run(self) -> None:
+        pid = self.pid
+        if pid is not None:
+            try:
+                os.killpg(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+
+    def close(self) -> None:
+        self.stop_run()
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait()
+        self.out.unlink(missing_ok=True)
+
+
+#: The fork servers of ``--targeted`` (one per private copy), by the copy's path; none with
+#: ``--fresh-interpreters``.
+_SERVERS: dict[Path, _ForkServer] = {}
+_USE_SERVERS = hasattr(os, "fork")
+
+
+def _close_servers() -> None:
+    with _CHILDREN_LOCK:
+        servers = list(_SERVERS.values())
+        _SERVERS.clear()
+    for server in servers:
+        server.close()
 
 
 _FAIL_RE = re.compile(r"^(FAILED|ERROR) (.+?)(?: - (.*))?$", re.M)
@@ -897,6 +1030,15 @@ def run_suite(
         os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else ""
     )
     t0 = time.monotonic()
+    if base is TARGETED_ARGS and _USE_SERVERS:
+        with _CHILDREN_LOCK:
+            server = _SERVERS.get(root)
+            if server is None:
+                server = _SERVERS[root] = _ForkServer(root, python, env)
+        rc, out = server.run([*base[2:], *extra], timeout_s)  # base: -m pytest ARGS
+        if rc is None:
+            return "timeout", f"(over {timeout_s:g} s)", time.monotonic() - t0, ""
+        return _outcome(rc, out, time.monotonic() - t0, tail_chars)
     child = subprocess.Popen(
         [python, *(PYTEST_ARGS if base is None else base), *extra],
         cwd=root,
@@ -924,7 +1066,11 @@ def run_suite(
         if child.poll() is not None:
             with _CHILDREN_LOCK:
                 _CHILDREN.discard(child)
-    dt = time.monotonic() - t0
+    return _outcome(rc, out, time.monotonic() - t0, tail_chars)
+
+
+def _outcome(rc: int, out: str, dt: float, tail_chars: int) -> tuple[str, str, float, str]:
+    """:func:`run_suite`'s answer from pytest's exit code and output."""
     tail = out[-tail_chars:]
     if rc == 0:
         return "passed", "", dt, tail
@@ -992,6 +1138,12 @@ def main(argv: list[str] | None = None) -> int:
         "catchers on the unmutated tree (which must pass)",
     )
     ap.add_argument(
+        "--fresh-interpreters",
+        action="store_true",
+        help="--targeted: each run in a new interpreter (default: forked from one that imported "
+        "the libraries, PRELOADED)",
+    )
+    ap.add_argument(
         "--no-baseline", action="store_true", help="--targeted: skip the catchers' unmutated run"
     )
     ap.add_argument(
@@ -1032,6 +1184,9 @@ def main(argv: list[str] | None = None) -> int:
         "-v", "--verbose", action="store_true", help="print pytest's output tail of every run"
     )
     args = ap.parse_args(argv)
+    global _USE_SERVERS
+    if args.fresh_interpreters:
+        _USE_SERVERS = False
     if args.timeout is None:
         args.timeout = 120.0 if args.targeted else 900.0
     root = args.root.resolve()
@@ -1314,6 +1469,7 @@ def targeted(args, root: Path, faults: list[Fault], python: str, log) -> int:
         _kill_child()  # the runs under way end, and with them their threads
         pool.shutdown(wait=True)
         _kill_child()
+        _close_servers()
         shutil.rmtree(top, ignore_errors=True)
     done = [r for r in rows if r]
     _emit(args, done, baseline, [])

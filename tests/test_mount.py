@@ -6,6 +6,10 @@ from __future__ import annotations
 
 import importlib.util
 import math
+import os
+import shutil
+import subprocess
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import mujoco
@@ -17,7 +21,10 @@ from bvsr_cad.assembly.robot import robot_model
 from bvsr_cad.cli import main
 from bvsr_cad.exporters.mjcf import mjcf_tree, write_mjcf
 from bvsr_cad.exporters.mount import MountError, mount, mount_spec, parse_pose, write_mounted
+from bvsr_cad.exporters.robot_files import EXPORT_XACRO_MESH_DIR
 from bvsr_cad.exporters.robot_meshes import write_robot_meshes
+from bvsr_cad.exporters.urdf import urdf_tree, write_xacro
+from bvsr_cad.exporters.xml import write_tree
 
 THETA_MAX = 0.5  # a fixed joint limit, as tests/test_robot.py: no clearance analysis needed
 
@@ -46,13 +53,22 @@ REAR_POS_M, REAR_RPY_DEG = (-0.2, 0.0, 0.0), (90.0, 0.0, -90.0)
 
 
 @pytest.fixture(scope="module")
-def tail_xml(tmp_path_factory, bvsr_spec) -> Path:
-    """The default tail's reduced-chain MJCF (robot/bvsr.xml of an export) without a full build."""
-    root = tmp_path_factory.mktemp("tail")
+def tail_folder(tmp_path_factory, bvsr_spec) -> Path:
+    """An export's robot/ without a full build: the default tail's reduced-chain MJCF, URDF and
+    xacro macro, as the export's writers write them."""
+    root = tmp_path_factory.mktemp("tail") / "robot"
     robot = robot_model(build_assembly(bvsr_spec), [THETA_MAX] * bvsr_spec.joints)
     mesh_files = write_robot_meshes(robot, root / "meshes")
     write_mjcf(root / "bvsr.xml", mjcf_tree(robot, mesh_files, per_segment=False)[0])
-    return root / "bvsr.xml"
+    urdf = urdf_tree(robot, mesh_files)
+    write_tree(urdf, root / "bvsr.urdf")
+    write_xacro(urdf.getroot(), robot.name, root, EXPORT_XACRO_MESH_DIR)
+    return root
+
+
+@pytest.fixture(scope="module")
+def tail_xml(tail_folder) -> Path:
+    return tail_folder / "bvsr.xml"
 
 
 @pytest.fixture()
@@ -330,3 +346,70 @@ def test_missing_tail(capsys, tmp_path, box_host):
         tmp_path / "out.xml",
     )
     assert "noexport" in err and "bvsr build" in err
+
+
+# -- URDF: the xacro macro on a host's description -------------------------------------------------
+
+HOST_XACRO = """<?xml version="1.0"?>
+<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="box_robot">
+  <xacro:include filename="{include}"/>
+  <link name="base">
+    <inertial><mass value="10"/><inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/>
+    </inertial>
+    <collision><geometry><box size="0.4 0.2 0.1"/></geometry></collision>
+  </link>
+  <xacro:bvsr_tail parent="base" xyz="{xyz}" rpy="{rpy}" prefix="tail_"/>
+</robot>
+"""
+
+
+def expand_xacro(host: Path) -> str:
+    """The host's description expanded by the ``xacro`` package, as ``xacro host > out`` does."""
+    xacro = pytest.importorskip("xacro")
+    return xacro.process_file(str(host)).toprettyxml(indent="  ")
+
+
+def check_urdf(path: Path) -> str:
+    exe = shutil.which("check_urdf")
+    if exe is None:
+        pytest.skip("check_urdf (Debian liburdfdom-tools) is not installed")
+    run = subprocess.run([exe, str(path)], capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, run.stdout + run.stderr
+    return run.stdout
+
+
+def _urdf_model(path: Path) -> mujoco.MjModel:
+    """A URDF read by MuJoCo, every link its own body (no fixed links fused), meshes as named."""
+    spec = mujoco.MjSpec.from_file(str(path))
+    spec.compiler.fusestatic = False
+    spec.strippath = False
+    return spec.compile()
+
+
+def test_xacro_macro_on_a_host_expands_and_check_urdf_accepts(tail_folder, tmp_path):
+    """The export's macro, included by a host description in another folder: xacro expands it,
+    check_urdf accepts the robot, and MuJoCo reading it finds the host's mass plus the tail URDF's
+    (read alone), the tail's root link at the pose in closed form and every tail name prefixed."""
+    host = tmp_path / "host" / "box_robot.urdf.xacro"
+    host.parent.mkdir()
+    include = os.path.relpath(tail_folder / "bvsr_tail.xacro", host.parent)
+    rpy = np.radians(REAR_RPY_DEG)
+    host.write_text(
+        HOST_XACRO.format(include=include, xyz="-0.2 0 0", rpy=" ".join(f"{v:.17g}" for v in rpy))
+    )
+    out = tmp_path / "box_robot.urdf"
+    out.write_text(expand_xacro(host))
+    assert "root Link: base" in check_urdf(out)
+    combined, tail = _urdf_model(out), _urdf_model(tail_folder / "bvsr.urdf")
+    assert combined.body_mass.sum() == pytest.approx(10.0 + tail.body_mass.sum(), rel=1e-9)
+    assert combined.nbody == tail.nbody + 1 and combined.njnt == tail.njnt
+    tail_bodies = [combined.body(i).name for i in range(2, combined.nbody)]
+    assert all(n.startswith("tail_") for n in tail_bodies)
+    assert combined.neq == tail.neq > 0  # the mimic joints found their prefixed leaders
+    d = _at_rest(combined)
+    root = combined.body("tail_panel0").id
+    assert np.allclose(
+        _world(d.xpos[root], d.xmat[root]), _pose(REAR_POS_M, REAR_RPY_DEG), atol=1e-9
+    )
+    for mesh in ET.parse(out).getroot().iter("mesh"):
+        assert Path(mesh.get("filename")).resolve().parent == (tail_folder / "meshes").resolve()

@@ -55,12 +55,14 @@ def test_manifest_lists_exactly_the_files(written, source):
     info, pkg = written
     assert pkg == source / "ros2" / PACKAGE and pkg.is_dir()
     assert info["name"] == PACKAGE and info["urdf"] == f"urdf/{NAME}.urdf"
+    assert info["xacro"] == f"urdf/{NAME}_tail.xacro"
     on_disk = sorted(p.relative_to(pkg).as_posix() for p in pkg.rglob("*") if p.is_file())
     assert info["files"] == on_disk
     assert {
         "package.xml",
         "CMakeLists.txt",
         f"urdf/{NAME}.urdf",
+        f"urdf/{NAME}_tail.xacro",
         "launch/display.launch.py",
         "rviz/display.rviz",
         "README.md",
@@ -307,3 +309,39 @@ def test_a_failure_while_writing_leaves_the_old_package_and_no_temporary_folder(
         sorted(p.relative_to(pkg).as_posix() for p in pkg.rglob("*") if p.is_file())
         == good["files"]
     )
+
+
+def test_xacro_macro_expands_onto_a_host_and_check_urdf_accepts(written, tmp_path):
+    """The package's macro on a host description: the ``xacro`` package expands it, check_urdf
+    accepts the robot (the host's link the root, the tail's root link its child through the mount
+    joint), the links are the package URDF's with the prefix, and every mesh is a package URI of a
+    file the package holds."""
+    xacro = pytest.importorskip("xacro")
+    exe = shutil.which("check_urdf")
+    if exe is None:
+        pytest.skip("check_urdf (Debian liburdfdom-tools) is not installed")
+    _, pkg = written
+    host = tmp_path / "host.urdf.xacro"
+    host.write_text(
+        '<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="host">'
+        f'<xacro:include filename="{pkg / "urdf" / f"{NAME}_tail.xacro"}"/>'
+        '<link name="base_link"/>'
+        f'<xacro:{NAME}_tail parent="base_link" xyz="-0.24 0 0" rpy="1.5708 0 -1.5708" '
+        'prefix="rear_"/></robot>'
+    )
+    out = tmp_path / "host.urdf"
+    out.write_text(xacro.process_file(str(host)).toprettyxml(indent="  "))
+    run = subprocess.run([exe, str(out)], capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert (
+        "root Link: base_link has 1 child(ren)" in run.stdout
+        and "child(1):  rear_panel0" in run.stdout
+    )
+    robot = ET.parse(out).getroot()
+    links = {l.get("name") for l in robot.findall("link")}
+    assert links == {"base_link"} | {f"rear_{l.get('name')}" for l in _urdf(pkg).findall("link")}
+    mount = robot.find(f"joint[@name='rear_{NAME}_mount']")
+    assert mount.find("origin").attrib == {"xyz": "-0.24 0 0", "rpy": "1.5708 0 -1.5708"}
+    meshes = [m.get("filename") for m in robot.iter("mesh")]
+    assert meshes and all(m.startswith(PREFIX) for m in meshes)
+    assert all((pkg / "meshes" / m[len(PREFIX) :]).is_file() for m in meshes)

@@ -1,6 +1,8 @@
 """Writes the robot descriptions of a tail into an export (``robot/``).
 
 - ``robot/bvsr.urdf``: URDF (mimic joints; MuJoCo reads its <mujoco> block);
+- ``robot/bvsr_tail.xacro``: the URDF as a xacro macro ``<xacro:bvsr_tail parent xyz rpy/>`` that
+  adds the tail to a host's robot description (its meshes: ``robot/meshes/``);
 - ``robot/bvsr.xml``: MJCF, reduced chain (two universal joints per bending joint), one actuator
   per SOA;
 - ``robot/bvsr_segments.xml``: MJCF, reduced chain, the joints of a segment bend alike, one
@@ -27,7 +29,11 @@ from ..models.kinematics import chain_tip_error_mm, joint_transform_chain, joint
 from .mjcf import cart_scene_tree, mjcf_tree, scene_tree, write_mjcf
 from .robot_meshes import write_robot_meshes
 from .ros2_package import write_ros2_package
-from .urdf import write_urdf
+from .urdf import urdf_tree, write_xacro, xacro_name
+from .xml import write_tree
+
+#: The export's xacro macro finds its meshes beside it, wherever it is included from.
+EXPORT_XACRO_MESH_DIR = "${xacro.abs_filename('meshes')}"
 
 
 def write_robot(
@@ -47,7 +53,9 @@ def write_robot(
         progress("robot meshes")
         mesh_files = write_robot_meshes(robot, folder / "meshes")
     name = robot.name
-    write_urdf(robot, folder / f"{name}.urdf", mesh_files)
+    urdf = urdf_tree(robot, mesh_files)
+    write_tree(urdf, folder / f"{name}.urdf")
+    write_xacro(urdf.getroot(), name, folder, EXPORT_XACRO_MESH_DIR)
     progress("ROS 2 description package")
     ros2 = write_ros2_package(folder / f"{name}.urdf", folder / "meshes", folder / "ros2", name)
     facts = _write_mjcf_models(robot, folder, mesh_files)
@@ -92,11 +100,13 @@ def _robot_section(
     )
     return {
         "urdf": f"robot/{name}.urdf",
+        "xacro": f"robot/{xacro_name(name)}.xacro",
         "mjcf": "robot/scene.xml",
         "mjcf_model": f"robot/{name}.xml",
         "ros2_package": {
             "path": f"robot/ros2/{ros2['name']}",
             "urdf": ros2["urdf"],
+            "xacro": ros2["xacro"],
             "meshes": ros2["meshes"],
         },
         "mjcf_per_segment": "robot/scene_segments.xml",

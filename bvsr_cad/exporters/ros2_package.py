@@ -7,6 +7,8 @@
     package.xml                 format 3, ament_cmake, exec_depends of the launch file
     CMakeLists.txt              installs urdf/ meshes/ launch/ rviz/ into share/<name>_description
     urdf/<name>.urdf            the URDF, every mesh as package://<name>_description/meshes/<file>
+    urdf/<name>_tail.xacro      the URDF as the macro <xacro:<name>_tail parent xyz rpy/> for a
+                                host's description (exporters/urdf.py: xacro_tree)
     meshes/                     exactly the meshes the URDF references
     launch/display.launch.py    robot_state_publisher + joint_state_publisher_gui + rviz2
     rviz/display.rviz           Grid and RobotModel (/robot_description), fixed frame: root link
@@ -33,6 +35,7 @@ from pathlib import Path, PurePosixPath
 from typing import Any
 
 from .. import __version__
+from .urdf import write_xacro, xacro_name
 
 #: REP 144: a package name is lower case letters, digits and underscores, starting with a letter.
 _PACKAGE_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
@@ -91,6 +94,7 @@ def write_ros2_package(urdf_file: Path, mesh_dir: Path, out_dir: Path, name: str
         "name": package,
         "path": str(package_dir),
         "urdf": f"urdf/{name}.urdf",
+        "xacro": f"urdf/{xacro_name(name)}.xacro",
         "meshes": len(meshes),
         "files": files,
     }
@@ -155,6 +159,7 @@ def _write_contents(
     for sub in ("urdf", "meshes", "launch", "rviz"):
         (folder / sub).mkdir()
     tree.write(folder / "urdf" / f"{name}.urdf", encoding="utf-8", xml_declaration=True)
+    write_xacro(tree.getroot(), name, folder / "urdf", f"package://{package}/meshes")
     for file, source in meshes.items():
         shutil.copyfile(source, folder / "meshes" / file)
     (folder / "package.xml").write_text(_package_xml(package, name), encoding="utf-8")
@@ -372,4 +377,13 @@ RViz shows the tail with `robot_state_publisher`; move the joints with the \
 `joint_state_publisher_gui`
 sliders (mimic joints follow their leaders). Regenerate the package with bvsr_cad rather than \
 editing it.
+
+To add the tail to a robot's description, include its macro and call it with the host link and \
+the pose of the tail's mount frame (the centre of the root panel's robot face, Z along the tail; \
+`xyz` in m, `rpy` in rad; `prefix` goes before every tail name):
+
+```xml
+<xacro:include filename="$(find {package})/urdf/{name}_tail.xacro"/>
+<xacro:{name}_tail parent="base_link" xyz="-0.24 0 0" rpy="1.5708 0 -1.5708" prefix=""/>
+```
 """

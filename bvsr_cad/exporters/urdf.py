@@ -117,3 +117,82 @@ def write_urdf(
     robot: RobotModel, path: Path, mesh_files: dict[str, str], mesh_prefix: str = "meshes/"
 ) -> None:
     write_tree(urdf_tree(robot, mesh_files, mesh_prefix), path)
+
+
+#: The xacro namespace of a macro file.
+XACRO_NS = "http://www.ros.org/wiki/xacro"
+
+
+def xacro_name(robot_name: str) -> str:
+    """The macro's name (and its file's stem): ``bvsr`` -> ``bvsr_tail``."""
+    return f"{robot_name}_tail"
+
+
+def xacro_tree(urdf: ET.Element, robot_name: str, mesh_dir: str) -> ET.ElementTree:
+    """The tail's URDF as a xacro macro a host's robot description calls to add the tail::
+
+        <xacro:include filename="bvsr_tail.xacro"/>
+        <xacro:bvsr_tail parent="base_link" xyz="-0.24 0 0" rpy="1.5708 0 -1.5708"/>
+
+    A fixed joint ``${prefix}<name>_mount`` puts the tail's root link (its frame is the mount
+    frame: the root panel's robot face, Z along the tail) at ``xyz`` (m) and fixed-axis ``rpy``
+    (rad) in ``parent``; every link, joint and material name of the URDF gets ``prefix`` (default
+    none), every mesh is ``${mesh_dir}/<file>``. The URDF's ``<mujoco>`` block stays out: it is
+    the host's to give.
+
+    Args:
+        urdf: the tail's URDF (:func:`urdf_tree`'s root, or a file's).
+        robot_name: the tail's name; the macro is :func:`xacro_name` of it.
+        mesh_dir: the default of the macro's ``mesh_dir`` (evaluated where the file is included:
+            ``${xacro.abs_filename('meshes')}`` is the ``meshes`` folder beside it).
+
+    Returns:
+        The macro file's tree.
+    """
+    import copy
+
+    ET.register_namespace("xacro", XACRO_NS)
+    x = f"{{{XACRO_NS}}}"
+    macro = xacro_name(robot_name)
+    children = {c.get("link") for c in urdf.iterfind("joint/child")}
+    root_link = next(l.get("name") for l in urdf.findall("link") if l.get("name") not in children)
+    out = ET.Element("robot", name=macro)
+    default = f"{macro}_mesh_dir"
+    ET.SubElement(out, x + "property", name=default, value=mesh_dir, lazy_eval="false")
+    body = ET.SubElement(
+        out,
+        x + "macro",
+        name=macro,
+        params=f"parent xyz:='0 0 0' rpy:='0 0 0' prefix:='' mesh_dir:=${{{default}}}",
+    )
+    joint = ET.SubElement(body, "joint", name=f"${{prefix}}{robot_name}_mount", type="fixed")
+    ET.SubElement(joint, "parent", link="${parent}")
+    ET.SubElement(joint, "child", link=f"${{prefix}}{root_link}")
+    ET.SubElement(joint, "origin", xyz="${xyz}", rpy="${rpy}")
+    for el in urdf:
+        if el.tag in ("link", "joint", "material"):
+            body.append(_prefixed(copy.deepcopy(el)))
+    ET.indent(out)
+    return ET.ElementTree(out)
+
+
+def _prefixed(el: ET.Element) -> ET.Element:
+    """A URDF link, joint or material with ``${prefix}`` on every name it gives or refers to and
+    ``${mesh_dir}`` before every mesh file's name."""
+    for sub in el.iter():
+        if (sub is el and sub.tag in ("link", "joint")) or sub.tag == "material":
+            sub.set("name", "${prefix}" + sub.get("name"))
+        elif sub.tag in ("parent", "child"):
+            sub.set("link", "${prefix}" + sub.get("link"))
+        elif sub.tag == "mimic":
+            sub.set("joint", "${prefix}" + sub.get("joint"))
+        elif sub.tag == "mesh":
+            sub.set("filename", "${mesh_dir}/" + sub.get("filename").rsplit("/", 1)[-1])
+    return el
+
+
+def write_xacro(urdf: ET.Element, robot_name: str, folder: Path, mesh_dir: str) -> str:
+    """Write :func:`xacro_tree` as ``folder/<macro>.xacro``; returns the file's name."""
+    name = f"{xacro_name(robot_name)}.xacro"
+    write_tree(xacro_tree(urdf, robot_name, mesh_dir), folder / name)
+    return name

@@ -13,7 +13,7 @@ of a build imports this package first, before it can handle Ctrl-C quietly.
 """
 
 #: The public names of :mod:`bvsr_cad.api`, importable from the package.
-_API = ("ParamError", "SLICES_PER_GAP", "Tail", "load")
+_API = ("ParamError", "SLICES_PER_GAP", "Tail", "load", "mount")
 __all__ = ["__version__", *_API]
 
 

@@ -406,4 +406,59 @@ def _rows(m: np.ndarray) -> tuple[tuple[float, ...], ...]:
     return tuple(tuple(float(v) for v in row) for row in m)
 
 
-__all__ = ["ParamError", "SLICES_PER_GAP", "Tail", "load"]
+def mount(
+    host: str | Path,
+    tail: str | Path = "exports/bvsr",
+    *,
+    body: str | None = None,
+    site: str | None = None,
+    pos_m: Sequence[float] = (0.0, 0.0, 0.0),
+    rpy_deg: Sequence[float] = (0.0, 0.0, 0.0),
+    prefix: str = "tail_",
+):
+    """The exported tail mounted on a host robot, as ``bvsr mount`` writes it, as a MuJoCo spec.
+
+    The tail's mount frame (the centre of its root panel's robot face, Z along the tail, Y dorsal)
+    is put at ``pos_m`` and ``rpy_deg`` in the frame of the host's ``body`` or ``site``
+    (:mod:`bvsr_cad.exporters.mount`). The host's options stay; each option the tail's file sets
+    differently is issued as a :class:`UserWarning`. Example::
+
+        spec = bvsr_cad.mount("go1", "exports/bvsr", body="trunk", pos_m=(-0.24, 0, 0),
+                              rpy_deg=(90, 0, -90))
+        model = spec.compile()
+
+    Args:
+        host: an MJCF or URDF file, or a known host's name (``"go1"``: the quadruped extra).
+        tail: an export folder of ``bvsr build``, or its ``robot/bvsr.xml``.
+        body: the host body to mount on (or ``site``).
+        site: the host site to mount on.
+        pos_m: the mount frame's origin in the body's (site's) frame, m.
+        rpy_deg: its fixed-axis roll, pitch, yaw (as URDF's rpy), degrees.
+        prefix: put before every tail name.
+
+    Returns:
+        A ``mujoco.MjSpec`` of the host with the tail attached.
+
+    Raises:
+        bvsr_cad.exporters.mount.MountError: a missing or unreadable file, an unknown body or
+            site, or a pose that puts the tail into the host's collision geometry at rest.
+    """
+    import warnings
+
+    from .exporters.mount import mount as _mount
+
+    mounted = _mount(
+        host,
+        tail,
+        body=body,
+        site=site,
+        pos_m=tuple(pos_m),
+        rpy_rad=tuple(units.deg_to_rad(v) for v in rpy_deg),
+        prefix=prefix,
+    )
+    for note in mounted.notes:
+        warnings.warn(note, UserWarning, stacklevel=2)
+    return mounted.spec
+
+
+__all__ = ["ParamError", "SLICES_PER_GAP", "Tail", "load", "mount"]

@@ -206,6 +206,22 @@ def test_box_host_at_a_site_written_and_loaded_elsewhere(box_host, tail_xml, tmp
     assert written.nmeshvert == mounted.spec.compile().nmeshvert
 
 
+def test_python_api_gives_the_same_spec(box_host, tail_xml):
+    """bvsr_cad.mount (m and degrees) gives mount's spec; the tail's options it warns about."""
+    import bvsr_cad
+
+    with pytest.warns(UserWarning, match="option timestep: the tail's file sets 0.002"):
+        spec = bvsr_cad.mount(
+            box_host, tail_xml, body="base", pos_m=REAR_POS_M, rpy_deg=REAR_RPY_DEG
+        )
+    rpy = np.radians(REAR_RPY_DEG)
+    ref = mount(box_host, tail_xml, body="base", pos_m=REAR_POS_M, rpy_rad=rpy).spec.compile()
+    got = spec.compile()
+    d, r = _at_rest(got), _at_rest(ref)
+    assert got.nbody == ref.nbody and np.allclose(d.xpos, r.xpos, atol=1e-12)
+    assert np.allclose(d.xmat, r.xmat, atol=1e-12)
+
+
 def test_urdf_host_any_link(tmp_path, tail_xml):
     """A URDF host: MuJoCo reads it; a link on a fixed joint stays a body to mount on."""
     urdf = tmp_path / "host.urdf"

@@ -217,6 +217,8 @@ def cmd_simulate(args) -> int:
     from .parameters.load import load_spec
 
     spec = load_spec(args.params)  # a bad file is refused before the simulator's imports (seconds)
+    if args.platform == "quadruped":
+        return _simulate_quadruped(args, spec)
     with library_imports():
         from .exporters.plots import plot_simulation
         from .parameters import paper
@@ -279,6 +281,56 @@ def cmd_simulate(args) -> int:
             )
             print(f"{key}: {c['computed']:.3g}  {ref}")
         print(f"segment reached {res.angle_reached_deg:.1f} deg; plot: {png}")
+    return EXIT_OK
+
+
+def _simulate_quadruped(args, spec) -> int:
+    with library_imports():
+        from .exporters.quadruped_files import write_quadruped_results
+        from .simulation import quadruped
+
+    say = _progress(args.quiet or args.json)
+    host = quadruped.make_host(args.host or "go1", args.body, args.pose)
+    export = Path(args.export) if args.export else Path("exports") / spec.name
+    res = quadruped.run_experiments(export, host, progress=say)
+    summary = quadruped.summary(res)
+    out = Path(args.output) if args.output else Path("exports") / spec.name / "simulate"
+    files = write_quadruped_results(summary, res, out, spec.name)
+    if args.json:
+        print(json.dumps({**summary, "files": files}))
+        return EXIT_OK
+    h = summary["host"]
+    print(f"host {h['model']} ({h['mass_kg']:.2f} kg), tail {h['tail_mass_kg'] * 1e3:.1f} g")
+    for r in summary["stand"]:
+        print(
+            f"stance, tail {r['tail']}: height {r['height_min_m']:.4f}-{r['height_max_m']:.4f} m, "
+            f"roll/pitch within {r['max_roll_pitch_deg']:.2f} deg, finite {r['finite']}"
+        )
+    f17 = summary["fig17"]
+    print(f"{'Fig. 17':11} {'tail':6} {'torso m/s':>9} {'F_root N':>9} {'T_root N m':>10}")
+    for r in f17["rows"]:
+        print(
+            f"{r['ball'].split(' (')[0]:11} {r['tail']:6} {r['peak_torso_speed_m_s']:9.3f} "
+            f"{r['peak_root_force_n']:9.1f} {r['peak_root_torque_nm']:10.2f}"
+        )
+    ratios = ", ".join(f"{b}: {v['torso_speed']:.2f}" for b, v in f17["soft_over_rigid"].items())
+    print(f"soft/rigid peak torso speed {ratios}; paper: {f17['paper']}; agrees: {f17['agrees']}")
+    f18 = summary["fig18"]
+    head = f"{'roll':>6} {'pitch':>6} {'yaw deg':>7} {'F_root N':>9} {'T_root N m':>10}"
+    print(f"{'Fig. 18 g':9} {head}")
+    for r in f18["rows"]:
+        e = r["excursion_deg"]
+        print(
+            f"{r['payload_g']:9g} {e['roll']:6.2f} {e['pitch']:6.2f} {e['yaw']:7.2f} "
+            f"{r['peak_root_force_n']:9.2f} {r['peak_root_torque_nm']:10.2f}"
+        )
+    if "force_minus_paper_n" in f18:
+        print(
+            f"500 g: paper {f18['paper_force_n_500g']:g} N, {f18['paper_torque_nm_500g']:g} N m; "
+            f"computed minus paper {f18['force_minus_paper_n']:+.2f} N, "
+            f"{f18['torque_minus_paper_nm']:+.2f} N m"
+        )
+    print(f"files: {', '.join(files.values())}")
     return EXIT_OK
 
 
@@ -711,11 +763,22 @@ def _add_simulate(sub, common: argparse.ArgumentParser) -> None:
             "pneumatics.model)",
         },
         "--platform": {
-            "choices": ("none", "cart"),
+            "choices": ("none", "cart", "quadruped"),
             "default": "none",
             "help": "cart: the tail on the paper's hinged 700 g cart (robot/scene_cart.xml), "
             "extension "
-            "and waggle; the cart's lift and angles beside Eq 20-22 and the paper",
+            "and waggle; the cart's lift and angles beside Eq 20-22 and the paper. quadruped: "
+            "the export's tail on a standing quadruped (default Unitree Go1, the 'quadruped' "
+            "extra): the stance, Fig. 17's ball impacts (soft against rigid) and Fig. 18's tip "
+            "payloads",
+        },
+        "--export": {
+            "help": "quadruped: the export folder whose tail is mounted (default exports/<name>)"
+        },
+        "--host": {"help": "quadruped: the host's MJCF or URDF, or a known host (default go1)"},
+        "--body": {"help": "quadruped: the host body the tail is mounted on"},
+        "--pose": {
+            "help": 'quadruped: the mount frame in that body, "x y z roll pitch yaw" (m, deg)'
         },
         "--impact": {
             "action": "store_true",
@@ -998,6 +1061,7 @@ _BAD_INPUT = (
     ("exporters.mount", "MountError"),
     ("build.publish", "OutputError"),
     ("simulation.sim", "SimulationInputError"),
+    ("simulation.quadruped", "QuadrupedInputError"),
     ("studies.sweep", "SweepError"),
 )
 

@@ -165,6 +165,29 @@ def _sensors(root: ET.Element) -> None:
     ET.SubElement(sensor, "framelinvel", name="ball_vel", objtype="body", objname="ball")
 
 
+def ramp_ball_tree(
+    ball: Ball, ramp_length_m: float, timestep_s: float = IMPACT_TIMESTEP_S
+) -> ET.ElementTree:
+    """The floor, the ramp and the ball of the impact scenes alone, to roll the ball on its own or
+    to attach to another scene (``MjsFrame.attach_body``): the floor and the ramp's facets are the
+    geoms of one fixed body ``ramp``, the ball's body is ``ball`` (its ``framelinvel`` sensor
+    ``ball_vel``); the ramp's foot is at the origin and the ball, at its top, rolls along +X."""
+    root = ET.Element("mujoco", model=f"ramp_{ball.name.split()[1]}")
+    ET.SubElement(root, "compiler", angle="radian", autolimits="true")
+    ET.SubElement(root, "option", timestep=_f(timestep_s))
+    ET.SubElement(root, "asset")
+    ET.SubElement(root, "worldbody")
+    world = _world(root, ball, ramp_length_m, timestep_s)
+    fixed = ET.SubElement(world, "body", name="ramp")
+    for geom in world.findall("geom"):
+        world.remove(geom)
+        fixed.append(geom)
+    sensor = ET.SubElement(root, "sensor")
+    ET.SubElement(sensor, "framelinvel", name="ball_vel", objtype="body", objname="ball")
+    ET.indent(root)
+    return ET.ElementTree(root)
+
+
 def soft_impact_tree(
     robot: RobotModel,
     mesh_files: dict[str, str],

@@ -178,3 +178,69 @@ def plot_cart(runs, path: Path, title: str) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def plot_quadruped_impact(runs, path: Path, title: str) -> None:
+    """Fig. 17(d)'s shape: per ball (columns), the tail tip's and the torso's speed, soft against
+    rigid, and the root force, over the time from the first touch."""
+    balls = list(dict.fromkeys(r.ball for r in runs))
+    fig, axes = plt.subplots(3, len(balls), figsize=(5.5 * len(balls), 8.5), squeeze=False)
+    styles = {"soft": ("C0", "BVSR (soft)"), "rigid": ("C3", "rigid PLA twin")}
+    for col, ball in enumerate(balls):
+        for r in (r for r in runs if r.ball == ball):
+            color, label = styles.get(r.tail, ("k", r.tail))
+            t_ms = r.time_s * 1000
+            axes[0, col].plot(t_ms, r.tip_speed_m_s, color=color, label=label)
+            axes[1, col].plot(
+                t_ms,
+                np.linalg.norm(r.torso_velocity_m_s, axis=1),
+                color=color,
+                label=f"{label}: peak {r.peak_torso_speed_m_s:.3f} m/s",
+            )
+            axes[2, col].plot(
+                t_ms,
+                np.linalg.norm(r.root_force_n, axis=1),
+                color=color,
+                lw=0.8,
+                label=f"{label}: peak {r.peak_root_force_n:.0f} N (1 ms mean)",
+            )
+        axes[0, col].set_title(ball)
+        for row, ylabel in enumerate(
+            ("tail tip speed (m/s)", "torso velocity change (m/s)", "root force change (N)")
+        ):
+            ax = axes[row, col]
+            ax.set_ylabel(ylabel)
+            ax.grid(True, lw=0.3)
+            ax.legend(fontsize=7)
+        axes[2, col].set_xlabel("time from first touch (ms)")
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_quadruped_payload(runs, path: Path, title: str) -> None:
+    """Fig. 18's shape: per payload (columns), the tip's travel, the torso's roll, pitch and yaw
+    changes and the root's force and torque changes over the waggle, extension and flexion."""
+    fig, axes = plt.subplots(3, len(runs), figsize=(4.2 * len(runs), 8.5), squeeze=False)
+    for col, r in enumerate(runs):
+        t = r.time_s
+        axes[0, col].plot(t, r.tip_distance_mm, color="k")
+        axes[0, col].set_title(f"{r.payload_g:g} g on the tip")
+        for k, name in enumerate(("roll", "pitch", "yaw")):
+            axes[1, col].plot(t, r.attitude_deg[:, k], label=name)
+        axes[2, col].plot(t, np.linalg.norm(r.root_force_n, axis=1), "C0", label="force (N)")
+        axes[2, col].plot(t, np.linalg.norm(r.root_torque_nm, axis=1), "C1", label="torque (N m)")
+        for row, ylabel in enumerate(
+            ("tip travel (mm)", "torso angle change (deg)", "root force, torque change")
+        ):
+            axes[row, col].grid(True, lw=0.3)
+            if col == 0:
+                axes[row, col].set_ylabel(ylabel)
+        axes[1, col].legend(fontsize=7)
+        axes[2, col].legend(fontsize=7)
+        axes[2, col].set_xlabel("time (s): waggle, extension, flexion")
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

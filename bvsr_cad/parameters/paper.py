@@ -107,3 +107,15 @@ IMPACT_TIP_ACCELERATION = PaperFigure(
     "tail tip during rod strikes ('approximately 200 m/s²')",
     "Sec. IV-D, Impact Resistance, Fig. 16(c)",
 )
+
+
+# The quadruped experiments (Sec. IV-D): shown beside the simulated ones, never used.
+QUADRUPED_MASS = PaperFigure(14.5, "kg", "asOverdog quadruped (MAX: 14 kg)", "Sec. IV-D")
+QUADRUPED_IMPACT_FINDING = (
+    "Fig. 17: under identical impacts the quadruped with the BVSR tail shows significantly lower "
+    "velocity responses than with the rigid PLA twin"
+)
+QUADRUPED_PAYLOAD_FINDING = (
+    "Fig. 18: posture nearly unchanged with 0, 100 and 200 g on the tip; a slight rotation about "
+    "Z with 500 g, the other angles essentially constant"
+)

@@ -17,7 +17,7 @@ import pytest
 
 from bvsr_cad.build.cache import ArtifactCache, spec_without, stage_key
 
-from .conftest import PARAMS, benchmark_script, script, write_toml
+from .conftest import PARAMS, benchmark_script, built_once, script, write_toml
 
 #: Two exports compared file for file, the manifest's volatile section aside (also
 #: tools/wheel_check.sh's).
@@ -287,39 +287,67 @@ SMALL_TAIL = (
     ("analysis", "build_clearance_poses", "100"),
 )
 
+#: The rebuild benchmark: its edits and its editor of parameter text (one source).
+REBUILD_BENCH = benchmark_script("rebuild_bench")
+
+
+@pytest.fixture(scope="session")
+def small_tail(request, tmp_path_factory) -> Path:
+    """A folder with ``params/base.toml`` (:data:`SMALL_TAIL`, its calibration data beside it) and
+    ``cache``, a cache of its own that holds that file's build, built once per session for every
+    edit's test (:func:`~tests.conftest.built_once`)."""
+    from bvsr_cad.build.pipeline import build_export
+
+    def make(folder: Path) -> None:
+        (folder / "params").mkdir()
+        (folder / "data").mkdir()
+        text = (PARAMS / "bvsr.toml").read_text()
+        data_file = (PARAMS / tomllib.loads(text)["calibration"]["data_file"]).resolve()
+        (folder / "data" / data_file.name).write_bytes(data_file.read_bytes())
+        for table, key, value in SMALL_TAIL:
+            text = REBUILD_BENCH.edited(text, table, key, value)
+        base = folder / "params" / "base.toml"
+        base.write_text(text)
+        before = os.environ.get("BVSR_CACHE")
+        os.environ["BVSR_CACHE"] = str(folder / "cache")
+        try:
+            stages = build_export(base, folder / "base").stages
+        finally:
+            if before is None:
+                del os.environ["BVSR_CACHE"]
+            else:
+                os.environ["BVSR_CACHE"] = before
+        assert {s["status"] for s in stages} == {"built"}
+
+    return built_once(request, tmp_path_factory, "small-tail", make)
+
 
 @pytest.mark.slow
-def test_every_benchmark_edit_built_from_the_cache_equals_a_fresh_build(tmp_path, monkeypatch):
+@pytest.mark.parametrize("name", list(REBUILD_BENCH.EDITS))
+def test_every_benchmark_edit_built_from_the_cache_equals_a_fresh_build(
+    small_tail, tmp_path, monkeypatch, name
+):
     """Each one-parameter edit of the rebuild benchmark (rod material and diameter, pocket
     clearance, taper, segment count, casting shrinkage, printer volume, effective area), built
     through a cache that holds the unedited file's build, equals the same file built with the cache
     off, file for file (the manifest's volatile section aside); each reuses at least one stage and
-    rebuilds at least one. A CI-sized tail (:data:`SMALL_TAIL`) in a cache of its own."""
+    rebuilds at least one. A CI-sized tail (:data:`SMALL_TAIL`) in a cache of its own, its base
+    built once per session and the edits spread over the workers (the other edits' entries may
+    join the cache meanwhile: their keys differ from this edit's in the key edited)."""
     from bvsr_cad.build.pipeline import build_export
 
-    bench = benchmark_script(
-        "rebuild_bench"
-    )  # its edits and its editor of parameter text: one source
-    monkeypatch.setenv("BVSR_CACHE", str(tmp_path / "cache"))
-    (tmp_path / "params").mkdir()
-    (tmp_path / "data").mkdir()
-    text = (PARAMS / "bvsr.toml").read_text()
-    data_file = (PARAMS / tomllib.loads(text)["calibration"]["data_file"]).resolve()
-    (tmp_path / "data" / data_file.name).write_bytes(data_file.read_bytes())
-    for table, key, value in SMALL_TAIL:
-        text = bench.edited(text, table, key, value)
-    base = tmp_path / "params" / "base.toml"
-    base.write_text(text)
-    assert {s["status"] for s in build_export(base, tmp_path / "base").stages} == {"built"}
-    for name, (table, key, value) in bench.EDITS.items():
-        edit = tmp_path / "params" / f"{name.replace(' ', '_')}.toml"
-        edit.write_text(bench.edited(text, table, key, value))
-        cached = build_export(edit, tmp_path / "cached")
-        fresh = build_export(edit, tmp_path / "fresh", use_cache=False)
-        statuses = {s["status"] for s in cached.stages}
-        assert statuses == {"built", "reused"}, (name, cached.stages)
-        assert {s["status"] for s in fresh.stages} == {"built"}, name
-        assert differences(tmp_path / "cached", tmp_path / "fresh") == [], name
+    monkeypatch.setenv("BVSR_CACHE", str(small_tail / "cache"))
+    table, key, value = REBUILD_BENCH.EDITS[name]
+    text = (small_tail / "params" / "base.toml").read_text()
+    # beside the base file: the calibration's data file is found where its relative path leads
+    edit = small_tail / "params" / f"{name.replace(' ', '_')}.toml"
+    edit.write_text(REBUILD_BENCH.edited(text, table, key, value))
+    cached = build_export(edit, tmp_path / "cached")
+    fresh = build_export(edit, tmp_path / "fresh", use_cache=False)
+    statuses = {s["status"] for s in cached.stages}
+    assert statuses == {"built", "reused"}, (name, cached.stages)
+    assert {s["status"] for s in fresh.stages} == {"built"}, name
+    assert differences(tmp_path / "cached", tmp_path / "fresh") == [], name
 
 
 def _edit_beside_its_data(tmp_path: Path, data: dict) -> Path:

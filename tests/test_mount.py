@@ -20,7 +20,15 @@ from bvsr_cad.assembly.build import build_assembly
 from bvsr_cad.assembly.robot import robot_model
 from bvsr_cad.cli import main
 from bvsr_cad.exporters.mjcf import mjcf_tree, write_mjcf
-from bvsr_cad.exporters.mount import MountError, mount, mount_spec, parse_pose, write_mounted
+from bvsr_cad.exporters.mount import (
+    MountError,
+    mount,
+    mount_frame,
+    mount_spec,
+    parse_pose,
+    plot_mount_frame,
+    write_mounted,
+)
 from bvsr_cad.exporters.robot_files import EXPORT_XACRO_MESH_DIR
 from bvsr_cad.exporters.robot_meshes import write_robot_meshes
 from bvsr_cad.exporters.urdf import urdf_tree, write_xacro
@@ -150,6 +158,35 @@ def _assert_mounted(combined, host, tail, prefix="tail_", rel=1e-12):
         (combined.body_quat[-(tail.nbody - 2) :], tail.body_quat[2:]),
     ):
         assert np.allclose(got, want, rtol=rel, atol=1e-15)
+
+
+def test_mount_frame_is_the_root_panels_robot_face(bvsr_spec, bvsr_data, tail_xml, tmp_path):
+    """The mount frame: the inserts on the parameter file's bolt circle on the face Z = 0, where the
+    root panel's CAD layout bores them, half-way between the SOA pockets; in the MJCF the root
+    panel's body sits at the mount body's frame and its collision disc starts at Z = 0."""
+    from bvsr_cad.parameters.layout import panel_layout
+
+    frame = mount_frame(bvsr_spec)
+    xyz = np.array(frame.insert_xyz_mm)
+    assert len(xyz) == 5 and np.allclose(xyz[:, 2], 0.0)
+    r_mm = bvsr_data["mount"]["bolt_circle_diameter_mm"] / 2
+    assert np.allclose(np.hypot(xyz[:, 0], xyz[:, 1]), r_mm, rtol=1e-12)
+    lay = panel_layout(bvsr_spec, 0)
+    bores = np.array([c.p0[:2] for c in lay.cuts if c.role == "insert"])
+    assert np.allclose(np.sort(bores, axis=0), np.sort(xyz[:, :2], axis=0), atol=1e-9)
+    pockets = lay.pocket_centres("lower")
+    angle = np.degrees(np.arctan2(xyz[:, 1], xyz[:, 0]))[:, None]
+    to_pockets = np.degrees(np.arctan2(pockets[:, 1], pockets[:, 0]))[None, :]
+    gap = np.abs((angle - to_pockets + 180.0) % 360.0 - 180.0).min(axis=1)
+    assert np.allclose(gap, 36.0)  # each insert half-way between two of the five pockets
+    m = _load(tail_xml)
+    panel = m.body("panel0")
+    assert panel.parentid[0] == m.body("bvsr_mount").id
+    assert np.allclose(panel.pos, 0.0) and np.allclose(panel.quat, (1, 0, 0, 0))
+    disc = m.geom("panel0_collision")
+    assert disc.pos[2] - disc.size[1] == pytest.approx(0.0, abs=1e-4)
+    png = plot_mount_frame(bvsr_spec, tmp_path / "frame.png")
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_box_host_at_a_body(box_host, tail_xml, tmp_path):

@@ -83,6 +83,61 @@ def mount_frame(spec) -> MountFrame:
     return MountFrame(m.bolt_circle_diameter_mm, xyz, m.insert_diameter_mm, m.insert_depth_mm)
 
 
+def plot_mount_frame(spec, path: str | Path) -> Path:
+    """Draw the mount frame on the root panel's robot face (PNG): the rim, the holes that open on
+    the face, the bolt circle and its inserts, the X (lateral) and Y (dorsal) axes; Z points out of
+    the page, along the tail.
+
+    Args:
+        spec: the tail's parameters.
+        path: the PNG to write.
+
+    Returns:
+        ``path``.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Circle
+
+    from ..parameters.layout import panel_layout
+
+    lay, frame = panel_layout(spec, 0), mount_frame(spec)
+    rim = lay.rim_radius_lower_mm
+    fig, ax = plt.subplots(figsize=(5.2, 5.2))
+    ax.add_patch(Circle((0, 0), rim, fill=False, lw=1.5, color="0.2"))
+    for cut in lay.cuts:
+        if min(cut.p0[2], cut.p1[2]) <= 0.0 and not cut.name.startswith("mount_insert"):
+            ax.add_patch(Circle(cut.p0[:2], cut.diameter_mm / 2, fill=False, lw=0.6, color="0.5"))
+    r_bolt = frame.bolt_circle_diameter_mm / 2
+    ax.add_patch(Circle((0, 0), r_bolt, fill=False, ls="--", lw=0.8, color="tab:blue"))
+    for i, (x, y, _) in enumerate(frame.insert_xyz_mm, start=1):
+        ax.add_patch(Circle((x, y), frame.insert_diameter_mm / 2, color="tab:blue"))
+        ax.annotate(f"M3 insert {i}", (x, y), (x * 1.18, y * 1.18), ha="center", fontsize=7)
+    arrow = dict(width=0.6, head_width=2.5, length_includes_head=True)
+    ax.arrow(0, 0, 0.45 * rim, 0, color="tab:red", **arrow)
+    ax.arrow(0, 0, 0, 0.45 * rim, color="tab:green", **arrow)
+    ax.text(0.48 * rim, -3, "X (lateral)", color="tab:red", fontsize=8)
+    ax.text(1.5, 0.48 * rim, "Y (dorsal)", color="tab:green", fontsize=8)
+    ax.plot(0, 0, "o", mfc="white", mec="k", ms=9)
+    ax.plot(0, 0, "k.", ms=3)
+    ax.text(-2, 2, "Z along the tail,\ntoward the viewer", fontsize=7, ha="right")
+    ax.set_title(
+        f"{spec.name}: the mount frame on the root panel's robot face (Z = 0),\nseen from "
+        "the tail; bolt circle "
+        f"{frame.bolt_circle_diameter_mm:g} mm, {len(frame.insert_xyz_mm)} M3 inserts",
+        fontsize=9,
+    )
+    lim = rim * 1.3
+    ax.set(xlim=(-lim, lim), ylim=(-lim, lim), xlabel="x (mm)", ylabel="y (mm)", aspect="equal")
+    ax.grid(True, lw=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return Path(path)
+
+
 @dataclass
 class Mounted:
     """A host with the tail attached.

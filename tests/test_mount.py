@@ -211,6 +211,7 @@ def test_box_host_at_a_body(box_host, tail_xml, tmp_path):
     # the box's 5 ms RK4 step is kept; the tail's 2 ms Euler step reported
     notes = " ".join(mounted.notes)
     assert "timestep" in notes and "integrator" in notes and "0.005" in notes
+    assert "contact:" not in notes  # the floor and the hull are on the tail's contact bit
     assert (
         mount_spec(box_host, tail_xml, body="base", pos_m=REAR_POS_M, rpy_rad=rpy).compile().nbody
         == combined.nbody
@@ -243,14 +244,37 @@ def test_box_host_at_a_site_written_and_loaded_elsewhere(box_host, tail_xml, tmp
     assert written.nmeshvert == mounted.spec.compile().nmeshvert
 
 
+def test_host_geometry_the_tail_cannot_touch_is_noted_and_a_host_spec_is_kept(box_host, tail_xml):
+    """A floor on contact bit 4 alone: MuJoCo's contype/conaffinity rule lets no tail geometry
+    (contype 2 or 3, conaffinity 0) touch it, and the notes say so; the caller's spec is not
+    changed by the mount."""
+    spec = mujoco.MjSpec.from_file(str(box_host))
+    spec.geom("floor").contype, spec.geom("floor").conaffinity = 4, 4
+    n_before = spec.compile().nbody
+    mounted = mount(spec, tail_xml, body="base", pos_m=REAR_POS_M, rpy_rad=np.radians(REAR_RPY_DEG))
+    assert [n for n in mounted.notes if n.startswith("contact:")] == [
+        "contact: the tail's collision geometries (contype 2, 3, conaffinity [0]) pass through "
+        "the host's floor: give those a conaffinity bit the tail's contype has, to let the tail "
+        "touch them"
+    ]
+    assert spec.compile().nbody == n_before
+    assert mounted.spec.compile().nbody == n_before + _load(tail_xml).nbody - 1
+
+
 def test_python_api_gives_the_same_spec(box_host, tail_xml):
     """bvsr_cad.mount (m and degrees) gives mount's spec; the tail's options it warns about."""
     import bvsr_cad
 
-    with pytest.warns(UserWarning, match="option timestep: the tail's file sets 0.002"):
+    with pytest.warns(UserWarning) as record:
         spec = bvsr_cad.mount(
             box_host, tail_xml, body="base", pos_m=REAR_POS_M, rpy_deg=REAR_RPY_DEG
         )
+    assert [str(w.message) for w in record] == [
+        "option integrator: the tail's file sets Euler, the host keeps 1 (mjINT_RK4)",
+        "option timestep: the tail's file sets 0.002, the host keeps 0.005; the tail's reduced "
+        "chain holds its tip within 2 mm of a fine step at steps up to its own 0.002 s, not at a "
+        "longer one",
+    ]
     rpy = np.radians(REAR_RPY_DEG)
     ref = mount(box_host, tail_xml, body="base", pos_m=REAR_POS_M, rpy_rad=rpy).spec.compile()
     got = spec.compile()

@@ -215,8 +215,10 @@ def parse_pose(text: str, flag: str = "--pose") -> tuple[tuple[float, ...], tupl
 
 def _read(source, what: str) -> tuple[mujoco.MjSpec, str]:
     """A model file (MJCF or URDF) as a spec, its paths absolute; ``what`` names it in errors."""
-    if isinstance(source, mujoco.MjSpec):
-        return source, "the host spec"
+    if isinstance(source, mujoco.MjSpec):  # the caller's spec stays as it is
+        spec = source.copy()
+        _absolute_assets(spec, Path(spec.modelfiledir or "."))
+        return spec, "the host spec"
     path = Path(source)
     if not path.is_file():
         raise MountError(f"{what} {str(path)!r}: no such file")
@@ -404,29 +406,56 @@ def mount(
     except ValueError as exc:
         raise MountError(f"prefix {prefix!r}: attaching {tail_where} failed: {exc}") from None
     model = _compile(spec, f"{where} with {tail_where}")
+    if check_clearance:
+        _refuse_interpenetration(model, attached.name, where, parent)
     host_mass = float(host_model.body_mass.sum())
-    mounted = Mounted(
+    return Mounted(
         spec,
-        notes,
+        notes + _contact_notes(model, attached.name),
         parent,
         attached.name,
         prefix,
         float(model.body_mass.sum()) - host_mass,
         host_mass,
     )
-    if check_clearance:
-        hits = interpenetrations(model, attached.name)
-        if hits:
-            listed = "; ".join(
-                f"{t} in {h} ({units.m_to_mm(d):.1f} mm deep)" for t, h, d in hits[:5]
-            )
-            more = f"; and {len(hits) - 5} more pairs" if len(hits) > 5 else ""
-            raise MountError(
-                f"{where}: the tail at this pose on body {parent!r} enters the host's collision "
-                f"geometry at rest: {listed}{more} (allowed: "
-                f"{units.m_to_mm(PENETRATION_TOLERANCE_M):g} mm); move it with the pose"
-            )
-    return mounted
+
+
+def _refuse_interpenetration(model: mujoco.MjModel, mount_body: str, where: str, parent: str):
+    """Raise :class:`MountError` naming the pairs of :func:`interpenetrations`, deepest first."""
+    hits = interpenetrations(model, mount_body)
+    if hits:
+        listed = "; ".join(f"{t} in {h} ({units.m_to_mm(d):.1f} mm deep)" for t, h, d in hits[:5])
+        more = f"; and {len(hits) - 5} more pairs" if len(hits) > 5 else ""
+        raise MountError(
+            f"{where}: the tail at this pose on body {parent!r} enters the host's collision "
+            f"geometry at rest: {listed}{more} (allowed: "
+            f"{units.m_to_mm(PENETRATION_TOLERANCE_M):g} mm); move it with the pose"
+        )
+
+
+def _contact_notes(model: mujoco.MjModel, mount_body: str) -> list[str]:
+    """The host's collision geometries that no tail collision geometry can touch (MuJoCo's
+    contype/conaffinity rule: a pair collides if either's contype shares a bit with the other's
+    conaffinity), one note."""
+    tail = _subtree(model, model.body(mount_body).id)
+    solid = np.flatnonzero((model.geom_contype != 0) | (model.geom_conaffinity != 0))
+    mine = [g for g in solid if model.geom_bodyid[g] in tail]
+    ct, ca = model.geom_contype, model.geom_conaffinity
+    apart = [
+        _geom_name(model, h)
+        for h in solid
+        if model.geom_bodyid[h] not in tail
+        and not any((ct[t] & ca[h]) or (ct[h] & ca[t]) for t in mine)
+    ]
+    if not apart:
+        return []
+    bits = sorted({int(ct[t]) for t in mine})
+    return [
+        f"contact: the tail's collision geometries (contype {', '.join(map(str, bits))}, "
+        f"conaffinity {sorted({int(ca[t]) for t in mine})}) pass through the host's "
+        f"{', '.join(apart[:8])}{' and more' if len(apart) > 8 else ''}: give those a "
+        "conaffinity bit the tail's contype has, to let the tail touch them"
+    ]
 
 
 def mount_spec(

@@ -56,9 +56,11 @@ check-l: $(CORE)
 # What `make test` installs, without running the tests (CI: ruff and mkdocs before the tests).
 test-deps: $(TESTS)
 
-# pytest reads more options from PYTEST_ADDOPTS (CI: --durations=15, the 15 slowest tests).
+# One worker per core (at most four); worksteal: a worker that runs out of tests takes some queued
+# on another, so the whole builds do not leave one core idle at the end. pytest reads more options
+# from PYTEST_ADDOPTS (CI: --durations=15, the 15 slowest tests).
 test: $(TESTS)
-	$(BIN)/python -m pytest -q -n auto --maxprocesses 4
+	$(BIN)/python -m pytest -q -n auto --maxprocesses 4 --dist worksteal
 
 clean:
 	rm -rf $(VENV) exports

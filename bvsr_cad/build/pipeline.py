@@ -54,6 +54,7 @@ from .publish import (
     temporary_folder,
     volatile,
 )
+from .quadruped import quadruped_section
 from .stages import Runner, Stage
 
 Progress = Callable[[str], None]
@@ -142,6 +143,7 @@ PREVIEWS = Stage(
     "previews", "previews", PART_FILES_IGNORE, _rod, say="previews (off-screen renders)"
 )
 ROBOT_FILES = Stage("analysis files and robot descriptions")
+QUADRUPED = Stage("quadruped scene and experiments", say="quadruped scene")
 CHECKS = Stage("checks", say="checks")
 REPORT = Stage("report", say="report")
 
@@ -365,6 +367,9 @@ class _Build:
                     ),
                 },
             )
+        )
+        manifest.update(
+            run.run(QUADRUPED, lambda folder: quadruped_section(folder, self.spec, run.say))
         )
         # STEP and 3MF time stamps of the files written since the checks started
         make_reproducible(run.folder, self.fixed)

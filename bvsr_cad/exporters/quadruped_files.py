@@ -22,6 +22,7 @@ def _write_text(path: Path, text: str) -> None:
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write(text)
+        os.chmod(tmp, 0o644)  # as the export's other files (mkstemp makes it 0600)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -72,3 +73,24 @@ def write_host_licence(licence_file: str, folder: Path, host: str) -> str:
     out = folder / f"{host.upper()}_LICENSE"
     shutil.copyfile(licence_file, out)
     return str(out)
+
+
+def write_host_scene(mounted, folder: Path, host: str, licence_file: str) -> dict[str, str]:
+    """The tail on its host as one MJCF, ``<folder>/scene_<host>.xml``, and the host model's
+    licence beside it (:func:`write_host_licence`).
+
+    Args:
+        mounted: :class:`bvsr_cad.exporters.mount.Mounted` (the host without visual meshes).
+        folder: the export's ``robot/quadruped``.
+        host: the host's short name.
+        licence_file: the host model's licence file.
+
+    Returns:
+        The scene's and the licence's paths.
+    """
+    from .mount import write_mounted
+
+    folder.mkdir(parents=True, exist_ok=True)
+    scene = write_mounted(mounted, folder / f"scene_{host}.xml")
+    os.chmod(scene, 0o644)  # write_mounted's temporary file was 0600
+    return {"scene": str(scene), "licence": write_host_licence(licence_file, folder, host)}

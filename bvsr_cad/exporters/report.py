@@ -578,6 +578,7 @@ def write_report(
     h += _report_molds(manifest)
     h.append(drawings_section(manifest))
     h += _report_analyses(root, manifest)
+    h += _report_quadruped(manifest)
     h += _report_fabrication(manifest)
     h.append("<h2>Checks</h2><p class=muted>Failures first, then comparisons, then passes.</p>")
     h.append(_checks_table(checks))
@@ -722,6 +723,97 @@ def _report_analyses(root: Path, manifest: dict[str, Any]) -> list[str]:
     h.append("<h2>Mass budget</h2>")
     h.append(_mass_table(manifest))
     return h
+
+
+def _report_quadruped(manifest: dict[str, Any]) -> list[str]:
+    """The tail on a quadruped: the host's scene and licence, and the paper's Figs. 17 and 18 as
+    simulated (when the build ran them), each beside the paper's finding; else how to run them."""
+    q = manifest.get("quadruped")
+    if not q:
+        return []
+    h = ["<h2>On a quadruped (the paper's Figs. 17 and 18)</h2>"]
+    if not q.get("installed"):
+        return h + [f"<p class=muted>Not in this export: {_e(q.get('how', ''))}.</p>"]
+    h.append(
+        f"<p>Host: {_e(q['host'])} from {_e(q['host_package'])}, {_num(q['host_mass_kg'])} kg; "
+        f"the tail on it: <code>{_e(q['scene'])}</code>; the host model's licence "
+        f"({_e(q['licence'])}): <code>{_e(q['licence_file'])}</code>.</p>"
+    )
+    summary = q.get("summary")
+    if not summary:
+        return h + [
+            f"<p class=muted>Experiments not run in this build: {_e(q.get('how', ''))}.</p>"
+        ]
+    h += _quadruped_stand(summary) + _quadruped_fig17(q, summary) + _quadruped_fig18(q, summary)
+    return h
+
+
+def _quadruped_stand(summary: dict[str, Any]) -> list[str]:
+    rows = "".join(
+        f"<tr><td>{_e(r['tail'])}</td><td>{r['seconds']:g}</td>"
+        f"<td>{r['height_min_m']:.4f}-{r['height_max_m']:.4f}</td>"
+        f"<td>{r['max_roll_pitch_deg']:.2f}</td><td>{r['yaw_range_deg']:.2f}</td>"
+        f"<td>{_status(bool(r['finite']) and r['warnings'] == 0)}</td></tr>"
+        for r in summary["stand"]
+    )
+    host = summary["host"]
+    return [
+        f"<p>PD stance (kp {host['stance_kp_nm_per_rad']:g} N m/rad, kd "
+        f"{host['stance_kd_nm_s_per_rad']:g} N m s/rad) at the {_e(host['stance'])} pose, step "
+        f"{host['timestep_s']:g} s; the tail at {_e(str(host['mount_pos_m']))} m on "
+        f"{_e(host['body'])}, pointing backward.</p>",
+        "<table><tr><th>tail</th><th>s</th><th>trunk height (m)</th><th>max roll, pitch "
+        f"(deg)</th><th>yaw range (deg)</th><th>no NaN, no warning</th></tr>{rows}</table>",
+    ]
+
+
+def _quadruped_fig17(q: dict[str, Any], summary: dict[str, Any]) -> list[str]:
+    f17 = summary["fig17"]
+    rows = "".join(
+        f"<tr><td>{_e(r['ball'])}</td><td>{_e(r['tail'])}</td>"
+        f"<td>{r['peak_torso_speed_m_s']:.3f}</td><td>{r['peak_torso_rate_deg_s']:.1f}</td>"
+        f"<td>{r['peak_root_force_n']:.1f}</td><td>{r['peak_root_torque_nm']:.2f}</td></tr>"
+        for r in f17["rows"]
+    )
+    ratios = "; ".join(
+        f"{_e(b)}: {v['torso_speed']:.2f}" for b, v in f17["soft_over_rigid"].items()
+    )
+    verdict = "agrees" if f17["agrees"] else "does not agree"
+    h = [
+        "<h3>Fig. 17: ball impacts, soft tail against the rigid twin</h3>",
+        "<table><tr><th>ball</th><th>tail</th><th>peak torso speed (m/s)</th><th>peak torso "
+        "rate (deg/s)</th><th>peak root force (N)</th><th>peak root torque (N m)</th></tr>"
+        f"{rows}</table>",
+        f"<p>Paper: {_e(f17['paper'])}. Model: peak torso speed soft over rigid {ratios}: it "
+        f"{verdict}.</p>",
+    ]
+    fig = q.get("results", {}).get("fig17")
+    return h + ([_fig(fig, "Fig. 17 as simulated")] if fig else [])
+
+
+def _quadruped_fig18(q: dict[str, Any], summary: dict[str, Any]) -> list[str]:
+    f18 = summary["fig18"]
+    rows = "".join(
+        f"<tr><td>{r['payload_g']:g}</td><td>{r['excursion_deg']['roll']:.2f}</td>"
+        f"<td>{r['excursion_deg']['pitch']:.2f}</td><td>{r['excursion_deg']['yaw']:.2f}</td>"
+        f"<td>{r['peak_root_force_n']:.2f}</td><td>{r['peak_root_torque_nm']:.2f}</td></tr>"
+        for r in f18["rows"]
+    )
+    h = [
+        f"<h3>Fig. 18: waggle, extension, flexion to {f18['tip_distance_mm']:g} mm of tip travel "
+        "with tip payloads</h3>",
+        "<table><tr><th>payload (g)</th><th>roll</th><th>pitch</th><th>yaw (deg)</th>"
+        f"<th>peak root force (N)</th><th>peak root torque (N m)</th></tr>{rows}</table>",
+        f"<p>Paper: {_e(f18['paper'])}; at 500 g a root force of {f18['paper_force_n_500g']:g} N "
+        f"and torque of {f18['paper_torque_nm_500g']:g} N m.</p>",
+    ]
+    if "force_minus_paper_n" in f18:
+        h.append(
+            f"<p>Model minus paper at 500 g: {f18['force_minus_paper_n']:+.2f} N, "
+            f"{f18['torque_minus_paper_nm']:+.2f} N m.</p>"
+        )
+    fig = q.get("results", {}).get("fig18")
+    return h + ([_fig(fig, "Fig. 18 as simulated")] if fig else [])
 
 
 def _report_fabrication(manifest: dict[str, Any]) -> list[str]:

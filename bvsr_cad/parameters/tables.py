@@ -366,6 +366,7 @@ class RobotDescription:
     pulse_pressure_max_kpa: float
     timestep_s: float
     collision_geometry: str
+    quadruped_experiments: str
 
 
 @table

@@ -328,7 +328,6 @@ def build_scene(
         QuadrupedInputError: a missing export file.
         bvsr_cad.exporters.mount.MountError: a bad host, body or pose.
     """
-    import mujoco
 
     from ..exporters.mount import mount
     from ..exporters.xml import write_tree
@@ -342,7 +341,7 @@ def build_scene(
             tail = Path(tmp) / f"{soft_xml.stem}_rigid_collide.xml"
             write_tree(rigid_tail_tree(soft_xml, rigid_xml), tail, declaration=False)
         mounted = mount(
-            host_files(host)["model"], tail, body=host.body, pos_m=host.pos_m, rpy_rad=host.rpy_rad
+            _host_model(host), tail, body=host.body, pos_m=host.pos_m, rpy_rad=host.rpy_rad
         )
     spec, prefix = mounted.spec, mounted.prefix
     spec.option.timestep = _export_timestep_s(soft_xml)
@@ -357,18 +356,61 @@ def build_scene(
     _add_sensors(spec, root_name)
     if ball is not None:
         _attach_ramp(spec, ball, ramp_length_m)
-    elif not any(g.type == mujoco.mjtGeom.mjGEOM_PLANE for g in spec.geoms):
+    else:
+        add_floor(spec)
+    model = spec.compile()
+    scene = _index(model, host, prefix, root_name, tip_name, mounted, payload_g if not rigid else 0)
+    if ball is not None:
+        _place_before_ramp(scene)
+    return scene
+
+
+def add_floor(spec) -> None:
+    """A floor plane at Z = 0 unless the model has a plane already."""
+    import mujoco
+
+    if not any(g.type == mujoco.mjtGeom.mjGEOM_PLANE for g in spec.geoms):
         spec.worldbody.add_geom(
             name="floor",
             type=mujoco.mjtGeom.mjGEOM_PLANE,
             size=[0.0, 0.0, 0.05],
             rgba=[0.25, 0.3, 0.35, 1.0],
         )
-    model = spec.compile()
-    scene = _index(model, host, prefix, root_name, tip_name, mounted, payload_g if not rigid else 0)
-    if ball is not None:
-        _place_before_ramp(scene)
-    return scene
+
+
+def _host_model(host: Host):
+    """A known host's model without its visual meshes (geoms that collide with nothing and carry
+    no mass: every body's inertia is explicit), so that neither a scene nor the export's file needs
+    the package's mesh files; a host given as a file, as it is."""
+    import mujoco
+
+    from ..exporters.mount import NAMED_HOSTS
+
+    path = host_files(host)["model"]
+    if host.model not in NAMED_HOSTS or Path(host.model).exists():
+        return path
+    spec = mujoco.MjSpec.from_file(path)
+    for g in list(spec.geoms):
+        if g.type == mujoco.mjtGeom.mjGEOM_MESH and g.contype == 0 and g.conaffinity == 0:
+            spec.delete(g)
+    for mesh in list(spec.meshes):
+        spec.delete(mesh)
+    return spec
+
+
+def host_scene(export: Path, host: Host = GO1):
+    """The export's tail on ``host`` above a floor, as a file would hold it: the mount's
+    :class:`~bvsr_cad.exporters.mount.Mounted` (write it with
+    :func:`~bvsr_cad.exporters.mount.write_mounted`); a known host without its visual meshes."""
+    from ..exporters.mount import mount
+
+    soft_xml, _ = _tail_files(Path(export))
+    mounted = mount(
+        _host_model(host), soft_xml, body=host.body, pos_m=host.pos_m, rpy_rad=host.rpy_rad
+    )
+    mounted.spec.option.timestep = _export_timestep_s(soft_xml)
+    add_floor(mounted.spec)
+    return mounted
 
 
 def _tip_face_m(spec, tip_name: str) -> float:
@@ -1037,11 +1079,13 @@ class QuadrupedResults:
 def host_summary(export: Path, host: Host = GO1) -> dict:
     """The host, where the tail sits on it and the stance, for the JSON and the report."""
     sc = build_scene(export, host)
+    from ..exporters.mount import NAMED_HOSTS
+
     files = host_files(host)
+    named = NAMED_HOSTS.get(host.model) if not Path(host.model).exists() else None
     return {
         "model": host.model,
-        "file": files["model"],
-        "licence_file": files["licence"],
+        "file": f"{named[0]}/{named[1]}" if named else host.model,  # no machine's own folders
         "licence": Path(files["licence"]).read_text().splitlines()[0] if files["licence"] else "",
         "mass_kg": sc.host_mass_kg,
         "tail_mass_kg": sc.tail_mass_kg,

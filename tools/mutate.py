@@ -548,8 +548,8 @@ FAULTS: list[Fault] = [
     Fault(
         "mount_rpy_intrinsic",
         "bvsr_cad/exporters/mount.py",
-        '    T[:3, :3] = Rotation.from_euler("xyz", np.asarray(rpy_rad, float)).as_matrix()\n',
-        '    T[:3, :3] = Rotation.from_euler("XYZ", np.asarray(rpy_rad, float)).as_matrix()\n',
+        "    T[:3, :3] = yaw @ pitch @ roll  # about the fixed X, then Y, then Z\n",
+        "    T[:3, :3] = roll @ pitch @ yaw  # about the fixed X, then Y, then Z\n",
         "the mount pose's roll-pitch-yaw read about moving axes, not URDF's fixed ones: the tail "
         "points elsewhere than the pose and the xacro macro say",
         catchers=("tests/test_mount.py::test_box_host_at_a_body",),

@@ -36,10 +36,8 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from .. import units
-from ..parameters.layout import mid_angles_deg, polar
 
 #: The tail's root body in every exported MJCF (exporters/mjcf.py), the mount frame.
 MOUNT_BODY = "bvsr_mount"
@@ -78,6 +76,8 @@ def mount_frame(spec) -> MountFrame:
     Returns:
         The bolt circle and its inserts' centres on the face.
     """
+    from ..parameters.layout import mid_angles_deg, polar
+
     m = spec.mount
     xyz = tuple((*polar(m.bolt_circle_diameter_mm / 2, a), 0.0) for a in mid_angles_deg())
     return MountFrame(m.bolt_circle_diameter_mm, xyz, m.insert_diameter_mm, m.insert_depth_mm)
@@ -290,8 +290,12 @@ def tail_model_path(export_or_xml: str | Path) -> Path:
 
 def _pose_matrix(pos_m, rpy_rad) -> np.ndarray:
     """4x4 transform of a position and a fixed-axis roll-pitch-yaw (URDF's ``rpy``)."""
+    (cr, cp, cy), (sr, sp, sy) = np.cos(rpy_rad), np.sin(rpy_rad)
+    roll = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
+    pitch = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+    yaw = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
     T = np.eye(4)
-    T[:3, :3] = Rotation.from_euler("xyz", np.asarray(rpy_rad, float)).as_matrix()
+    T[:3, :3] = yaw @ pitch @ roll  # about the fixed X, then Y, then Z
     T[:3, 3] = np.asarray(pos_m, float)
     return T
 

@@ -68,6 +68,8 @@ def tail_folder(tmp_path_factory, bvsr_spec) -> Path:
     robot = robot_model(build_assembly(bvsr_spec), [THETA_MAX] * bvsr_spec.joints)
     mesh_files = write_robot_meshes(robot, root / "meshes")
     write_mjcf(root / "bvsr.xml", mjcf_tree(robot, mesh_files, per_segment=False)[0])
+    exact = mjcf_tree(robot, mesh_files, per_segment=True, chain="exact")[0]
+    write_mjcf(root / "bvsr_exact.xml", exact)
     urdf = urdf_tree(robot, mesh_files)
     write_tree(urdf, root / "bvsr.urdf")
     write_xacro(urdf.getroot(), robot.name, root, EXPORT_XACRO_MESH_DIR)
@@ -281,6 +283,30 @@ def test_python_api_gives_the_same_spec(box_host, tail_xml):
     d, r = _at_rest(got), _at_rest(ref)
     assert got.nbody == ref.nbody and np.allclose(d.xpos, r.xpos, atol=1e-12)
     assert np.allclose(d.xmat, r.xmat, atol=1e-12)
+
+
+def test_tail_keeps_its_radians_on_a_host_in_degrees(box_host, tail_folder):
+    """The exact chain (joint limits in rad, equality polynomials, a 0.2 ms step) on the box host,
+    whose MJCF is in degrees: its joints' ranges and its equalities are its file's, and its own
+    integrator and step come back as notes."""
+    mounted = mount(
+        box_host,
+        tail_folder / "bvsr_exact.xml",
+        body="base",
+        pos_m=REAR_POS_M,
+        rpy_rad=np.radians(REAR_RPY_DEG),
+    )
+    combined, tail = mounted.spec.compile(), _load(tail_folder / "bvsr_exact.xml")
+    _assert_mounted(combined, _load(box_host), tail)
+    assert tail.jnt_limited.any() and np.array_equal(
+        combined.jnt_range[-tail.njnt :], tail.jnt_range
+    )
+    assert np.array_equal(combined.eq_data[-tail.neq :], tail.eq_data)
+    assert combined.opt.timestep == 0.005
+    assert any(
+        n.startswith(f"option timestep: the tail's file sets {tail.opt.timestep:g}")
+        for n in mounted.notes
+    )
 
 
 def test_urdf_host_any_link(tmp_path, tail_xml):

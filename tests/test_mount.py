@@ -309,6 +309,22 @@ def test_tail_keeps_its_radians_on_a_host_in_degrees(box_host, tail_folder):
     )
 
 
+def test_command_json(box_host, tail_xml, tmp_path, capsys):
+    """`bvsr mount --json`: one JSON object naming the file written, the parent, both masses (each
+    as MuJoCo reads its own file) and the notes."""
+    import json
+
+    out = tmp_path / "scene.xml"
+    argv = ["mount", str(box_host), "--site", "rear", "--pose", "0 0 0.001 0 0 30"]
+    assert main([*argv, "--tail", str(tail_xml), "-o", str(out), "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["out"] == str(out) and out.is_file() and result["parent"] == "base"
+    assert result["mount_body"] == "tail_bvsr_mount"
+    assert result["host_mass_kg"] == pytest.approx(_load(box_host).body_mass.sum(), rel=1e-12)
+    assert result["tail_mass_kg"] == pytest.approx(_load(tail_xml).body_mass.sum(), rel=1e-12)
+    assert [n.split(":")[0] for n in result["notes"]] == ["option integrator", "option timestep"]
+
+
 def test_urdf_host_any_link(tmp_path, tail_xml):
     """A URDF host: MuJoCo reads it; a link on a fixed joint stays a body to mount on."""
     urdf = tmp_path / "host.urdf"

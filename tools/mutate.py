@@ -574,6 +574,50 @@ FAULTS: list[Fault] = [
             "tests/test_ros2_package.py::test_xacro_macro_expands_onto_a_host_and_check_urdf_accepts",
         ),
     ),
+    # -- the tail on a quadruped (simulation/quadruped.py) -------------------------------------
+    Fault(
+        "quadruped_payload_half_mass",
+        "bvsr_cad/simulation/quadruped.py",
+        "    m = units.g_to_kg(payload_g)\n",
+        "    m = units.g_to_kg(payload_g) / 2\n",
+        "the tip payload of Fig. 18 weighs half what it is said to: the root carries too little",
+        catchers=("tests/test_quadruped.py::test_a_payload_adds_its_weight_at_the_root",),
+    ),
+    Fault(
+        "quadruped_ball_impulse_sign",
+        "bvsr_cad/simulation/quadruped.py",
+        "            f_ball = f if c.geom2 == self.ball else -f\n",
+        "            f_ball = -f if c.geom2 == self.ball else f\n",
+        "the contact force on the ball taken as the force on the other geom: Fig. 17's impulse "
+        "into the tail has the wrong sign and no longer balances the ball's momentum change",
+        catchers=("tests/test_quadruped.py::test_fig17_ball_momentum_and_soft_below_rigid",),
+    ),
+    Fault(
+        "quadruped_stance_pd_sign",
+        "bvsr_cad/simulation/quadruped.py",
+        "    torque = sc.kp * (sc.stance_q - q) - sc.kd * qd\n",
+        "    torque = sc.kp * (q - sc.stance_q) - sc.kd * qd\n",
+        "the stance's PD pushes the joints away from the standing pose: the robot falls",
+        catchers=("tests/test_quadruped.py::test_stands_5_s_at_rest_and_waggling_at_6_bar",),
+    ),
+    Fault(
+        "quadruped_attitude_quat_order",
+        "bvsr_cad/simulation/quadruped.py",
+        '    return np.degrees(Rotation.from_quat([x, y, z, w]).as_euler("xyz"))\n',
+        '    return np.degrees(Rotation.from_quat([w, x, y, z]).as_euler("xyz"))\n',
+        "MuJoCo's w-first quaternion read as SciPy's w-last: the torso's roll, pitch and yaw are "
+        "wrong (a level robot reads tilted by 180 deg)",
+        catchers=("tests/test_quadruped.py::test_stands_5_s_at_rest_and_waggling_at_6_bar",),
+    ),
+    Fault(
+        "quadruped_fig17_verdict_inverted",
+        "bvsr_cad/simulation/quadruped.py",
+        'all(v["torso_speed"] < 1.0 for v in ratios.values())',
+        'all(v["torso_speed"] > 1.0 for v in ratios.values())',
+        "Fig. 17's verdict reads a higher torso response behind the soft tail as agreeing with "
+        "the paper",
+        catchers=("tests/test_quadruped.py::test_fig17_ball_momentum_and_soft_below_rigid",),
+    ),
 ]
 
 

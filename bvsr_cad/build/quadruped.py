@@ -51,7 +51,10 @@ def quadruped_section(folder: Path, spec, say: Callable[[str], None]) -> dict:
         "experiments": spec.robot.quadruped_experiments,
     }
     if spec.robot.quadruped_experiments != "on":
-        section["how"] = how
+        section["how"] = (
+            'set robot.quadruped_experiments = "on" (about 10 s more) or run '
+            "`bvsr simulate --platform quadruped`"
+        )
         say(f"quadruped scene: {time.perf_counter() - t:.1f} s")
         return {"quadruped": section}
     res = quadruped.run_experiments(folder, host, progress=say)

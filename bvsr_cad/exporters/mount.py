@@ -534,6 +534,11 @@ def write_mounted(mounted: Mounted, out: str | Path) -> Path:
     relative to the written file's folder, atomically: a temporary file beside ``out``, loaded by
     MuJoCo from there, then renamed; on any failure nothing is left.
 
+    The file names the host's and the tail's own mesh files (it loads while they stay where they
+    are; nothing is copied). ``MjSpec.to_xml`` writes most numbers with 6 significant digits (a
+    hinge stiffness of 3.71882605 N m/rad as 3.71883), so the file's numbers are within 5e-6 of the
+    spec's, relatively.
+
     Args:
         mounted: what :func:`mount` returned.
         out: the file to write.
@@ -548,7 +553,10 @@ def write_mounted(mounted: Mounted, out: str | Path) -> Path:
     for el in root.iter():  # meshes, textures, height fields, skins: absolute in the spec
         path = el.get("file")
         if path and os.path.isabs(path):
-            el.set("file", os.path.relpath(path, folder).replace(os.sep, "/"))
+            try:
+                el.set("file", os.path.relpath(path, folder).replace(os.sep, "/"))
+            except ValueError:  # another drive (Windows): no relative path, keep it absolute
+                pass
     ET.indent(root)
     text = ET.tostring(root, encoding="unicode")
     fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=folder)

@@ -12,13 +12,16 @@ Rx(roll)) in the frame of a host body, or of a host site.
 
 Composition
 -----------
-:func:`mount` reads the host (a path or an :class:`mujoco.MjSpec`) and the tail's MJCF, adds a
-frame at the pose to the named body (a site's pose is composed with the requested one) and attaches
-the tail's root body there with :meth:`mujoco.MjsFrame.attach_body`, every tail name prefixed. The
-host's ``<option>`` and ``<compiler>`` are kept; each option the tail's file sets to something the
-host does not is returned as a note (:attr:`Mounted.notes`). Mesh and texture files of both are
-made absolute, so the combined spec compiles from any folder; :func:`write_mounted` writes them
-relative to the written file.
+:func:`mount` reads the host (a path or an :class:`mujoco.MjSpec`, which it copies) and the
+tail's MJCF, adds a frame at the pose to the named body (a site's pose is composed with the
+requested one) and attaches the tail's root body there with :meth:`mujoco.MjsFrame.attach_body`,
+every tail name prefixed; the root body's own pose in the tail's file (the stand-alone scene's
+horizontal tail 0.45 m up) is dropped. The host's ``<option>`` and ``<compiler>`` are kept, and the
+tail keeps its own compiler settings (radians, autolimits) for its elements, as ``attach`` does.
+Each option the tail's file states that the host's differs in is returned as a note
+(:attr:`Mounted.notes`), and so are host collision geometries that no tail geometry can touch
+(their contype/conaffinity). Mesh and texture files of both are made absolute, so the combined spec
+compiles from any folder; :func:`write_mounted` writes them relative to the written file.
 
 At rest (the host's ``qpos0``) every tail collision geometry is measured against every host
 collision geometry with MuJoCo's own distance (``mj_geomDistance``); a pose that puts one into the

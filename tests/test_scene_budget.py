@@ -60,3 +60,49 @@ def test_default_scene_constraint_rows_within_budget(budget):
     assert counts["warnings"] == []
     assert rows["equality"] == equality_rows
     assert equality_rows <= rows["all"] <= ROWS_PER_JOINT * joints
+
+
+@pytest.fixture(scope="module")
+def written_model(bvsr_spec):
+    """The default tail's model file as a build writes it (robot/bvsr.xml, the reduced chain that
+    robot/scene.xml includes), made in memory from the assembly in seconds instead of a whole
+    build: without collision shapes and meshes (neither adds a DoF, a tendon or an equality) and
+    with a fixed joint limit (its value sets no count).
+    :func:`test_the_model_made_in_memory_counts_as_the_exported_scene` holds it to the export."""
+    import xml.etree.ElementTree as ET
+
+    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.robot import robot_model
+    from bvsr_cad.exporters.mjcf import mjcf_tree
+
+    asm = build_assembly(bvsr_spec)
+    robot = robot_model(asm, [0.5] * asm.spec.joints, collisions=False)
+    meshes = {v.name: f"{v.name}.stl" for link in robot.links.values() for v in link.visuals}
+    root = mjcf_tree(robot, meshes, False, chain="reduced")[0].getroot()
+    for parent in list(root.iter()):
+        for child in list(parent):
+            if child.tag == "mesh" or child.get("mesh") is not None:
+                parent.remove(child)
+    model = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
+    return model, bvsr_spec.segments * bvsr_spec.joints_per_segment
+
+
+def test_the_written_models_dofs_within_budget(written_model):
+    model, joints = written_model
+    assert model.nv <= DOFS_PER_JOINT * joints
+
+
+def test_the_written_models_tendons_within_budget(written_model):
+    """tools/mutate.py's mjcf_idle_tendon_per_joint (a tendon per joint that does nothing) fails
+    here in seconds, as in :func:`test_default_scene_tendons_within_budget` after a whole build."""
+    model, joints = written_model
+    assert model.ntendon <= TENDONS_PER_JOINT * joints
+
+
+def test_the_model_made_in_memory_counts_as_the_exported_scene(written_model, budget):
+    """The in-memory model has the exported scene's DoFs, tendons, actuators and equalities: the
+    fast tests above see what the scene has."""
+    made, _ = written_model
+    exported, _, _ = budget
+    counts = ("nv", "ntendon", "nu", "neq", "njnt")
+    assert {c: getattr(made, c) for c in counts} == {c: getattr(exported, c) for c in counts}

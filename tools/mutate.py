@@ -542,7 +542,7 @@ FAULTS: list[Fault] = [
         "    if per_segment:\n",
         "the writer adds a tendon per joint that does nothing: the same physics, one more tendon "
         "for every world of a batch to pass over each step",
-        catchers=("tests/test_scene_budget.py::test_default_scene_tendons_within_budget",),
+        catchers=("tests/test_scene_budget.py::test_the_written_models_tendons_within_budget",),
     ),
     # -- the tail on a host: the mount transform -----------------------------------------------
     Fault(

@@ -824,8 +824,15 @@ def _add_workspace(sub, common: argparse.ArgumentParser) -> None:
         help="tip workspace by the paper's random chamber-state protocol",
     )
     wk.add_argument("params", help="parameter file")
-    wk.add_argument("--samples", type=_number(1, inclusive=True, kind=int), default=20000)
-    wk.add_argument("--seed", type=int, default=1)
+    wk.add_argument(
+        "--samples",
+        type=_number(1, inclusive=True, kind=int),
+        default=20000,
+        help="random chamber states, one settled tip each (default 20000)",
+    )
+    wk.add_argument(
+        "--seed", type=int, default=1, help="seed of the random chamber states (default 1)"
+    )
     wk.set_defaults(func=cmd_workspace)
 
 
@@ -860,7 +867,12 @@ def _add_clearance(sub, common: argparse.ArgumentParser) -> None:
         "clearance", parents=[common], help="minimum clearance between solids over the workspace"
     )
     cl.add_argument("params", help="parameter file")
-    cl.add_argument("--poses", type=_number(1, inclusive=True, kind=int), default=20000)
+    cl.add_argument(
+        "--poses",
+        type=_number(1, inclusive=True, kind=int),
+        default=20000,
+        help="workspace poses the solids are checked at (default 20000; the seed is analysis.seed)",
+    )
     cl.set_defaults(func=cmd_clearance)
 
 

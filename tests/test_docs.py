@@ -5,12 +5,13 @@ from __future__ import annotations
 import dataclasses
 import importlib.util
 import json
+import os
 import re
-import shutil
 import subprocess
 import sys
 import tomllib
 import typing
+from html import unescape
 from pathlib import Path
 
 import pytest
@@ -157,31 +158,142 @@ def test_sphinx_roles_render_as_code():
     )
 
 
-@pytest.mark.skipif(
-    shutil.which("mkdocs", path=str(Path(sys.executable).parent)) is None,
-    reason="mkdocs not installed (the docs extra)",
-)
-def test_docs_build_strict_with_every_parameter(tmp_path):
-    """`mkdocs build --strict` passes (a broken link or reference fails it) and the built parameter
-    page holds every schema key."""
+@pytest.fixture(scope="module")
+def site(tmp_path_factory) -> Path:
+    """The docs site built once with `mkdocs build --strict` from the committed export summary (a
+    broken link or reference fails it)."""
     mkdocs = Path(sys.executable).parent / "mkdocs"
+    if not mkdocs.exists():
+        pytest.skip("mkdocs not installed (the docs extra)")
+    out = tmp_path_factory.mktemp("site")
+    env = {k: v for k, v in os.environ.items() if k != "BVSR_DOCS_EXPORT"}
     run = subprocess.run(
-        [str(mkdocs), "build", "--strict", "-q", "-d", str(tmp_path / "site")],
+        [str(mkdocs), "build", "--strict", "-q", "-d", str(out)],
         cwd=ROOT,
         capture_output=True,
         text=True,
         timeout=300,
+        env=env | {"NO_MKDOCS_2_WARNING": "1"},
     )
     assert run.returncode == 0, run.stderr[-3000:]
-    html = (tmp_path / "site" / "reference" / "parameters" / "index.html").read_text(
-        encoding="utf-8"
+    return out
+
+
+def _codes(html: str) -> set[str]:
+    """The text of every ``<code>`` element of a page, unescaped."""
+    return {unescape(c) for c in re.findall(r"<code>(.*?)</code>", html, re.DOTALL)}
+
+
+def test_docs_build_strict_with_every_parameter(site):
+    """The built parameter page holds every schema key."""
+    html = (site / "reference" / "parameters" / "index.html").read_text(encoding="utf-8")
+    assert schema_keys() - _codes(html) == set()
+
+
+#: Keys the reference must show by their real names (issue 68: a digit in a key's name made it
+#: ``<name>``), and name-keyed tables with their placeholders.
+REAL_NAMES = {
+    "params_sha256",
+    "robot.ros2_package.urdf",
+    "robot.ros2_package.meshes",
+    "robot.chains.<file>.timestep_s",
+    "robot.chains.<file>.tip_error_vs_eq2_mm",
+    "robot.joint_limits.<joint>.effort",
+    "robot.supply_lag_s.<line>",
+    "robot.virtual_link_mass_kg",
+    "parts[].density_g_cm3",
+    "print_jobs[].files.3mf",
+}
+
+
+def _manifest_rows(site: Path) -> dict[str, list[str]]:
+    """The export reference's manifest table as built: key -> its cells (type, unit, value)."""
+    html = (site / "reference" / "export" / "index.html").read_text(encoding="utf-8")
+    table = html[html.index('id="every-key-of-manifestjson"') :]
+    rows = {}
+    for row in re.findall(r"<tr>(.*?)</tr>", table, re.DOTALL):
+        cells = [
+            unescape(re.sub(r"<[^>]+>", "", c)).strip()
+            for c in re.findall(r"<td>(.*?)</td>", row, re.DOTALL)
+        ]
+        if cells:
+            rows[cells[0]] = cells[1:]
+    return rows
+
+
+def test_manifest_reference_types_and_names(site):
+    """Real names, one type each (no ``list of list of ...``), a unit for every number."""
+    rows = _manifest_rows(site)
+    assert REAL_NAMES <= rows.keys(), sorted(REAL_NAMES - rows.keys())
+    assert not [k for k in rows if "<name>" in k and not k.startswith("bom.")], (
+        "keys lost to <name>"
     )
-    missing = {
-        k
-        for k in schema_keys()
-        if f"<code>{k.replace('<', '&lt;').replace('>', '&gt;')}</code>" not in html
-    }
-    assert missing == set()
+    assert {k: t for k, (t, _u, _v) in rows.items() if "list of list" in t} == {}
+    assert rows["robot.chains.<file>.timestep_s"][:2] == ["number", "s"]
+    assert rows["robot.ros2_package.meshes"][:2] == ["number", "count"]
+    assert rows["assembly.instances[].transform[]"][:2] == ["list of number", "4 x 4 transform, mm"]
+    assert rows["robot.joint_limits.<joint>.lower"][0] == "null or number"  # phi: continuous
+
+
+@pytest.mark.slow
+def test_every_manifest_key_is_in_the_site(bvsr_export, site):
+    """Each key of a freshly built default manifest, generalised only where its table is keyed by
+    names (a file, a joint, a line), is a row of the built export reference."""
+    gen = _generator()
+    manifest = json.loads((bvsr_export / "manifest.json").read_text(encoding="utf-8"))
+    keys = set()
+
+    def walk(v, path):
+        if isinstance(v, dict):
+            for k, x in v.items():
+                name = gen.NAME_KEYED.get(path, "<name>" if "/" in k or " " in k else k)
+                walk(x, f"{path}.{name}" if path else name)
+        elif isinstance(v, list) and any(isinstance(x, (dict, list)) for x in v):
+            for x in v:
+                walk(x, path + "[]")
+        else:
+            keys.add(path)
+
+    walk(manifest, "")
+    keys = {k for k in keys if not any(o.startswith(k + "[]") for o in keys)}  # empty here only
+    assert len(keys) > 200
+    missing = keys - _manifest_rows(site).keys()
+    assert missing == set(), (
+        f"manifest keys missing from the built export reference: {sorted(missing)}"
+    )
+
+
+def test_cli_reference_lists_every_command_and_flag(site):
+    """Every command of the parser `bvsr` runs, and every flag and positional of each, appears in
+    the built command reference under that command's heading."""
+    import argparse
+
+    from bvsr_cad.cli import make_parser
+
+    top = make_parser()
+    sub = next(a for a in top._actions if isinstance(a, argparse._SubParsersAction))
+    html = (site / "reference" / "cli" / "index.html").read_text(encoding="utf-8")
+    sections = dict(re.findall(r'<h3 id="bvsr-([a-z]+)">(.*?)(?=<h[23] |\Z)', html, re.DOTALL))
+    assert set(sections) == set(sub.choices), "commands missing from (or extra in) the reference"
+    assert len(sub.choices) >= 11
+    missing = []
+    for name, parser in sub.choices.items():
+        cells = {part.strip() for code in _codes(sections[name]) for part in code.split(",")}
+        for action in parser._actions:
+            if isinstance(action, argparse._HelpAction):
+                continue
+            for flag in action.option_strings or [action.metavar or action.dest]:
+                if flag not in cells:
+                    missing.append(f"bvsr {name} {flag}")
+    assert missing == []
+    # the four that issue 68 found missing from the hand-written table
+    for name, flag in (
+        ("init", "--force"),
+        ("simulate", "-o"),
+        ("workspace", "--seed"),
+        ("sweep", "-o"),
+    ):
+        assert f"bvsr {name} {flag}" not in missing and name in sections
 
 
 @pytest.mark.slow

@@ -307,6 +307,16 @@ def paper_table_markdown(data: dict[str, Any] | None = None) -> str:
 
 
 EXPORT_SUMMARY = DOCS / "data" / "export_summary.json"
+#: The manifest's tables whose keys are names the build chose (a file, a joint, a pressure line, an
+#: MJCF model, a BOM total), by path, and the placeholder their keys read as in the reference. Every
+#: other key is printed as it is written.
+NAME_KEYED = {
+    "robot.chains": "<file>",
+    "robot.joint_limits": "<joint>",
+    "robot.supply_lag_s": "<line>",
+    "robot.mjcf_actuators": "<model>",
+    "bom.totals": "<total>",
+}
 #: Numbers in the manifest whose name carries no unit, by their generalised path (see
 #: :func:`manifest_keys`).
 MANIFEST_UNITS = {
@@ -321,19 +331,16 @@ MANIFEST_UNITS = {
     "molds.parts[].parting_planes[].point": "mm",
     "molds.parts[].parting_planes[].normal": "unit vector",
     "rigid_tail.mass_g_solid": "g",
-    "bom.totals.<name>.quantity": "`bom.totals.<name>.unit`",
-    "robot.chains.<name>.bend_limit.max_overshoot": "fraction of theta_max",
-    "robot.joint_limits.<name>.lower": "rad (m for `*_chord`)",
-    "robot.joint_limits.<name>.upper": "rad (m for `*_chord`)",
-    "robot.joint_limits.<name>.velocity": "rad/s (m/s for `*_chord`)",
-    "robot.joint_limits.<name>.effort": "N m (N for `*_chord`)",
+    "bom.totals.<total>.quantity": "`bom.totals.<total>.unit`",
+    "robot.chains.<file>.bend_limit.max_overshoot": "fraction of theta_max",
+    "robot.joint_limits.<joint>.lower": "rad (m for `*_chord`)",
+    "robot.joint_limits.<joint>.upper": "rad (m for `*_chord`)",
+    "robot.joint_limits.<joint>.velocity": "rad/s (m/s for `*_chord`)",
+    "robot.joint_limits.<joint>.effort": "N m (N for `*_chord`)",
     "viewer.bytes": "bytes",
     "viewer.scenes[].bytes": "bytes",
     "scenes.files[].bytes": "bytes",
-    "robot.supply_lag_s.<name>": "s",
     "volatile.stages[].seconds": "s",
-    "volatile.cpu_seconds.<name>": "s",
-    "mass_g.<name>": "g",
 }
 #: Leaf names that count things.
 COUNTS = {
@@ -355,69 +362,89 @@ COUNTS = {
     "faces",
     "joint",
     "segment",
-    "bvsr",
-    "bvsr_segments",
-    "bvsr_exact",
-    "<name>",
+    "nodes",
+    "bodies",
+    "actuators",
+    "<model>",
 }
 
 
-def _generalise(key: str, tail_name: str) -> str:
-    """A manifest key that is a name (a joint, a file, a line, a tail) becomes ``<name>``."""
-    data_like = (
-        any(c.isdigit() for c in key.removesuffix("_m2").removesuffix("_mm2").removesuffix("_mm3"))
-        or "/" in key
-        or " " in key
-        or key.startswith(tail_name)
-    )
-    return "<name>" if data_like else key
+def _generalise(table: str, key: str) -> str:
+    """A key of a name-keyed table becomes its placeholder (:data:`NAME_KEYED`); a key that cannot
+    be a field's name (a path, words with spaces) becomes ``<name>``; every other key stays as
+    written."""
+    if table in NAME_KEYED:
+        return NAME_KEYED[table]
+    return "<name>" if "/" in key or " " in key else key
+
+
+def _kind(v: Any) -> str:
+    if isinstance(v, bool):
+        return "bool"
+    if isinstance(v, (int, float)):
+        return "number"
+    return "null" if v is None else "text"
 
 
 def manifest_keys(manifest: dict[str, Any]) -> dict[str, dict[str, str]]:
-    """Every key path of a manifest (lists as ``[]``, name-keyed tables as ``<name>``), with its
-    JSON type, its unit and the default build's value where it is one number or short text."""
-    tail = manifest.get("name", "")
-    out: dict[str, dict[str, str]] = {}
+    """Every key path of a manifest (a list's items as ``[]``, a name-keyed table's keys as its
+    placeholder), with its JSON type (``a or b`` where values differ, ``list of ...`` for a list of
+    numbers or names), its unit and the default build's value where it is one number."""
+    kinds: dict[str, set[str]] = {}
+    example: dict[str, Any] = {}
 
-    def walk(v: Any, path: str, leaf: str) -> None:
+    def note(path: str, kind: str, value: Any) -> None:
+        kinds.setdefault(path, set()).add(kind)
+        if path not in example or example[path] is None:
+            example[path] = value
+
+    def walk(v: Any, path: str) -> None:
         if isinstance(v, dict):
             for k, x in v.items():
-                g = _generalise(k, tail)
-                walk(x, f"{path}.{g}" if path else g, g)
+                g = _generalise(path, k)
+                walk(x, f"{path}.{g}" if path else g)
             if not v:
-                out.setdefault(path, {"type": "object", "unit": "", "example": "{}"})
-            return
-        if isinstance(v, list):
-            if v and all(
-                not isinstance(x, (dict, list)) for x in v
-            ):  # a vector of numbers or names
-                walk(v[0], path, leaf)
-                out[path]["type"] = "list of " + out[path]["type"]
+                note(path, "object", None)
+        elif isinstance(v, list):
+            if v and not any(isinstance(x, (dict, list)) for x in v):  # numbers or names
+                inner = " or ".join(sorted({_kind(x) for x in v}))
+                note(path, f"list of {inner}", v[0])
                 return
             for x in v:
-                walk(x, path + "[]", leaf)
+                walk(x, path + "[]")
             if not v:
-                out.setdefault(path + "[]", {"type": "list", "unit": "", "example": "[]"})
-            return
-        if path in out:
-            return
-        kind = (
-            "number"
-            if isinstance(v, (int, float)) and not isinstance(v, bool)
-            else ("bool" if isinstance(v, bool) else "null" if v is None else "text")
-        )
+                note(path, "list", None)
+        else:
+            note(path, _kind(v), v)
+
+    walk(manifest, "")
+    out = {}
+    for path in sorted(kinds):
+        if kinds[path] == {"list"} and any(k.startswith(path + "[]") for k in kinds):
+            continue  # a list empty here and filled elsewhere: its items' keys describe it
+        kind = _either(kinds[path])
+        number = "number" in kind
+        value = example[path]
         volatile = path.startswith("volatile.")  # differs from build to build: no example
         out[path] = {
             "type": kind,
-            "unit": manifest_unit(path, leaf) if kind == "number" else "",
-            "example": _fmt(v) if kind == "number" and not volatile else "",
+            "unit": manifest_unit(path) if number else "",
+            "example": _fmt(value)
+            if number and isinstance(value, (int, float)) and not volatile
+            else "",
         }
-
-    walk(manifest, "", "")
-    return dict(sorted(out.items()))
+    return out
 
 
-def manifest_unit(path: str, leaf: str) -> str:
+def _either(kinds: set[str]) -> str:
+    """``a, b or c``, single values first, lists last."""
+    ordered = sorted(kinds, key=lambda k: (k.startswith("list"), k))
+    return (
+        " or ".join(ordered) if len(ordered) < 3 else ", ".join(ordered[:-1]) + " or " + ordered[-1]
+    )
+
+
+def manifest_unit(path: str) -> str:
     """The unit of a number in the manifest: from the table above, else its name or its table's
     name."""
     bare = re.sub(r"(\[\])+$", "", path)
@@ -426,7 +453,7 @@ def manifest_unit(path: str, leaf: str) -> str:
     for part in reversed(bare.replace("[]", "").split(".")):
         if unit_of(part) != UNITLESS:
             return unit_of(part)
-    return "count" if leaf.replace("[]", "") in COUNTS else "?"
+    return "count" if bare.replace("[]", "").rsplit(".", 1)[-1] in COUNTS else "?"
 
 
 def export_files(export: Path) -> dict[str, list[str]]:
@@ -506,12 +533,128 @@ def paper_checks_markdown() -> str:
     return "\n".join(out) + "\n"
 
 
+#: The guide that shows each command in use (a command not named here gets no link).
+CLI_GUIDES = {
+    "build": "../guides/designer.md",
+    "watch": "../guides/designer.md",
+    "show": "../guides/designer.md",
+    "init": "../guides/designer.md",
+    "check": "checks.md",
+    "simulate": "../guides/simulation.md",
+    "mount": "../guides/simulation.md",
+    "calibrate": "../guides/lab.md",
+    "workspace": "../models.md",
+    "clearance": "../models.md#clearance-and-joint-limits",
+    "sweep": "../guides/studies.md",
+}
+
+
+def cli_commands() -> list[tuple[str, Any]]:
+    """Every subcommand of ``bvsr`` with its parser, in the parser's order (read from
+    ``bvsr_cad.cli.make_parser``, the parser the command runs)."""
+    import argparse
+
+    from bvsr_cad.cli import make_parser
+
+    top = make_parser()
+    sub = next(a for a in top._actions if isinstance(a, argparse._SubParsersAction))
+    return list(sub.choices.items())
+
+
+def cli_arguments(parser: Any) -> list[dict[str, str]]:
+    """One row per argument of a parser: its name or flags, what it takes, its default, its help."""
+    import argparse
+
+    rows = []
+    for a in parser._actions:
+        if isinstance(a, argparse._HelpAction):
+            continue
+        names = ", ".join(a.option_strings) or (a.metavar or a.dest)
+        if a.choices:
+            takes = "one of " + ", ".join(f"`{c}`" for c in a.choices)
+        elif a.nargs == 0:
+            takes = "flag"
+        else:
+            takes = _takes(a.type) + (" (optional)" if a.nargs == "?" else "")
+        default = a.default
+        shown = (
+            ""
+            if default is None or default is False or default == argparse.SUPPRESS
+            else f"`{default}`"
+        )
+        rows.append(
+            {
+                "argument": names,
+                "takes": takes,
+                "default": shown,
+                "required": "yes" if a.required else "",
+                "help": (a.help or "") % {"default": default} if a.help else "",
+            }
+        )
+    return rows
+
+
+def _takes(parse: Any) -> str:
+    """What an argument's type accepts: ``int``, ``float`` or one of ``bvsr_cad.cli._number``'s
+    checked numbers (its bound read from the closure), else text."""
+    import inspect
+
+    names = {int: "integer", float: "number"}
+    if parse in names:
+        return names[parse]
+    if callable(parse) and getattr(parse, "__closure__", None):
+        bound = inspect.getclosurevars(parse).nonlocals
+        if {"kind", "minimum", "inclusive"} <= bound.keys():
+            sym = "≥" if bound["inclusive"] else ">"
+            return f"{names[bound['kind']]} {sym} {_number(bound['minimum'])}"
+    return "text"
+
+
+def cli_markdown() -> str:
+    """The command reference: every ``bvsr`` command with its usage and every argument, generated
+    from the parser so that none can go missing."""
+    import argparse
+
+    out: list[str] = []
+    for name, parser in cli_commands():
+        parser.formatter_class = lambda prog: argparse.HelpFormatter(prog, width=100)
+        usage = parser.format_usage().removeprefix("usage: ").strip()
+        what = _escape(parser.description or _help_of(name))
+        if name in CLI_GUIDES:
+            what += f" ([in use]({CLI_GUIDES[name]}))"
+        out += ["", f"### `bvsr {name}`", "", what, "", "```text", usage, "```", ""]
+        out += ["| argument | takes | default | what it does |", "|---|---|---|---|"]
+        for r in cli_arguments(parser):
+            code = _escape(r["argument"]).replace("\\|", "&#124;")  # a | would split the cell
+            arg = f"<code>{code}</code>" + (" (required)" if r["required"] else "")
+            cells = (arg, r["takes"], r["default"], _escape(r["help"]))
+            out.append("| " + " | ".join(_cell(c) for c in cells) + " |")
+    return "\n".join(out) + "\n"
+
+
+def _escape(text: str) -> str:
+    """Help text in a Markdown cell: ``<name>`` kept as text, not read as an HTML tag."""
+    return _cell(text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;"))
+
+
+def _help_of(name: str) -> str:
+    """A subcommand's one-line help, as ``bvsr --help`` lists it."""
+    import argparse
+
+    from bvsr_cad.cli import make_parser
+
+    top = make_parser()
+    sub = next(a for a in top._actions if isinstance(a, argparse._SubParsersAction))
+    return next(c.help for c in sub._choices_actions if c.dest == name)
+
+
 GENERATORS = {
     "parameters": parameters_markdown,
     "paper-table": lambda: paper_table_markdown(),
     "export-files": export_files_markdown,
     "manifest-keys": manifest_markdown,
     "paper-checks": paper_checks_markdown,
+    "cli": cli_markdown,
 }
 
 

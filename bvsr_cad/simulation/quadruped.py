@@ -708,6 +708,7 @@ class QuadImpactRun:
     max_penetration_mm: float
     warnings: int
     roll_s: float  # the ball's roll before the hand-over (s of model time)
+    tail_mass_kg: float = 0.0  # the mounted tail's (the rigid twin: solid PLA)
 
     @property
     def peak_torso_speed_m_s(self) -> float:
@@ -862,7 +863,9 @@ def impact_run(
     _copy_ball(rm, rd, m, d)
     m.opt.timestep = IMPACT_TIMESTEP_S
     mujoco.mj_forward(m, d)
-    return _impact_window(sc, d, ball, "rigid" if rigid else "soft", window_s, float(rd.time))
+    run = _impact_window(sc, d, ball, "rigid" if rigid else "soft", window_s, float(rd.time))
+    run.tail_mass_kg = sc.tail_mass_kg
+    return run
 
 
 def _impact_window(sc: Scene, d, ball, tail: str, window_s: float, roll_s: float):
@@ -1170,6 +1173,7 @@ def _impact_row(r: QuadImpactRun) -> dict:
     return {
         "tail": r.tail,
         "ball": r.ball,
+        "tail_mass_kg": r.tail_mass_kg,
         "peak_torso_speed_m_s": r.peak_torso_speed_m_s,
         "peak_torso_rate_deg_s": r.peak_torso_rate_deg_s,
         "peak_root_force_n": r.peak_root_force_n,

@@ -242,3 +242,27 @@ def test_without_the_extra_the_report_says_how_to_get_it(export, bvsr_spec, monk
     assert section == {"quadruped": {"installed": False, "how": section["quadruped"]["how"]}}
     page = html.unescape("\n".join(_report_quadruped(section)))
     assert "pip install 'bvsr_cad[quadruped]'" in page
+
+
+BOX_URDF = """<robot name="box_bot">
+  <link name="base">
+    <inertial><mass value="10"/><inertia ixx="0.1" iyy="0.3" izz="0.35" ixy="0" ixz="0" iyz="0"/>
+    </inertial>
+    <collision><geometry><box size="0.6 0.3 0.1"/></geometry></collision>
+  </link>
+</robot>
+"""
+
+
+def test_a_urdf_host_gets_a_floating_base_and_stands_on_the_floor(export, tmp_path, tail_mass_kg):
+    """MuJoCo fixes a URDF's root link to the world: the scene gives it a free joint (noted) and
+    starts it with its lowest point on the floor (the box's half height up), where the floor then
+    carries host and tail."""
+    path = tmp_path / "box_bot.urdf"
+    path.write_text(BOX_URDF)
+    sc = q.build_scene(export, q.make_host(str(path), "base", "-0.31 0 0.02 90 0 -90"))
+    assert any("free joint" in n for n in sc.notes)
+    assert sc.start_qpos[sc.base_qpos + 2] == pytest.approx(0.05, abs=1e-9)
+    d = q.new_data(sc)
+    q.settle(sc, d)
+    assert q.ground_force_n(sc, d) == pytest.approx((10.0 + tail_mass_kg) * G, rel=1e-3)

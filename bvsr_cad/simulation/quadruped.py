@@ -345,6 +345,7 @@ def build_scene(
         )
     spec, prefix = mounted.spec, mounted.prefix
     spec.option.timestep = _export_timestep_s(soft_xml)
+    _float_base(spec, host.body, mounted.notes)
     root_name = f"{prefix}rigid_tail" if rigid else f"{prefix}panel0"
     panels = sorted(
         (b.name for b in spec.bodies if b.name.startswith(f"{prefix}panel")),
@@ -469,6 +470,8 @@ def _index(model, host: Host, prefix: str, root_name: str, tip_name: str, mounte
     key = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, host.keyframe or "")
     if key >= 0:
         start = model.key_qpos[key].copy()
+    else:  # no stance of its own: the robot as its file poses it, its lowest point on the floor
+        start[model.jnt_qposadr[free[0]] + 2] -= _lowest_z_m(model, start, body)
     qa = model.jnt_qposadr[joints]
     return Scene(
         model=model,
@@ -493,6 +496,37 @@ def _index(model, host: Host, prefix: str, root_name: str, tip_name: str, mounte
         kd=host.kd,
         notes=list(mounted.notes),
     )
+
+
+def _float_base(spec, body: str, notes: list[str]) -> None:
+    """Give a host whose top body is fixed to the world (a URDF as MuJoCo reads it) a free joint
+    there, so that the stance stands it on the floor; noted."""
+    top = spec.body(body)
+    while top.parent.name != spec.worldbody.name:
+        top = top.parent
+    if not list(top.joints):
+        top.add_freejoint()
+        notes.append(f"host body {top.name!r} was fixed to the world: given a free joint")
+
+
+def _lowest_z_m(model, qpos: np.ndarray, base: int) -> float:
+    """The lowest point of the robot's collision geometry (``base``'s subtree) at ``qpos``: the
+    corners of each geom's bounding box."""
+    import mujoco
+
+    d = mujoco.MjData(model)
+    d.qpos[:] = qpos
+    mujoco.mj_kinematics(model, d)
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+    lowest = np.inf
+    for g in range(model.ngeom):
+        solid = model.geom_contype[g] or model.geom_conaffinity[g]
+        if not solid or model.body_rootid[model.geom_bodyid[g]] != base:
+            continue
+        centre, half = model.geom_aabb[g, :3], model.geom_aabb[g, 3:]
+        R = d.geom_xmat[g].reshape(3, 3)
+        lowest = min(lowest, float(np.min(d.geom_xpos[g, 2] + (centre + corners * half) @ R[2])))
+    return lowest if np.isfinite(lowest) else 0.0
 
 
 def stance_control(sc: Scene, d) -> None:

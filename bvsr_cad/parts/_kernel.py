@@ -23,10 +23,9 @@ def kernel_threads(n: int) -> int:
     """Run OCCT's parallel algorithms (the booleans and the meshing build123d and the exporters ask
     to run in parallel) on ``n`` threads, the calling one included (1: on it alone); the number
     before is returned, to give back. A build whose second process keeps the other core busy asks
-    for 1: on the default tail its booleans then take 0.65 CPU s less than on two threads (the
-    assembly 1.48 against 1.77, the rigid twin 2.67 against 2.86, the mold set 1.41 against 1.55)
-    for the same solids, and the meshing as much for the same STL bytes. OCCT refuses while its
-    threads are at work: the pool is then left as it was."""
+    for 1: on the default tail its booleans then take less CPU than on two threads for the same
+    solids, and the meshing as much for the same STL bytes (figures: benchmarks/RESULTS.md). OCCT
+    refuses while its threads are at work: the pool is then left as it was."""
     from OCP.OSD import OSD_ThreadPool
 
     pool = OSD_ThreadPool.DefaultPool_s()
@@ -160,7 +159,7 @@ def bounds(shape: bd.Shape) -> bd.BoundBox:
     shape, which deletes the triangulation of every face it shares with other shapes: the manifest's
     tail length (a compound of the placed parts) and the drawings' hole tables (the parts' faces)
     would wipe what the print STLs meshed, and the robot's meshes (the same solids at the same
-    tolerances) would be meshed again (1.6 CPU s in a cold default build). Here the box reads the
+    tolerances) would be meshed again (its cost: benchmarks/RESULTS.md). Here the box reads the
     geometry only (``useTriangulation`` off), which is what the optimal box reads after a clean: the
     same numbers (tests/test_parts.py compares them on every part, face and placed assembly)."""
     from OCP.Bnd import Bnd_Box
@@ -212,9 +211,9 @@ def _boolean(base: bd.Shape, tools: list[bd.Shape], operation) -> bd.Shape:
     """build123d's boolean of ``base`` and ``tools`` (its clean and history included: what
     ``Shape.cut`` and ``Shape.fuse`` run) with OCCT's oriented bounding boxes on (``SetUseOBB``):
     the kernel then rejects the pairs of sub-shapes whose oriented boxes do not meet before it
-    intersects them, for the same solid. On the default tail (alternated, 4 runs each, one core) the
-    mold set takes 0.8-1.4 CPU s with it against 2.2-2.9 without, the assembly and the rigid twin
-    the same within the machine's noise; the default export byte-identical with it and without
+    intersects them, for the same solid. On the default tail it cuts the mold set's booleans to
+    about half their CPU and leaves the assembly's and the rigid twin's within the machine's noise
+    (figures: benchmarks/RESULTS.md); the default export is byte-identical with it and without
     (compared file by file, the manifest's volatile section apart)."""
     operation.SetUseOBB(True)
     return base._bool_op((base,), tools, operation)  # build123d 0.12's one boolean path (pinned)
@@ -243,10 +242,9 @@ def ruled_loft(sections: Sequence[bd.Face], what: str) -> bd.Solid:
     band is flat (between two straight edges). Those faces are given their plane here (the same
     edges, so the same solid): what reads the solid then meets a plane, not a B-spline, and a CAD
     user picks a flat face that is one. The SOA's outer loft has 16 flat bands of 32, its interior
-    all 16. Measured on the default tail: its parts, mold set and rigid twin mesh for print (0.01
-    mm) to 255,188 triangles instead of 523,656 (OCCT refines a B-spline face's interior, flat or
-    not), in 5.1-6.3 CPU s instead of 6.5-7.8 (alternated, one core); their volumes unchanged to
-    1e-4 mm^3; the export 72 MB instead of 104 MB.
+    all 16. OCCT refines a B-spline face's interior, flat or not, so with planes the default tail's
+    print meshes have about half the triangles, mesh faster and make a smaller export, with the
+    volumes unchanged to 1e-4 mm^3 (figures: benchmarks/RESULTS.md).
     """
     from OCP.BRep import BRep_Builder, BRep_Tool
     from OCP.BRepAdaptor import BRepAdaptor_Surface

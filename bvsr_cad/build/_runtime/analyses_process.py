@@ -3,8 +3,8 @@ bvsr_cad.build._runtime.analyses_process``).
 
 Its own module, beside :mod:`bvsr_cad.build.pipeline` rather than in it, so that the process imports
 what the analyses read (the CAD kernel, the models, the simulator) and not the exporters the build's
-own process writes with (matplotlib, pyvista, the drawings' SVG): measured with ``python -X
-importtime``, about 2.4 CPU s of imports instead of 2.9. Here, not in the analysis layer, because a
+own process writes with (matplotlib, pyvista, the drawings' SVG): a sixth less import time (``python
+-X importtime``; figures: benchmarks/RESULTS.md). Here, not in the analysis layer, because a
 measured workspace is predicted in the simulator.
 """
 
@@ -44,8 +44,8 @@ def write_geometry_ahead(folder: Path, geo: GeometryAnalyses) -> None:
 #: (:func:`write_rest_ahead`); the build moves it into its cache entry of the geometry analyses as
 #: :data:`REST_FILE` (:func:`keep_rest`), beside their pickle, and the next build of the same
 #: geometry hands it back: an edit that moves no solid then makes no solid in this process, meshes
-#: none and measures no rest distance (its assembly ahead and the posed tail are 3-4 CPU s of this
-#: process's work, most of it before its analyses could start).
+#: none and measures no rest distance (its assembly ahead and the posed tail are seconds of this
+#: process's work, most of it before its analyses could start; figures: benchmarks/RESULTS.md).
 REST_AHEAD_FILE = ".analysis-rest.pkl"
 #: The rest geometry's name in the cache entry of the geometry analyses.
 REST_FILE = "rest_geometry.pkl"
@@ -164,7 +164,8 @@ def _analyses_process(
     limits alone, while the other analyses go on; they took the build's last seconds, on one core,
     when they waited for the whole result), and once the analyses are done their pictures of the
     tail ``NAME`` (:func:`bvsr_cad.exporters.analysis_files.write_analysis_pictures`; ``drawn`` says
-    so): they were 1.1 s of the build's last stages too."""
+    so): drawn in the build's process, they were part of its last stages too
+    (benchmarks/RESULTS.md)."""
     from ...analysis.run import from_params
 
     kernel_threads(1)  # beside the build, which keeps the other core busy

@@ -116,10 +116,9 @@ def one_blas_thread() -> None:
     """numpy's and scipy's OpenBLAS on one thread (``OPENBLAS_NUM_THREADS=1``) unless the
     environment sets a number OpenBLAS reads (:data:`BLAS_THREAD_VARIABLES`); before they are
     imported. A build keeps both cores busy with its own processes: OpenBLAS's second thread only
-    takes CPU from them (cold default builds run two at a time, same machine phase: 71.3 and 80.1
-    CPU s against 73.0 and 81.0 with OpenBLAS's default of one thread per core) and the export is
-    the same (every file, the manifest's volatile section aside). Called by the entry points only
-    (the ``bvsr`` command, a second process, which inherits it), as :func:`tune_allocator`."""
+    takes CPU from them (figures: benchmarks/RESULTS.md) and the export is the same (every file, the
+    manifest's volatile section aside). Called by the entry points only (the ``bvsr`` command, a
+    second process, which inherits it), as :func:`tune_allocator`."""
     if not any(os.environ.get(name) for name in BLAS_THREAD_VARIABLES):
         os.environ["OPENBLAS_NUM_THREADS"] = "1"
 

@@ -369,3 +369,15 @@ def test_simulation_guide_drive_snippet_runs(bvsr_export, bvsr_data, tmp_path):
     drop_m = at_rest[2] - moved[2]
     assert 0.05 < drop_m < 0.15  # the guide: "about 9 cm lower"
     assert abs(moved[1]) < 1e-3  # SOA 1 lies in the sagittal plane: no sideways motion
+
+
+def test_one_python_range():
+    """The README and the docs home state the supported Python versions as pyproject.toml's
+    requires-python says them, and no other range."""
+    spec = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    low, high = re.fullmatch(r">=3\.(\d+),<3\.(\d+)", spec["project"]["requires-python"]).groups()
+    stated = f"Python 3.{low} to 3.{int(high) - 1}"
+    for page in ("README.md", "docs/index.md"):
+        text = " ".join((ROOT / page).read_text(encoding="utf-8").split())
+        assert stated in text, page
+        assert set(re.findall(r"Python 3\.\d+(?: to 3\.\d+)?", text)) == {stated}, page

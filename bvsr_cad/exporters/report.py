@@ -716,7 +716,7 @@ def _report_analyses(root: Path, manifest: dict[str, Any]) -> list[str]:
     else:
         h.append("<p class=muted>No analysis plots in this export.</p>")
 
-    h.append("<h2>Against the paper (SPEC section 6)</h2>")
+    h.append("<h2>Against the paper</h2>")
     h.append(_paper_table(manifest))
     h.append("<h2>Model against measurements</h2>")
     h.append(_measurements_section(root, manifest))

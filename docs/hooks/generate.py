@@ -509,7 +509,7 @@ def manifest_markdown() -> str:
 
 
 def paper_checks_markdown() -> str:
-    """The paper's figures of SPEC section 6 beside the build's, with each difference's reason."""
+    """The paper's figures the build computes beside the build's, with each difference's reason."""
     out = [
         "| figure | paper | model | unit | where in the paper | difference and reason |",
         "|---|---|---|---|---|---|",

@@ -381,3 +381,47 @@ def test_one_python_range():
         text = " ".join((ROOT / page).read_text(encoding="utf-8").split())
         assert stated in text, page
         assert set(re.findall(r"Python 3\.\d+(?: to 3\.\d+)?", text)) == {stated}, page
+
+
+def _faq() -> str:
+    return (ROOT / "docs" / "faq.md").read_text(encoding="utf-8")
+
+
+def test_faq_quotes_the_missing_extra_message(monkeypatch, capsys):
+    """`bvsr sweep` with the studies extra's modules hidden prints the FAQ's line, exit code 2."""
+    from bvsr_cad.cli import main
+    from bvsr_cad.extras import MODULES
+
+    for module in MODULES["studies"]:
+        monkeypatch.setitem(sys.modules, module, None)  # importlib finds no spec: "not installed"
+    assert main(["sweep", str(ROOT / "studies" / "vertebra.toml")]) == 2
+    line = capsys.readouterr().err.strip().splitlines()[-1]
+    assert line.startswith("bvsr: error: bvsr sweep needs the 'studies' extra")
+    assert line in _faq()
+
+
+def test_faq_quotes_the_no_viewer_message(monkeypatch, capsys):
+    """`bvsr show` with nothing listening on the viewer's port prints the FAQ's line for that
+    port, exit code 2."""
+    import socket
+
+    from bvsr_cad.cli import main
+
+    with socket.socket() as s:  # a port nothing listens on once closed
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    monkeypatch.delenv("OCP_PORT", raising=False)
+    assert main(["show", "--port", str(port)]) == 2
+    line = capsys.readouterr().err.strip().splitlines()[-1]
+    assert line.startswith("bvsr: error: no OCP CAD Viewer listens on port")
+    assert line.replace(str(port), "3939") in _faq()
+
+
+def test_faq_quotes_the_missing_slicer_message(monkeypatch):
+    """Slicing without PrusaSlicer raises the FAQ's message before it reads any export."""
+    from bvsr_cad.checks import printability
+
+    monkeypatch.setattr(printability, "slicer_exe", lambda: None)
+    with pytest.raises(printability.SlicerMissingError) as err:
+        printability.slice_stls(None)
+    assert f"bvsr: error: {err.value}" in _faq()

@@ -91,6 +91,22 @@ def default_parameters(spec: TailSpec, rows: list[Measurement]) -> list[str]:
     return names
 
 
+def informed_values(spec: TailSpec, quantity: str) -> tuple[list[str], list[str]]:
+    """The fitted values a ``fit`` row of ``quantity`` informs: those :func:`default_parameters`
+    fits for it, and the damping c, which only ``--fit`` adds, where the row is predicted in time.
+
+    Args:
+        spec: the tail (its rod and supply model choose among the defaults).
+        quantity: a name of :data:`bvsr_cad.parameters.measurements.QUANTITIES`.
+
+    Returns:
+        (fitted by default, fitted only when named in ``--fit``).
+    """
+    row = Measurement(0, "", quantity, (), 1.0, "", "fit", "")
+    on_request = ["damping_n_s_per_m"] if quantity in DYNAMIC_QUANTITIES else []
+    return default_parameters(spec, [row]), on_request
+
+
 def with_values(spec: TailSpec, values: dict[str, float]) -> TailSpec:
     base = uncalibrated(spec)
     return dataclasses.replace(
@@ -371,5 +387,6 @@ __all__ = [
     "FittedValue",
     "uncalibrated",
     "default_parameters",
+    "informed_values",
     "with_values",
 ]

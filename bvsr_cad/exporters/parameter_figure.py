@@ -27,16 +27,16 @@ from .drawings import SVG_NS, Dimension, _dimensions, _placed, _project, _SheetS
 
 #: The symbols drawn (the paper's Table I and II): symbol -> (parameter-file key, what it is).
 PAPER_SYMBOLS: dict[str, tuple[str, str]] = {
-    "H_j": ("joint.joint_height_mm", "height of one joint"),
+    "H_j": ("joint.joint_height_mm", "one joint"),
     "H_a": ("joint.gap_mm", "between two panels"),
-    "D_a": ("joint.pitch_diameter_mm", "actuator circle, at the root"),
-    "D_p": ("joint.panel_diameter_mm", "end panel, at the root"),
-    "D_b": ("joint.base_diameter_mm", "actuator base (flange)"),
-    "H": ("soa.height_mm", "height of the SOA"),
-    "a": ("soa.short_side_mm", "short side of a facet"),
-    "b": ("soa.long_side_mm", "long side of a facet"),
+    "D_a": ("joint.pitch_diameter_mm", "actuator circle (root)"),
+    "D_p": ("joint.panel_diameter_mm", "end panel (root)"),
+    "D_b": ("joint.base_diameter_mm", "actuator base"),
+    "H": ("soa.height_mm", "SOA height"),
+    "a": ("soa.short_side_mm", "facet short side"),
+    "b": ("soa.long_side_mm", "facet long side"),
 }
-FIGURE_MM = (230.0, 128.0)
+FIGURE_MM = (230.0, 118.0)
 #: Each view's scale and the sheet point (mm, y up) of its model origin.
 JOINT_VIEW = (1.0, (57.0, 52.0))
 TOP_VIEW = (0.75, (138.0, 78.0))
@@ -167,23 +167,23 @@ def _symbol_dimensions(asm: Assembly, m: dict[str, float]) -> tuple[list, list]:
 def _captions(root: ET.Element) -> None:
     g = ET.SubElement(root, f"{{{SVG_NS}}}g", {"id": "captions", "font-family": "DejaVu Sans"})
     for text, (x, y) in (
-        ("joint 1, front (-Y), 1:1", (JOINT_VIEW[1][0], 112.0)),
-        ("root panel, top (+Z), 1:1.33", (TOP_VIEW[1][0], 112.0)),
-        ("SOA, front, 1.5:1", (SOA_VIEW[1][0], 112.0)),
+        ("joint 1, front (-Y), 1:1", (JOINT_VIEW[1][0], 110.0)),
+        ("root panel, top (+Z), 1:1.33", (TOP_VIEW[1][0], 110.0)),
+        ("SOA, front, 1.5:1", (SOA_VIEW[1][0], 110.0)),
     ):
-        _text(g, x, y, text, 3.0, "middle", fill="#333")
+        _text(g, x, y, text, 3.4, "middle", fill="#333")
 
 
 def _legend(root: ET.Element, m: dict[str, float]) -> None:
     """Two columns of rows "symbol  key  value mm  what it is" under the views."""
     g = ET.SubElement(root, f"{{{SVG_NS}}}g", {"id": "legend", "font-family": "DejaVu Sans"})
     for i, (symbol, (key, what)) in enumerate(PAPER_SYMBOLS.items()):
-        x, y = 4.0 + 115.0 * (i // 4), 30.0 - 6.0 * (i % 4)
+        x, y = 4.0 + 115.0 * (i // 4), 31.0 - 6.5 * (i % 4)
         row = ET.SubElement(g, f"{{{SVG_NS}}}g", {"class": "legend-row", "data-symbol": symbol})
-        _symbol_text(_text(row, x, y, "", 3.0, **{"font-weight": "bold"}), symbol, "")
-        _text(row, x + 8.0, y, key, 3.0, **{"font-family": "DejaVu Sans Mono"})
-        _text(row, x + 58.0, y, f"{m[symbol]:.2f} mm", 3.0, **{"class": "value"})
-        _text(row, x + 75.0, y, what, 2.4, fill="#555")
+        _symbol_text(_text(row, x, y, "", 3.4, **{"font-weight": "bold"}), symbol, "")
+        _text(row, x + 8.0, y, key, 3.4, **{"font-family": "DejaVu Sans Mono"})
+        _text(row, x + 58.0, y, f"{m[symbol]:.2f} mm", 3.4, **{"class": "value"})
+        _text(row, x + 78.0, y, what, 2.8, fill="#555")
 
 
 def _symbol_text(el: ET.Element, symbol: str, rest: str) -> None:

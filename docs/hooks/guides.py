@@ -47,23 +47,20 @@ def measurement_quantities_markdown(params: Path = DEFAULT_PARAMS) -> str:
     if missing:
         raise ValueError(f"bvsr_cad.parameters.measurements.HOW_TO_MEASURE lacks {missing}")
     out = [
-        "| quantity | unit | condition keys | what it is | how to measure it "
+        "| quantity: what it is | unit | condition keys | how to measure it "
         "| fitted value it informs |",
-        "|---|---|---|---|---|---|",
+        "|---|---|---|---|---|",
     ]
     for name, (unit, conditions, what) in QUANTITIES.items():
         default, on_request = informed_values(spec, name)
         informs = ", ".join(f"`{v}`" for v in default) or "none (a check of the tables' values)"
         if on_request:
             informs += "; with `--fit`: " + ", ".join(f"`{v}`" for v in on_request)
-        keys = ", ".join(
-            f"`{k}` ({'extension, flexion or waggle' if kind == 'motion' else 'number'})"
-            for k, kind in conditions.items()
-        )
+        keys = ", ".join(f"`{k}`" for k in conditions)
         how = re.sub(r"``([^`]+)``", r"`\1`", HOW_TO_MEASURE[name])
         out.append(
             "| "
-            + " | ".join(_cell(c) for c in (f"`{name}`", f"`{unit}`", keys, what, how, informs))
+            + " | ".join(_cell(c) for c in (f"`{name}`: {what}", f"`{unit}`", keys, how, informs))
             + " |"
         )
     return "\n".join(out) + "\n"

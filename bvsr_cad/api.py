@@ -2,7 +2,7 @@
 
 A small, stable surface over the pipeline's layers (parameters -> parts ->
 assembly -> analysis). Everything is in millimetres and degrees, in the tail
-frame of SPEC section 2 (Z along the tail, Y dorsal, X lateral)::
+frame (Z along the tail, Y dorsal, X lateral)::
 
     import bvsr_cad
 

@@ -65,7 +65,7 @@ def test_manifest_follows_spec_section_7(default_molds):
             assert p["pull_direction"] is None and p["sacrificial"] is True
         else:
             assert np.linalg.norm(p["pull_direction"]) == pytest.approx(1.0, abs=1e-12)
-    # SPEC's example: half_a leaves along (1, -1, 0)/sqrt(2), half_b the other way.
+    # The split's example: half_a leaves along (1, -1, 0)/sqrt(2), half_b the other way.
     assert parts["half_a"]["pull_direction"] == pytest.approx(
         [math.sqrt(0.5), -math.sqrt(0.5), 0.0]
     )
@@ -96,7 +96,7 @@ def test_default_mold_set_passes_every_check(default_molds):
     by = _by_name(results)
     assert abs(by["mold_cavity_volume"].value) <= 0.5
     for half in ("half_a", "half_b"):
-        # SPEC 4: the diagonal split leaves about 34 deg on every facet.
+        # The diagonal split leaves about 34 deg on every facet.
         assert 30.0 <= by[f"mold_draft:{half}"].value <= 40.0
         assert by[f"mold_demold:{half}"].value == 0.0
     for name in MOLD_PARTS:

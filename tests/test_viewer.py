@@ -5,7 +5,7 @@ Expected values come from outside the code under test: the GLB files are read ba
 (an independent glTF reader, not trimesh that wrote them); the instances' names and placements from
 the assembly; the bounding box from the B-rep; colours from the colour table through the sRGB
 transfer function written out here (IEC 61966-2-1); the tail's length from the parameters, the
-bending directions of SPEC section 2 (extension dorsal, +Y in the tail frame; flexion -Y; waggle
+bending directions of the paper (extension dorsal, +Y in the tail frame; flexion -Y; waggle
 +X), the mold set's pull directions, and the rigidity of a panel (a posed panel keeps every distance
 between its vertices). The page test opens the written page in headless Chromium (SwiftShader WebGL)
 and looks at the pixels of the canvas.
@@ -250,7 +250,7 @@ def test_posed_tip_panel_moves_the_way_the_motion_says(built, decoded, motion, a
     posed = _by_label(decoded[motion])
     assert list(posed) == list(rest)
     moved = posed[tip]["scene_vertices"].mean(0) - rest[tip]["scene_vertices"].mean(0)
-    # SPEC section 2: extension bends dorsally (+Y), flexion ventrally (-Y), waggle sideways (+X);
+    # Paper's motions: extension bends dorsally (+Y), flexion ventrally (-Y), waggle sideways (+X);
     # at the pressure limits each segment bends tens of degrees, so the tip moves a good part of the
     # tail's length.
     assert sign * moved[axis] > 0.3 * spec.length_mm, moved

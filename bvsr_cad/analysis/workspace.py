@@ -1,4 +1,4 @@
-"""The paper's workspace protocol (Sec. IV-A-4, SPEC section 5) on the static model.
+"""The paper's workspace protocol (Sec. IV-A-4) on the static model.
 
 Each of the 5 x n_segments lines is, with equal probability, pressurised
 (uniform from atmospheric to the protocol's maximum), depressurised (uniform

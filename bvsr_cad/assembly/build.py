@@ -1,6 +1,6 @@
 """The tail at rest: unique parts, named instances and their placements (mm).
 
-Instances are named as SPEC section 2 says (``panel0`` .. ``panelN``,
+Instances are named by their place in the tail (``panel0`` .. ``panelN``,
 ``jk_soa1`` .. ``jk_soa5``, ``rod_s1`` ..). Parts that are geometrically
 identical are built once and shared: a part is named ``soa`` for the SOAs and
 after its first instance otherwise.

@@ -23,7 +23,7 @@ from ..parts.rigid_tail import RigidPiece, rigid_tail_pieces
 from .build import Assembly
 from .inertia import Inertial, SolidProperties, compose, from_solid
 
-#: The rigid twin's material (SPEC section 4: a PLA print), checked at load.
+#: The rigid twin's material (a PLA print, as the paper's rigid comparison tail), checked at load.
 RIGID_MATERIAL = RIGID_TWIN_MATERIAL
 
 

@@ -1,7 +1,7 @@
 """The robot model between the assembly and the URDF/MJCF writers, in SI.
 
 Links, joints, inertials, visuals, collisions and SOA actuators, as plain
-data. Each bending joint ``jk`` is the exact chain (SPEC section 7)
+data. Each bending joint ``jk`` is the exact constant-curvature chain
 
     Rz(phi) Ry(theta/2) Tz(chord) Ry(theta/2) Rz(-phi),  chord = 2 L sin(theta/2) / theta
 

@@ -391,7 +391,7 @@ def draft_and_blocking(
 def check_demolding(
     cast: trimesh.Trimesh, parts: list[MoldMesh], samples: CastSamples, parting_margin_mm: float
 ) -> list[CheckResult]:
-    """Every rigid part comes off along its pull direction (SPEC 4: halves about 34 deg)."""
+    """Every rigid part comes off along its pull direction (the diagonal split: about 34 deg)."""
     out = []
     for i, part in enumerate(parts):
         if part.pull_direction is None:

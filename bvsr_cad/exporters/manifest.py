@@ -1,4 +1,4 @@
-"""manifest.json: what an export holds, for tests and outside tools (SPEC section 7)."""
+"""manifest.json: what an export holds, for tests and outside tools."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Writes the SOA casting mold set into an export (``molds/``).
 
-Layout (paths relative to the export root, as SPEC section 7 names them):
+Layout (paths relative to the export root, as the manifest names them):
 
 * ``molds/soa_cast.stl``: the cast part as it sits in the closed mold
   (the SOA scaled by 1 + shrinkage), in the cast frame;

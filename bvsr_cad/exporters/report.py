@@ -9,7 +9,7 @@ failing the build.
 Sections: summary, the interactive 3D view (when the manifest has a
 ``viewer``: :mod:`bvsr_cad.exporters.viewer`), the assembly and every part
 (print orientation), the rigid comparison tail, the mold set, the analysis
-plots the manifest lists, the paper comparison of SPEC section 6 (computed
+plots the manifest lists, the paper comparison (computed
 beside reported, with the difference; figures the build does not model are
 marked so), the mass budget, print jobs and BOM totals, and the table of
 checks.
@@ -36,7 +36,7 @@ _MODEL = (
     "the Eq 6-12 model predicts it: see Model against measurements (and `bvsr simulate` in MuJoCo)"
 )
 _CART = "the Eq 20-22 cart model predicts it: see Model against measurements"
-#: SPEC section 6: quantity, the paper's figure (parameters/paper.py), the check that computes it
+#: Paper comparison: quantity, the paper's figure (parameters/paper.py), the check that computes it
 #: (or None), a note.
 PAPER_ROWS: tuple[tuple[str, paper.PaperFigure, str | None, str], ...] = (
     ("mass", paper.SEGMENT_STANDALONE_MASS, "paper:segment_standalone_mass", ""),

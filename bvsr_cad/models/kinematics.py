@@ -8,7 +8,7 @@ needs no special case beyond the series of sin(theta)/theta and
 :mod:`bvsr_cad.models.statics` work in w for the same reason: phi is undefined
 at a straight joint, w is not.
 
-Frames (SPEC section 2): Z along the tail, Y dorsal, X lateral. Joint k
+Frames: Z along the tail, Y dorsal, X lateral. Joint k
 (1-based) runs from the upper face centre of panel k-1 (its base frame) to
 the lower face centre of panel k (its moving frame) along an arc of length
 L = H_a; the panels are rigid slabs of thickness H_j - H_a. Everything is

@@ -40,7 +40,7 @@ from .rod import joint_rod_stiffness_nmm_per_rad
 
 #: Standard gravity, m/s^2 (N per kg).
 G_N_PER_KG = units.STANDARD_GRAVITY_M_S2
-#: Motions of SPEC section 2 as the bending-plane angle phi: towards +Y, -Y, +X.
+#: The paper's motions as the bending-plane angle phi: towards +Y, -Y, +X.
 MOTION_PHI_RAD = {"extension": math.pi / 2, "flexion": -math.pi / 2, "waggle": 0.0}
 #: Forward statics' Newton keeps a sample's loads' Hessian (gravity, tip force: 2n evaluations of
 #: every load) while its steps stay below this and shrink, computing it afresh otherwise: near the

@@ -1,4 +1,4 @@
-"""Figures the paper reports (SPEC section 6), kept only to compare against.
+"""Figures the paper reports kept only to compare against.
 
 Nothing in the pipeline builds from these; checks and reports print the
 computed value beside them with the difference.

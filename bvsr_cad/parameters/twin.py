@@ -6,7 +6,7 @@ and nut holes to these numbers and judges the printer fit with
 :func:`fits_printer`; :func:`twin_problems` checks the same numbers when a
 parameter file is loaded, so a twin that validates is the one that gets built.
 
-A piece (SPEC: one per joint, split at every panel's lower face) is panel
+A piece (one per joint, split at every panel's lower face) is panel
 ``k - 1`` on the bed with joint ``k``'s five SOA columns and its rod standing
 on it, up to panel ``k``'s lower face; the tip panel is a piece of its own.
 """

@@ -7,7 +7,7 @@ out of it: the core is sacrificial (printed in a soluble material such as
 PVA/BVOH, or cast in wax) and is located by square core prints in sockets at
 both ends, so it can neither shift nor turn while the PU flows.
 
-Split strategy (SPEC section 4, with the reasons):
+Split strategy, with the reasons:
 
 * Two shell halves split on the diagonal plane x = y through two opposite
   corners of the square. Pulled along +/-(1, -1, 0)/sqrt(2), every facet of the

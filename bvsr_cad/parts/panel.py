@@ -1,4 +1,4 @@
-"""Panels: root mount, intermediate, segment boundary and tip (SPEC section 4).
+"""Panels: root mount, intermediate, segment boundary and tip.
 
 Every feature comes from :func:`bvsr_cad.parameters.layout.panel_layout`, so the
 validated layout and the built solid cannot disagree. Frame: the panel's lower

@@ -1,4 +1,4 @@
-"""The rigid comparison tail (SPEC section 4): the BVSR's outer geometry at rest, in PLA.
+"""The rigid comparison tail: the BVSR's outer geometry at rest, in PLA.
 
 The paper's disturbance tests compare the BVSR with a rigid twin of
 "identical geometric parameters". Here the twin is the union of the panel

@@ -1,5 +1,5 @@
 """The soft origami actuator (SOA): a square bellows of PU rubber, open at both
-ends, with a round flange at each end (SPEC section 3, Table II).
+ends, with a round flange at each end (the paper's Table II).
 
 Frame: the SOA axis is +Z, the lower flange face at z = 0, the square's sides
 parallel to X and Y (the assembly turns it by ``soa.rotation_deg``).

@@ -1,17 +1,20 @@
 """Cost of the tail on a legged host, in one run, on one CPU core: steps/s of
 
 - (a) the host alone: the quadruped above a floor, held in its keyframe's stance by a PD stance
-  (each leg motor made a PD servo inside MuJoCo, ``kp`` and ``kd`` of
-  :data:`bvsr_cad.simulation.quadruped.GO1`, so the step loop is MuJoCo's own);
+  (``kp`` and ``kd`` of :data:`bvsr_cad.simulation.quadruped.GO1`);
 - (b) the host with the export's tail mounted where ``bvsr simulate --platform quadruped`` mounts
   it, the same floor and stance;
 - (c) the tail alone: the export's ``robot/scene.xml``;
 
-each at the tail's exported time step, the three alternated over ``--rounds`` rounds (the order
-rotating each round). A rate is steps over the process's CPU seconds of the stepping (the process
-pinned to one core), so other work on a shared machine slows the wall clock, not the figure; the
-wall-clock rate and the load average are printed beside it. Then the host+tail's ratio to the
-host alone (the goal: at least 1/2) and where a step's time goes in each, from MuJoCo's timers.
+each at the tail's exported time step, in two protocols: MuJoCo's own loop (``mj_step`` with
+``nstep``) with the stance as servos, which measures the engine alone, and one ``mj_step`` call a
+step with the stance computed in Python before it (as ``bvsr simulate --platform quadruped`` and
+the issue's first trial stepped), which adds a controller's fixed cost to every step; the six
+alternated over ``--rounds`` rounds (the order rotating each round). A rate is steps over the
+process's CPU seconds of the stepping (the process pinned to one core), so other work on a shared
+machine slows the wall clock, not the figure; the wall-clock rate and the load average are printed
+beside it. Then the host+tail's ratio to the host alone (the goal: at least 1/2) and where a
+step's time goes in each, from MuJoCo's timers.
 
     python benchmarks/host_bench.py exports/bvsr
     python benchmarks/host_bench.py exports/bvsr --host go2 --rounds 5 --json out.json
@@ -58,8 +61,9 @@ def host_xml(name: str) -> Path:
     return Path(found.submodule_search_locations[0]) / "robot_model" / name / f"{name}.xml"
 
 
-def host_spec(name: str, timestep_s: float) -> mujoco.MjSpec:
-    """The host without its visual meshes, a floor, its motors as PD servos about ``ctrl``."""
+def host_spec(name: str, timestep_s: float, servo: bool = True) -> mujoco.MjSpec:
+    """The host without its visual meshes, a floor, and (``servo``) its motors as PD servos about
+    ``ctrl``; else its motors as the package has them, for a stance computed in Python."""
     from bvsr_cad.simulation.quadruped import GO1, add_floor
 
     spec = mujoco.MjSpec.from_file(str(host_xml(name)))
@@ -69,7 +73,7 @@ def host_spec(name: str, timestep_s: float) -> mujoco.MjSpec:
     for mesh in list(spec.meshes):
         spec.delete(mesh)
     add_floor(spec)
-    for a in spec.actuators:
+    for a in spec.actuators if servo else ():
         a.gaintype = mujoco.mjtGain.mjGAIN_FIXED
         a.gainprm[0] = GO1.kp
         a.biastype = mujoco.mjtBias.mjBIAS_AFFINE
@@ -79,8 +83,8 @@ def host_spec(name: str, timestep_s: float) -> mujoco.MjSpec:
     return spec
 
 
-def scenes(export: Path, host: str) -> dict[str, mujoco.MjModel]:
-    """The three compiled scenes, by row name."""
+def scenes(export: Path, host: str, servo: bool = True) -> dict[str, mujoco.MjModel]:
+    """The three compiled scenes, by row name (``servo``: :func:`host_spec`)."""
     from bvsr_cad.exporters.mount import mount_spec
     from bvsr_cad.simulation.quadruped import GO1
 
@@ -88,10 +92,14 @@ def scenes(export: Path, host: str) -> dict[str, mujoco.MjModel]:
     alone = mujoco.MjModel.from_xml_path(str(export / "robot" / "scene.xml"))
     step_s = alone.opt.timestep
     both = mount_spec(
-        host_spec(host, step_s), tail_xml, body=HOSTS[host], pos_m=GO1.pos_m, rpy_rad=GO1.rpy_rad
+        host_spec(host, step_s, servo),
+        tail_xml,
+        body=HOSTS[host],
+        pos_m=GO1.pos_m,
+        rpy_rad=GO1.rpy_rad,
     )
     return {
-        "host": host_spec(host, step_s).compile(),
+        "host": host_spec(host, step_s, servo).compile(),
         "host+tail": both.compile(),
         "tail": alone,
     }
@@ -109,14 +117,54 @@ def start(m: mujoco.MjModel) -> mujoco.MjData:
     return d
 
 
-def rate(m: mujoco.MjModel, seconds: float) -> tuple[float, float, mujoco.MjData]:
+def python_stance(m: mujoco.MjModel):
+    """The PD stance of ``bvsr simulate --platform quadruped`` (its ``stance_control``), computed
+    in Python before every step: each host motor's torque towards its joint's start angle over its
+    gear, within its control range; None for a model without host motors (the tail alone)."""
+    from bvsr_cad.simulation.quadruped import GO1
+
+    motors = [
+        i
+        for i in range(m.nu)
+        if m.actuator_trntype[i] == 0 and m.actuator_biastype[i] == mujoco.mjtBias.mjBIAS_NONE
+    ]
+    if not motors:
+        return None
+    joints = m.actuator_trnid[motors, 0]
+    qadr, dadr = m.jnt_qposadr[joints], m.jnt_dofadr[joints]
+    gear = m.actuator_gear[motors, 0]
+    lo, hi = m.actuator_ctrlrange[motors].T
+    target = {}
+
+    def control(d: mujoco.MjData) -> None:
+        if "q" not in target:
+            target["q"] = d.qpos[qadr].copy()
+        torque = GO1.kp * (target["q"] - d.qpos[qadr]) - GO1.kd * d.qvel[dadr]
+        d.ctrl[motors] = np.clip(torque / gear, lo, hi)
+
+    return control
+
+
+def rate(m: mujoco.MjModel, seconds: float, servo: bool = True):
     """Steps per CPU second and per wall second of ``seconds`` of simulated time from the start
-    (after 0.1 s of settling, not counted)."""
+    (after 0.1 s of settling, not counted): MuJoCo's own loop (``servo``), or one ``mj_step`` call
+    a step from Python with :func:`python_stance` before it (the tail alone: the call alone)."""
     d = start(m)
-    mujoco.mj_step(m, d, nstep=round(0.1 / m.opt.timestep))
-    n = round(seconds / m.opt.timestep)
+    control = None if servo else python_stance(m)
+    n0, n = round(0.1 / m.opt.timestep), round(seconds / m.opt.timestep)
+
+    def steps(count: int) -> None:
+        if servo:
+            mujoco.mj_step(m, d, nstep=count)
+            return
+        for _ in range(count):
+            if control is not None:
+                control(d)
+            mujoco.mj_step(m, d)
+
+    steps(n0)
     cpu, wall = time.process_time(), time.perf_counter()
-    mujoco.mj_step(m, d, nstep=n)
+    steps(n)
     return n / (time.process_time() - cpu), n / (time.perf_counter() - wall), d
 
 
@@ -135,22 +183,24 @@ def stage_us(m: mujoco.MjModel, steps: int = 2000) -> dict[str, float]:
 
 
 def run(export: Path, host: str, rounds: int, seconds: float) -> dict:
-    """Every row's rates over the rounds and its stages; the figures :func:`main` prints."""
-    models = scenes(export, host)
-    names = list(models)
-    cpu = {n: [] for n in names}
-    wall = {n: [] for n in names}
+    """Every row's rates over the rounds, in both protocols (``servo``: MuJoCo's own loop with the
+    stance as servos; ``python``: a step a call with the stance computed in Python), and its
+    stages; the figures :func:`main` prints."""
+    models = {True: scenes(export, host, True), False: scenes(export, host, False)}
+    names = list(models[True])
+    runs = [(n, servo) for servo in (True, False) for n in names]
+    cpu = {r: [] for r in runs}
+    wall = {r: [] for r in runs}
     loads = []
     for k in range(rounds):
-        order = names[k % 3 :] + names[: k % 3]
-        for n in order:
-            c, w, _ = rate(models[n], seconds)
-            cpu[n].append(c)
-            wall[n].append(w)
+        for n, servo in runs[k % len(runs) :] + runs[: k % len(runs)]:
+            c, w, _ = rate(models[servo][n], seconds, servo)
+            cpu[n, servo].append(c)
+            wall[n, servo].append(w)
         loads.append(os.getloadavg()[0])
         print(f"round {k + 1}/{rounds}: load {loads[-1]:.1f}", file=sys.stderr, flush=True)
     rows = {}
-    for n, m in models.items():
+    for n, m in models[True].items():
         d = start(m)
         mujoco.mj_step(m, d, nstep=100)
         rows[n] = {
@@ -160,21 +210,25 @@ def run(export: Path, host: str, rounds: int, seconds: float) -> dict:
             "ntendon": m.ntendon,
             "ngeom": m.ngeom,
             "nefc": int(d.nefc),
-            "steps_per_cpu_s": statistics.median(cpu[n]),
-            "steps_per_cpu_s_rounds": cpu[n],
-            "steps_per_wall_s": statistics.median(wall[n]),
+            "steps_per_cpu_s": statistics.median(cpu[n, True]),
+            "steps_per_cpu_s_rounds": cpu[n, True],
+            "steps_per_wall_s": statistics.median(wall[n, True]),
+            "python_steps_per_cpu_s": statistics.median(cpu[n, False]),
+            "python_steps_per_wall_s": statistics.median(wall[n, False]),
             "stage_us": stage_us(m),
         }
-    ratio = rows["host+tail"]["steps_per_cpu_s"] / rows["host"]["steps_per_cpu_s"]
+    both, alone = rows["host+tail"], rows["host"]
     return {
         "host": host,
         "export": str(export),
-        "timestep_s": models["tail"].opt.timestep,
+        "timestep_s": models[True]["tail"].opt.timestep,
         "rounds": rounds,
         "seconds_each": seconds,
         "load_average": loads,
         "rows": rows,
-        "host_plus_tail_over_host": ratio,
+        "host_plus_tail_over_host": both["steps_per_cpu_s"] / alone["steps_per_cpu_s"],
+        "python_host_plus_tail_over_host": both["python_steps_per_cpu_s"]
+        / alone["python_steps_per_cpu_s"],
         "mujoco": mujoco.__version__,
     }
 
@@ -187,14 +241,22 @@ def print_table(res: dict) -> None:
         f"{res['rounds']} alternated rounds of {res['seconds_each']:g} s simulated; load "
         f"{min(res['load_average']):.1f}-{max(res['load_average']):.1f}; MuJoCo {res['mujoco']}"
     )
-    print(f"{'scene':10s} {'nv':>3s} {'nefc':>4s} {'steps/CPU s':>11s} {'steps/wall s':>12s}")
+    print("steps/s: MuJoCo's loop, stance as servos | a step a call, stance in Python")
+    print(
+        f"{'scene':10s} {'nv':>3s} {'nefc':>4s} {'CPU s':>8s} {'wall s':>8s} | "
+        f"{'CPU s':>8s} {'wall s':>8s}"
+    )
     for n, r in rows.items():
         print(
-            f"{n:10s} {r['nv']:3d} {r['nefc']:4d} {r['steps_per_cpu_s']:11.0f} "
-            f"{r['steps_per_wall_s']:12.0f}"
+            f"{n:10s} {r['nv']:3d} {r['nefc']:4d} {r['steps_per_cpu_s']:8.0f} "
+            f"{r['steps_per_wall_s']:8.0f} | {r['python_steps_per_cpu_s']:8.0f} "
+            f"{r['python_steps_per_wall_s']:8.0f}"
         )
-    print(f"host+tail / host: {res['host_plus_tail_over_host']:.2f} (goal >= 0.50, aim 0.67)")
-    print("µs a step by MuJoCo's timers:")
+    print(
+        f"host+tail / host: {res['host_plus_tail_over_host']:.2f} (MuJoCo's loop), "
+        f"{res['python_host_plus_tail_over_host']:.2f} (Python stance); goal >= 0.50, aim 0.67"
+    )
+    print("µs a step by MuJoCo's timers (MuJoCo's loop):")
     print(f"{'stage':15s}" + "".join(f"{n:>11s}" for n in rows))
     for stage in TIMERS:
         print(f"{stage:15s}" + "".join(f"{r['stage_us'][stage]:11.1f}" for r in rows.values()))

@@ -167,7 +167,7 @@ def _bvsr_part_rows(asm: Assembly, items) -> tuple[list[BomRow], float]:
                     "BVSR",
                     "rod",
                     it.label,
-                    f"{spec.material(it.material).name} rod, D "
+                    f"{spec.material(it.material).name}, D "  # the name says its form: rod, cord
                     f"{info['diameter_mm']:g} mm, cut to {info['cut_length_mm']:.2f} mm",
                     it.quantity,
                     "pcs",

@@ -62,7 +62,11 @@ def pytest_collection_modifyitems(config, items):
     is named in :data:`SLOW`. ``pytest -m "not slow"`` stays a fast suite of in-memory tests, the
     inner loop of docs/contributing.md (tools/mutate.py runs it per fault)."""
     for item in items:
-        if "bvsr_export" in getattr(item, "fixturenames", ()) or item.nodeid.split("[")[0] in SLOW:
+        if (
+            "bvsr_export" in getattr(item, "fixturenames", ())
+            or item.nodeid.split("[")[0] in SLOW
+            or item.nodeid.split("::")[0] in SLOW
+        ):
             item.add_marker(pytest.mark.slow)
 
 

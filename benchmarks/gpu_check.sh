@@ -14,7 +14,9 @@
 #            carry .gpu/2:  bash benchmarks/gpu_check.sh stash .gpu/2
 #            carry .gpu/3:  bash benchmarks/gpu_check.sh stash .gpu/3 && bash benchmarks/gpu_check.sh run
 #
-# `run` writes sim_bench.txt and sim_bench.json to $OUT (or ./gpu_check_out); arguments after `run`
+# `run` writes sim_bench.txt and sim_bench.json to $OUT (or ./gpu_check_out), and where the export
+# holds the tail on the quadruped (robot/quadruped/scene_go1.xml) host_tail_8192.txt and .json: its
+# MuJoCo Warp rate at batch 8192 (benchmarks/host_bench.py --warp-scene); arguments after `run`
 # go to sim_bench.py (e.g. --gpu-batches 8192,32768). The versions are the lock's
 # (requirements/lock.txt).
 set -euo pipefail
@@ -100,6 +102,14 @@ run() {
         --baseline "$stash/scenes/baseline/robot/scene.xml" --no-mjx --warp-cpu-batch 0 \
         --cpu-seconds 2 --gpu-batches 1,1024,8192 --profile --json "$out/sim_bench.json" "$@" \
         2>&1 | tee "$out/sim_bench.txt"
+    local quad="$stash/scenes/scene/robot/quadruped/scene_go1.xml"
+    if [ -f "$quad" ]; then
+        python3 benchmarks/host_bench.py "$stash/scenes/scene" --warp-scene "$quad" \
+            --warp-batch 8192 --json "$out/host_tail_8192.json" 2>&1 | tee "$out/host_tail_8192.txt"
+    else
+        echo "gpu_check: no robot/quadruped/scene_go1.xml in the export (built without the" \
+            "quadruped extra): no host+tail rate" | tee "$out/host_tail_8192.txt"
+    fi
 }
 
 case "${1:-}" in

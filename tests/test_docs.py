@@ -419,9 +419,9 @@ def test_faq_quotes_the_no_viewer_message(monkeypatch, capsys):
 
 def test_faq_quotes_the_missing_slicer_message(monkeypatch):
     """Slicing without PrusaSlicer raises the FAQ's message before it reads any export."""
-    from bvsr_cad.checks import printability
+    from bvsr_cad.checks import slicer
 
-    monkeypatch.setattr(printability, "slicer_exe", lambda: None)
-    with pytest.raises(printability.SlicerMissingError) as err:
-        printability.slice_stls(None)
+    monkeypatch.setattr(slicer, "slicer_exe", lambda: None)
+    with pytest.raises(slicer.SlicerMissingError) as err:
+        slicer.slice_stls(None)
     assert f"bvsr: error: {err.value}" in _faq()

@@ -540,7 +540,9 @@ def test_ctrl_c_exits_130_with_one_line_not_a_traceback(monkeypatch, capsys, dur
 
     monkeypatch.setattr(cli, "cmd_build", interrupted)
     monkeypatch.setattr(
-        cli, "_error_classes", lambda: pytest.fail("an interrupt is not an error to classify")
+        cli,
+        "_bad_input_message",
+        lambda *a: pytest.fail("an interrupt is not an error to classify"),
     )
     assert cli.main(["build", "params/bvsr.toml"]) == 130
     assert capsys.readouterr().err == "bvsr: interrupted; nothing was published\n"

@@ -20,18 +20,15 @@ import trimesh
 
 from bvsr_cad.build._runtime.checks_process import run_checks
 from bvsr_cad.build.cache import ArtifactCache
-from bvsr_cad.checks import printability
+from bvsr_cad.checks import printability, slicer
 from bvsr_cad.checks.export import Export
 from bvsr_cad.checks.printability import (
-    SLICER,
     _SurfaceIndex,
     check_envelope,
-    check_slicing,
     min_hole_mm,
     overhang_regions,
-    slice_items,
-    slice_stls,
 )
+from bvsr_cad.checks.slicer import SLICER, check_slicing, slice_items, slice_stls
 from bvsr_cad.cli import main
 
 
@@ -179,9 +176,9 @@ def _no_slicer_started(monkeypatch) -> None:
     def refuse(*_a, **_k):
         raise AssertionError("the checks started the slicer")
 
-    monkeypatch.setattr(printability, "_slice", refuse)
-    monkeypatch.setattr(printability, "_slicer_version", refuse)
-    monkeypatch.setattr(printability.subprocess, "run", refuse)
+    monkeypatch.setattr(slicer, "_slice", refuse)
+    monkeypatch.setattr(slicer, "_slicer_version", refuse)
+    monkeypatch.setattr(slicer.subprocess, "run", refuse)
 
 
 def test_slicing_not_in_the_cache_is_null_with_the_command(

@@ -1,5 +1,5 @@
-"""The one-way data flow of DESIGN.md: every module sits in exactly one layer and nothing imports
-upward."""
+"""The one-way data flow of docs/architecture.md: every module sits in exactly one layer and
+nothing imports upward."""
 
 from __future__ import annotations
 
@@ -8,12 +8,14 @@ from pathlib import Path
 
 PKG = Path(__file__).resolve().parents[1] / "bvsr_cad"
 
-#: Every top-level module and package of bvsr_cad in exactly one layer, lowest first (DESIGN.md's
-#: import direction). A module imports its own package freely and another package only from a lower
-#: layer: two packages of one layer (the writers and the checks) never import each other, so no
-#: layer hides an import. ``__version__`` is the package root's one value read below it (its
-#: ``__init__`` imports nothing at import).
+#: Every top-level module and package of bvsr_cad in exactly one layer, lowest first
+#: (docs/architecture.md's import direction). A module imports its own package freely and another
+#: package only from a lower layer: two packages of one layer (the writers and the checks) never
+#: import each other, so no layer hides an import. ``__version__`` is the package root's one value
+#: read below it (its ``__init__`` imports nothing at import). ``errors`` holds the base classes of
+#: the errors, below everything, so that every layer's errors can subclass them.
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("error bases", ("errors",)),
     ("foundations", ("units", "colors", "folders", "extras", "defaults", "__version__")),
     ("parameters", ("parameters",)),
     ("models", ("models",)),
@@ -92,7 +94,9 @@ def test_every_module_sits_in_exactly_one_layer():
     assert len(names) == len(set(names)), "a name in two layers"
     tops = {p.relative_to(PKG).parts[0].removesuffix(".py") for p in _modules()}
     tops |= {p.name for p in PKG.iterdir() if p.is_dir() and p.name != "__pycache__"}
-    assert tops - set(names) == set(), "modules in no layer: put each in LAYERS (and DESIGN.md)"
+    assert tops - set(names) == set(), (
+        "modules in no layer: put each in LAYERS (and docs/architecture.md's table)"
+    )
     assert set(names) - tops - {"__version__"} == set(), "layers name modules that are gone"
 
 
@@ -129,8 +133,8 @@ WRITERS = (
 
 
 def test_nothing_below_the_exporters_writes_a_file():
-    """DESIGN.md: compute first, write last; the layers below exporters/ hand on objects in
-    memory."""
+    """docs/architecture.md: compute first, write last; the layers below exporters/ hand on objects
+    in memory."""
     bad = []
     for path in PKG.rglob("*.py"):
         rel = path.relative_to(PKG).with_suffix("")

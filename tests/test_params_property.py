@@ -24,7 +24,7 @@ twin), too slow for 200. So:
 
 Outside CI, every geometry key was also driven to the extreme value that still loads (bisection on
 load, 120 samples) and built with every generator: all built once the taper rule of
-:func:`bvsr_cad.parameters.layout.validate_layout` refused cones under 0.05 deg.
+:func:`bvsr_cad.parameters.panel_rules.validate_layout` refused cones under 0.05 deg.
 
 The file takes about 4.5 minutes on the 2-core machine (measured: 15 s, 167 s and 93 s for the three
 tests, load average near 3). Run it with ``-s`` to see how many samples loaded and which rules

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from bvsr_cad.cli import main
-from bvsr_cad.parameters import layout
+from bvsr_cad.parameters import layout, panel_rules
 from bvsr_cad.parameters.load import ParamError, load_spec, spec_from_dict
 
 from .conftest import PARAMS, write_toml
@@ -30,7 +30,7 @@ def test_defaults_load(name, segments, panels):
 
 
 def test_auto_taper_is_the_largest_feasible_cone(bvsr_spec):
-    beta = layout.max_feasible_taper_deg(bvsr_spec)
+    beta = panel_rules.max_feasible_taper_deg(bvsr_spec)
     # Independent closed form for the binding rule (pocket webs at the tip panel):
     # 2 r_tip sin 36 - d_pocket = min gap, r_tip = D_a/2 - z_tip tan(beta).
     j, fab = bvsr_spec.joint, bvsr_spec.fabrication
@@ -39,7 +39,7 @@ def test_auto_taper_is_the_largest_feasible_cone(bvsr_spec):
     z_tip = (bvsr_spec.panels - 1) * j.joint_height_mm
     expected = math.degrees(math.atan((j.pitch_diameter_mm / 2 - r_tip) / z_tip))
     assert beta == pytest.approx(expected, abs=1e-6)
-    assert "pocket_lower" in layout.binding_constraint(bvsr_spec)
+    assert "pocket_lower" in panel_rules.binding_constraint(bvsr_spec)
     # Just past it, validation refuses a fixed taper.
     with pytest.raises(ParamError, match="taper.half_angle_deg"):
         spec_from_dict({**_as_dict(bvsr_spec), "taper": {"half_angle_deg": beta + 0.01}})
@@ -54,24 +54,24 @@ def _as_dict(spec):
 @pytest.mark.parametrize("name", ["bvsr", "bvsr_l"])
 def test_the_web_rule_between_cuts_flags_every_pair_a_pair_by_pair_test_flags(name):
     """panel_problems tests only the pairs of cuts whose plan-view circles come near (numpy's gaps,
-    :func:`~bvsr_cad.parameters.layout._near_pairs`): on every panel, from no cone to well past the
-    feasible one (where webs break), it flags the same pairs, in the same order, as testing every
-    pair."""
+    :func:`~bvsr_cad.parameters.panel_rules._near_pairs`): on every panel, from no cone to well past
+    the feasible one (where webs break), it flags the same pairs, in the same order, as testing
+    every pair."""
     import numpy as np
 
     spec = load_spec(PARAMS / f"{name}.toml")
     fab = spec.fabrication
     flagged_somewhere = 0
-    for beta in np.linspace(0.0, math.radians(3.0 * layout.max_feasible_taper_deg(spec)), 25):
+    for beta in np.linspace(0.0, math.radians(3.0 * panel_rules.max_feasible_taper_deg(spec)), 25):
         for k in range(spec.panels):
             lay = layout.panel_layout(spec, k, beta)
             cuts = list(lay.cuts)
             every = []
             for i, a in enumerate(cuts):
                 for b in cuts[i + 1 :]:
-                    if not layout._z_overlap(a, b) or "setscrew" in (a.role, b.role):
+                    if not panel_rules._z_overlap(a, b) or "setscrew" in (a.role, b.role):
                         continue
-                    gap, nested = layout._circle_gap(a, b)
+                    gap, nested = panel_rules._circle_gap(a, b)
                     need = (
                         fab.min_pocket_gap_mm if a.role == b.role == "pocket" else fab.min_wall_mm
                     )
@@ -80,7 +80,7 @@ def test_the_web_rule_between_cuts_flags_every_pair_a_pair_by_pair_test_flags(na
             names = {c.name for c in cuts}
             found = [
                 p.features
-                for p in layout.panel_problems(spec, lay)
+                for p in panel_rules.panel_problems(spec, lay)
                 if len(p.features) == 2 and set(p.features) <= names
             ]
             assert found == every, (name, beta, k)

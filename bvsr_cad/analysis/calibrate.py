@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import BadInput
 from ..parameters.measurements import Measurement
 from ..parameters.tables import CALIBRATABLE, Calibration, TailSpec
 from .predict import Predictor
@@ -53,7 +54,7 @@ DYNAMIC_QUANTITIES = (
 )  # the workspace is recorded in time: both kinds identify it
 
 
-class CalibrationError(ValueError):
+class CalibrationError(ValueError, BadInput):
     """A calibration that cannot be asked for (an unknown quantity to fit): exit code 2."""
 
 

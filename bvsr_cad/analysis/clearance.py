@@ -43,8 +43,9 @@ import fcl
 import numpy as np
 import trimesh
 
-from ..assembly.build import Assembly
+from ..assembly.build import Assembly, build_assembly
 from ..models.kinematics import TailKinematics, joint_transform_uv, theta_phi_from_uv
+from ..parameters.tables import TailSpec
 from ..parts._kernel import fresh_copy, mesh_arrays
 
 Progress = Callable[[str], None]
@@ -807,3 +808,35 @@ def clearance_map(
         refined[pose, pair] = pt.refine(lam[pose, pair], ids[pair])
     out = refined.min(axis=1)
     return th, ph, out.reshape(tt.shape)
+
+
+def workspace_clearance(
+    spec: TailSpec, poses: int, progress: Callable[[str], None] | None = None
+) -> tuple[ClearanceResult, dict]:
+    """The closest approach of the tail's solids over ``poses`` poses of its workspace (the
+    paper's random chamber-state protocol, seeded by ``analysis.seed``), against
+    ``analysis.min_clearance_mm``.
+
+    Args:
+        spec: the tail.
+        poses: how many workspace poses the solids are checked at.
+        progress: called with a line per stage.
+
+    Returns:
+        (the result; its JSON with ``required_mm``, ``seconds``, ``poses_per_s`` and ``passed``).
+    """
+    from .workspace import run_workspace
+
+    say = progress or (lambda _m: None)
+    asm = build_assembly(spec, say)
+    ws = run_workspace(asm, poses, spec.analysis.seed, say)
+    pt = posed_tail(asm, say)
+    say(f"clearance over {poses} workspace poses")
+    res = clearance_over(pt, ws.w)
+    required = spec.analysis.min_clearance_mm
+    return res, res.to_json() | {
+        "required_mm": required,
+        "seconds": res.seconds,
+        "poses_per_s": res.poses_per_s,
+        "passed": res.min_clearance_mm >= required,
+    }

@@ -72,6 +72,16 @@ class Workspace:
     def max_theta_rad(self) -> float:
         return float(np.max(np.hypot(self.w[..., 0], self.w[..., 1])))
 
+    def summary(self) -> dict:
+        """What `bvsr workspace` prints: the samples, the seed, the tip's extent along each axis
+        (mm) and the largest joint bend (rad)."""
+        return {
+            "samples": self.samples,
+            "seed": self.seed,
+            "tip_extent_mm": self.extent_mm(),
+            "max_theta_rad": self.max_theta_rad,
+        }
+
 
 def unsolved_problems(spec: TailSpec, line_kpa: np.ndarray, why: str) -> list[str]:
     """The protocol's pressures for which the forward statics find no equilibrium (Newton's steps do

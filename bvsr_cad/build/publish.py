@@ -23,6 +23,7 @@ from pathlib import Path
 
 from ..checks.environment import environment_state
 from ..checks.result import CheckResult
+from ..errors import BadInput
 from ..exporters.manifest_file import write_manifest
 from ..parameters.load import load_spec
 from ..parameters.tables import TailSpec
@@ -32,7 +33,7 @@ from .cache import ORPHAN_AGE_S, OWNER_FILE, ArtifactCache, claim, copy_tree, ow
 Progress = Callable[[str], None]
 
 
-class OutputError(ValueError):
+class OutputError(ValueError, BadInput):
     """The output path cannot take an export (exit code 2)."""
 
 
@@ -45,6 +46,24 @@ class BuildResult:
     #: CPU seconds by process: ``build`` (this one, since the build opened) and each second process
     #: that gave its result (``analyses``, ``checks``); see :meth:`StageLog.cpu_s`.
     cpu_s: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def failed(self) -> list[CheckResult]:
+        """The checks that failed (informational and skipped ones do not fail a build)."""
+        return [r for r in self.results if r.passed is False]
+
+    def summary(self) -> dict:
+        """The build as `bvsr build --json` prints it: the folder, the wall seconds, whether every
+        check passed and the names of those that failed, each stage's line and the CPU seconds by
+        process."""
+        return {
+            "out": str(self.out_dir),
+            "seconds": round(self.seconds, 2),
+            "passed": not self.failed,
+            "failed_checks": [r.name for r in self.failed],
+            "stages": self.stages,
+            "cpu_seconds": self.cpu_s,
+        }
 
 
 @dataclass

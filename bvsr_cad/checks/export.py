@@ -11,8 +11,10 @@ from typing import Any
 import numpy as np
 import trimesh
 
+from ..errors import BadInput
 
-class ExportError(ValueError):
+
+class ExportError(ValueError, BadInput):
     """The folder is not a readable bvsr export."""
 
 

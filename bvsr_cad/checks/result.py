@@ -124,3 +124,17 @@ def summary_lines(results: list[CheckResult]) -> list[str]:
     if reasons:
         lines += ["", "skipped:"] + reasons
     return lines
+
+
+def tally_line(results: list[CheckResult], verbose: bool = False) -> str:
+    """The last line of a run's report: how many checks passed and failed, with the informational
+    and skipped ones counted apart (``verbose``: every check was listed above it)."""
+    failed = sum(r.passed is False for r in results)
+    skipped = sum(r.skipped for r in results)
+    info = sum(r.passed is None for r in results) - skipped
+    tail = f"{info} informational, {skipped} skipped"
+    if failed:
+        return f"{len(results) - failed - info - skipped} passed, {failed} failed ({tail})"
+    return f"all {len(results) - info - skipped} checks passed ({tail})" + (
+        "" if verbose else "; --verbose lists every check"
+    )

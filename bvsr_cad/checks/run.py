@@ -15,9 +15,10 @@ from .memo import CheckMemo, VerdictStore
 from .mesh import check_part_mesh, part_mesh_reads
 from .molds import check_molds, molds_reads
 from .paper import check_paper
-from .printability import check_printability, slice_stls
+from .printability import check_printability
 from .result import CheckResult
 from .robot import ROBOT_PARTS, check_robot, robot_reads
+from .slicer import slice_stls
 
 
 def _mold_checks(exp: Export, memo: CheckMemo) -> list[CheckResult]:
@@ -465,7 +466,7 @@ def run_checks(
 
     The checks never start the slicer: the ``slice:*`` results come from the slice cache. With
     ``run_slicer`` (``bvsr check --slice``), every printed STL the cache does not hold is sliced
-    first (:func:`~bvsr_cad.checks.printability.slice_stls`). With ``store`` the groups whose
+    first (:func:`~bvsr_cad.checks.slicer.slice_stls`). With ``store`` the groups whose
     files and manifest values are unchanged (the meshes, the molds, the printed STLs, the twin's
     envelope) take their verdicts from it.
 

@@ -8,7 +8,7 @@ import build123d as bd
 
 from .. import __version__
 from ..assembly.build import Assembly, instance_solid, segment_masses_g
-from ..parameters.layout import binding_constraint, max_feasible_taper_deg
+from ..parameters.panel_rules import binding_constraint, max_feasible_taper_deg
 from ..parameters.tables import AUTO, SoaTable
 from ..parts._kernel import bounds
 

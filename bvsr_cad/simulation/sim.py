@@ -28,6 +28,7 @@ import numpy as np
 from .. import units
 from ..assembly.build import Assembly, build_assembly
 from ..assembly.robot import robot_model
+from ..errors import BadInput
 from ..exporters.mjcf import mjcf_tree, write_mjcf
 from ..exporters.robot_meshes import write_robot_meshes
 from ..models.dynamics import VELOCITY_WINDOW_DEG, ramp_pa
@@ -60,7 +61,7 @@ def pressure_input(
     return lambda t: float(np.interp(t, t_s, p_pa))
 
 
-class SimulationInputError(ValueError):
+class SimulationInputError(ValueError, BadInput):
     """A simulation argument outside what the model allows (exit code 2)."""
 
 

@@ -46,6 +46,7 @@ import numpy as np
 
 from ..analysis.metrics import METRICS, Conditions, group_of
 from ..build._runtime.worker import child_env
+from ..errors import BadInput
 from ..extras import require
 from ..parameters.study import Study, StudyError, Variant, get_path
 
@@ -61,7 +62,7 @@ STATUSES = ("ok", "infeasible", "timeout", "error")
 JOURNAL = "results.jsonl"
 
 
-class SweepError(RuntimeError):
+class SweepError(RuntimeError, BadInput):
     """The study could not run (no scheduler at the address, an unwritable output folder)."""
 
 

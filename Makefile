@@ -17,14 +17,14 @@ TESTS := $(VENV)/.installed-test
 
 .PHONY: exports test test-deps check-l clean
 
-# $(call install,EXTRAS): the package, editable, with EXTRAS, at the lock's versions.
+# $(call install,EXTRAS[,UV_OPTIONS]): the package, editable, with EXTRAS, at the lock's versions.
 define install
 	@if command -v uv >/dev/null 2>&1; then uv=uv; \
 	elif [ -x $(BIN)/uv ] || $(BIN)/pip install --quiet -c $(LOCK) uv; then uv=$(BIN)/uv; \
 	else uv=; fi; \
 	if [ -n "$$uv" ]; then \
 		echo "$$uv pip install -c $(LOCK) -e '.[$(1)]'"; \
-		$$uv pip install --quiet --compile-bytecode --python $(BIN)/python -c $(LOCK) -e '.[$(1)]'; \
+		$$uv pip install --quiet --compile-bytecode --python $(BIN)/python -c $(LOCK) -e '.[$(1)]' $(2); \
 	else \
 		echo "$(BIN)/pip install -c $(LOCK) -e '.[$(1)]'"; \
 		$(BIN)/pip install --quiet -c $(LOCK) -e '.[$(1)]'; \
@@ -41,8 +41,11 @@ $(CORE): pyproject.toml $(LOCK) | $(BIN)/python
 	$(BIN)/python -m compileall -q bvsr_cad  # as pip does for a regular install (this one is editable)
 	touch $(CORE)
 
+# build123d's OCP without VTK (the core) and CadQuery's with it (the cad extra) are one module, OCP;
+# CadQuery needs the one with VTK on disk. pip installs it after the core's; uv installs in parallel
+# and promises no order, so it is told to write cadquery-ocp again.
 $(TESTS): $(CORE)
-	$(call install,$(TEST_EXTRAS))
+	$(call install,$(TEST_EXTRAS),--reinstall-package cadquery-ocp)
 	touch $(TESTS)
 
 exports: $(CORE)

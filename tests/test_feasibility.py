@@ -584,3 +584,20 @@ def test_a_seeded_file_inside_the_ranges_builds_or_is_refused_at_load(tmp_path, 
     limits = json.loads((tmp_path / "out" / "analysis" / "limits.json").read_text())
     assert all(min(j["theta_max_rad"]) > 0.0 for j in limits["joints"]), changes
     assert limits["workspace_max_theta_rad"] > 0.0
+
+
+def test_an_soa_stiffness_that_turns_negative_under_vacuum_is_refused_naming_the_slope(data):
+    """k = m_a P + n_a (Eq 4) at the default's lowest gauge pressure, -95 kPa: zero at
+    m_a = 2918 / 95 = 30.72 N/m/kPa (hand value). Just below it the file loads; just above it is
+    refused, naming the slope, its value and the bound."""
+
+    assert data["actuation"]["pressure_min_kpa"] == -95.0
+    assert data["actuation"]["stiffness_offset_n_per_m"] == 2918.0
+    data["actuation"]["stiffness_slope_n_per_m_per_kpa"] = 30.7
+    spec_from_dict(data)
+    data["actuation"]["stiffness_slope_n_per_m_per_kpa"] = 30.8
+    with pytest.raises(ParamError) as err:
+        spec_from_dict(data)
+    (problem,) = err.value.problems
+    assert problem.startswith("actuation.stiffness_slope_n_per_m_per_kpa = 30.8")
+    assert "allowed: actuation.stiffness_slope_n_per_m_per_kpa < 30.72" in problem

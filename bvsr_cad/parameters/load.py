@@ -269,7 +269,29 @@ def actuation_problems(spec: TailSpec) -> list[str]:
             "above it or a "
             "depressurised minimum below it"
         )
-    return out
+    return out + _soa_stiffness_problems(a)
+
+
+def _soa_stiffness_problems(a) -> list[str]:
+    """The SOA's axial stiffness k = m_a P + n_a (Eq 4) must stay positive at the lowest gauge
+    pressure a model draws (the vacuum limit, or the workspace protocol's depressurised minimum):
+    with k <= 0 an SOA pushes harder the more it is stretched, and the statics have no equilibrium
+    to converge to."""
+    p_kpa = min(a.pressure_min_kpa, a.workspace_depressurised_min_kpa_abs - a.atmospheric_kpa)
+    k_n_per_m = a.stiffness_slope_n_per_m_per_kpa * p_kpa + a.stiffness_offset_n_per_m
+    if k_n_per_m > 0:
+        return []
+    bound = (
+        f"actuation.stiffness_slope_n_per_m_per_kpa < {a.stiffness_offset_n_per_m / -p_kpa:.4g}"
+        if p_kpa < 0
+        else f"actuation.stiffness_offset_n_per_m > {-k_n_per_m + a.stiffness_offset_n_per_m:.4g}"
+    )
+    return [
+        f"actuation.stiffness_slope_n_per_m_per_kpa = {a.stiffness_slope_n_per_m_per_kpa!r} with "
+        f"actuation.stiffness_offset_n_per_m = {a.stiffness_offset_n_per_m!r}: the SOA's stiffness "
+        f"m_a P + n_a is {k_n_per_m:.4g} N/m at {p_kpa:g} kPa (gauge; the lowest pressure drawn), "
+        f"and an SOA that pushes harder the more it stretches has no equilibrium; allowed: {bound}"
+    ]
 
 
 def read_input_text(path: Path, error: type) -> str:

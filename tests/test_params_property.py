@@ -36,6 +36,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import functools
+import json
 import re
 import subprocess
 import sys
@@ -412,10 +413,11 @@ def test_loaded_samples_build_with_every_generator(changes):
 )
 def test_cli_builds_drawn_samples(tmp_path_factory, changes):
     """The real command line on drawn samples: exit 0, or exit 2 at load; never exit 1 or a
-    traceback."""
+    traceback. The tail is named other than the default, whose name no file may assume (its robot
+    files are ``robot/<name>.xml``)."""
     assume(load_or_refuse(changes) is not None)  # feasible samples: the refusals are tested above
     tmp = tmp_path_factory.mktemp("cli")
-    path = write_toml(tmp / "sample.toml", apply(changes))
+    path = write_toml(tmp / "sample.toml", {**apply(changes), "name": "drawn_sample"})
     bvsr = Path(sys.executable).with_name("bvsr")
     cmd = [str(bvsr)] if bvsr.exists() else [sys.executable, "-m", "bvsr_cad.cli"]
     res = subprocess.run(
@@ -432,4 +434,9 @@ def test_cli_builds_drawn_samples(tmp_path_factory, changes):
             res.stderr
         )  # refused at load, naming the key
     else:
-        assert (tmp / "out" / "manifest.json").exists()
+        manifest = json.loads((tmp / "out" / "manifest.json").read_text())
+        assert manifest["robot"]["mjcf_model"] == "robot/drawn_sample.xml"
+        assert (tmp / "out" / manifest["robot"]["mjcf_model"]).is_file()
+        quadruped = manifest["quadruped"]
+        if quadruped["installed"]:  # the tail mounted on the default host, by its own name
+            assert (tmp / "out" / quadruped["scene"]).is_file()

@@ -369,7 +369,12 @@ class _Build:
             )
         )
         manifest.update(
-            run.run(QUADRUPED, lambda folder: quadruped_section(folder, self.spec, run.say))
+            run.run(
+                QUADRUPED,
+                lambda folder: quadruped_section(
+                    folder, folder / manifest["robot"]["mjcf_model"], self.spec, run.say
+                ),
+            )
         )
         # STEP and 3MF time stamps of the files written since the checks started
         make_reproducible(run.folder, self.fixed)

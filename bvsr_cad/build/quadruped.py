@@ -15,11 +15,12 @@ from ..extras import install_line, missing
 from ..simulation import quadruped
 
 
-def quadruped_section(folder: Path, spec, say: Callable[[str], None]) -> dict:
+def quadruped_section(folder: Path, tail_xml: Path, spec, say: Callable[[str], None]) -> dict:
     """Write the quadruped files of the export in ``folder`` (its robot files written).
 
     Args:
         folder: the export being built.
+        tail_xml: its reduced-chain MJCF (``robot/<name>.xml``; the manifest is written last).
         spec: its parameters.
         say: progress.
 
@@ -36,7 +37,7 @@ def quadruped_section(folder: Path, spec, say: Callable[[str], None]) -> dict:
     t = time.perf_counter()
     host = quadruped.GO1
     files = quadruped.host_files(host)
-    mounted = quadruped.host_scene(folder, host)
+    mounted = quadruped.host_scene(tail_xml, host)
     written = write_host_scene(
         mounted, folder / "robot" / "quadruped", host.model, files["licence"]
     )
@@ -57,7 +58,7 @@ def quadruped_section(folder: Path, spec, say: Callable[[str], None]) -> dict:
         )
         say(f"quadruped scene: {time.perf_counter() - t:.1f} s")
         return {"quadruped": section}
-    res = quadruped.run_experiments(folder, host, progress=say)
+    res = quadruped.run_experiments(tail_xml, host, progress=say)
     summary = quadruped.summary(res)
     summary.pop("seconds")  # the export is the same at every build: timings go to the log
     out = write_quadruped_results(summary, res, folder / "analysis", spec.name)

@@ -1151,7 +1151,7 @@ def run_experiments(
     and the rigid tail) and Fig. 18 (each payload) on ``host`` with ``export``'s tail.
 
     Args:
-        export: an export folder of ``bvsr build``.
+        export: an export folder of ``bvsr build`` (or its ``robot/<name>.xml``).
         host: the host and the mount.
         balls: the Fig. 17 balls (keys of :data:`bvsr_cad.models.impact.BALLS`).
         payloads: the Fig. 18 tip payloads, g.

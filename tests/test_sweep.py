@@ -179,7 +179,7 @@ def test_a_grid_study_survives_a_killed_worker_and_resumes(tmp_path):
 
     path = _study(
         tmp_path,
-        'name = "kill"\nmetrics = ["mass"]\nbaseline = false\n'
+        'name = "kill"\nmetrics = ["mass"]\nbaseline = false\n[set]\nsegments = 1\n'
         '[grid]\n"vertebra.material" = ["nylon", "none", "PVC"]\n'
         '[[variants]]\nlabel = "impossible"\n"joint.panel_diameter_mm" = 40.0\n',
     )
@@ -247,7 +247,7 @@ def test_an_optuna_study_records_trials_and_resumes(tmp_path):
 
     path = _study(
         tmp_path,
-        'name = "opt"\nmetrics = ["mass"]\n[optuna]\ntrials = 3\nseed = 3\n'
+        'name = "opt"\nmetrics = ["mass"]\n[set]\nsegments = 1\n[optuna]\ntrials = 3\nseed = 3\n'
         'objectives = [{ metric = "mass_g", direction = "minimize" }]\n'
         'constraints = [{ metric = "rod_flexural_rigidity_n_mm2", min = 1.0 }]\n'
         '[optuna.space]\n"vertebra.material" = ["nylon", "none", "TPU"]\n',

@@ -124,8 +124,9 @@ def main() -> None:
     work = Path(tempfile.mkdtemp(prefix="bvsr-rebuild-bench-"))
     users_cache = os.environ.get("BVSR_CACHE")
     os.environ["BVSR_CACHE"] = str(work / "cache")
-    from bvsr_cad.build._runtime.worker import SecondProcess, library_imports, tune_process
+    from bvsr_cad.build._runtime.worker import SecondProcess
     from bvsr_cad.build.cache import process_start
+    from bvsr_cad.process import library_imports, tune_process
 
     tune_process()  # as the `bvsr` command does, and its imports
     with library_imports():

@@ -14,8 +14,9 @@ import threading
 import time
 from pathlib import Path
 
-from .build._runtime.worker import SecondProcess, library_imports, tune_process
+from .build._runtime.worker import SecondProcess
 from .errors import BadInput, GeneratorFailure
+from .process import library_imports, tune_process
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -88,7 +89,7 @@ def cmd_build(args) -> int:
         opened = open_build(args.params, args.output, say, use_cache=not args.no_cache)
         res = reuse_whole(opened)
         if res is None:
-            # A Ctrl-C in the pipeline's imports stops the build (worker.library_imports).
+            # A Ctrl-C in the pipeline's imports stops the build (process.library_imports).
             with library_imports():
                 from .build.pipeline import build_opened
 
@@ -700,11 +701,6 @@ def cmd_mount(args) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    # A command runs its own processes and threads side by side (the build's analyses and checks, a
-    # sweep's workers): BLAS's worker threads beside them only spin, for the same files. Set before
-    # numpy loads, for this process and every process it starts; a user's
-    # value stands.
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     try:
         args = make_parser().parse_args(argv)
     except (
@@ -774,7 +770,7 @@ def console() -> None:
     stopped and nothing left to write (what it printed is flushed first). A bug's
     traceback ends it the usual way. Called in-process (tests, scripts), :func:`main` returns its
     exit code instead. The process is tuned as every ``bvsr`` process
-    (:func:`bvsr_cad.build._runtime.worker.tune_process`: freed memory kept for reuse, its libraries
+    (:func:`bvsr_cad.process.tune_process`: freed memory kept for reuse, its libraries
     frozen out of the garbage collector, no OpenGL for MuJoCo, OpenBLAS on one thread)."""
     import signal
 

@@ -1,5 +1,5 @@
 """scikit-learn's clustering is loaded when used, not when the CAD kernel is imported
-(bvsr_cad.build._runtime.deferred)."""
+(bvsr_cad.process.deferred)."""
 
 import os
 import subprocess
@@ -10,7 +10,7 @@ from .conftest import ROOT
 CHILD = r"""
 import sys, time
 import numpy as np
-from bvsr_cad.build._runtime.worker import tune_process
+from bvsr_cad.process import tune_process
 tune_process()  # as every bvsr process does at its start
 import bvsr_cad.build.pipeline  # every layer, build123d with it
 assert "sklearn" not in sys.modules, "scikit-learn was imported with the pipeline"
@@ -30,7 +30,7 @@ print("ok")
 BEFORE = r"""
 import sys
 import sklearn.cluster  # the user's own, before bvsr_cad: left as it is
-from bvsr_cad.build._runtime.worker import tune_process
+from bvsr_cad.process import tune_process
 tune_process()
 import bvsr_cad.build.pipeline
 assert sys.modules["sklearn.cluster"] is sklearn.cluster
@@ -70,8 +70,8 @@ print("ok")
 
 def test_importing_the_library_changes_nothing_in_the_process():
     """``import bvsr_cad`` (and its API) installs no import hook, leaves the collector and the
-    environment variables of worker.tune_process as they were: only the ``bvsr`` command and its own
-    processes set process settings."""
+    environment variables of :func:`bvsr_cad.process.tune_process` as they were: only the ``bvsr``
+    command and its own processes set process settings."""
     out = subprocess.run(
         [sys.executable, "-c", LIBRARY],
         cwd=ROOT,

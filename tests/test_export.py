@@ -625,13 +625,13 @@ def test_ctrl_c_leaves_a_waiting_standby_process_quietly(tmp_path):
 
 def test_an_interrupt_is_held_through_imports_that_catch_base_exception():
     """trimesh's optional imports catch ``BaseException``: a Ctrl-C landing in one was swallowed and
-    ``bvsr build`` ran on. :func:`~bvsr_cad.build._runtime.worker.interrupts_held` delivers it when
+    ``bvsr build`` ran on. :func:`~bvsr_cad.process.interrupts_held` delivers it when
     the block ends."""
     import os
     import signal
     import threading
 
-    from bvsr_cad.build._runtime.worker import interrupts_held
+    from bvsr_cad.process import interrupts_held
 
     def optional_import() -> (
         bool

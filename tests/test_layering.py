@@ -16,7 +16,7 @@ PKG = Path(__file__).resolve().parents[1] / "bvsr_cad"
 #: the errors, below everything, so that every layer's errors can subclass them.
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("error bases", ("errors",)),
-    ("foundations", ("units", "colors", "folders", "extras", "defaults", "__version__")),
+    ("foundations", ("units", "colors", "folders", "extras", "defaults", "process", "__version__")),
     ("parameters", ("parameters",)),
     ("models", ("models",)),
     ("parts", ("parts",)),
@@ -153,4 +153,65 @@ def test_nothing_below_the_exporters_writes_a_file():
                     name == "open" and any(set(str(m)) & set("wax") for m in mode)
                 ):
                     bad.append(f"{rel}:{node.lineno} {name}")
+    assert not bad, bad
+
+
+def _process_settings(tree: ast.AST) -> list[tuple[int, str]]:
+    """Where a module sets something of its process: an environment variable, the garbage
+    collector, the allocator, the import system, OCCT's thread pool."""
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Assign | ast.AugAssign):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            for t in targets:
+                if isinstance(t, ast.Subscript) and ast.unparse(t.value) == "os.environ":
+                    found.append((node.lineno, ast.unparse(t)))
+        elif isinstance(node, ast.Call):
+            call = ast.unparse(node.func)
+            if call in (
+                "os.environ.setdefault",
+                "os.environ.update",
+                "os.putenv",
+                "gc.disable",
+                "gc.freeze",
+                "gc.set_threshold",
+                "sys.meta_path.insert",
+                "sys.meta_path.append",
+            ) or call.endswith(("mallopt", "DefaultPool_s")):
+                found.append((node.lineno, call))
+    return found
+
+
+def test_process_settings_live_in_one_module():
+    """bvsr_cad/process/ alone sets a process's environment, collector, allocator, import system or
+    OCCT's threads (docs/architecture.md); the others call it."""
+    bad = [
+        f"{path.relative_to(PKG)}:{line} {what}"
+        for path in _modules()
+        if path.relative_to(PKG).parts[0] != "process"
+        for line, what in _process_settings(ast.parse(path.read_text()))
+    ]
+    assert not bad, bad
+    found = {
+        what
+        for path in (PKG / "process").glob("*.py")
+        for _line, what in _process_settings(ast.parse(path.read_text()))
+    }
+    # the scan sees each kind of setting the package makes (a scan that saw nothing would pass)
+    assert {"gc.disable", "gc.freeze", "sys.meta_path.insert", "DefaultPool_s"} <= {
+        w.rsplit(".", 1)[-1] if w.endswith("DefaultPool_s") else w for w in found
+    }, found
+    assert any(w.startswith("os.environ") for w in found), found
+
+
+def test_writers_and_checks_import_no_process_setting():
+    """A writer or a check receives products and writes or judges them: it neither tunes the
+    process nor imports what does."""
+    bad = [
+        f"{path.relative_to(PKG)} imports {target}"
+        for path in _modules()
+        if path.relative_to(PKG).parts[0] in ("exporters", "checks")
+        for target in _imports(path)
+        if _top(target) == "process"
+    ]
     assert not bad, bad

@@ -180,28 +180,26 @@ def test_remembered_solids_are_made_once_copied_per_call_and_bounded():
 
 
 def test_kernel_threads_run_the_kernel_on_one_thread_for_the_same_solids(bvsr_spec, tmp_path):
-    """parts._kernel.kernel_threads: OCCT's pool on the threads asked for, the number before
+    """process.kernel_threads: OCCT's pool on the threads asked for, the number before
     returned (to give back); a panel's booleans and its print STL on one thread are the parallel
     ones, byte for byte."""
     from OCP.OSD import OSD_ThreadPool
 
     from bvsr_cad.exporters.cad import write_stl
-    from bvsr_cad.parts import _kernel
+    from bvsr_cad.process import kernel_threads
 
     pool = OSD_ThreadPool.DefaultPool_s()
-    before = _kernel.kernel_threads(2)
+    before = kernel_threads(2)
     try:
         assert pool.NbThreads() == 2
         lay = layout.panel_layout(bvsr_spec, 1)
         write_stl(panel(lay), tmp_path / "parallel.stl")
-        assert _kernel.kernel_threads(1) == 2 and pool.NbThreads() == 1
+        assert kernel_threads(1) == 2 and pool.NbThreads() == 1
         write_stl(panel(lay), tmp_path / "one.stl")
         assert (tmp_path / "one.stl").read_bytes() == (tmp_path / "parallel.stl").read_bytes()
-        assert (
-            _kernel.kernel_threads(0) == 1 and pool.NbThreads() == 1
-        )  # at least the calling thread
+        assert kernel_threads(0) == 1 and pool.NbThreads() == 1  # at least the calling thread
     finally:
-        _kernel.kernel_threads(before)
+        kernel_threads(before)
 
 
 def test_ruled_loft_gives_its_flat_bands_planes_for_the_same_solid(bvsr_spec):

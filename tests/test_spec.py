@@ -299,7 +299,7 @@ class Info(ctypes.Structure):
 libc = ctypes.CDLL(None)
 libc.mallinfo2.restype = Info
 if sys.argv[1] == "tuned":
-    from bvsr_cad.build._runtime.worker import tune_allocator
+    from bvsr_cad.process import tune_allocator
     assert tune_allocator()
 a = np.ones(2 << 20)  # 16 MiB, a build's large temporary
 mapped = libc.mallinfo2().hblkhd  # bytes in blocks of their own mapping
@@ -311,7 +311,7 @@ print(mapped, kept)
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt")
 def test_a_bvsr_process_reuses_freed_memory():
-    """:func:`bvsr_cad.build._runtime.worker.tune_allocator` (the command and its second processes):
+    """:func:`bvsr_cad.process.tune_allocator` (the command and its second processes):
     a large array comes from the heap and, freed, stays there for the next one; with glibc's
     defaults it is a mapping of its own, handed back to the kernel when freed, whose pages the
     kernel zeroes again at the next one (a cold build's minor page faults 690,000-725,000 with the
@@ -343,9 +343,9 @@ def test_a_bvsr_process_reuses_freed_memory():
 
 COLLECTIONS = r"""
 import gc, sys
-from bvsr_cad.build._runtime import worker
+from bvsr_cad import process
 if sys.argv[1] == "entry":
-    worker.tune_process()  # what the entry points call
+    process.tune_process()  # what the entry points call
 def collections():
     return sum(s["collections"] for s in gc.get_stats())
 before = collections()
@@ -353,7 +353,7 @@ if sys.argv[1] == "plain":
     import bvsr_cad.analysis.run
     during = collections() - before
 else:
-    with worker.library_imports():
+    with process.library_imports():
         assert not gc.isenabled()
         import bvsr_cad.analysis.run
         during = collections() - before
@@ -362,10 +362,10 @@ print(during, gc.isenabled(), gc.get_freeze_count())
 
 
 def test_library_imports_pause_the_garbage_collector():
-    """:func:`bvsr_cad.build._runtime.worker.library_imports`: the libraries' imports (the CAD
+    """:func:`bvsr_cad.process.library_imports`: the libraries' imports (the CAD
     kernel, scipy, trimesh, ...) run without Python's cyclic collector, which ran hundreds of times
     over them otherwise (0.4-0.5 CPU s a process); it runs again after, and only an entry point's
-    process (:func:`~bvsr_cad.build._runtime.worker.tune_collector`) freezes what was imported (a
+    process (:func:`~bvsr_cad.process.tune_collector`) freezes what was imported (a
     library call in someone else's process leaves its collector as it was)."""
     out = {
         mode: subprocess.run(
@@ -385,9 +385,9 @@ def test_library_imports_pause_the_garbage_collector():
 
 MUJOCO_IMPORT = r"""
 import os, sys
-from bvsr_cad.build._runtime import worker
+from bvsr_cad import process
 if sys.argv[1] == "entry":
-    worker.tune_process()  # what the entry points call
+    process.tune_process()  # what the entry points call
 import mujoco
 print("glfw" in sys.modules, os.environ.get("MUJOCO_GL", "-"))
 """
@@ -395,7 +395,7 @@ print("glfw" in sys.modules, os.environ.get("MUJOCO_GL", "-"))
 
 @pytest.mark.parametrize("users", [None, "glfw"])
 def test_a_bvsr_process_loads_no_opengl_for_mujoco(users):
-    """:func:`bvsr_cad.build._runtime.worker.no_mujoco_rendering` (the command and its second
+    """:func:`bvsr_cad.process.no_mujoco_rendering` (the command and its second
     processes): ``import mujoco`` loads no GLFW, whose binding starts a Python interpreter at import
     (0.1 s a process); an environment that names MuJoCo's OpenGL keeps it."""
     env = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
@@ -420,9 +420,9 @@ def test_a_bvsr_process_loads_no_opengl_for_mujoco(users):
 
 BLAS_THREADS = r"""
 import sys
-from bvsr_cad.build._runtime import worker
+from bvsr_cad import process
 if sys.argv[1] == "entry":
-    worker.tune_process()  # what the entry points call
+    process.tune_process()  # what the entry points call
 import numpy, scipy.linalg
 from threadpoolctl import threadpool_info
 print(sorted({i["num_threads"] for i in threadpool_info() if i["internal_api"] == "openblas"}))
@@ -431,11 +431,11 @@ print(sorted({i["num_threads"] for i in threadpool_info() if i["internal_api"] =
 
 @pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="OpenBLAS runs one thread on one core anyway")
 def test_a_bvsr_process_runs_openblas_on_one_thread():
-    """:func:`bvsr_cad.build._runtime.worker.one_blas_thread` (the command and its second
+    """:func:`bvsr_cad.process.one_blas_thread` (the command and its second
     processes): numpy's and scipy's OpenBLAS on one thread, where they would take one per core; a
     number the environment sets is kept."""
     pytest.importorskip("threadpoolctl")
-    from bvsr_cad.build._runtime.worker import BLAS_THREAD_VARIABLES
+    from bvsr_cad.process import BLAS_THREAD_VARIABLES
 
     env = {k: v for k, v in os.environ.items() if k not in BLAS_THREAD_VARIABLES}
 

@@ -18,7 +18,7 @@ from typing import Any
 from ..analysis.limits import per_joint_rad
 from ..analysis.run import BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS
 from ..parameters.load import params_sha256
-from ..parts._kernel import kernel_threads
+from ..process import kernel_threads
 from ._runtime.analyses_process import (
     drop_geometry_ahead,
     keep_rest,

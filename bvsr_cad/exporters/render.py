@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -18,7 +17,6 @@ from ..parts._kernel import fresh_copy, mesh_arrays
 def offscreen_pyvista():
     """pyvista, set to draw off-screen (no display needed). VTK's logger comes from its own module:
     ``import vtk`` loads every VTK module, far more than pyvista's own."""
-    os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
     import pyvista as pv
     from vtkmodules.vtkCommonCore import vtkLogger
 

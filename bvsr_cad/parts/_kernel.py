@@ -21,24 +21,6 @@ class GeometryError(RuntimeError, GeneratorFailure):
     """The CAD kernel could not make a valid solid from valid parameters."""
 
 
-def kernel_threads(n: int) -> int:
-    """Run OCCT's parallel algorithms (the booleans and the meshing build123d and the exporters ask
-    to run in parallel) on ``n`` threads, the calling one included (1: on it alone); the number
-    before is returned, to give back. A build whose second process keeps the other core busy asks
-    for 1: on the default tail its booleans then take less CPU than on two threads for the same
-    solids, and the meshing as much for the same STL bytes (figures: benchmarks/RESULTS.md). OCCT
-    refuses while its threads are at work: the pool is then left as it was."""
-    from OCP.OSD import OSD_ThreadPool
-
-    pool = OSD_ThreadPool.DefaultPool_s()
-    before = pool.NbThreads()
-    try:
-        pool.Init(max(1, int(n)))
-    except Exception:  # noqa: BLE001 - "active ThreadPool is reinitialized": another thread is using it
-        pass
-    return before
-
-
 def location(t) -> bd.Location:
     """A rigid 4x4 transform (rows: nested sequences or an array, mm) as a build123d Location."""
     from OCP.gp import gp_Trsf

@@ -1,4 +1,3 @@
 """The build's second processes (:mod:`~bvsr_cad.build._runtime.worker`, the analyses' and the
-checks') and the settings the ``bvsr`` command's processes start with
-(:func:`~bvsr_cad.build._runtime.worker.tune_process`): nowhere else does bvsr_cad start or tune a
-process."""
+checks'): nowhere else does bvsr_cad start a process. What a process sets at its start is
+:mod:`bvsr_cad.process`'s."""

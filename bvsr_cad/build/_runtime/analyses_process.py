@@ -17,7 +17,7 @@ from pathlib import Path
 
 from ...analysis.run import BESIDE_BUILD_THREADS, GeometryAnalyses, RestGeometry
 from ...parameters.load import load_spec, params_sha256
-from ...parts._kernel import kernel_threads
+from ...process import kernel_threads
 from ...simulation.sim import protocol_radius_mm
 
 #: In the build's temporary folder: the geometry analyses, pickled by the analyses' second process

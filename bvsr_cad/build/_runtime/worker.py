@@ -24,7 +24,6 @@ and reports the interrupt once; the parent's death stops them too
 
 from __future__ import annotations
 
-import gc
 import importlib
 import json
 import os
@@ -35,10 +34,11 @@ import sys
 import tempfile
 import threading
 import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
+
+from ...process import library_imports, tune_process
 
 
 class WorkerLost(RuntimeError):
@@ -54,7 +54,6 @@ def _die_with_parent() -> None:
     """Linux: the kernel sends SIGKILL to this process when its parent dies (PR_SET_PDEATHSIG);
     elsewhere, or if that fails, a daemon thread polls the parent. Either way a build killed with
     SIGKILL leaves no second process running."""
-    import signal
 
     parent = int(os.environ.get(PARENT_PID_ENV, "0") or 0)
     if not parent:
@@ -78,134 +77,8 @@ def _die_with_parent() -> None:
         os._exit(1)
 
 
-#: glibc's allocator settings of a ``bvsr`` process (:func:`tune_allocator`): (mallopt parameter,
-#: value). M_MMAP_THRESHOLD (-3) 64 MiB, M_TRIM_THRESHOLD (-1) 256 MiB, M_TOP_PAD (-2) 64 MiB.
-ALLOCATOR_SETTINGS = ((-3, 64 << 20), (-1, 256 << 20), (-2, 64 << 20))
-
-
-def tune_allocator() -> bool:
-    """Keep freed memory in the process for the next allocation instead of handing it back to the
-    kernel (glibc's ``mallopt``; elsewhere nothing changes, False). With the defaults, the many
-    large numpy temporaries of a build (meshes, pose batches) are each mapped fresh and unmapped
-    when freed, and the kernel zeroes every page again on first touch: a fifth of a build's minor
-    page faults and system CPU, for a few per cent more peak memory. Called by the entry points only
-    (the ``bvsr`` command, a second process), never by a library call in someone else's process."""
-    try:
-        import ctypes
-
-        mallopt = ctypes.CDLL(None).mallopt
-    except (OSError, AttributeError):
-        return False
-    return all(mallopt(param, value) == 1 for param, value in ALLOCATOR_SETTINGS)
-
-
-def no_mujoco_rendering() -> None:
-    """MuJoCo's OpenGL contexts off (``MUJOCO_GL=disable``) unless the environment names one:
-    nothing of bvsr_cad draws through MuJoCo (its pictures are pyvista's), and ``import mujoco``
-    otherwise loads GLFW, whose Python binding starts a Python interpreter to read the library's
-    version, in each of a build's three processes. Called by the entry points only (the ``bvsr``
-    command, a second process, which inherits it), as :func:`tune_allocator`."""
-    os.environ.setdefault("MUJOCO_GL", "disable")
-
-
-#: The variables OpenBLAS reads its number of threads from.
-BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS")
-
-
-def one_blas_thread() -> None:
-    """numpy's and scipy's OpenBLAS on one thread (``OPENBLAS_NUM_THREADS=1``) unless the
-    environment sets a number OpenBLAS reads (:data:`BLAS_THREAD_VARIABLES`); before they are
-    imported. A build keeps both cores busy with its own processes: OpenBLAS's second thread only
-    takes CPU from them (figures: benchmarks/RESULTS.md) and the export is the same (every file, the
-    manifest's volatile section aside). Called by the entry points only (the ``bvsr`` command, a
-    second process, which inherits it), as :func:`tune_allocator`."""
-    if not any(os.environ.get(name) for name in BLAS_THREAD_VARIABLES):
-        os.environ["OPENBLAS_NUM_THREADS"] = "1"
-
-
 #: The first argument of a child started by :meth:`SecondProcess.standby`: its work comes on stdin.
 STANDBY = "--standby"
-
-
-@contextmanager
-def interrupts_held() -> Iterator[None]:
-    """Ctrl-C (SIGINT) held back while the block runs and raised as KeyboardInterrupt when it ends:
-    for imports of the libraries. trimesh's optional imports catch ``BaseException``, so an
-    interrupt that lands in one is swallowed (a Ctrl-C during the pipeline's imports let the build
-    run on to the end), and pybind11 turns one into OCP's
-    ``ImportError: initialization failed``. An interrupt that came wins over an error the block
-    raised. Off the main thread, or where SIGINT is not Python's own handler (ignored, or the
-    caller's), the block runs as it is."""
-    if (
-        threading.current_thread() is not threading.main_thread()
-        or signal.getsignal(signal.SIGINT) is not signal.default_int_handler
-    ):
-        yield
-        return
-    came: list[int] = []
-    signal.signal(signal.SIGINT, lambda signum, _frame: came.append(signum))
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-        if (
-            came
-        ):  # before any error the block raised (the user asked to stop): that one is its context
-            raise KeyboardInterrupt
-
-
-#: Entry points (:func:`tune_collector`) freeze what the libraries' imports made
-#: (:func:`library_imports`).
-_FREEZE_IMPORTS = False
-
-
-def tune_collector() -> None:
-    """This process's libraries, once :func:`library_imports` has imported them, are frozen out of
-    Python's cyclic garbage collector (``gc.freeze``: a full collection no longer walks their
-    million objects, again and again in a build that allocates as much as this one). Called by the
-    entry points only (the ``bvsr`` command, a second process), as
-    :func:`tune_allocator`: frozen objects are never freed (what the imports left in cycles stays
-    until the process ends), which a library call in someone else's process must not decide."""
-    global _FREEZE_IMPORTS
-    _FREEZE_IMPORTS = True
-
-
-@contextmanager
-def library_imports() -> Iterator[None]:
-    """The block that imports the libraries (the CAD kernel, MuJoCo, scipy, trimesh, ...): Ctrl-C
-    held back (:func:`interrupts_held`) and Python's cyclic garbage collector paused. Imports make
-    about a million objects and almost no garbage, yet the collector would run hundreds of times
-    over them in each process. It resumes when the block ends, if it ran before; in an entry point's
-    process (:func:`tune_collector`) what the block imported is frozen first."""
-    was = gc.isenabled()
-    gc.disable()
-    try:
-        with interrupts_held():
-            yield
-    finally:
-        if was:
-            if _FREEZE_IMPORTS:
-                gc.freeze()
-            gc.enable()
-
-
-def tune_process() -> None:
-    """What a ``bvsr`` process sets at its start, before its imports: :func:`tune_allocator`,
-    :func:`tune_collector`, :func:`no_mujoco_rendering`, :func:`one_blas_thread` and scikit-learn's
-    clustering loaded when used (:func:`bvsr_cad.build._runtime.deferred.defer_sklearn_cluster`).
-    Called by the entry points only (the command, a second process, the rebuild benchmark's own
-    process), in one place so that they stay alike: ``import bvsr_cad`` changes nothing in the
-    importing process. They stay as two groups, each measured to save over a second of a cold build
-    (benchmarks/RESULTS.md): what the libraries' imports cost every process (the collector paused
-    and frozen, no GLFW, scikit-learn deferred) and the allocator's and OpenBLAS's settings; one by
-    one their savings are within a run's noise."""
-    from .deferred import defer_sklearn_cluster
-
-    tune_allocator()
-    tune_collector()
-    no_mujoco_rendering()
-    one_blas_thread()
-    defer_sklearn_cluster()
 
 
 def child_main(argv: list[str]) -> int:

@@ -13,7 +13,7 @@ import numpy as np
 
 from bvsr_cad.analysis.clearance import brute_force, clearance_over, posed_tail
 from bvsr_cad.analysis.workspace import run_workspace
-from bvsr_cad.assembly.build import build_assembly
+from bvsr_cad.assembly.assemble import build_assembly
 from bvsr_cad.parameters.load import load_spec
 
 

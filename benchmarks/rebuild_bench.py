@@ -124,13 +124,13 @@ def main() -> None:
     work = Path(tempfile.mkdtemp(prefix="bvsr-rebuild-bench-"))
     users_cache = os.environ.get("BVSR_CACHE")
     os.environ["BVSR_CACHE"] = str(work / "cache")
-    from bvsr_cad.build._runtime.worker import SecondProcess
-    from bvsr_cad.build.cache import process_start
+    from bvsr_cad.pipeline.cache import process_start
+    from bvsr_cad.pipeline.processes.worker import SecondProcess
     from bvsr_cad.process import library_imports, tune_process
 
     tune_process()  # as the `bvsr` command does, and its imports
     with library_imports():
-        from bvsr_cad.build.pipeline import build_export
+        from bvsr_cad.pipeline.stages import build_export
     base = Path(args.params).resolve()
     text = base.read_text()
     for stale in base.parent.glob(".bench-*.toml"):  # left by a benchmark that was killed
@@ -173,7 +173,7 @@ def main() -> None:
             path,
             work / "out",
             standby=SecondProcess.standby(
-                "bvsr_cad.build._runtime.analyses_process", None, [str(path)]
+                "bvsr_cad.pipeline.processes.analyses_process", None, [str(path)]
             ),
         )
         return row(label, time.perf_counter() - t0, cpu_s() - c0, res.stages, res.cpu_s)

@@ -32,7 +32,7 @@ from OCP.TopTools import TopTools_ListOfShape
 
 from . import units
 from .analysis.clearance import PosedTail, plane_sections
-from .assembly.build import Assembly, build_assembly
+from .assembly.assemble import Assembly, build_assembly
 from .assembly.placed import PlacedShape, labelled_compound, placed_instances
 from .exporters.cad import write_labelled_step
 from .exporters.reproducible import fix_step
@@ -40,8 +40,8 @@ from .extras import require
 from .models.kinematics import uv_from_theta_phi
 from .parameters.load import ParamError, load_spec
 from .parameters.tables import TailSpec
-from .parts._kernel import bounds as _bounds
-from .parts._kernel import location as _location
+from .parts.kernel import bounds as _bounds
+from .parts.kernel import location as _location
 
 if TYPE_CHECKING:  # CadQuery is needed only by Tail.cadquery_assembly
     import cadquery as cq
@@ -89,7 +89,7 @@ class Tail:
         Args:
             spec: validated parameters (:func:`bvsr_cad.parameters.load.load_spec`).
             assembly: the assembly already built from ``spec``
-                (:func:`bvsr_cad.assembly.build.build_assembly`); None: built on first use.
+                (:func:`bvsr_cad.assembly.assemble.build_assembly`); None: built on first use.
         """
         if assembly is not None and assembly.spec != spec:
             raise ValueError(

@@ -14,8 +14,8 @@ import threading
 import time
 from pathlib import Path
 
-from .build._runtime.worker import SecondProcess
 from .errors import BadInput, GeneratorFailure
+from .pipeline.processes.worker import SecondProcess
 from .process import library_imports, tune_process
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
@@ -79,19 +79,19 @@ def cmd_build(args) -> int:
     # pipeline, and builds the tail's assembly from the file while this process decides what the
     # cache holds.
     standby = SecondProcess.standby(
-        "bvsr_cad.build._runtime.analyses_process", say, [str(Path(args.params).resolve())]
+        "bvsr_cad.pipeline.processes.analyses_process", say, [str(Path(args.params).resolve())]
     )
     try:
         # A bad file is refused, and an export the cache holds whole is published, in a fraction of
         # a second: before the pipeline's imports (seconds).
-        from .build.publish import open_build, reuse_whole
+        from .pipeline.publish import open_build, reuse_whole
 
         opened = open_build(args.params, args.output, say, use_cache=not args.no_cache)
         res = reuse_whole(opened)
         if res is None:
             # A Ctrl-C in the pipeline's imports stops the build (process.library_imports).
             with library_imports():
-                from .build.pipeline import build_opened
+                from .pipeline.stages import build_opened
 
             res = build_opened(opened, standby)
     finally:
@@ -124,7 +124,7 @@ def cmd_watch(args) -> int:
         )
     args.params = _params_or_default(args, _progress(args.quiet))
     with library_imports():
-        from .build.watch import watch
+        from .pipeline.watch import watch
 
     def say(msg: str) -> None:
         print(msg, flush=True)
@@ -179,7 +179,7 @@ def cmd_show(args) -> int:
 
 def cmd_check(args) -> int:
     with library_imports():
-        from .build._runtime.checks_process import run_checks
+        from .pipeline.processes.checks_process import run_checks
 
     results = run_checks(args.export, _progress(args.quiet or args.json), run_slicer=args.slice)
     return _print_results(results, args.json, verbose=args.verbose)
@@ -270,7 +270,7 @@ def _number(minimum: float, inclusive: bool, kind: type = float):
 def cmd_workspace(args) -> int:
     with library_imports():
         from .analysis.workspace import run_workspace
-        from .assembly.build import build_assembly
+        from .assembly.assemble import build_assembly
         from .parameters.load import load_spec
 
     spec = load_spec(args.params)

@@ -120,7 +120,7 @@ def built_once(request, tmp_path_factory, name: str, make) -> Path:
 def bvsr_export(tmp_path_factory, request) -> Path:
     """One full default build shared by the export tests (read-only to them), in the session's
     cache (:func:`built_once`)."""
-    from bvsr_cad.build.pipeline import build_export
+    from bvsr_cad.pipeline.stages import build_export
 
     def make(folder: Path) -> None:
         build_export(PARAMS / "bvsr.toml", folder / "bvsr")

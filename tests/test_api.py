@@ -22,7 +22,7 @@ import pytest
 
 import bvsr_cad
 from bvsr_cad import api
-from bvsr_cad.assembly.build import build_assembly
+from bvsr_cad.assembly.assemble import build_assembly
 from bvsr_cad.colors import rgb
 from bvsr_cad.exporters.cad import write_assembly_step
 from bvsr_cad.exporters.manifest import manifest_dict

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from bvsr_cad.build.publish import BuildResult
 from bvsr_cad.parameters.layout import key_value
 from bvsr_cad.parameters.load import load_spec
+from bvsr_cad.pipeline.publish import BuildResult
 
 from .conftest import benchmark_script
 
@@ -31,8 +31,8 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(
     value, and is removed afterwards; an edit file left by a dead benchmark is removed, a live one's
     kept; the table lists the cold build, the no-op (in the process and as the command) and each
     edit with its ratio to cold."""
-    import bvsr_cad.build._runtime.worker
-    import bvsr_cad.build.pipeline
+    import bvsr_cad.pipeline.processes.worker
+    import bvsr_cad.pipeline.stages
 
     bench = benchmark_script("rebuild_bench")
     (tmp_path / "params").mkdir()
@@ -64,12 +64,12 @@ def test_rebuild_bench_runs_every_edit_and_cleans_a_killed_runs_files(
         commands.append((Path(path), os.environ["BVSR_CACHE"]))
         return 0.5, 0.4, [{"stage": "export", "status": "reused", "seconds": 0.1}], {"build": 0.31}
 
-    monkeypatch.setattr(bvsr_cad.build.pipeline, "build_export", fake_build)
+    monkeypatch.setattr(bvsr_cad.pipeline.stages, "build_export", fake_build)
     monkeypatch.setattr(bench, "command_seconds", fake_command)
     loops = iter([0.91, 0.97])  # the reference loop, before and after
     monkeypatch.setattr(bench, "reference_loop_s", lambda: next(loops))
     monkeypatch.setattr(
-        bvsr_cad.build._runtime.worker.SecondProcess,
+        bvsr_cad.pipeline.processes.worker.SecondProcess,
         "standby",
         classmethod(lambda cls, *a, **k: None),
     )
@@ -128,8 +128,8 @@ def test_rebuild_bench_runs_several_cold_builds_each_from_an_empty_cache(
     """``--cold 3``: three cold builds, each finding the benchmark's cache empty (what the one
     before it put there removed), then the no-op from the last one's cache; the table lists each and
     the ratios' base is their median; ``--cold 0`` is refused."""
-    import bvsr_cad.build._runtime.worker
-    import bvsr_cad.build.pipeline
+    import bvsr_cad.pipeline.processes.worker
+    import bvsr_cad.pipeline.stages
 
     bench = benchmark_script("rebuild_bench")
     found: list[list[str]] = []
@@ -147,11 +147,11 @@ def test_rebuild_bench_runs_several_cold_builds_each_from_an_empty_cache(
             {"build": 0.5},
         )
 
-    monkeypatch.setattr(bvsr_cad.build.pipeline, "build_export", fake_build)
+    monkeypatch.setattr(bvsr_cad.pipeline.stages, "build_export", fake_build)
     monkeypatch.setattr(bench, "command_seconds", lambda path, out: (0.5, 0.4, [], {"build": 0.3}))
     monkeypatch.setattr(bench, "reference_loop_s", lambda: 0.9)
     monkeypatch.setattr(
-        bvsr_cad.build._runtime.worker.SecondProcess,
+        bvsr_cad.pipeline.processes.worker.SecondProcess,
         "standby",
         classmethod(lambda cls, *a, **k: None),
     )

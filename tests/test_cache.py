@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from bvsr_cad.build.cache import ArtifactCache, spec_without, stage_key
+from bvsr_cad.pipeline.cache import ArtifactCache, spec_without, stage_key
 
 from .conftest import PARAMS, benchmark_script, built_once, script, write_toml
 
@@ -76,7 +76,7 @@ def test_keys_follow_exactly_the_declared_inputs(bvsr_spec):
     material."""
     import dataclasses
 
-    from bvsr_cad.build.pipeline import ANALYSES_IGNORE, PART_FILES_IGNORE
+    from bvsr_cad.pipeline.stages import ANALYSES_IGNORE, PART_FILES_IGNORE
 
     def key(stage, spec, ignore):
         return stage_key(stage, spec=spec_without(spec, *ignore))
@@ -95,14 +95,14 @@ def test_keys_follow_exactly_the_declared_inputs(bvsr_spec):
     assert key("analyses", pvc, ANALYSES_IGNORE) != key("analyses", bvsr_spec, ANALYSES_IGNORE)
     assert key("analyses", renamed, ANALYSES_IGNORE) != key("analyses", bvsr_spec, ANALYSES_IGNORE)
     # The geometry analyses (joint limits, clearance map): the solids, not the material or the name.
-    from bvsr_cad.build.pipeline import ANALYSIS_GEOMETRY_IGNORE as GEO
+    from bvsr_cad.pipeline.stages import ANALYSIS_GEOMETRY_IGNORE as GEO
 
     assert key("analysis_geometry", pvc, GEO) == key("analysis_geometry", bvsr_spec, GEO)
     assert key("analysis_geometry", renamed, GEO) == key("analysis_geometry", bvsr_spec, GEO)
     assert key("analysis_geometry", thin, GEO) != key("analysis_geometry", bvsr_spec, GEO)
     # The robot's meshes and collision fits: the solids and which collision shapes, not the
     # material, the name or the robot table's other values.
-    from bvsr_cad.build.pipeline import robot_geometry_key
+    from bvsr_cad.pipeline.stages import robot_geometry_key
 
     robot = robot_geometry_key(bvsr_spec)
     assert robot_geometry_key(pvc) == robot_geometry_key(renamed) == robot
@@ -136,7 +136,7 @@ def test_keys_follow_the_libraries_the_results_are_computed_with(monkeypatch):
     import tomllib
     from importlib import metadata
 
-    from bvsr_cad.build import cache
+    from bvsr_cad.pipeline import cache
 
     project = tomllib.loads((PARAMS.parent / "pyproject.toml").read_text())["project"]
     computing = project["dependencies"] + [
@@ -168,10 +168,10 @@ def test_keys_follow_the_libraries_the_results_are_computed_with(monkeypatch):
 def test_check_verdicts_follow_the_bytes_of_the_files_they_read(tmp_path):
     """A group's verdicts are reused while its files' bytes and manifest values are unchanged (a
     file rewritten with the same bytes too), and computed again when either changes."""
-    from bvsr_cad.build.stages import verdict_store
     from bvsr_cad.checks.export import Export
     from bvsr_cad.checks.memo import CheckMemo
     from bvsr_cad.checks.result import CheckResult
+    from bvsr_cad.pipeline.runner import verdict_store
 
     (tmp_path / "manifest.json").write_text(json.dumps({"name": "t", "parts": [], "mass_g": {}}))
     (tmp_path / "a.stl").write_bytes(b"solid a")
@@ -217,7 +217,7 @@ def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(
     benchmark's rod-material edit, built by two command-line builds at once through that cache,
     equals file for file the same edit built with --no-cache (the manifest's volatile section
     aside)."""
-    from bvsr_cad.build.pipeline import build_export
+    from bvsr_cad.pipeline.stages import build_export
 
     monkeypatch.setenv("BVSR_CACHE", str(small_tail / "cache"))
     base = small_tail / "params" / "base.toml"
@@ -307,7 +307,7 @@ def small_tail(request, tmp_path_factory) -> Path:
     """A folder with ``params/base.toml`` (:data:`SMALL_TAIL`, its calibration data beside it) and
     ``cache``, a cache of its own that holds that file's build, built once per session for every
     edit's test (:func:`~tests.conftest.built_once`)."""
-    from bvsr_cad.build.pipeline import build_export
+    from bvsr_cad.pipeline.stages import build_export
 
     def make(folder: Path) -> None:
         (folder / "params").mkdir()
@@ -345,7 +345,7 @@ def test_every_benchmark_edit_built_from_the_cache_equals_a_fresh_build(
     and rebuilds at least one. A CI-sized tail (:data:`SMALL_TAIL`) in a cache of its own, its base
     built once per session and the edits spread over the workers (the other edits' entries may
     join the cache meanwhile: their keys differ from this edit's in the key edited)."""
-    from bvsr_cad.build.pipeline import build_export
+    from bvsr_cad.pipeline.stages import build_export
 
     monkeypatch.setenv("BVSR_CACHE", str(small_tail / "cache"))
     table, key, value = SMALL_TAIL_EDITS[name]
@@ -384,8 +384,8 @@ def test_a_build_whose_analyses_are_cached_stops_its_standby_before_its_stages(
     build takes them from the cache and stops its standby analyses' process before the assembly, so
     that its imports and head start do not take a core from the build's stages. Without the cache it
     is given the analyses, and runs beside them."""
-    from bvsr_cad.build import pipeline
-    from bvsr_cad.build._runtime import worker
+    from bvsr_cad.pipeline import stages
+    from bvsr_cad.pipeline.processes import worker
 
     data["fabrication_package"]["printer_x_mm"] = 220.0
     edit = _edit_beside_its_data(tmp_path, data)
@@ -395,15 +395,15 @@ def test_a_build_whose_analyses_are_cached_stops_its_standby_before_its_stages(
         seen.append(standby.running)
         raise _StageReached
 
-    monkeypatch.setattr(pipeline, "build_assembly", first_stage)
+    monkeypatch.setattr(stages, "build_assembly", first_stage)
     for use_cache in (True, False):
         standby = worker.SecondProcess.standby(
-            "bvsr_cad.build._runtime.analyses_process", None, [str(edit)]
+            "bvsr_cad.pipeline.processes.analyses_process", None, [str(edit)]
         )
         if standby is None:
             pytest.skip("one core: the analyses never leave the process")
         with pytest.raises(_StageReached):
-            pipeline.build_export(edit, tmp_path / "out", use_cache=use_cache, standby=standby)
+            stages.build_export(edit, tmp_path / "out", use_cache=use_cache, standby=standby)
         assert standby.proc is None  # closed by the build either way
     assert seen == [False, True]
 
@@ -419,8 +419,8 @@ def test_analyses_take_both_cores_when_the_geometry_is_cached(
     table is the same either way (compare_rows); measured on the default tail, 2 cores: 22.9-24.4 s
     with 2 threads, 19.0-20.1 with 3."""
     from bvsr_cad.analysis.run import BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS
-    from bvsr_cad.build import pipeline
-    from bvsr_cad.build._runtime import worker
+    from bvsr_cad.pipeline import stages
+    from bvsr_cad.pipeline.processes import worker
 
     data["actuation"]["effective_area_mm2"] = 150.0
     edit = _edit_beside_its_data(tmp_path, data)
@@ -434,10 +434,10 @@ def test_analyses_take_both_cores_when_the_geometry_is_cached(
         raise _StageReached
 
     monkeypatch.setattr(worker.SecondProcess, "start", classmethod(start))
-    monkeypatch.setattr(pipeline, "build_assembly", first_stage)
+    monkeypatch.setattr(stages, "build_assembly", first_stage)
     for use_cache in (True, False):
         with pytest.raises(_StageReached):
-            pipeline.build_export(edit, tmp_path / "out", use_cache=use_cache)
+            stages.build_export(edit, tmp_path / "out", use_cache=use_cache)
     assert [(bool(args[2]), args[3]) for args in given] == [
         (True, str(BESIDE_IDLE_BUILD_THREADS)),
         (False, str(BESIDE_BUILD_THREADS)),
@@ -457,7 +457,7 @@ HEAVY_MODULES = {
     "mujoco",
     "matplotlib",
     "pyvista",
-    "bvsr_cad.build.pipeline",
+    "bvsr_cad.pipeline.stages",
     "bvsr_cad.assembly",
     "bvsr_cad.checks.printability",
 }
@@ -501,7 +501,7 @@ def test_a_noop_build_command_publishes_the_cached_export_before_the_cad_imports
         for line in done.stderr.splitlines()
         if line.startswith("import time:")
     }
-    assert "bvsr_cad.build.publish" in imported  # the listing is there to read
+    assert "bvsr_cad.pipeline.publish" in imported  # the listing is there to read
     assert not imported & HEAVY_MODULES
     assert differences(bvsr_export, out) == []
 

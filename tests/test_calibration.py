@@ -192,7 +192,7 @@ def test_shipped_fitted_rigidity_reaches_the_mjcf(bvsr_data, bvsr_spec):
     can give up the whole shear spring (none left on a shear tendon)."""
     import mujoco
 
-    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.assemble import build_assembly
     from bvsr_cad.assembly.robot import robot_model
     from bvsr_cad.exporters.mjcf import HingeShare, mjcf_tree
 
@@ -241,7 +241,7 @@ def test_inherited_calibration_compares_only_the_rows_of_its_own_tail(bvsr_spec)
 
     from bvsr_cad.analysis.calibrate import uncalibrated
     from bvsr_cad.analysis.measured import compare_measurements, rows_of_tail
-    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.assemble import build_assembly
     from bvsr_cad.parameters.load import load_spec
     from bvsr_cad.parameters.measurements import load_measurements
 
@@ -317,7 +317,7 @@ def test_rows_predicted_in_threads_equal_rows_predicted_one_by_one(bvsr_spec):
     take one thread of their own): the table is the same, value for value, with one thread."""
     from bvsr_cad.analysis.calibrate import compare_rows, uncalibrated
     from bvsr_cad.analysis.predict import Predictor
-    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.assemble import build_assembly
     from bvsr_cad.parameters.measurements import load_measurements
 
     from .conftest import ROOT

@@ -28,7 +28,7 @@ BAD_INPUT = (
     ("exporters.ocp_viewer", "ViewerUnavailable", RuntimeError),
     ("exporters.mount", "MountError", ValueError),
     ("exporters.starter_files", "StarterExistsError", FileExistsError),
-    ("build.publish", "OutputError", ValueError),
+    ("pipeline.publish", "OutputError", ValueError),
     ("simulation.sim", "SimulationInputError", ValueError),
     ("simulation.quadruped", "QuadrupedInputError", ValueError),
     ("studies.sweep", "SweepError", RuntimeError),
@@ -53,7 +53,7 @@ def test_a_bad_input_exits_2_with_its_message_and_no_traceback(monkeypatch, caps
 
 
 def test_the_kernels_failure_is_a_generator_failure_and_a_bug_stays_a_traceback(monkeypatch):
-    from bvsr_cad.parts._kernel import GeometryError
+    from bvsr_cad.parts.kernel import GeometryError
 
     assert issubclass(GeometryError, GeneratorFailure) and issubclass(GeometryError, RuntimeError)
 

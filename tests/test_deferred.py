@@ -12,7 +12,7 @@ import sys, time
 import numpy as np
 from bvsr_cad.process import tune_process
 tune_process()  # as every bvsr process does at its start
-import bvsr_cad.build.pipeline  # every layer, build123d with it
+import bvsr_cad.pipeline.stages  # every layer, build123d with it
 assert "sklearn" not in sys.modules, "scikit-learn was imported with the pipeline"
 assert "sklearn.cluster" not in sys.modules and "build123d" in sys.modules  # the stand-in is gone
 import build123d.brep_from_stl as b
@@ -32,7 +32,7 @@ import sys
 import sklearn.cluster  # the user's own, before bvsr_cad: left as it is
 from bvsr_cad.process import tune_process
 tune_process()
-import bvsr_cad.build.pipeline
+import bvsr_cad.pipeline.stages
 assert sys.modules["sklearn.cluster"] is sklearn.cluster
 print("ok")
 """

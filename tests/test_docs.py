@@ -149,12 +149,12 @@ def test_sphinx_roles_render_as_code():
     roles = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(roles)
     text = (
-        "Uses :func:`~bvsr_cad.api.load`, :data:`bvsr_cad.build.pipeline.X` and ``a``. "
+        "Uses :func:`~bvsr_cad.api.load`, :data:`bvsr_cad.pipeline.stages.X` and ``a``. "
         "Example::\n\n    x = 1"
     )
     assert (
         roles.markdown(text)
-        == "Uses `load`, `bvsr_cad.build.pipeline.X` and `a`. Example:\n\n    x = 1"
+        == "Uses `load`, `bvsr_cad.pipeline.stages.X` and `a`. Example:\n\n    x = 1"
     )
 
 

@@ -14,7 +14,7 @@ import pytest
 import trimesh
 
 from bvsr_cad import cli
-from bvsr_cad.assembly.build import build_assembly
+from bvsr_cad.assembly.assemble import build_assembly
 from bvsr_cad.cli import main
 from bvsr_cad.parameters import paper
 
@@ -126,7 +126,7 @@ def test_checks_started_early_see_a_file_changed_before_they_finish(bvsr_export,
     """A build runs the CAD files' checks before its analyses are in (Checks.start) and the rest
     after (Checks.finish): a file changed in between is checked again, so the verdicts are those of
     the final export, the same as one run of every check."""
-    from bvsr_cad.build._runtime.checks_process import run_checks, start_checks
+    from bvsr_cad.pipeline.processes.checks_process import run_checks, start_checks
 
     copy = tmp_path / "copy"
     shutil.copytree(bvsr_export, copy)
@@ -148,7 +148,7 @@ def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_change
     check's."""
     import os
 
-    from bvsr_cad.build._runtime.checks_process import run_checks, start_checks
+    from bvsr_cad.pipeline.processes.checks_process import run_checks, start_checks
 
     if (os.cpu_count() or 1) < 2:
         pytest.skip("one core: the checks never leave the process")
@@ -181,9 +181,9 @@ def test_mold_checks_in_the_second_process_see_a_mold_file_changed_before_they_f
     is."""
     import os
 
-    from bvsr_cad.build._runtime.checks_process import start_checks
     from bvsr_cad.checks.export import Export
     from bvsr_cad.checks.molds import check_molds
+    from bvsr_cad.pipeline.processes.checks_process import start_checks
 
     if (os.cpu_count() or 1) < 2:
         pytest.skip("one core: the mold checks never leave the process")
@@ -219,7 +219,7 @@ def test_checks_handed_the_manifest_need_no_manifest_file(bvsr_export, tmp_path)
     export (which reads its file)."""
     import os
 
-    from bvsr_cad.build._runtime.checks_process import finish_checks, run_checks, start_checks
+    from bvsr_cad.pipeline.processes.checks_process import finish_checks, run_checks, start_checks
 
     copy = tmp_path / "copy"
     shutil.copytree(bvsr_export, copy)
@@ -271,10 +271,10 @@ def test_failed_build_leaves_earlier_export_untouched(bvsr_export, tmp_path, dat
     assert main(["build", str(write_toml(tmp_path / "bad.toml", data)), "-o", str(out), "-q"]) == 2
     assert _tree_digest(out) == before
     # A failure half-way through writing: the earlier export survives, no temp folder is left.
-    import bvsr_cad.build.pipeline as pipeline
+    import bvsr_cad.pipeline.stages as stages
 
     calls = {"n": 0}
-    real = pipeline.write_part_stl
+    real = stages.write_part_stl
 
     def flaky(part, path):
         calls["n"] += 1
@@ -282,9 +282,9 @@ def test_failed_build_leaves_earlier_export_untouched(bvsr_export, tmp_path, dat
             raise OSError("disk full (simulated)")
         real(part, path)
 
-    monkeypatch.setattr(pipeline, "write_part_stl", flaky)
+    monkeypatch.setattr(stages, "write_part_stl", flaky)
     with pytest.raises(OSError, match="simulated"):
-        pipeline.build_export(PARAMS / "bvsr.toml", out, use_cache=False)
+        stages.build_export(PARAMS / "bvsr.toml", out, use_cache=False)
     assert _tree_digest(out) == before
     assert sorted(p.name for p in out.parent.iterdir()) == ["bvsr"]
 
@@ -299,13 +299,13 @@ def test_build_refuses_to_replace_a_foreign_folder(tmp_path, capsys):
 
 
 def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, monkeypatch):
-    from bvsr_cad.build._runtime import worker
     from bvsr_cad.parameters.load import ParamError
+    from bvsr_cad.pipeline.processes import worker
 
     changed = write_toml(tmp_path / "edited.toml", {"name": "edited"})
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     proc = worker.SecondProcess.start(
-        "bvsr_cad.build._runtime.analyses_process",
+        "bvsr_cad.pipeline.processes.analyses_process",
         [str(changed), "sha256 of what the build read"],
         tmp_path,
     )
@@ -323,7 +323,7 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
     assert counted > 0.5 and counted - 0.2 <= proc.cpu_s <= counted, (proc.cpu_s, counted)
     # A process that dies without a result: the work runs here instead.
     monkeypatch.setattr(worker.sys, "executable", shutil.which("false") or "/bin/false")
-    lost = worker.SecondProcess.start("bvsr_cad.build._runtime.analyses_process", [], tmp_path)
+    lost = worker.SecondProcess.start("bvsr_cad.pipeline.processes.analyses_process", [], tmp_path)
     said: list[str] = []
     assert worker.result_or(
         lost, lambda: {"analysis": "computed here"}, said.append, "analyses"
@@ -336,15 +336,15 @@ def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path, monkeypatch
     """`bvsr build` starts the analyses' process before it imports the pipeline: given its work it
     answers as a process started with it (even from a working folder that is gone); closed without
     work it exits; once gone it takes none."""
-    from bvsr_cad.build._runtime import worker
     from bvsr_cad.parameters.load import ParamError
+    from bvsr_cad.pipeline.processes import worker
 
     changed = write_toml(tmp_path / "edited.toml", {"name": "edited"})
     gone = tmp_path / "gone"
     gone.mkdir()
     monkeypatch.chdir(gone)
     gone.rmdir()
-    standby = worker.SecondProcess.standby("bvsr_cad.build._runtime.analyses_process")
+    standby = worker.SecondProcess.standby("bvsr_cad.pipeline.processes.analyses_process")
     if standby is None:
         pytest.skip("one core: the analyses never leave the process")
     assert standby.begin([str(changed), "sha256 of what the build read"], tmp_path)
@@ -355,11 +355,11 @@ def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path, monkeypatch
     here = tmp_path / "here"
     (here / "exports").mkdir(parents=True)
     monkeypatch.chdir(here)
-    relative = worker.SecondProcess.standby("bvsr_cad.build._runtime.analyses_process")
+    relative = worker.SecondProcess.standby("bvsr_cad.pipeline.processes.analyses_process")
     assert relative.begin([str(changed), "sha256 of what the build read"], Path("exports"))
     with pytest.raises(ParamError, match=r"edited.toml(.|\n)*changed while the build was running"):
         relative.result()
-    idle = worker.SecondProcess.standby("bvsr_cad.build._runtime.analyses_process")
+    idle = worker.SecondProcess.standby("bvsr_cad.pipeline.processes.analyses_process")
     idle.proc.stdin.close()  # no work: it imports, reads the end of its input and exits quietly
     assert idle.proc.wait(timeout=300) == 0
     assert not idle.begin([str(changed), "x"], tmp_path)  # gone: the build starts another
@@ -372,27 +372,27 @@ def test_the_standby_head_start_is_used_only_for_the_bytes_it_was_built_from(tmp
     the build reads its cache; the work that comes uses it only if it names the same file with the
     same SHA-256, else it builds the file as it is now."""
     from bvsr_cad.analysis import run
-    from bvsr_cad.build._runtime import analyses_process as pipeline
     from bvsr_cad.parameters.load import params_sha256
+    from bvsr_cad.pipeline.processes import analyses_process
 
     params = tmp_path / "tail.toml"
     shutil.copyfile(PARAMS / "bvsr.toml", params)
     monkeypatch.setattr(
         run, "run_analyses", lambda asm, *_a, **_k: asm
     )  # the analyses' input, handed back
-    monkeypatch.setattr(pipeline, "_PREPARED", {})
-    pipeline._prepare_analyses(str(params))
+    monkeypatch.setattr(analyses_process, "_PREPARED", {})
+    analyses_process._prepare_analyses(str(params))
     first = params_sha256(params)
-    prepared = pipeline._PREPARED[str(params.resolve()), first]
-    used, drawn = pipeline._analyses_process(str(params), first)
+    prepared = analyses_process._PREPARED[str(params.resolve()), first]
+    used, drawn = analyses_process._analyses_process(str(params), first)
     assert used is prepared and not drawn  # used, and taken (used once); no pictures asked for
-    assert pipeline._PREPARED == {}
-    pipeline._prepare_analyses(str(params))
+    assert analyses_process._PREPARED == {}
+    analyses_process._prepare_analyses(str(params))
     params.write_text(params.read_text().replace('name = "bvsr"', 'name = "edited"', 1))
-    built, _drawn = pipeline._analyses_process(str(params), params_sha256(params))
+    built, _drawn = analyses_process._analyses_process(str(params), params_sha256(params))
     assert (
         built.spec.name == "edited"
-        and built is not pipeline._PREPARED[str(params.resolve()), first]
+        and built is not analyses_process._PREPARED[str(params.resolve()), first]
     )
 
 
@@ -402,12 +402,12 @@ def test_the_analyses_process_leaves_the_joint_limits_before_its_other_analyses(
     """The analyses' process puts its geometry analyses (the joint limits) into the build's folder
     as soon as it has them, whole (never a half-written file under the name the build reads), before
     its other analyses: the build writes and checks the robot files while those go on. The build
-    takes the file once (:func:`~bvsr_cad.build._runtime.analyses_process.take_geometry_ahead`
+    takes the file once (:func:`~bvsr_cad.pipeline.processes.analyses_process.take_geometry_ahead`
     removes it)."""
     from bvsr_cad.analysis import run
     from bvsr_cad.analysis.limits import per_joint_rad
-    from bvsr_cad.build._runtime import analyses_process
     from bvsr_cad.parameters.load import load_spec, params_sha256
+    from bvsr_cad.pipeline.processes import analyses_process
 
     class Reached(Exception):
         pass
@@ -455,7 +455,7 @@ def test_the_export_holds_the_robot_files_made_with_the_analyses_joint_limits(bv
     """The build writes the robot files with the joint limits the analyses' process left ahead; they
     are the limits of the export's analysis (the minimum over each joint's bending planes), and the
     file they came in is not published."""
-    from bvsr_cad.build._runtime.analyses_process import GEOMETRY_AHEAD_FILE
+    from bvsr_cad.pipeline.processes.analyses_process import GEOMETRY_AHEAD_FILE
 
     manifest = json.loads((bvsr_export / "manifest.json").read_text())
     analysis = json.loads((bvsr_export / "analysis" / "limits.json").read_text())
@@ -497,8 +497,8 @@ def test_the_analyses_process_is_told_where_to_draw_as_an_absolute_folder(tmp_pa
     another folder than the build's: a build into a relative output folder (``make exports``: ``-o
     exports/bvsr``) names it by its absolute path (a relative one made the process fail: the folder
     was not found)."""
-    from bvsr_cad.build import pipeline
-    from bvsr_cad.build._runtime import worker
+    from bvsr_cad.pipeline import stages
+    from bvsr_cad.pipeline.processes import worker
 
     class Reached(Exception):
         pass
@@ -513,12 +513,12 @@ def test_the_analyses_process_is_told_where_to_draw_as_an_absolute_folder(tmp_pa
         raise Reached
 
     monkeypatch.setattr(worker.SecondProcess, "start", classmethod(start))
-    monkeypatch.setattr(pipeline, "build_assembly", first_stage)
+    monkeypatch.setattr(stages, "build_assembly", first_stage)
     monkeypatch.chdir(tmp_path)
     with pytest.raises(Reached):
-        pipeline.build_export(PARAMS / "bvsr.toml", Path("exports") / "bvsr", use_cache=False)
+        stages.build_export(PARAMS / "bvsr.toml", Path("exports") / "bvsr", use_cache=False)
     ((module, *_rest, pictures, name),) = given
-    assert module == "bvsr_cad.build._runtime.analyses_process" and name == "bvsr"
+    assert module == "bvsr_cad.pipeline.processes.analyses_process" and name == "bvsr"
     assert Path(pictures).is_absolute() and Path(pictures).parent == tmp_path / "exports"
     assert Path(pictures).name.startswith(".bvsr.tmp-")
 
@@ -594,12 +594,12 @@ def test_ctrl_c_leaves_a_waiting_standby_process_quietly(tmp_path):
     import signal
     import time
 
-    from bvsr_cad.build._runtime import worker
+    from bvsr_cad.pipeline.processes import worker
 
     lines: list[str] = []
     with _sigint_reaches_children():
         standby = worker.SecondProcess.standby(
-            "bvsr_cad.build._runtime.analyses_process", progress=lines.append
+            "bvsr_cad.pipeline.processes.analyses_process", progress=lines.append
         )
     if standby is None:
         pytest.skip("one core: the analyses never leave the process")
@@ -689,9 +689,9 @@ def _bvsr_command() -> list[str]:
 
 def _helpers_of(pid: int) -> list[int]:
     """The live processes a build with PID ``pid`` started (its second processes and theirs): they
-    carry its PID in their environment (bvsr_cad.build._runtime.worker.PARENT_PID_ENV); they run in
-    process groups of their own."""
-    from bvsr_cad.build._runtime.worker import PARENT_PID_ENV
+    carry its PID in their environment (bvsr_cad.pipeline.processes.worker.PARENT_PID_ENV); they run
+    in process groups of their own."""
+    from bvsr_cad.pipeline.processes.worker import PARENT_PID_ENV
 
     mark = f"{PARENT_PID_ENV}={pid}".encode()
     found = []

@@ -18,8 +18,6 @@ import numpy as np
 import pytest
 import trimesh
 
-from bvsr_cad.build._runtime.checks_process import run_checks
-from bvsr_cad.build.cache import ArtifactCache
 from bvsr_cad.checks import printability, slicer
 from bvsr_cad.checks.export import Export
 from bvsr_cad.checks.printability import (
@@ -30,6 +28,8 @@ from bvsr_cad.checks.printability import (
 )
 from bvsr_cad.checks.slicer import SLICER, check_slicing, slice_items, slice_stls
 from bvsr_cad.cli import main
+from bvsr_cad.pipeline.cache import ArtifactCache
+from bvsr_cad.pipeline.processes.checks_process import run_checks
 
 
 @pytest.fixture(scope="module")
@@ -145,7 +145,7 @@ def test_bom_counts_equal_the_assembly(manifest, bvsr_export):
 
 
 def test_segment_two_tubes_reach_the_boundary_port(manifest, bvsr_export):
-    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.assemble import build_assembly
     from bvsr_cad.assembly.pneumatic_lines import tube_routes_mm
     from bvsr_cad.parameters.load import load_spec
 
@@ -262,8 +262,8 @@ def test_a_second_process_in_another_folder_reads_the_slice_cache_the_user_names
     """With a relative BVSR_CACHE, a child started in another working folder (as the printability
     process is, in the export's) finds slices.json where the user stands, not under its own
     folder."""
-    from bvsr_cad.build._runtime.worker import child_env
     from bvsr_cad.checks.environment import slice_cache_path
+    from bvsr_cad.pipeline.processes.worker import child_env
 
     (tmp_path / "user").mkdir()
     (tmp_path / "elsewhere").mkdir()
@@ -287,9 +287,9 @@ def test_a_second_process_in_another_folder_reads_the_slice_cache_the_user_names
 
 
 def test_printability_runs_here_when_the_second_process_fails(bvsr_export, monkeypatch):
-    from bvsr_cad.build._runtime import worker
-    from bvsr_cad.build._runtime.checks_process import beside
     from bvsr_cad.checks import run
+    from bvsr_cad.pipeline.processes import worker
+    from bvsr_cad.pipeline.processes.checks_process import beside
 
     if (os.cpu_count() or 1) < 2:
         pytest.skip("one core: the printability checks never leave the process")

@@ -46,7 +46,7 @@ BASE = tomllib.loads((PARAMS / "bvsr.toml").read_text())
 @pytest.fixture(scope="module")
 def default_posed(bvsr_spec):
     from bvsr_cad.analysis.clearance import posed_tail
-    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.assemble import build_assembly
 
     return posed_tail(build_assembly(bvsr_spec))
 
@@ -98,7 +98,7 @@ def test_the_bellows_gap_bounds_the_meshes_distance(data):
     """Where the bellows bind (a side of the square towards the neighbour), the closed form against
     FCL on the build's meshes of the tip joint's SOAs."""
     from bvsr_cad.analysis.clearance import posed_tail
-    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.assemble import build_assembly
 
     spec = spec_from_dict(_with(data, "soa.rotation_deg", 0.0), "rot0.toml")
     fcl = _fcl_rest(posed_tail(build_assembly(spec)))

@@ -13,7 +13,7 @@ THETA_MAX = 0.5  # fixed joint limits: these tests do not depend on the clearanc
 
 @pytest.fixture(scope="module")
 def asm(bvsr_spec):
-    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.assemble import build_assembly
 
     return build_assembly(bvsr_spec)
 
@@ -87,7 +87,7 @@ def test_collision_cylinders_hold_the_b_rep(bvsr_spec, asm):
     import build123d as bd
 
     from bvsr_cad.assembly import collision as C
-    from bvsr_cad.parts._kernel import location
+    from bvsr_cad.parts.kernel import location
 
     cols = C.panel_collisions(asm, {})
     t = bvsr_spec.joint.panel_thickness_mm

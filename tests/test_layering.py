@@ -24,7 +24,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("analysis", ("analysis",)),
     ("writers and checks", ("exporters", "checks")),
     ("simulation", ("simulation",)),
-    ("build", ("build",)),
+    ("pipeline", ("pipeline",)),
     ("studies", ("studies",)),
     ("Python API", ("api",)),
     ("command line", ("cli",)),

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from bvsr_cad.build.cache import OWNER_FILE, ArtifactCache, process_start
-from bvsr_cad.build.publish import clean_leftovers
+from bvsr_cad.pipeline.cache import OWNER_FILE, ArtifactCache, process_start
+from bvsr_cad.pipeline.publish import clean_leftovers
 
 from .conftest import PARAMS
 
@@ -70,7 +70,7 @@ def test_sigkill_leaves_no_second_process_and_the_next_build_cleans_up(tmp_path)
                     == Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1]
                 ):
                     cmdline = Path(f"/proc/{pid}/cmdline").read_bytes()
-                    if b"bvsr_cad.build._runtime.analyses_process" in cmdline:
+                    if b"bvsr_cad.pipeline.processes.analyses_process" in cmdline:
                         child = int(pid)
             except OSError:
                 pass

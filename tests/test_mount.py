@@ -16,7 +16,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from bvsr_cad.assembly.build import build_assembly
+from bvsr_cad.assembly.assemble import build_assembly
 from bvsr_cad.assembly.robot import robot_model
 from bvsr_cad.cli import main
 from bvsr_cad.exporters.mjcf import mjcf_tree, write_mjcf

@@ -132,7 +132,7 @@ def test_a_build_hands_on_its_assembly_before_it_writes_the_part_files(tmp_path,
     tail."""
     import tomllib
 
-    from bvsr_cad.build.pipeline import build_export
+    from bvsr_cad.pipeline.stages import build_export
 
     from .conftest import benchmark_script
     from .test_cache import SMALL_TAIL

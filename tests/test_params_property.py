@@ -353,7 +353,7 @@ def _sound(solid, what: str) -> None:
 
 def build_everything(spec: TailSpec) -> None:
     """Every generator, in memory, as the build calls them."""
-    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.assemble import build_assembly
     from bvsr_cad.parts.rigid_tail import rigid_tail_pieces
 
     asm = build_assembly(spec)

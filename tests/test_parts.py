@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from bvsr_cad.assembly.build import build_assembly
+from bvsr_cad.assembly.assemble import build_assembly
 from bvsr_cad.parameters import layout
 from bvsr_cad.parameters.load import load_spec, spec_from_dict
 from bvsr_cad.parts.panel import panel
@@ -143,16 +143,16 @@ def test_rod_material_changes_mass_not_geometry(bvsr_spec):
 
 
 def test_remembered_solids_are_made_once_copied_per_call_and_bounded():
-    """parts._kernel.remembered: a repeated call does not make the solid again and gets its own copy
+    """parts.kernel.remembered: a repeated call does not make the solid again and gets its own copy
     (a triangulation or label on one leaves the others as they were); past REMEMBERED_MAX arguments
     the least recently used is made again, the others are not."""
     import build123d as bd
 
-    from bvsr_cad.parts import _kernel
+    from bvsr_cad.parts import kernel
 
     made: list[float] = []
 
-    @_kernel.remembered
+    @kernel.remembered
     def box(size_mm: float) -> bd.Solid:
         made.append(size_mm)
         return bd.Solid.make_box(size_mm, 1.0, 1.0)
@@ -165,7 +165,7 @@ def test_remembered_solids_are_made_once_copied_per_call_and_bounded():
     first.mesh(0.1)
     assert box(1.0).label != "mine"
     assert math.isclose(again.volume, 1.0, rel_tol=1e-12)
-    sizes = [1.0 + k for k in range(1, _kernel.REMEMBERED_MAX)]  # REMEMBERED_MAX arguments in all
+    sizes = [1.0 + k for k in range(1, kernel.REMEMBERED_MAX)]  # REMEMBERED_MAX arguments in all
     for s in sizes:
         box(s)
     box(1.0)  # used last: kept, and 2.0 is now the least recently used
@@ -211,7 +211,7 @@ def test_ruled_loft_gives_its_flat_bands_planes_for_the_same_solid(bvsr_spec):
     from OCP.BRep import BRep_Tool
     from OCP.GeomLib import GeomLib_IsPlanarSurface
 
-    from bvsr_cad.parts._kernel import ruled_loft
+    from bvsr_cad.parts.kernel import ruled_loft
     from bvsr_cad.parts.soa import rounded_square
 
     sides, zs = (20.0, 8.0, 14.0), (0.0, 5.0, 12.0)
@@ -255,14 +255,14 @@ def test_solid_properties_are_build123d_s_three_properties_to_the_bit(bvsr_spec)
 
 
 def test_bounds_is_bounding_box_and_keeps_the_triangulation(bvsr_spec):
-    """parts._kernel.bounds gives build123d's ``bounding_box`` to the bit on every part, every face
+    """parts.kernel.bounds gives build123d's ``bounding_box`` to the bit on every part, every face
     of a part and the placed tail, and leaves a meshed shape's triangulation in place
     (``bounding_box`` clears it: a robot mesh or a fit after it meshed again)."""
     import build123d as bd
     from OCP.BRepTools import BRepTools
 
-    from bvsr_cad.assembly.build import instance_solid
-    from bvsr_cad.parts._kernel import bounds, mesh_absolute
+    from bvsr_cad.assembly.assemble import instance_solid
+    from bvsr_cad.parts.kernel import bounds, mesh_absolute
 
     asm = build_assembly(bvsr_spec)
     shapes = [bd.Compound([instance_solid(asm, i) for i in asm.instances])]

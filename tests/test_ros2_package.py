@@ -26,7 +26,7 @@ PREFIX = f"package://{PACKAGE}/meshes/"
 @pytest.fixture(scope="module")
 def source(tmp_path_factory) -> Path:
     """An export's ``robot/`` folder: the URDF and its meshes, written by the existing writers."""
-    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.assemble import build_assembly
     from bvsr_cad.assembly.robot import robot_model
     from bvsr_cad.exporters.robot_meshes import write_robot_meshes
     from bvsr_cad.exporters.urdf import write_urdf

@@ -71,7 +71,7 @@ def written_model(bvsr_spec):
     :func:`test_the_model_made_in_memory_counts_as_the_exported_scene` holds it to the export."""
     import xml.etree.ElementTree as ET
 
-    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.assemble import build_assembly
     from bvsr_cad.assembly.robot import robot_model
     from bvsr_cad.exporters.mjcf import mjcf_tree
 

@@ -207,7 +207,7 @@ def _generator_fails(monkeypatch, error):
 def test_generator_failure_exits_2_with_advice_not_a_traceback(
     tmp_path, monkeypatch, capsys, error
 ):
-    from bvsr_cad.parts._kernel import GeometryError  # noqa: F401 - used by eval
+    from bvsr_cad.parts.kernel import GeometryError  # noqa: F401 - used by eval
 
     _generator_fails(monkeypatch, eval(error))
     out = tmp_path / "out"
@@ -225,7 +225,7 @@ def test_generator_failure_exits_2_with_advice_not_a_traceback(
 
 
 def test_a_value_error_outside_the_generators_keeps_its_traceback(monkeypatch):
-    import bvsr_cad.assembly.build as build_module
+    import bvsr_cad.assembly.assemble as build_module
 
     def bug(*_args, **_kwargs):
         raise ValueError("a bug, not a parameter")
@@ -246,7 +246,7 @@ def test_a_bad_file_is_refused_before_the_pipeline_is_imported(tmp_path):
     code = (
         "import sys; from bvsr_cad.cli import main; rc = main(['build', sys.argv[1], '-o', "
         "sys.argv[2], '-q']); "
-        "print(rc, 'bvsr_cad.build.pipeline' in sys.modules, 'build123d' in sys.modules)"
+        "print(rc, 'bvsr_cad.pipeline.stages' in sys.modules, 'build123d' in sys.modules)"
     )
     run = subprocess.run(
         [sys.executable, "-c", code, str(bad), str(tmp_path / "out")],

@@ -1,13 +1,13 @@
-"""The build's stage runner (bvsr_cad.build.stages): a stage declared in a list runs through it with
-no edit of the runner, keyed by exactly what it declares it reads."""
+"""The build's stage runner (bvsr_cad.pipeline.runner): a stage declared in a list runs through it
+with no edit of the runner, keyed by exactly what it declares it reads."""
 
 from __future__ import annotations
 
 import dataclasses
 
-from bvsr_cad.build.cache import ArtifactCache, spec_without, stage_key
-from bvsr_cad.build.publish import StageLog
-from bvsr_cad.build.stages import Runner, Stage
+from bvsr_cad.pipeline.cache import ArtifactCache, spec_without, stage_key
+from bvsr_cad.pipeline.publish import StageLog
+from bvsr_cad.pipeline.runner import Runner, Stage
 
 #: A stage of the kind a new export file adds: the tail's name and rod material, written to one
 #: file.

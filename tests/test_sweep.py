@@ -99,7 +99,7 @@ def test_variants_grid_listed_and_keys(tmp_path):
 
 
 def test_no_vertebra_keeps_the_sockets_and_drops_the_rod(bvsr_data):
-    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.assemble import build_assembly
     from bvsr_cad.models.rod import rod_section
     from bvsr_cad.parameters.load import ParamError, spec_from_dict
 

@@ -25,7 +25,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from bvsr_cad.assembly.build import build_assembly
+from bvsr_cad.assembly.assemble import build_assembly
 from bvsr_cad.parameters import layout
 
 from .test_parts import _bellows_volume_closed_form

@@ -45,7 +45,7 @@ def linear(c: float) -> float:
 @pytest.fixture(scope="module")
 def built():
     from bvsr_cad.analysis.poses import limit_poses, viewer_scenes
-    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.assemble import build_assembly
     from bvsr_cad.assembly.products import build_mold_set, build_rigid_twin
     from bvsr_cad.parameters.load import load_spec
 
@@ -206,7 +206,7 @@ def test_rest_scene_is_the_assembly(built, decoded):
     import build123d as bd
 
     from bvsr_cad.analysis.poses import ANGULAR_TOLERANCE_RAD
-    from bvsr_cad.assembly.build import instance_solid
+    from bvsr_cad.assembly.assemble import instance_solid
     from bvsr_cad.exporters.manifest import manifest_dict
 
     asm, spec = built["asm"], built["asm"].spec
@@ -316,7 +316,7 @@ def test_build_twin_scene_is_the_rigid_robots_visual_meshes(built, tmp_path):
     from bvsr_cad import units
     from bvsr_cad.analysis.poses import twin_scene
     from bvsr_cad.exporters.fabrication_files import write_rigid_files
-    from bvsr_cad.parts._kernel import fresh_copy
+    from bvsr_cad.parts.kernel import fresh_copy
 
     pieces = [
         dataclasses.replace(p, solid=fresh_copy(p.solid)) for p in built["pieces"]
@@ -502,7 +502,7 @@ def test_tail_scene_meshes_do_not_depend_on_earlier_tessellations(built):
     build that took the part files from its cache (no 0.01 mm STL meshing) shows the same scene as a
     cold one."""
     from bvsr_cad.analysis.poses import _tail_meshes
-    from bvsr_cad.parts._kernel import mesh_arrays
+    from bvsr_cad.parts.kernel import mesh_arrays
 
     asm = built["asm"]
     before = _tail_meshes(asm)

@@ -8,10 +8,10 @@ import threading
 import time
 from pathlib import Path
 
-from bvsr_cad.build.publish import BuildResult
-from bvsr_cad.build.watch import changed_keys, watch
 from bvsr_cad.parameters.load import ParamError
-from bvsr_cad.parts._kernel import GeometryError
+from bvsr_cad.parts.kernel import GeometryError
+from bvsr_cad.pipeline.publish import BuildResult
+from bvsr_cad.pipeline.watch import changed_keys, watch
 
 
 def test_changed_keys_names_table_and_key():

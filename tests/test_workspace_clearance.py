@@ -12,7 +12,7 @@ from .conftest import PARAMS
 
 @pytest.fixture(scope="module")
 def asm(bvsr_spec):
-    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.assemble import build_assembly
 
     return build_assembly(bvsr_spec)
 
@@ -315,7 +315,7 @@ def test_analyses_given_the_rest_geometry_make_no_solid_and_give_the_same_result
     import pickle
 
     from bvsr_cad.analysis import run
-    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.assemble import build_assembly
 
     monkeypatch.setattr(
         run, "compare_measurements", lambda *_a, **_k: None

@@ -13,7 +13,7 @@ import pytest
 
 from bvsr_cad.analysis.predict import NeedsSimulator, Predictor
 from bvsr_cad.analysis.workspace import sample_line_pressures_kpa, tail_statics
-from bvsr_cad.assembly.build import build_assembly
+from bvsr_cad.assembly.assemble import build_assembly
 from bvsr_cad.simulation import sim
 
 CYCLES = 40

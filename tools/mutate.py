@@ -164,7 +164,7 @@ FAULTS: list[Fault] = [
     # -- more faults in the core numbers ------------------------------------------------------
     Fault(
         "rod_part_panel_material",
-        "bvsr_cad/assembly/build.py",
+        "bvsr_cad/assembly/assemble.py",
         'kind="rod",\n                material=spec.vertebra.material,',
         'kind="rod",\n                material=spec.use.panel,',
         "the rod part (its mass, its BOM line) is made of the panel's material",
@@ -208,7 +208,7 @@ FAULTS: list[Fault] = [
     ),
     Fault(
         "dropped_soa",
-        "bvsr_cad/assembly/build.py",
+        "bvsr_cad/assembly/assemble.py",
         "for i, a in enumerate(soa_angles_deg(), start=1):",
         "for i, a in enumerate(soa_angles_deg()[:4], start=1):",
         "each joint places 4 SOAs instead of N_SOA = 5",

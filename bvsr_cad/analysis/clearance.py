@@ -43,10 +43,10 @@ import fcl
 import numpy as np
 import trimesh
 
-from ..assembly.build import Assembly, build_assembly
+from ..assembly.assemble import Assembly, build_assembly
 from ..models.kinematics import TailKinematics, joint_transform_uv, theta_phi_from_uv
 from ..parameters.tables import TailSpec
-from ..parts._kernel import fresh_copy, mesh_arrays
+from ..parts.kernel import fresh_copy, mesh_arrays
 
 Progress = Callable[[str], None]
 #: Longest mesh edge on bending parts, so that deformed triangles follow the arc (chord error < 0.01

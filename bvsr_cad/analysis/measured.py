@@ -22,7 +22,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..assembly.build import Assembly
+from ..assembly.assemble import Assembly
 from ..parameters.measurements import Measurement, MeasurementError, data_sha256, load_measurements
 from ..parameters.tables import TailSpec
 from .calibrate import COMPARE_THREADS, compare_rows, rms_relative, uncalibrated

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import units
-from ..assembly.build import Assembly, build_assembly
+from ..assembly.assemble import Assembly, build_assembly
 from ..models.rod import rod_section
 from ..models.statics import lateral_stiffness_n_per_mm
 from ..parameters.measurements import MOTIONS

@@ -32,13 +32,13 @@ import build123d as bd
 import numpy as np
 import trimesh
 
-from ..assembly.build import Assembly
+from ..assembly.assemble import Assembly
 from ..assembly.products import piece_transform_mm
 from ..colors import rgb, rgba
 from ..models.kinematics import TailKinematics
 from ..models.statics import MOTION_PHI_RAD, pressure_pattern_kpa, segment_bend_angle_rad
 from ..parameters.tables import TailSpec
-from ..parts._kernel import fresh_copy, mesh_arrays
+from ..parts.kernel import fresh_copy, mesh_arrays
 from ..parts.mold import MoldSet
 from ..parts.rigid_tail import RigidPiece
 from .clearance import PosedTail, _cut_at_z, _rod_mesh, plane_sections

@@ -25,8 +25,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import units
+from ..assembly.assemble import Assembly, build_assembly
 from ..assembly.bodies import moving_body
-from ..assembly.build import Assembly, build_assembly
 from ..assembly.pneumatic_lines import line_supply
 from ..models.actuator import soa_force_law
 from ..models.dynamics import (

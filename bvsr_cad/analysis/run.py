@@ -5,9 +5,10 @@ certified clearance, the exact joint limits and the tip joint's clearance map;
 :mod:`bvsr_cad.exporters.analysis_files` serialises the result and the robot
 model takes its joint limits from it (nothing reads a file the build wrote).
 
-:func:`from_params` is the build's second process (:mod:`bvsr_cad.build._runtime.worker`, started as
-``python -m bvsr_cad.build._runtime.worker bvsr_cad.build._runtime.analyses_process``, which gives
-it the simulator): the same analyses from the parameter file, the result pickled back to the build.
+:func:`from_params` is the build's second process (:mod:`bvsr_cad.pipeline.processes.worker`,
+started as ``python -m bvsr_cad.pipeline.processes.worker
+bvsr_cad.pipeline.processes.analyses_process``, which gives it the simulator): the same analyses
+from the parameter file, the result pickled back to the build.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..assembly.build import Assembly
+from ..assembly.assemble import Assembly
 from ..assembly.inertia import SolidProperties
 from .calibrate import COMPARE_THREADS
 from .clearance import ClearanceResult, PosedTail, clearance_map, clearance_over, posed_tail
@@ -275,7 +276,7 @@ def from_params(
 ) -> AnalysisResults:
     """The second process's work: the analyses of the parameter file the build read (``sha256``),
     progress on stderr (the parent relays it). Its entry point is
-    :mod:`bvsr_cad.build._runtime.analyses_process`'s (which gives ``workspace_sim``, from the
+    :mod:`bvsr_cad.pipeline.processes.analyses_process`'s (which gives ``workspace_sim``, from the
     build's cache ``geometry``, ``asm`` when it built the assembly of this very file ahead,
     ``threads``: :data:`BESIDE_BUILD_THREADS` or :data:`BESIDE_IDLE_BUILD_THREADS`, ``on_geometry``,
     ``rest`` and ``on_rest``: see :func:`run_analyses`; without ``asm`` the assembly's solids are
@@ -283,7 +284,7 @@ def from_params(
     a robot model)."""
     import sys
 
-    from ..assembly.build import build_assembly
+    from ..assembly.assemble import build_assembly
     from ..parameters.load import ParamError, load_spec, params_sha256
 
     if params_sha256(params) != sha256:

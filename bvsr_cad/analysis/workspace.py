@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import units
-from ..assembly.build import Assembly
+from ..assembly.assemble import Assembly
 from ..models.rod import rod_section
 from ..models.statics import Actuator, LumpedMasses, TailStatics, quasi_static_segment
 from ..parameters.layout import N_SOA

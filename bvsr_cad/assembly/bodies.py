@@ -15,7 +15,7 @@ import numpy as np
 from .. import units
 from ..models.dynamics import RigidBody
 from ..models.rod import rod_section
-from .build import Assembly, Instance
+from .assemble import Assembly, Instance
 from .inertia import Inertial, compose, from_solid
 
 

@@ -35,9 +35,9 @@ import numpy as np
 from scipy.spatial import ConvexHull
 
 from .. import units
-from ..parts._kernel import bounds, location, mesh_arrays
+from ..parts.kernel import bounds, location, mesh_arrays
 from ..parts.vertebra import rod
-from .build import Assembly
+from .assemble import Assembly
 
 #: Allowed values of ``robot.collision_geometry``.
 COLLISION_GEOMETRIES = ("primitives", "convex")

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from .. import units
 from ..parts.mold import MoldSet
 from ..parts.rigid_tail import RigidPiece
-from .build import Assembly
+from .assemble import Assembly
 from .products import RIGID_MATERIAL
 
 

@@ -16,8 +16,8 @@ import build123d as bd
 import numpy as np
 
 from ..colors import rgb
-from ..parts._kernel import location
-from .build import Assembly
+from ..parts.kernel import location
+from .assemble import Assembly
 
 IDENTITY = tuple(tuple(float(v) for v in row) for row in np.eye(4))
 

@@ -18,7 +18,7 @@ from ..models.pneumatics import LineSupply, Valve
 from ..parameters.layout import N_SOA
 from ..parameters.tables import TailSpec
 from ..parts.soa import soa_interior
-from .build import Assembly
+from .assemble import Assembly
 
 
 def tube_routes_mm(asm: Assembly) -> dict[str, float]:

@@ -17,10 +17,10 @@ import numpy as np
 
 from ..parameters.tables import TailSpec
 from ..parameters.twin import RIGID_TWIN_MATERIAL
-from ..parts._kernel import location
+from ..parts.kernel import location
 from ..parts.mold import MoldSet, mold_set
 from ..parts.rigid_tail import RigidPiece, rigid_tail_pieces
-from .build import Assembly
+from .assemble import Assembly
 from .inertia import Inertial, SolidProperties, compose, from_solid
 
 #: The rigid twin's material (a PLA print, as the paper's rigid comparison tail), checked at load.

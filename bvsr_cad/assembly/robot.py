@@ -36,7 +36,7 @@ from ..models.rod import rod_section
 from ..parameters.layout import N_SOA
 from ..parameters.tables import TailSpec
 from ..parts.vertebra import rod
-from .build import Assembly, Instance, rod_span_mm
+from .assemble import Assembly, Instance, rod_span_mm
 from .collision import Collision, CylinderFit, panel_collisions
 from .inertia import Inertial, compose, from_solid
 from .pneumatic_lines import line_supply
@@ -555,7 +555,7 @@ def _top_socket(asm: Assembly, inst: Instance) -> np.ndarray:
 
 
 def _location(T_mm: np.ndarray) -> bd.Location:
-    from ..parts._kernel import location
+    from ..parts.kernel import location
 
     return location(_as_tuple(T_mm))
 

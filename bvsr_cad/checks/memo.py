@@ -5,7 +5,7 @@ it reads from an export: the files (hashed by content, so a rebuilt but
 byte-identical STL still matches) and the manifest values. Its verdicts are
 kept in a store under the group's name, those values and those hashes (the
 build's store is its artifact cache, keyed as its stages are:
-:func:`bvsr_cad.build.stages.verdict_store`), so an edit that leaves them
+:func:`bvsr_cad.pipeline.runner.verdict_store`), so an edit that leaves them
 unchanged (a rod material: no mesh moves) reuses them, and the verdicts are
 the ones a fresh run gives. Without a store every group runs.
 """

@@ -42,8 +42,8 @@ def _mesh_checks(exp: Export, memo: CheckMemo) -> dict[str, list[CheckResult]]:
 #: manifest)`` runs :func:`printability_groups` on the export at ``root`` whose manifest is
 #: ``manifest`` in another process and returns its handle
 #: (``result_or(here, say, what)``, ``close()``, ``cpu_s``), or None where it could not start. The
-#: build hands one to :class:`Checks` (:mod:`bvsr_cad.build._runtime.checks_process`); the checks
-#: start no process.
+#: build hands one to :class:`Checks` (:mod:`bvsr_cad.pipeline.processes.checks_process`); the
+#: checks start no process.
 StartBeside = Callable[[Path, Collection[str], bool, bool, dict[str, Any]], Any]
 
 
@@ -457,7 +457,7 @@ def run_checks(
         progress: called with one line per step (None: silent).
         run_slicer: slice the printed STLs the slice cache does not hold first.
         beside: starts the printability checks' second process (None: every group runs here); the
-            command's :func:`bvsr_cad.build._runtime.checks_process.run_checks` gives one on two
+            command's :func:`bvsr_cad.pipeline.processes.checks_process.run_checks` gives one on two
             cores or more.
         store: where verdicts are kept (:mod:`bvsr_cad.checks.memo`; None: every check runs).
 

@@ -1,5 +1,5 @@
 """A writer's own steps that a build caches: the build hands the writer a memo
-(:meth:`bvsr_cad.build.stages.Runner.memo`), ``memo(name, inputs, make, dst, files=())``, which
+(:meth:`bvsr_cad.pipeline.runner.Runner.memo`), ``memo(name, inputs, make, dst, files=())``, which
 gives ``make(dst)``'s products (its files written under ``dst``) for these ``inputs`` and the bytes
 of ``files``. A writer called without one runs each step now (:func:`now`): writers never see the
 cache.

@@ -16,10 +16,10 @@ def write_analysis_pictures(res: AnalysisResults, root: Path, name: str) -> None
     """The analyses' pictures under ``root/analysis`` (the workspace, the clearance map and, with
     measured rows, the model against them), as :func:`write_analyses` draws them. They are most of
     that function's time, so the build's analyses' process draws them once its analyses are done,
-    beside the build's own stages (:mod:`bvsr_cad.build._runtime.analyses_process`). Matplotlib is
-    imported here, not with this module: the build's own process, which writes the analyses' files,
-    then imports it only when it draws them itself (matplotlib's import is a large part of the
-    build's imports)."""
+    beside the build's own stages (:mod:`bvsr_cad.pipeline.processes.analyses_process`). Matplotlib
+    is imported here, not with this module: the build's own process, which writes the analyses'
+    files, then imports it only when it draws them itself (matplotlib's import is a large part of
+    the build's imports)."""
     from .plots import plot_clearance_map, plot_measurements, plot_workspace
 
     out = root / "analysis"

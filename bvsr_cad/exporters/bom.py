@@ -17,7 +17,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from ..assembly.build import Assembly
+from ..assembly.assemble import Assembly
 from ..assembly.fabrication import made_items
 from ..assembly.pneumatic_lines import line_tube_lengths_mm, tube_routes_mm
 from ..assembly.products import RIGID_MATERIAL

@@ -7,10 +7,10 @@ from pathlib import Path
 import build123d as bd
 from OCP.BRepBuilderAPI import BRepBuilderAPI_Copy
 
-from ..assembly.build import Assembly, PartDef
+from ..assembly.assemble import Assembly, PartDef
 from ..assembly.placed import labelled_compound, placed_instances
 from ..colors import rgb
-from ..parts._kernel import mesh_absolute
+from ..parts.kernel import mesh_absolute
 
 #: Tessellation for print STLs, absolute: no facet strays more than 0.01 mm from the surface (ten
 #: times finer than the printers' resolution) nor turns more than 0.1 rad; the mesh volume stays
@@ -47,7 +47,7 @@ def write_stl(
     target = path if scale == 1.0 else path.with_suffix(".mm.stl")
     if relative:
         BRepMesh_IncrementalMesh(shape.wrapped, tolerance_mm, True, angular_tolerance_rad, True)
-    else:  # the one absolute meshing, shared with the robot's collision fits (_kernel.mesh_arrays)
+    else:  # the one absolute meshing, shared with the robot's collision fits (kernel.mesh_arrays)
         mesh_absolute(shape, tolerance_mm, angular_tolerance_rad)
     writer = StlAPI_Writer()
     writer.ASCIIMode = False

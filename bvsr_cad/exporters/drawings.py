@@ -30,11 +30,11 @@ from typing import Any
 import build123d as bd
 import numpy as np
 
-from ..assembly.build import Assembly
+from ..assembly.assemble import Assembly
 from ..assembly.fabrication import made_items
 from ..parameters.layout import Cyl
 from ..parameters.standard_parts import size_for_clearance_hole
-from ..parts._kernel import bounds
+from ..parts.kernel import bounds
 from ..parts.mold import MoldSet
 
 SVG_NS = "http://www.w3.org/2000/svg"

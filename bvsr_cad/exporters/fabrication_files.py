@@ -28,13 +28,13 @@ import numpy as np
 import trimesh
 
 from .. import units
-from ..assembly.build import Assembly, rod_span_mm
+from ..assembly.assemble import Assembly, rod_span_mm
 from ..assembly.fabrication import MadeItem, made_items
 from ..assembly.products import RIGID_MATERIAL, RigidRobot, piece_transform_mm
 from ..colors import rgb, rgba
 from ..parameters.tables import TailSpec
 from ..parameters.twin import rigid_joining
-from ..parts._kernel import location, mesh_arrays
+from ..parts.kernel import location, mesh_arrays
 from ..parts.mold import MoldSet
 from ..parts.rigid_tail import KEPT_ROLES, RigidPiece
 from ._memo import Memo, now

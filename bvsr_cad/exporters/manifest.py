@@ -7,10 +7,10 @@ from typing import Any
 import build123d as bd
 
 from .. import __version__
-from ..assembly.build import Assembly, instance_solid, segment_masses_g
+from ..assembly.assemble import Assembly, instance_solid, segment_masses_g
 from ..parameters.panel_rules import binding_constraint, max_feasible_taper_deg
 from ..parameters.tables import AUTO, SoaTable
-from ..parts._kernel import bounds
+from ..parts.kernel import bounds
 
 
 def tail_length_mm(asm: Assembly) -> float:

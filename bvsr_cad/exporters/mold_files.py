@@ -21,10 +21,10 @@ from typing import Any
 import build123d as bd
 import numpy as np
 
-from ..assembly.build import Assembly
+from ..assembly.assemble import Assembly
 from ..colors import rgb
 from ..parameters.tables import TailSpec
-from ..parts._kernel import mesh_arrays
+from ..parts.kernel import mesh_arrays
 from ..parts.mold import MoldPart, MoldSet
 from .cad import write_step, write_stl
 from .render import offscreen_pyvista

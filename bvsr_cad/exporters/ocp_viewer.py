@@ -21,7 +21,7 @@ from ..errors import BadInput
 if TYPE_CHECKING:  # the CAD imports take seconds: `bvsr show` refuses a missing viewer before them
     import build123d as bd
 
-    from ..assembly.build import Assembly
+    from ..assembly.assemble import Assembly
 
 #: The port the viewer listens on unless told otherwise (ocp_vscode's and ocp_viewer's default).
 DEFAULT_PORT = 3939
@@ -121,12 +121,13 @@ def show_compound(
 def assembly_sender(
     port: int | None = None, say: Callable[[str], None] | None = None
 ) -> Callable[[Assembly], None]:
-    """A callback for :func:`bvsr_cad.build.pipeline.build_export` (``on_assembly``): sends the tail
-    at rest as soon as its assembly is built. It tessellates copies of the parts, not the build's
-    solids (OCCT keeps the finest triangulation a solid was given, and the build's meshes must not
-    depend on what was shown); a viewer gone away is said, not raised (the build goes on)."""
+    """A callback for :func:`bvsr_cad.pipeline.stages.build_export` (``on_assembly``): sends the
+    tail at rest as soon as its assembly is built. It tessellates copies of the parts, not the
+    build's solids (OCCT keeps the finest triangulation a solid was given, and the build's meshes
+    must not depend on what was shown); a viewer gone away is said, not raised (the build goes
+    on)."""
     from ..assembly.placed import PlacedShape, labelled_compound
-    from ..parts._kernel import fresh_copy
+    from ..parts.kernel import fresh_copy
 
     say = say or (lambda _m: None)
     sent = []

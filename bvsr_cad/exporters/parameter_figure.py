@@ -21,7 +21,7 @@ import xml.etree.ElementTree as ET
 
 import build123d as bd
 
-from ..assembly.build import Assembly, instance_solid
+from ..assembly.assemble import Assembly, instance_solid
 from ..parts.soa import bellows_profile, soa_envelope
 from .drawings import SVG_NS, Dimension, _dimensions, _placed, _project, _SheetSVG, _text
 

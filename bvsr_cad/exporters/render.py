@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..assembly.build import Assembly
+from ..assembly.assemble import Assembly
 from ..colors import rgb
-from ..parts._kernel import fresh_copy, mesh_arrays
+from ..parts.kernel import fresh_copy, mesh_arrays
 
 
 def offscreen_pyvista():

@@ -8,7 +8,7 @@ import trimesh
 
 from .. import units
 from ..assembly.robot import RobotModel
-from ..parts._kernel import mesh_arrays
+from ..parts.kernel import mesh_arrays
 from .cad import write_stl
 from .mjcf import collision_mesh_name
 
@@ -49,6 +49,6 @@ def _write_m(shape, path: Path, tolerance_mm: float = MESH_TOLERANCE_MM) -> None
     """Tessellate in millimetres with OCCT (fast), then scale the mesh to metres. An absolute
     deflection at the print STLs' tolerances: a panel's or an SOA's robot mesh is its print STL's
     triangulation (and its collision fit's), the same whichever stages ran before (a compound of
-    placed parts included: :func:`bvsr_cad.parts._kernel.mesh_absolute` meshes each solid in its own
+    placed parts included: :func:`bvsr_cad.parts.kernel.mesh_absolute` meshes each solid in its own
     frame)."""
     write_stl(shape, path, tolerance_mm, 0.1, scale=units.mm_to_m(1.0), relative=False)

@@ -39,7 +39,7 @@ def raised_in_parts(exc: BaseException) -> str | None:
     while tb is not None:
         path = Path(tb.tb_frame.f_code.co_filename)
         if path.parent.name == "parts" and path.parent.parent.name == "bvsr_cad":
-            found = path.stem if path.stem != "_kernel" or found is None else found
+            found = path.stem if path.stem != "kernel" or found is None else found
         tb = tb.tb_next
     return found
 

@@ -47,7 +47,7 @@ import numpy as np
 from ..parameters.layout import Cyl
 from ..parameters.molds import PIN_ROOT_MM, SOCKET_EXTRA_DEPTH_MM, mold_dimensions, mold_problems
 from ..parameters.tables import Casting, SoaTable
-from ._kernel import (
+from .kernel import (
     GeometryError,
     PrintPosed,
     bounds,

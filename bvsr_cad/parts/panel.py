@@ -10,7 +10,7 @@ from __future__ import annotations
 import build123d as bd
 
 from ..parameters.layout import PanelLayout
-from ._kernel import cut_all, cylinder_between, fuse_all, single_solid
+from .kernel import cut_all, cylinder_between, fuse_all, single_solid
 
 
 def panel(lay: PanelLayout) -> bd.Solid:

@@ -51,7 +51,7 @@ from ..parameters.twin import (
     tie_rod_hole_mm,
     twin_problems,
 )
-from ._kernel import (
+from .kernel import (
     GeometryError,
     bounds,
     cut_all,

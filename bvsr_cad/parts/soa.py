@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import build123d as bd
 
 from ..parameters.tables import SoaTable
-from ._kernel import cut_all, fuse_all, remembered, ruled_loft, single_solid
+from .kernel import cut_all, fuse_all, remembered, ruled_loft, single_solid
 
 
 @dataclass(frozen=True)

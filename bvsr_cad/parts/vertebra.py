@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import build123d as bd
 
-from ._kernel import single_solid
+from .kernel import single_solid
 
 
 def rod(diameter_mm: float, length_mm: float) -> bd.Solid:

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import units
-from ..assembly.build import Assembly, build_assembly
+from ..assembly.assemble import Assembly, build_assembly
 from ..assembly.robot import robot_model
 from ..errors import BadInput
 from ..exporters.mjcf import mjcf_tree, write_mjcf

@@ -45,10 +45,10 @@ from typing import Any
 import numpy as np
 
 from ..analysis.metrics import METRICS, Conditions, group_of
-from ..build._runtime.worker import child_env
 from ..errors import BadInput
 from ..extras import require
 from ..parameters.study import Study, StudyError, Variant, get_path
+from ..pipeline.processes.worker import child_env
 
 #: Metrics of the ``checks`` group (a full export and every check of it).
 CHECK_METRICS = {
@@ -235,9 +235,9 @@ WORKDIR_PREFIX = "bvsr-variant-"
 
 
 def _export_and_check(task: dict[str, Any]) -> dict[str, Any]:
-    from ..build._runtime.checks_process import run_checks
-    from ..build.pipeline import build_export
     from ..exporters.study_report import toml_text
+    from ..pipeline.processes.checks_process import run_checks
+    from ..pipeline.stages import build_export
 
     with tempfile.TemporaryDirectory(prefix=f"{WORKDIR_PREFIX}{os.getpid()}-") as tmp:
         params = Path(tmp) / f"{task['data']['name']}.toml"
@@ -730,7 +730,7 @@ def _best(study: Study, ost) -> dict[str, Any] | None:
 def _main() -> int:
     """``python -m bvsr_cad.studies.sweep -``: one variant (JSON on stdin), its row pickled onto
     stdout."""
-    from ..build._runtime.worker import serve
+    from ..pipeline.processes.worker import serve
 
     task = json.loads(sys.stdin.buffer.read())
     return serve("-", _variant_here, task)

@@ -64,7 +64,7 @@ UNIT_SUFFIXES = {
 UNITLESS = "—"
 
 #: The cached stages of a build, what each produces and which parameters it reads: every table of
-#: the parameters but its ``*_IGNORE`` tuple in ``bvsr_cad.build.pipeline`` (read there, never
+#: the parameters but its ``*_IGNORE`` tuple in ``bvsr_cad.pipeline.stages`` (read there, never
 #: copied), plus the keys handed to its cache key beside them. A key that no stage reads still moves
 #: what every build writes afresh (manifest, robot descriptions, BOM, print jobs, checks, report).
 STAGES = (
@@ -142,7 +142,7 @@ def _pipeline() -> Any:
     """The module that declares the stages' ignore lists (the build's stage list)."""
     import importlib
 
-    for name in ("bvsr_cad.build.pipeline",):
+    for name in ("bvsr_cad.pipeline.stages",):
         try:
             module = importlib.import_module(name)
         except ModuleNotFoundError as exc:

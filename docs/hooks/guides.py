@@ -24,7 +24,7 @@ MARKER = re.compile(r"^<!-- guide: ([a-z-]+) -->$", re.MULTILINE)
 
 def parameter_figure_svg(params: Path = DEFAULT_PARAMS) -> bytes:
     """The designer's figure for the tail of ``params`` (SVG bytes)."""
-    from bvsr_cad.assembly.build import build_assembly
+    from bvsr_cad.assembly.assemble import build_assembly
     from bvsr_cad.exporters.parameter_figure import parameter_figure
     from bvsr_cad.parameters.load import load_spec
 

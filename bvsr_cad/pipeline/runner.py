@@ -104,8 +104,8 @@ class Runner:
         (picklable). From the cache, the entry's files are copied into the build's folder and its
         products read back; else ``make`` runs (into a new entry, when there is a cache). Products
         handed on are always the ones read back from their pickle
-        (:func:`bvsr_cad.build.cache.object_stage`), so a build from the cache equals one without,
-        file for file."""
+        (:func:`bvsr_cad.pipeline.cache.object_stage`), so a build from the cache equals one
+        without, file for file."""
         if stage.say:
             self.say(stage.say)
         t = time.perf_counter()

@@ -27,7 +27,7 @@ from ..parameters.layout import (
 )
 from ..parameters.standard_parts import metric
 from ..parameters.tables import TailSpec
-from ..parts._kernel import PrintPosed, location
+from ..parts.kernel import PrintPosed, location
 from ..parts.panel import panel
 from ..parts.soa import soa_body
 from ..parts.vertebra import rod

@@ -1,6 +1,6 @@
 """Work in a second Python process, beside the main one (the machine's second core).
 
-The child is a fresh interpreter started as ``python -m bvsr_cad.build._runtime.worker MODULE -
+The child is a fresh interpreter started as ``python -m bvsr_cad.pipeline.processes.worker MODULE -
 ARGS...`` (:func:`child_main`): it imports MODULE with Ctrl-C held back
 (:func:`library_imports`) and calls :func:`serve` with the module's
 ``SECOND_PROCESS`` (its function and, for a standby child, what prepares it), which
@@ -82,7 +82,7 @@ STANDBY = "--standby"
 
 
 def child_main(argv: list[str]) -> int:
-    """A child's entry, ``python -m bvsr_cad.build._runtime.worker MODULE OUT ARGS...``: it dies
+    """A child's entry, ``python -m bvsr_cad.pipeline.processes.worker MODULE OUT ARGS...``: it dies
     with its parent from the start, imports MODULE in :func:`library_imports` (Ctrl-C held: an
     interrupt during the imports ends it quietly with 130, its parent reports it; the collector
     paused, then what was imported frozen) and serves the module's ``SECOND_PROCESS``, ``(fn,
@@ -167,7 +167,7 @@ def child_env() -> dict[str, str]:
     process runs, knows its parent's PID (so that it dies with it: :func:`child_main`) and is given
     the folders of :data:`PATH_VARIABLES` as absolute paths (it starts in another working
     folder)."""
-    package_root = str(Path(__file__).resolve().parents[3])  # bvsr_cad/build/_runtime/worker.py
+    package_root = str(Path(__file__).resolve().parents[3])  # bvsr_cad/pipeline/processes/worker.py
     folders = {k: str(Path(os.environ[k]).absolute()) for k in PATH_VARIABLES if os.environ.get(k)}
     return {
         **os.environ,
@@ -204,7 +204,7 @@ class SecondProcess:
         progress: Callable[[str], None] | None = None,
         standby: bool = False,
     ) -> SecondProcess | None:
-        """``python -m bvsr_cad.build._runtime.worker module - *args`` (:func:`child_main`) in
+        """``python -m bvsr_cad.pipeline.processes.worker module - *args`` (:func:`child_main`) in
         ``cwd``; each line of its stderr goes to ``progress`` (from a reader thread) or, without it,
         nowhere. ``standby``: see :meth:`standby`."""
         if (os.cpu_count() or 1) < 2:
@@ -213,7 +213,7 @@ class SecondProcess:
             cmd = [
                 sys.executable,
                 "-m",
-                "bvsr_cad.build._runtime.worker",
+                "bvsr_cad.pipeline.processes.worker",
                 module,
                 STANDBY if standby else "-",
                 *args,
@@ -251,7 +251,7 @@ class SecondProcess:
         progress: Callable[[str], None] | None = None,
         hint: list[str] | None = None,
     ) -> SecondProcess | None:
-        """``python -m bvsr_cad.build._runtime.worker module --standby [HINT...]``: a child that
+        """``python -m bvsr_cad.pipeline.processes.worker module --standby [HINT...]``: a child that
         imports its modules now, while this process imports its own, prepares what ``hint`` lets it
         (see :func:`serve`) and waits for its work (:meth:`begin`); ``None`` where :meth:`start`
         would give none. A child never given work exits when it is :meth:`close`\\ d."""
@@ -340,7 +340,7 @@ def result_or(
 
 
 if __name__ == "__main__":
-    from bvsr_cad.build._runtime.worker import (
+    from bvsr_cad.pipeline.processes.worker import (
         child_main as _child_main,
     )  # the module by its real name, not __main__
 

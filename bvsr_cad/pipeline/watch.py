@@ -22,11 +22,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..assembly.build import Assembly
+from ..assembly.assemble import Assembly
 from ..parameters.load import ParamError
-from ..parts._kernel import GeometryError
-from .pipeline import build_export
+from ..parts.kernel import GeometryError
 from .publish import BuildResult, OutputError
+from .stages import build_export
 
 DEBOUNCE_MS = 400
 #: How often the watcher also compares the files with what was last built, without an event: a save

@@ -8,7 +8,7 @@ partial one; the next build removes what dead builds left (:func:`clean_leftover
 A rebuild of a file the cache holds whole (:func:`reuse_whole`) needs only the parameters, the
 cache and the environment the checks depend on: this module imports none of the CAD kernel, the
 mesh libraries or the simulator, so that `bvsr build` of an unchanged file answers without their
-imports (seconds); :mod:`bvsr_cad.build.pipeline` builds what it does not find.
+imports (seconds); :mod:`bvsr_cad.pipeline.stages` builds what it does not find.
 """
 
 from __future__ import annotations
@@ -27,8 +27,8 @@ from ..errors import BadInput
 from ..exporters.manifest_file import write_manifest
 from ..parameters.load import load_spec
 from ..parameters.tables import TailSpec
-from ._runtime.worker import cpu_seconds
 from .cache import ORPHAN_AGE_S, OWNER_FILE, ArtifactCache, claim, copy_tree, owner_alive, stage_key
+from .processes.worker import cpu_seconds
 
 Progress = Callable[[str], None]
 

@@ -17,11 +17,11 @@ from ...checks.memo import CheckMemo
 from ...checks.result import CheckResult
 from ...checks.run import Checks, StartBeside, printability_groups
 from ..cache import ArtifactCache
-from ..stages import verdict_store
+from ..runner import verdict_store
 from .worker import SecondProcess
 
 #: The second process's module: it serves :data:`SECOND_PROCESS`.
-MODULE = "bvsr_cad.build._runtime.checks_process"
+MODULE = "bvsr_cad.pipeline.processes.checks_process"
 
 
 def beside(cache: ArtifactCache | None) -> StartBeside:
@@ -103,10 +103,10 @@ def run_checks(
 def _printability(
     root: str, sliced_now: str, cache_root: str, meshes: str, robot: str, manifest: str
 ) -> dict[str, Any]:
-    """The second process's work (``python -m bvsr_cad.build._runtime.worker
-    bvsr_cad.build._runtime.checks_process --standby``, given ``[ROOT, SLICED, CACHE, MESHES, ROBOT,
-    MANIFEST]`` on its input): :func:`bvsr_cad.checks.run.printability_groups` of the export at
-    ``root`` whose manifest is ``manifest`` (JSON), the verdicts kept in the artifact cache at
+    """The second process's work (``python -m bvsr_cad.pipeline.processes.worker
+    bvsr_cad.pipeline.processes.checks_process --standby``, given ``[ROOT, SLICED, CACHE, MESHES,
+    ROBOT, MANIFEST]`` on its input): :func:`bvsr_cad.checks.run.printability_groups` of the export
+    at ``root`` whose manifest is ``manifest`` (JSON), the verdicts kept in the artifact cache at
     ``cache_root`` (when given)."""
     exp = Export.open(root, json.loads(manifest))
     store = verdict_store(ArtifactCache(Path(cache_root)) if cache_root else None)
@@ -116,5 +116,5 @@ def _printability(
 
 
 #: What the printability checks' second process serves
-#: (:func:`bvsr_cad.build._runtime.worker.child_main`).
+#: (:func:`bvsr_cad.pipeline.processes.worker.child_main`).
 SECOND_PROCESS = (_printability, None)

@@ -1,11 +1,11 @@
-"""The analyses' second process of `bvsr build` (``python -m bvsr_cad.build._runtime.worker
-bvsr_cad.build._runtime.analyses_process``).
+"""The analyses' second process of `bvsr build` (``python -m bvsr_cad.pipeline.processes.worker
+bvsr_cad.pipeline.processes.analyses_process``).
 
-Its own module, beside :mod:`bvsr_cad.build.pipeline` rather than in it, so that the process imports
-what the analyses read (the CAD kernel, the models, the simulator) and not the exporters the build's
-own process writes with (matplotlib, pyvista, the drawings' SVG): a sixth less import time (``python
--X importtime``; figures: benchmarks/RESULTS.md). Here, not in the analysis layer, because a
-measured workspace is predicted in the simulator.
+Its own module, beside :mod:`bvsr_cad.pipeline.stages` rather than in it, so that the process
+imports what the analyses read (the CAD kernel, the models, the simulator) and not the exporters the
+build's own process writes with (matplotlib, pyvista, the drawings' SVG): less import time
+(measured with ``python -X importtime``: benchmarks/RESULTS.md). Here, not in the analysis layer,
+because a measured workspace is predicted in the simulator.
 """
 
 from __future__ import annotations
@@ -105,12 +105,12 @@ _PREPARED: dict[tuple[str, str], object] = {}
 
 
 def _prepare_analyses(params: str) -> None:
-    """A standby analyses process's head start (``python -m bvsr_cad.build._runtime.worker
-    bvsr_cad.build._runtime.analyses_process --standby PARAMS``): the tail's assembly from the file,
-    its solids made one by one while the build imports and reads its cache, until the work comes (a
-    build whose geometry is cached hands over the rest geometry: it needs none of them; a solid not
-    made by then is made when first read). Used only if the work names the same file with the same
-    SHA-256 (the bytes the assembly was built from)."""
+    """A standby analyses process's head start (``python -m bvsr_cad.pipeline.processes.worker
+    bvsr_cad.pipeline.processes.analyses_process --standby PARAMS``): the tail's assembly from the
+    file, its solids made one by one while the build imports and reads its cache, until the work
+    comes (a build whose geometry is cached hands over the rest geometry: it needs none of them; a
+    solid not made by then is made when first read). Used only if the work names the same file with
+    the same SHA-256 (the bytes the assembly was built from)."""
     kernel_threads(1)  # beside the build, which keeps the other core busy
     read = _assembly_read(params)
     if read is None:
@@ -127,7 +127,7 @@ def _assembly_read(params: str, sha256: str | None = None):
     """``(assembly, SHA-256)``: the tail's assembly from the file (its solids made when first read)
     and the SHA-256 of the bytes it was built from; None where the file changed while it was read,
     or its bytes are not ``sha256``."""
-    from ...assembly.build import build_assembly
+    from ...assembly.assemble import build_assembly
 
     before = params_sha256(params)
     if sha256 is not None and before != sha256:
@@ -154,10 +154,10 @@ def _analyses_process(
     folder: str = "",
     name: str = "",
 ):
-    """The analyses' second process (``python -m bvsr_cad.build._runtime.worker
-    bvsr_cad.build._runtime.analyses_process - PARAMS SHA256 [GEOMETRY [THREADS [FOLDER NAME]]]``):
-    ``(results, drawn)``. ``GEOMETRY``: the cached geometry analyses' pickle (computed here when it
-    is gone); ``THREADS``: those that predict the measured rows (default
+    """The analyses' second process (``python -m bvsr_cad.pipeline.processes.worker
+    bvsr_cad.pipeline.processes.analyses_process - PARAMS SHA256 [GEOMETRY [THREADS [FOLDER
+    NAME]]]``): ``(results, drawn)``. ``GEOMETRY``: the cached geometry analyses' pickle (computed
+    here when it is gone); ``THREADS``: those that predict the measured rows (default
     :data:`bvsr_cad.analysis.run.BESIDE_BUILD_THREADS`); ``FOLDER``: the build's temporary folder.
     Into it go the geometry analyses as soon as they are computed here
     (:func:`write_geometry_ahead`: the build writes and checks the robot files, which need the joint
@@ -200,6 +200,6 @@ def _analyses_process(
     return results, True
 
 
-#: What the analyses' second process serves (:func:`bvsr_cad.build._runtime.worker.child_main`): its
-#: work and its head start.
+#: What the analyses' second process serves (:func:`bvsr_cad.pipeline.processes.worker.child_main`):
+#: its work and its head start.
 SECOND_PROCESS = (_analyses_process, _prepare_analyses)

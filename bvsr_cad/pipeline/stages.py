@@ -1,7 +1,7 @@
 """`bvsr build`: parameters -> assembly -> files -> checks, published atomically.
 
 Everything is written into a temporary folder beside the output and moved
-into place only when every file was written (:mod:`bvsr_cad.build.publish`); a
+into place only when every file was written (:mod:`bvsr_cad.pipeline.publish`); a
 failure (bad parameters, a kernel error, a full disk, Ctrl-C) leaves any
 earlier export untouched and no partial one.
 """
@@ -19,7 +19,7 @@ import trimesh
 from .. import units
 from ..analysis.poses import mold_scene, twin_scene, viewer_scenes
 from ..analysis.run import run_analyses
-from ..assembly.build import Assembly, build_assembly
+from ..assembly.assemble import Assembly, build_assembly
 from ..assembly.collision import CylinderFit
 from ..assembly.inertia import SolidProperties
 from ..assembly.products import build_mold_set, build_rigid_twin, mold_set_inputs, rigid_robot_model
@@ -41,10 +41,10 @@ from ..exporters.robot_meshes import write_robot_meshes
 from ..exporters.viewer import write_viewer
 from ..parameters.load import params_sha256
 from ..simulation.sim import protocol_radius_mm
-from ._runtime.checks_process import finish_checks, start_checks
-from ._runtime.worker import SecondProcess
 from .analyses import Analyses
 from .cache import OWNER_FILE, copy_tree
+from .processes.checks_process import finish_checks, start_checks
+from .processes.worker import SecondProcess
 from .publish import (
     BuildResult,
     OpenedBuild,
@@ -55,7 +55,7 @@ from .publish import (
     volatile,
 )
 from .quadruped import quadruped_section
-from .stages import Runner, Stage
+from .runner import Runner, Stage
 
 Progress = Callable[[str], None]
 
@@ -105,7 +105,7 @@ def _rod(spec) -> dict:
 
 
 # The stages, in the order of the build: each names what it reads, and its cache key is made of that
-# (bvsr_cad.build.stages). Stages without a key run at every build.
+# (bvsr_cad.pipeline.runner). Stages without a key run at every build.
 GEOMETRY_ANALYSES = Stage(
     "analysis geometry (joint limits, clearance map)",
     "analysis_geometry",
@@ -164,13 +164,13 @@ def build_export(
     """Build every part of the tail described by ``params`` into ``out_dir``.
 
     With ``use_cache`` the stages whose inputs are unchanged are taken from the artifact cache
-    (:mod:`bvsr_cad.build.cache`): the whole export, the analyses, the parts' files and previews.
+    (:mod:`bvsr_cad.pipeline.cache`): the whole export, the analyses, the parts' files and previews.
     ``standby``: the analyses' second process started ahead
-    (``SecondProcess.standby("bvsr_cad.build._runtime.analyses_process")``, as the command line does
-    before it imports this module, so that the two import side by side), given its work here if the
-    analyses are to be run, else stopped. ``on_assembly``: called with the tail's assembly as soon
-    as it is built, before the rest of the export (``bvsr watch --show``); an export the cache holds
-    whole is published first, then its assembly built for it.
+    (``SecondProcess.standby("bvsr_cad.pipeline.processes.analyses_process")``, as the command line
+    does before it imports this module, so that the two import side by side), given its work here if
+    the analyses are to be run, else stopped. ``on_assembly``: called with the tail's assembly as
+    soon as it is built, before the rest of the export (``bvsr watch --show``); an export the cache
+    holds whole is published first, then its assembly built for it.
 
     Args:
         params: the parameter file.
@@ -204,8 +204,8 @@ def build_opened(
     standby: SecondProcess | None = None,
     on_assembly: Callable[[Assembly], None] | None = None,
 ) -> BuildResult:
-    """Build, stage by stage, the export that :func:`bvsr_cad.build.publish.open_build` prepared and
-    the cache does not hold whole (:func:`bvsr_cad.build.publish.reuse_whole`). ``standby``,
+    """Build, stage by stage, the export that :func:`bvsr_cad.pipeline.publish.open_build` prepared
+    and the cache does not hold whole (:func:`bvsr_cad.pipeline.publish.reuse_whole`). ``standby``,
     ``on_assembly``: as in :func:`build_export`; the caller closes ``standby``. The analyses run
     beside the CAD stages in a second process; what reads only the CAD files (the checks of the
     meshes, the molds and the print files, the robot's files once the joint limits exist) starts

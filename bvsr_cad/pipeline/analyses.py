@@ -19,13 +19,13 @@ from ..analysis.limits import per_joint_rad
 from ..analysis.run import BESIDE_BUILD_THREADS, BESIDE_IDLE_BUILD_THREADS
 from ..parameters.load import params_sha256
 from ..process import kernel_threads
-from ._runtime.analyses_process import (
+from .processes.analyses_process import (
     drop_geometry_ahead,
     keep_rest,
     take_geometry_ahead,
 )
-from ._runtime.worker import SecondProcess, result_or
-from .stages import Runner, Stage
+from .processes.worker import SecondProcess, result_or
+from .runner import Runner, Stage
 
 #: In the geometry analyses' cache entry: :class:`bvsr_cad.analysis.run.GeometryAnalyses`, pickled.
 GEOMETRY_FILE = "geometry.pkl"
@@ -82,7 +82,7 @@ class Analyses:
                 standby
                 if standby is not None and standby.begin(work, folder)
                 else SecondProcess.start(
-                    "bvsr_cad.build._runtime.analyses_process", work, folder, run.say
+                    "bvsr_cad.pipeline.processes.analyses_process", work, folder, run.say
                 )
             )
             if self.process is not None:

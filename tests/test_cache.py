@@ -171,7 +171,7 @@ def test_check_verdicts_follow_the_bytes_of_the_files_they_read(tmp_path):
     from bvsr_cad.checks.export import Export
     from bvsr_cad.checks.memo import CheckMemo
     from bvsr_cad.checks.result import CheckResult
-    from bvsr_cad.pipeline.runner import verdict_store
+    from bvsr_cad.pipeline.runner import cache_memo
 
     (tmp_path / "manifest.json").write_text(json.dumps({"name": "t", "parts": [], "mass_g": {}}))
     (tmp_path / "a.stl").write_bytes(b"solid a")
@@ -179,7 +179,7 @@ def test_check_verdicts_follow_the_bytes_of_the_files_they_read(tmp_path):
     runs = []
 
     def verdicts(value):
-        memo = CheckMemo(Export.open(tmp_path), verdict_store(cache))
+        memo = CheckMemo(Export.open(tmp_path), cache_memo(cache))
         return memo(
             "g",
             (["a.stl"], {"limit": value}),

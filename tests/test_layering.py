@@ -16,7 +16,10 @@ PKG = Path(__file__).resolve().parents[1] / "bvsr_cad"
 #: the errors, below everything, so that every layer's errors can subclass them.
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("error bases", ("errors",)),
-    ("foundations", ("units", "colors", "folders", "extras", "defaults", "process", "__version__")),
+    (
+        "foundations",
+        ("units", "colors", "folders", "extras", "defaults", "memo", "process", "__version__"),
+    ),
     ("parameters", ("parameters",)),
     ("models", ("models",)),
     ("parts", ("parts",)),
@@ -214,4 +217,20 @@ def test_writers_and_checks_import_no_process_setting():
         for target in _imports(path)
         if _top(target) == "process"
     ]
+    assert not bad, bad
+
+
+def test_writers_and_checks_keep_no_memo_of_their_own():
+    """A writer's or a check's slow step goes through the memo it is handed (bvsr_cad.memo.Memo,
+    docs/architecture.md's table of memos): none decorates a function with a cache of its own."""
+    bad = []
+    for path in _modules():
+        if path.relative_to(PKG).parts[0] not in ("exporters", "checks"):
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                for dec in node.decorator_list:
+                    name = ast.unparse(dec.func if isinstance(dec, ast.Call) else dec)
+                    if name.rsplit(".", 1)[-1] in ("lru_cache", "cache", "remembered"):
+                        bad.append(f"{path.relative_to(PKG)}:{node.lineno} @{name}")
     assert not bad, bad

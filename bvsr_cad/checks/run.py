@@ -7,11 +7,12 @@ from collections.abc import Callable, Collection
 from pathlib import Path
 from typing import Any
 
+from ..memo import Memo
 from .analyses import check_analyses
 from .export import Export
 from .layout import check_layout
 from .mass import check_masses, masses_reads
-from .memo import CheckMemo, VerdictStore
+from .memo import CheckMemo
 from .mesh import check_part_mesh, part_mesh_reads
 from .molds import check_molds, molds_reads
 from .paper import check_paper
@@ -252,7 +253,7 @@ class Checks:
         *,
         run_slicer: bool = False,
         beside: StartBeside | None = None,
-        store: VerdictStore | None = None,
+        store: Memo | None = None,
         meshes_beside: bool = False,
         robot_beside: bool = False,
         manifest: dict[str, Any] | None = None,
@@ -448,7 +449,7 @@ def run_checks(
     *,
     run_slicer: bool = False,
     beside: StartBeside | None = None,
-    store: VerdictStore | None = None,
+    store: Memo | None = None,
 ) -> list[CheckResult]:
     """Run every check on the export at ``root``; the results come in the same order either way.
 
@@ -459,7 +460,8 @@ def run_checks(
         beside: starts the printability checks' second process (None: every group runs here); the
             command's :func:`bvsr_cad.pipeline.processes.checks_process.run_checks` gives one on two
             cores or more.
-        store: where verdicts are kept (:mod:`bvsr_cad.checks.memo`; None: every check runs).
+        store: the memo the verdicts are kept through (:class:`bvsr_cad.memo.Memo`, as
+            :mod:`bvsr_cad.checks.memo` uses it; None: every check runs).
 
     Returns:
         Every check's result; the export passes when none has ``passed`` False.

@@ -32,12 +32,12 @@ from ..assembly.assemble import Assembly, rod_span_mm
 from ..assembly.fabrication import MadeItem, made_items
 from ..assembly.products import RIGID_MATERIAL, RigidRobot, piece_transform_mm
 from ..colors import rgb, rgba
+from ..memo import Memo, run_now
 from ..parameters.tables import TailSpec
 from ..parameters.twin import rigid_joining
 from ..parts.kernel import location, mesh_arrays
 from ..parts.mold import MoldSet
 from ..parts.rigid_tail import KEPT_ROLES, RigidPiece
-from ._memo import Memo, now
 from .bom import bom_rows, write_bom
 from .cad import write_step, write_stl
 from .reproducible import write_reproducible_3mf
@@ -277,7 +277,7 @@ def _layout_3mf(items: list[tuple[str, Path]], path: Path) -> list[list[float]]:
 
 
 def _print_jobs(
-    asm: Assembly, root: Path, items: list[MadeItem], stl_of: dict[str, str], memo: Memo = now
+    asm: Assembly, root: Path, items: list[MadeItem], stl_of: dict[str, str], memo: Memo = run_now
 ) -> list[dict]:
     """One job per (process, material) of the printed items (MJF and FDM); ``stl_of`` maps an item's
     label to the STL its writer wrote. A job's 3MF and its items' sizes are a step of ``memo`` read
@@ -318,7 +318,7 @@ def _print_jobs(
             (dst / three_mf).parent.mkdir(parents=True, exist_ok=True)
             return _layout_3mf([(it["part"], root / it["stl"]) for it in items], dst / three_mf)
 
-        sizes = memo(
+        sizes, _reused = memo(
             "print_job_layout",
             {"job": job, "items": [(it["part"], it["stl"]) for it in items]},
             layout,
@@ -360,7 +360,7 @@ def write_fabrication(
     mold_files: dict[str, dict[str, str]],
     root: Path,
     progress: Callable[[str], None],
-    memo: Memo = now,
+    memo: Memo = run_now,
 ) -> dict[str, Any]:
     """Write the rigid tail's robot description, print files and the BOM under ``root``, beside the
     twin's pieces (built by :mod:`bvsr_cad.assembly.products`) and their files and ``visual`` meshes

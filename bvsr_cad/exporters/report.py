@@ -28,8 +28,8 @@ import numpy as np
 import trimesh
 
 from ..colors import rgb
+from ..memo import Memo, run_now
 from ..parameters import paper
-from ._memo import Memo, now
 from .render import composing, offscreen_pyvista
 
 _MODEL = (
@@ -515,12 +515,12 @@ class ReportPictures:
     problems: list[str]  # what failed to render
 
 
-def report_pictures(root: Path, manifest: dict[str, Any], memo: Memo = now) -> ReportPictures:
+def report_pictures(root: Path, manifest: dict[str, Any], memo: Memo = run_now) -> ReportPictures:
     """Draw the report's pictures of the print files and the rigid twin under ``root``: they read
     the manifest's parts, print jobs and twin and the STLs, so a build draws them before its
     analyses are in.
 
-    The pictures are steps of ``memo`` (:mod:`bvsr_cad.exporters._memo`) read by what they draw: the
+    The pictures are steps of ``memo`` (:class:`bvsr_cad.memo.Memo`) read by what they draw: the
     STLs' bytes, the names and kinds (the parts sheet), the pieces' placements (the twin)."""
     (root / "report").mkdir(exist_ok=True)
     problems: list[str] = []
@@ -535,7 +535,7 @@ def report_pictures(root: Path, manifest: dict[str, Any], memo: Memo = now) -> R
         if p["process"] not in ("MJF", "FDM")
     ]
     try:
-        part_pics = memo(
+        part_pics, _reused = memo(
             "report_part_pictures",
             {"items": items},
             lambda dst: _render_parts(root, items, dst),
@@ -550,7 +550,7 @@ def report_pictures(root: Path, manifest: dict[str, Any], memo: Memo = now) -> R
     if manifest.get("rigid_tail"):
         pieces = [(p["files"]["stl"], p["tail_transform"]) for p in _rigid_pieces(manifest)]
         try:
-            rigid_pic = memo(
+            rigid_pic, _reused = memo(
                 "report_rigid_picture",
                 {"pieces": pieces},
                 lambda dst: _render_rigid(root, manifest, dst),
@@ -563,7 +563,10 @@ def report_pictures(root: Path, manifest: dict[str, Any], memo: Memo = now) -> R
 
 
 def write_report(
-    root: Path, manifest: dict[str, Any], memo: Memo = now, pictures: ReportPictures | None = None
+    root: Path,
+    manifest: dict[str, Any],
+    memo: Memo = run_now,
+    pictures: ReportPictures | None = None,
 ) -> dict[str, Any]:
     """Write ``report.html`` and its pictures (``report/``; ``pictures``: drawn already by
     :func:`report_pictures`) under ``root``; returns the manifest's ``report``."""

@@ -6,20 +6,21 @@ nothing else (:meth:`Runner.key`), so a stage added to a build's list needs no e
 stage's function writes its files into a folder and returns its products; :meth:`Runner.run` takes
 them from the cache, or runs the function (into a new cache entry where there is a cache), times it
 and adds its line to the stage report (``bvsr build --json``). Writers and checks never see the
-cache: a build hands them :meth:`Runner.memo` (products of their own steps, keyed by what those
-read) and :meth:`Runner.verdicts`.
+cache: a build hands them a :class:`bvsr_cad.memo.Memo` over it (:func:`cache_memo`), keyed by
+what their own steps read.
 """
 
 from __future__ import annotations
 
 import hashlib
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
+from ..memo import Memo
 from .cache import ArtifactCache, object_stage, spec_without, stage_key, value_stage
 
 if TYPE_CHECKING:
@@ -133,31 +134,32 @@ class Runner:
         it."""
         self.log.record(stage.label, reused, seconds + self._pending.pop(stage.label, 0.0))
 
+    @property
+    def memo(self) -> Memo:
+        """The memo this build hands its writers (:func:`cache_memo` of its cache)."""
+        return cache_memo(self.cache)
+
+
+def cache_memo(cache: ArtifactCache | None) -> Memo:
+    """The :class:`bvsr_cad.memo.Memo` over ``cache``: a step's result keyed by its name, its inputs
+    and the bytes of its files (hashed only where there is a cache), through :func:`object_stage`
+    (files under ``dst``) or :func:`value_stage` (a value). Without a cache each step runs now, its
+    objects handed on as a cached build's would be (read back from their pickle)."""
+
     def memo(
-        self,
         name: str,
-        inputs: dict[str, Any],
-        make: Callable[[Path], T],
-        dst: Path,
+        inputs: Mapping[str, Any],
+        make: Callable[..., T],
+        dst: Path | None = None,
         files: Sequence[Path] = (),
-    ) -> T:
-        """A writer's own cached step: ``make(dst)``'s files and products, keyed by ``name``,
-        ``inputs`` and the bytes of ``files`` (hashed only where there is a cache)."""
-        hashes = (
-            [hashlib.sha256(Path(f).read_bytes()).hexdigest() for f in files] if self.cache else []
-        )
-        return object_stage(self.cache, stage_key(name, **inputs, files=hashes), make, dst)[0]
+    ) -> tuple[T, bool]:
+        hashes = [hashlib.sha256(Path(f).read_bytes()).hexdigest() for f in files] if cache else []
+        key = stage_key(name, **inputs, files=hashes)
+        if dst is None:
+            return value_stage(cache, key, make)
+        return object_stage(cache, key, make, dst)
+
+    return memo
 
 
-def verdict_store(
-    cache: ArtifactCache | None,
-) -> Callable[[str, dict[str, Any], Callable[[], T]], tuple[T, bool]] | None:
-    """Where check groups keep their verdicts (:class:`bvsr_cad.checks.memo.CheckMemo`):
-    ``store(name, inputs, compute)`` gives the verdicts of ``compute()`` for these ``inputs`` and
-    whether they came from ``cache`` (None without a cache: every group runs)."""
-    if cache is None:
-        return None
-    return lambda name, inputs, compute: value_stage(cache, stage_key(name, **inputs), compute)
-
-
-__all__ = ["Runner", "Stage", "verdict_store"]
+__all__ = ["Runner", "Stage", "cache_memo"]

@@ -17,7 +17,7 @@ from ...checks.memo import CheckMemo
 from ...checks.result import CheckResult
 from ...checks.run import Checks, StartBeside, printability_groups
 from ..cache import ArtifactCache
-from ..runner import verdict_store
+from ..runner import cache_memo
 from .worker import SecondProcess
 
 #: The second process's module: it serves :data:`SECOND_PROCESS`.
@@ -69,7 +69,11 @@ def start_checks(
     """:meth:`bvsr_cad.checks.run.Checks.start` with the second process (``parallel``, on two cores
     or more) and the verdicts kept in ``cache``; ``kw``: the rest of its arguments."""
     return Checks.start(
-        root, progress, beside=beside(cache) if parallel else None, store=verdict_store(cache), **kw
+        root,
+        progress,
+        beside=beside(cache) if parallel else None,
+        store=cache_memo(cache) if cache is not None else None,
+        **kw,
     )
 
 
@@ -109,7 +113,7 @@ def _printability(
     at ``root`` whose manifest is ``manifest`` (JSON), the verdicts kept in the artifact cache at
     ``cache_root`` (when given)."""
     exp = Export.open(root, json.loads(manifest))
-    store = verdict_store(ArtifactCache(Path(cache_root)) if cache_root else None)
+    store = cache_memo(ArtifactCache(Path(cache_root))) if cache_root else None
     return printability_groups(
         exp, json.loads(sliced_now), CheckMemo(exp, store), bool(meshes), bool(robot)
     )

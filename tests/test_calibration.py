@@ -185,16 +185,16 @@ def test_shipped_fitted_rigidity_reaches_the_mjcf(bvsr_data, bvsr_spec):
     half-angle hinges 2 E I / L each, and the reduced chain's four pivot hinges per joint 2 E I / L
     each (a pure bend turns both pivots' hinges by theta / 2: their energies add up to (1/2)(E I /
     L) theta^2). The per-segment file's hinges carry exactly that. The default file's hinges carry
-    the joint's shear spring besides (:class:`bvsr_cad.exporters.mjcf.HingeShare`), whose rod part
-    is the fixed-guided beam's beyond the pivots' bend: (g - 1) E I / L with g = 3 (1 - 2 f)^2 =
-    4/3 for pivots at f = L/6, and 2 of it on each hinge. So E I reaches each of those hinges as 2 g
+    the joint's shear spring besides (:class:`~bvsr_cad.models.reduced_chain.HingeShare`), whose
+    rod part is the fixed-guided beam's beyond the pivots' bend: (g - 1) E I / L with
+    g = 3 (1 - 2 f)^2 = 4/3 for pivots at f = L/6, and 2 of it on each hinge. So E I reaches each of those hinges as 2 g
     E I / L = 8/3 E I / L, seen here as the difference E I makes (doubled), while the SOAs' springs
     can give up the whole shear spring (none left on a shear tendon)."""
     import mujoco
 
     from bvsr_cad.assembly.assemble import build_assembly
     from bvsr_cad.assembly.robot import robot_model
-    from bvsr_cad.exporters.mjcf import HingeShare, mjcf_tree
+    from bvsr_cad.exporters.mjcf import hinge_share, mjcf_tree
 
     from .test_truth import _mesh_files, _without_meshes
 
@@ -221,7 +221,7 @@ def test_shipped_fitted_rigidity_reaches_the_mjcf(bvsr_data, bvsr_spec):
         ),
     )
     assert all(
-        HingeShare.of(r, k).shear_tendon_nm_rad == 0.0 for r in (robot, stiffer) for k in (1, n)
+        hinge_share(r, k).shear_tendon_nm_rad == 0.0 for r in (robot, stiffer) for k in (1, n)
     )
     g = 3 * (1 - 2 / 6) ** 2
     np.testing.assert_allclose(

@@ -387,7 +387,7 @@ def test_default_mjcf_hinges_carry_the_soa_dampers_and_shear(robot_export, bvsr_
     - bend: the stiffness of the rod's E I / L and of the SOAs' springs, the parameter file's n_a
       times the summed squared stretch rates (to 1e-4: the finite difference); shear: E I / L and
       the fixed-guided columns' (4/3) (N n_a A / (2 pi) + E I / L) - E I / L
-      (:func:`bvsr_cad.exporters.mjcf.shear_stiffness_nm_rad`, here from the parameter file),
+      (:func:`bvsr_cad.models.reduced_chain.shear_stiffness_nm_rad`, here from the parameter file),
       to 2 % (the lever arms against r)."""
     from bvsr_cad.models.actuator import soa_force_law
 

@@ -77,7 +77,9 @@ from scipy.spatial.transform import Rotation
 
 from ..assembly.collision import Collision
 from ..assembly.robot import RobotModel, chord_joint_value, rest_pair
+from ..models import reduced_chain
 from ..models.kinematics import PRB_PIVOT_FRACTION, PrbLimitPolygon
+from ..models.reduced_chain import HingeShare
 from .xml import num as _f
 from .xml import quat_wxyz as _quat
 from .xml import vec as _vec
@@ -202,7 +204,7 @@ def mjcf_tree(
     # integrates joint damping implicitly.
     shares = None
     if chain == "reduced" and not per_segment:
-        shares = {b.name: HingeShare.of(robot, k) for k, b in enumerate(robot.bending, 1)}
+        shares = {b.name: hinge_share(robot, k) for k, b in enumerate(robot.bending, 1)}
     integrator = "Euler" if shares else "implicitfast"
     ET.SubElement(root, "option", timestep=_f(timestep_s), integrator=integrator)
     _mjcf_defaults(root, model)
@@ -631,23 +633,15 @@ def collision_geom(body: ET.Element, c: Collision, shift=(0.0, 0.0, 0.0), **attr
 
 
 def shear_stiffness_nm_rad(robot: RobotModel) -> float:
-    """Stiffness (N m/rad) on a reduced joint's shear tendon ``a - b`` (s): the real joint's
-    resistance to it.
-
-    In that mode the panel slides sideways by (1 - 2 f) L s / 2 (f = :data:`PRB_PIVOT_FRACTION`)
-    without turning, and every column between the panels (the rod and the N SOAs) bends as a
-    fixed-guided beam of lateral stiffness 12 E I / L^3: energy (1/2) 3 (1 - 2 f)^2 (E I / L) s^2
-    per column. An SOA's own E I / L is its axial spring n_a spread on a thin wall round its
-    effective area A (a ring of radius sqrt(A / pi): I / A = A / (2 pi)). The two hinges' 2 E I / L
-    already give the rod (1/2) (E I / L) s^2, so the tendon carries the rest. It is zero whenever
-    the equalities hold: it adds nothing to the constant-curvature motion, and it holds the mode
-    where the rod is soft or absent.
-    """
-    law, act = robot.actuation.law, robot.actuation
-    n_soas = sum(1 for s in robot.soas if s.joint == 1)
-    guided = 3.0 * (1.0 - 2.0 * PRB_PIVOT_FRACTION) ** 2
-    soa_ei_over_l = law.stiffness_offset_n_per_m * law.area_m2 / (2.0 * np.pi)
-    return guided * n_soas * soa_ei_over_l + (guided - 1.0) * act.rod_bending_stiffness_nm_rad
+    """The shear tendon's stiffness of ``robot``'s reduced joints, N m/rad
+    (:func:`bvsr_cad.models.reduced_chain.shear_stiffness_nm_rad`)."""
+    law = robot.actuation.law
+    return reduced_chain.shear_stiffness_nm_rad(
+        n_soas=sum(1 for s in robot.soas if s.joint == 1),
+        stiffness_offset_n_per_m=law.stiffness_offset_n_per_m,
+        area_m2=law.area_m2,
+        rod_bending_stiffness_nm_rad=robot.actuation.rod_bending_stiffness_nm_rad,
+    )
 
 
 def _bend_limit_tendons(
@@ -685,12 +679,12 @@ def _bend_limit_tendons(
 
 
 def _soa_bending(robot: RobotModel, per_soa: float) -> float:
-    """``per_soa`` N r^2 / 2: a joint's N SOAs (each a spring n_a or damper c along it) against
-    bending about either axis, r the sockets' mean radius."""
+    """``per_soa`` N r^2 / 2 for a joint of ``robot``
+    (:func:`bvsr_cad.models.reduced_chain.soa_bending`)."""
     pos = {s.name: np.asarray(s.pos_m) for s in robot.sites}
-    joint1 = [s for s in robot.soas if s.joint == 1]
-    r2 = float(np.mean([np.sum(pos[s.bottom_site][:2] ** 2) for s in joint1]))
-    return per_soa * len(joint1) * r2 / 2
+    return reduced_chain.soa_bending(
+        per_soa, [pos[s.bottom_site] for s in robot.soas if s.joint == 1]
+    )
 
 
 def _soa_bending_damping(robot: RobotModel) -> float:
@@ -699,56 +693,28 @@ def _soa_bending_damping(robot: RobotModel) -> float:
 
 
 def soa_lever_arms_m(robot: RobotModel, k: int) -> dict[str, np.ndarray]:
-    """Each of reduced joint k's SOAs' stretch per unit bend about X and about Y from rest, m/rad.
-
-    Bending at u' (u' / 2 about each pivot), an SOA's top socket p moves at u' axis x (p - m), m
-    the pivots' midpoint, so the SOA stretches at e . (axis x (p - m)) u' (e along it). It is about
-    r sin or cos of the SOA's angle round the axis (r the sockets' radius)."""
+    """Reduced joint k's SOAs' lever arms (:func:`bvsr_cad.models.reduced_chain.soa_lever_arms_m`),
+    from its sockets at rest in panel k-1's frame."""
     b = robot.bending[k - 1]
     t_m = _arc_start_m(robot, b)
     pos = {s.name: np.asarray(s.pos_m) for s in robot.sites}
-    m = np.array([0.0, 0.0, t_m + b.arc_length_m / 2])
-    arms = {"x": [], "y": []}
-    for s in (s for s in robot.soas if s.joint == k):
-        top = pos[s.top_site] + [0.0, 0.0, t_m + b.arc_length_m]  # at rest, in panel k-1's frame
-        e = (top - pos[s.bottom_site]) / np.linalg.norm(top - pos[s.bottom_site])
-        for axis, unit in (("x", [1.0, 0.0, 0.0]), ("y", [0.0, 1.0, 0.0])):
-            arms[axis].append(float(e @ np.cross(unit, top - m)))
-    return {axis: np.array(a) for axis, a in arms.items()}
+    soas = [s for s in robot.soas if s.joint == k]
+    return reduced_chain.soa_lever_arms_m(
+        bottoms_m=[pos[s.bottom_site] for s in soas],
+        tops_m=[pos[s.top_site] + [0.0, 0.0, t_m + b.arc_length_m] for s in soas],
+        pivot_mid_m=[0.0, 0.0, t_m + b.arc_length_m / 2],
+    )
 
 
-@dataclasses.dataclass(frozen=True)
-class HingeShare:
-    """What the default file moves onto a reduced joint's four pivot hinges (module docstring).
-
-    Per axis, the bend u = a + b and the shear s = a - b of the pivots' hinges a, b: a damping D
-    on each hinge dissipates D (a'^2 + b'^2) = (D / 2) (u'^2 + s'^2), and a stiffness K stores
-    (K / 2) (a^2 + b^2) = (K / 4) (u^2 + s^2). The SOA dampers dissipate c sum(arm^2) u'^2
-    (:func:`soa_lever_arms_m`), about c N r^2 / 2, and the shear tendon damps s with c N r^2 / 2
-    (:func:`_soa_bending_damping`): D = 2 c sum(arm^2) dissipates both. The shear tendon's spring
-    k_s (:func:`shear_stiffness_nm_rad`) on each hinge as 2 k_s stores (k_s / 2) s^2 and as much in
-    the bend, which the SOAs' springs give up: their n_a sum(arm^2) u^2 / 2 (about n_a N r^2 / 4
-    u^2) loses k_s u^2 / 2 when n_a is reduced by k_s / sum(arm^2). The SOAs' springs cannot give
-    up more than they have: what is left of k_s (a very stiff rod's) stays on the shear tendon."""
-
-    damping_nms: dict[str, float]  # on each hinge, about X and about Y
-    stiffness_nm_rad: float  # added to each hinge's 2 E I / L
-    soa_stiffness_offset_n_per_m: float  # the joint's SOAs' n_a on their actuators
-    shear_tendon_nm_rad: float  # left on the shear tendons (0: none written)
-
-    @classmethod
-    def of(cls, robot: RobotModel, k: int) -> HingeShare:
-        law = robot.actuation.law
-        arms2 = {axis: float(np.sum(a**2)) for axis, a in soa_lever_arms_m(robot, k).items()}
-        mean2 = (arms2["x"] + arms2["y"]) / 2  # the same about both (the SOAs evenly round)
-        shear = shear_stiffness_nm_rad(robot)
-        moved = min(shear, law.stiffness_offset_n_per_m * mean2)
-        return cls(
-            damping_nms={axis: 2.0 * law.damping_n_s_per_m * a2 for axis, a2 in arms2.items()},
-            stiffness_nm_rad=2.0 * moved,
-            soa_stiffness_offset_n_per_m=law.stiffness_offset_n_per_m - moved / mean2,
-            shear_tendon_nm_rad=shear - moved,
-        )
+def hinge_share(robot: RobotModel, k: int) -> HingeShare:
+    """What the default file moves onto reduced joint k's pivot hinges (:class:`HingeShare`)."""
+    law = robot.actuation.law
+    return HingeShare.of(
+        soa_lever_arms_m(robot, k),
+        law.stiffness_offset_n_per_m,
+        law.damping_n_s_per_m,
+        shear_stiffness_nm_rad(robot),
+    )
 
 
 def _arc_start_m(robot: RobotModel, b) -> float:

@@ -187,9 +187,9 @@ def test_shipped_fitted_rigidity_reaches_the_mjcf(bvsr_data, bvsr_spec):
     L) theta^2). The per-segment file's hinges carry exactly that. The default file's hinges carry
     the joint's shear spring besides (:class:`~bvsr_cad.models.reduced_chain.HingeShare`), whose
     rod part is the fixed-guided beam's beyond the pivots' bend: (g - 1) E I / L with
-    g = 3 (1 - 2 f)^2 = 4/3 for pivots at f = L/6, and 2 of it on each hinge. So E I reaches each of those hinges as 2 g
-    E I / L = 8/3 E I / L, seen here as the difference E I makes (doubled), while the SOAs' springs
-    can give up the whole shear spring (none left on a shear tendon)."""
+    g = 3 (1 - 2 f)^2 = 4/3 for pivots at f = L/6, and 2 of it on each hinge. So E I reaches each
+    of those hinges as 2 g E I / L = 8/3 E I / L, seen here as the difference E I makes (doubled),
+    while the SOAs' springs can give up the whole shear spring (none left on a shear tendon)."""
     import mujoco
 
     from bvsr_cad.assembly.assemble import build_assembly

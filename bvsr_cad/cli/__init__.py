@@ -14,18 +14,13 @@ import threading
 import time
 from pathlib import Path
 
-from .errors import BadInput, GeneratorFailure
-from .pipeline.processes.worker import SecondProcess
-from .process import library_imports, tune_process
+from ..errors import BadInput, GeneratorFailure
+from ..pipeline.processes.worker import SecondProcess
+from ..process import library_imports, tune_process
+from . import parser
+from .parser import _number, _version  # noqa: F401 - _number: the docs read its bound off it
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # argparse exits 2 already; keep the message short
-        self.print_usage(sys.stderr)
-        print(f"bvsr: error: {message}", file=sys.stderr)
-        raise SystemExit(EXIT_BAD_INPUT)
 
 
 def _progress(quiet: bool):
@@ -42,7 +37,7 @@ def _progress(quiet: bool):
 
 
 def _print_results(results, as_json: bool, verbose: bool = False) -> int:
-    from .checks.result import overall, summary_lines, tally_line
+    from ..checks.result import overall, summary_lines, tally_line
 
     ok = overall(results)
     if as_json:
@@ -56,7 +51,7 @@ def _print_results(results, as_json: bool, verbose: bool = False) -> int:
 def _params_or_default(args, say) -> str:
     """The parameter file a build or watch names, else ``params/bvsr.toml`` of this folder (a copy
     that ``bvsr init`` wrote), else, for a build, the default tail shipped with the package."""
-    from . import defaults
+    from .. import defaults
 
     if args.params is not None:
         return args.params
@@ -84,14 +79,14 @@ def cmd_build(args) -> int:
     try:
         # A bad file is refused, and an export the cache holds whole is published, in a fraction of
         # a second: before the pipeline's imports (seconds).
-        from .pipeline.publish import open_build, reuse_whole
+        from ..pipeline.publish import open_build, reuse_whole
 
         opened = open_build(args.params, args.output, say, use_cache=not args.no_cache)
         res = reuse_whole(opened)
         if res is None:
             # A Ctrl-C in the pipeline's imports stops the build (process.library_imports).
             with library_imports():
-                from .pipeline.stages import build_opened
+                from ..pipeline.stages import build_opened
 
             res = build_opened(opened, standby)
     finally:
@@ -115,7 +110,7 @@ def cmd_build(args) -> int:
 
 
 def cmd_watch(args) -> int:
-    from .defaults import DEFAULT_PARAMS
+    from ..defaults import DEFAULT_PARAMS
 
     if args.params is None and not Path(DEFAULT_PARAMS).is_file():  # not the packaged tail
         raise BadInput(
@@ -124,14 +119,14 @@ def cmd_watch(args) -> int:
         )
     args.params = _params_or_default(args, _progress(args.quiet))
     with library_imports():
-        from .pipeline.watch import watch
+        from ..pipeline.watch import watch
 
     def say(msg: str) -> None:
         print(msg, flush=True)
 
     on_assembly = None
     if args.show:
-        from .exporters.ocp_viewer import assembly_sender, viewer_port
+        from ..exporters.ocp_viewer import assembly_sender, viewer_port
 
         # No viewer: exit 2 before the first build.
         on_assembly = assembly_sender(viewer_port(args.port), say)
@@ -139,7 +134,7 @@ def cmd_watch(args) -> int:
 
 
 def cmd_show(args) -> int:
-    from .exporters.ocp_viewer import viewer_port
+    from ..exporters.ocp_viewer import viewer_port
 
     port = viewer_port(args.port)  # no client or no viewer: exit 2 before the CAD imports (seconds)
     target = Path(args.target or "params/bvsr.toml")
@@ -150,7 +145,7 @@ def cmd_show(args) -> int:
             "was built from)"
         )
     with library_imports():
-        from .api import load
+        from ..api import load
 
     tail = load(params)
     posed = None if args.theta is None else tail.posed(theta_deg=args.theta, phi_deg=args.phi)
@@ -179,7 +174,7 @@ def cmd_show(args) -> int:
 
 def cmd_check(args) -> int:
     with library_imports():
-        from .pipeline.processes.checks_process import run_checks
+        from ..pipeline.processes.checks_process import run_checks
 
     results = run_checks(args.export, _progress(args.quiet or args.json), run_slicer=args.slice)
     return _print_results(results, args.json, verbose=args.verbose)
@@ -190,21 +185,21 @@ def _simulate_folder(args, spec) -> Path:
 
 
 def cmd_simulate(args) -> int:
-    from .parameters.load import load_spec
+    from ..parameters.load import load_spec
 
     spec = load_spec(args.params)  # a bad file is refused before the simulator's imports (seconds)
     say = _progress(args.quiet or args.json)
     if args.platform == "quadruped":
         with library_imports():
-            from .simulation.quadruped import on_quadruped, quadruped_lines
+            from ..simulation.quadruped import on_quadruped, quadruped_lines
 
         export = Path(args.export) if args.export else Path("exports") / spec.name
         folder = _simulate_folder(args, spec)
         res = on_quadruped(export, args.host, args.body, args.pose, folder, spec.name, say)
         return _print_lines(res, args.json, quadruped_lines)
     with library_imports():
-        from .simulation import experiments as ex
-        from .simulation.sim import check_inputs, joint_limits_rad
+        from ..simulation import experiments as ex
+        from ..simulation.sim import check_inputs, joint_limits_rad
 
     check_inputs(spec, args.pressure_bar, args.payload_g)
     limits = joint_limits_rad(spec, say)
@@ -230,13 +225,13 @@ def _print_lines(result: dict, as_json: bool, lines) -> int:
 
 
 def cmd_calibrate(args) -> int:
-    from .parameters.load import load_spec
-    from .parameters.measurements import load_measurements
+    from ..parameters.load import load_spec
+    from ..parameters.measurements import load_measurements
 
     spec = load_spec(args.params)  # bad files are refused before the models' imports (seconds)
     rows = load_measurements(args.data)
     with library_imports():
-        from .simulation.experiments import calibration, calibration_lines
+        from ..simulation.experiments import calibration, calibration_lines
 
     say = _progress(args.quiet or args.json)
     res, out = calibration(spec, rows, args.params, args.data, args.fit, args.output, say)
@@ -247,31 +242,11 @@ def cmd_calibrate(args) -> int:
     return EXIT_OK
 
 
-def _number(minimum: float, inclusive: bool, kind: type = float):
-    """argparse type: a number above ``minimum`` (or equal, if ``inclusive``), with a clear
-    message."""
-
-    def parse(text: str):
-        try:
-            value = kind(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(
-                f"{text!r} is not {'an integer' if kind is int else 'a number'}"
-            ) from None
-        if value < minimum or (value == minimum and not inclusive):
-            raise argparse.ArgumentTypeError(
-                f"{text!r}: must be {'>=' if inclusive else '>'} {minimum:g}"
-            )
-        return value
-
-    return parse
-
-
 def cmd_workspace(args) -> int:
     with library_imports():
-        from .analysis.workspace import run_workspace
-        from .assembly.assemble import build_assembly
-        from .parameters.load import load_spec
+        from ..analysis.workspace import run_workspace
+        from ..assembly.assemble import build_assembly
+        from ..parameters.load import load_spec
 
     spec = load_spec(args.params)
     say = _progress(args.quiet)
@@ -282,8 +257,8 @@ def cmd_workspace(args) -> int:
 
 def cmd_clearance(args) -> int:
     with library_imports():
-        from .analysis.clearance import workspace_clearance
-        from .parameters.load import load_spec
+        from ..analysis.clearance import workspace_clearance
+        from ..parameters.load import load_spec
 
     spec = load_spec(args.params)
     res, out = workspace_clearance(spec, args.poses, _progress(args.quiet))
@@ -298,15 +273,15 @@ def cmd_clearance(args) -> int:
 
 
 def cmd_sweep(args) -> int:
-    from .extras import require
-    from .parameters.study import load_study
+    from ..extras import require
+    from ..parameters.study import load_study
 
     study = load_study(
         args.study
     )  # a bad study file is refused before the sweep's imports (seconds)
     require("studies", "bvsr sweep")
     with library_imports():
-        from .studies.sweep import run_study
+        from ..studies.sweep import run_study
 
     say = _progress(args.quiet or args.json)
     try:
@@ -347,7 +322,7 @@ def cmd_sweep(args) -> int:
 
 
 def cmd_init(args) -> int:
-    from .exporters.starter_files import STARTER_FILES, write_starter
+    from ..exporters.starter_files import STARTER_FILES, write_starter
 
     folder = Path(args.folder)
     written = write_starter(folder, force=args.force)  # files there: StarterExistsError, exit 2
@@ -376,304 +351,8 @@ def cmd_init(args) -> int:
     return EXIT_OK
 
 
-def make_parser() -> argparse.ArgumentParser:
-    p = _Parser(
-        prog="bvsr",
-        description="Parametric CAD and fabrication pipeline for the BVSR soft robotic tail.",
-    )
-    p.add_argument("--version", action="version", version=f"bvsr_cad {_version()}")
-    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    # Every command takes these two.
-    common = argparse.ArgumentParser(add_help=False)
-    common.add_argument(
-        "--json", action="store_true", help="print the result as one JSON object on stdout"
-    )
-    common.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
-    for add in (
-        _add_build_and_watch,
-        _add_show,
-        _add_init,
-        _add_check,
-        _add_simulate,
-        _add_calibrate,
-        _add_workspace,
-        _add_sweep,
-        _add_clearance,
-        _add_mount,
-    ):
-        add(sub, common)
-    return p
-
-
-def _add_build_and_watch(sub, common: argparse.ArgumentParser) -> None:
-    """``bvsr build`` and ``bvsr watch``: a parameter file into an export folder, once or at each
-    save."""
-    for name, func, helptext in (
-        ("build", cmd_build, "build every part of a tail into an export folder"),
-        ("watch", cmd_watch, "rebuild the export each time the parameter file is saved"),
-    ):
-        b = sub.add_parser(name, parents=[common], help=helptext)
-        b.add_argument(
-            "params",
-            nargs="?",
-            help="parameter file (default params/bvsr.toml"
-            + (", else the default tail shipped with the package)" if name == "build" else ")"),
-        )
-        b.add_argument("-o", "--output", help="export folder (default exports/<name>/)")
-        if name == "build":
-            b.add_argument(
-                "--no-cache",
-                action="store_true",
-                help="build every stage from scratch (the cache is $BVSR_CACHE/artifacts, default "
-                "~/.cache/bvsr_cad/artifacts)",
-            )
-        if name == "watch":
-            b.add_argument(
-                "--show",
-                action="store_true",
-                help="send the tail to a running OCP CAD Viewer on "
-                "each save, as soon as its assembly is built (needs the viewer extra)",
-            )
-            b.add_argument(
-                "--port", type=int, help="the viewer's port (default $OCP_PORT, else 3939)"
-            )
-        b.set_defaults(func=func)
-
-
-def _add_show(sub, common: argparse.ArgumentParser) -> None:
-    """``bvsr show``: the tail to a running OCP CAD Viewer."""
-    sh = sub.add_parser(
-        "show",
-        parents=[common],
-        help="send the tail (at rest or posed) to a running OCP CAD "
-        "Viewer, named and coloured (needs the viewer extra)",
-    )
-    sh.add_argument(
-        "target",
-        nargs="?",
-        metavar="EXPORT|PARAMS",
-        help="an export folder or a parameter file (default params/bvsr.toml)",
-    )
-    sh.add_argument(
-        "--theta", type=float, help="bend every joint by this angle, degrees (default: at rest)"
-    )
-    sh.add_argument(
-        "--phi",
-        type=float,
-        default=0.0,
-        help="bending direction from +X towards +Y (dorsal), degrees (default 0)",
-    )
-    sh.add_argument("--port", type=int, help="the viewer's port (default $OCP_PORT, else 3939)")
-    sh.set_defaults(func=cmd_show)
-
-
-def _add_init(sub, common: argparse.ArgumentParser) -> None:
-    """``bvsr init``: editable copies of the default inputs."""
-    ini = sub.add_parser(
-        "init",
-        parents=[common],
-        help="write editable copies of the default parameter, data and study files into a folder",
-    )
-    ini.add_argument("folder", nargs="?", default=".", help="where (default: this folder)")
-    ini.add_argument("--force", action="store_true", help="overwrite files that exist")
-    ini.set_defaults(func=cmd_init)
-
-
-def _add_check(sub, common: argparse.ArgumentParser) -> None:
-    """``bvsr check``: every check on an export folder."""
-    c = sub.add_parser("check", parents=[common], help="run every check on an export folder")
-    c.add_argument("export", help="export folder made by `bvsr build`")
-    c.add_argument(
-        "--slice",
-        action="store_true",
-        help="first slice every printed STL the slice cache does not hold yet with PrusaSlicer "
-        "(prusa-slicer, 2 at a time); `bvsr build` and `bvsr check` never slice otherwise",
-    )
-    c.add_argument(
-        "-v",
-        "--verbose",
-        action="store_true",
-        help="print every check (by default: one line per check group, failures in full)",
-    )
-    c.set_defaults(func=cmd_check)
-
-
-def _add_simulate(sub, common: argparse.ArgumentParser) -> None:
-    """``bvsr simulate``: a pressure pulse through the MJCF."""
-    sm = sub.add_parser(
-        "simulate",
-        parents=[common],
-        help="drive the MJCF with a pressure pulse; peak velocity and root torque",
-    )
-    simulate_args = {
-        "params": {"help": "parameter file"},
-        "--pressure-bar": {
-            "type": _number(0.0, inclusive=False),
-            "default": 6.0,
-            "help": "pulse gauge pressure in bar (default 6)",
-        },
-        "--payload-g": {
-            "type": _number(0.0, inclusive=True),
-            "default": 0.0,
-            "help": "tip payload in grams (default 0)",
-        },
-        "--supply": {
-            "choices": ("ramp", "valve"),
-            "help": "pressure input: Eq 13 ramp or the ISO 6358 valve supply (default: "
-            "pneumatics.model)",
-        },
-        "--platform": {
-            "choices": ("none", "cart", "quadruped"),
-            "default": "none",
-            "help": "cart: the tail on the paper's hinged 700 g cart (robot/scene_cart.xml), "
-            "extension "
-            "and waggle; the cart's lift and angles beside Eq 20-22 and the paper. quadruped: "
-            "the export's tail on a standing quadruped (default Unitree Go1, the 'quadruped' "
-            "extra): the stance, Fig. 17's ball impacts (soft against rigid) and Fig. 18's tip "
-            "payloads",
-        },
-        "--export": {
-            "help": "quadruped: the export folder whose tail is mounted (default exports/<name>)"
-        },
-        "--host": {"help": "quadruped: the host's MJCF or URDF, or a known host (default go1)"},
-        "--body": {"help": "quadruped: the host body the tail is mounted on"},
-        "--pose": {
-            "help": 'quadruped: the mount frame in that body, "x y z roll pitch yaw" (m, deg)'
-        },
-        "--impact": {
-            "action": "store_true",
-            "help": "the paper's disturbance test: a 500 g and a 650 g ball down the 1.35 m, 45 "
-            "deg ramp "
-            "into the soft tail and the rigid PLA twin; peak root force and torque, tip "
-            "acceleration",
-        },
-        "--output": {"help": "folder for the plot (default exports/<name>/simulate/)"},
-    }
-    for flag, options in simulate_args.items():
-        sm.add_argument(*(("-o", flag) if flag == "--output" else (flag,)), **options)
-    sm.set_defaults(func=cmd_simulate)
-
-
-def _add_calibrate(sub, common: argparse.ArgumentParser) -> None:
-    """``bvsr calibrate``: the fit of the unknown quantities to measurements."""
-    ca = sub.add_parser(
-        "calibrate",
-        parents=[common],
-        help="fit the quantities no table gives to measurements; report fit and holdout errors",
-    )
-    ca.add_argument("params", help="parameter file")
-    ca.add_argument(
-        "data", help="measurements CSV (experiment,quantity,conditions,value,unit,role,source)"
-    )
-    ca.add_argument(
-        "-o",
-        "--output",
-        help="write the calibrated parameter file here ([calibration] table added)",
-    )
-    ca.add_argument(
-        "--fit", help="comma-separated quantities to fit (default: what the fit rows identify)"
-    )
-    ca.set_defaults(func=cmd_calibrate)
-
-
-def _add_workspace(sub, common: argparse.ArgumentParser) -> None:
-    """``bvsr workspace``: the tip workspace by the paper's protocol."""
-    wk = sub.add_parser(
-        "workspace",
-        parents=[common],
-        help="tip workspace by the paper's random chamber-state protocol",
-    )
-    wk.add_argument("params", help="parameter file")
-    wk.add_argument(
-        "--samples",
-        type=_number(1, inclusive=True, kind=int),
-        default=20000,
-        help="random chamber states, one settled tip each (default 20000)",
-    )
-    wk.add_argument(
-        "--seed", type=int, default=1, help="seed of the random chamber states (default 1)"
-    )
-    wk.set_defaults(func=cmd_workspace)
-
-
-def _add_sweep(sub, common: argparse.ArgumentParser) -> None:
-    """``bvsr sweep``: a design study on Dask."""
-    sw = sub.add_parser(
-        "sweep", parents=[common], help="run a design study (grid, random or Optuna) on Dask"
-    )
-    sw.add_argument("study", help="study file (TOML; see studies/)")
-    sw.add_argument("-o", "--output", help="study folder (default exports/studies/<study name>/)")
-    sw.add_argument(
-        "--scheduler",
-        help="address of a running Dask scheduler (tcp://host:8786); default: a "
-        "LocalCluster on this machine",
-    )
-    sw.add_argument(
-        "--workers",
-        type=_number(1, inclusive=True, kind=int),
-        help="LocalCluster worker processes (default: one per core)",
-    )
-    sw.add_argument(
-        "--keep-exports",
-        action="store_true",
-        help="with checks: keep each variant's export in <study folder>/variants/<key>/",
-    )
-    sw.set_defaults(func=cmd_sweep)
-
-
-def _add_clearance(sub, common: argparse.ArgumentParser) -> None:
-    """``bvsr clearance``: the closest approach of the solids over the workspace."""
-    cl = sub.add_parser(
-        "clearance", parents=[common], help="minimum clearance between solids over the workspace"
-    )
-    cl.add_argument("params", help="parameter file")
-    cl.add_argument(
-        "--poses",
-        type=_number(1, inclusive=True, kind=int),
-        default=20000,
-        help="workspace poses the solids are checked at (default 20000; the seed is analysis.seed)",
-    )
-    cl.set_defaults(func=cmd_clearance)
-
-
-def _add_mount(sub, common: argparse.ArgumentParser) -> None:
-    """``bvsr mount``: the tail on a host robot, one MJCF."""
-    mo = sub.add_parser(
-        "mount",
-        parents=[common],
-        help="attach the tail's MJCF to a body or site of a host robot (MJCF or URDF) and write "
-        "the combined scene",
-    )
-    mo.add_argument(
-        "host",
-        help="the host: an MJCF or URDF file, or a known host's name (go1: Unitree Go1 of the "
-        "quadruped extra)",
-    )
-    at = mo.add_mutually_exclusive_group(required=True)
-    at.add_argument("--body", help="the host body the tail is mounted on")
-    at.add_argument(
-        "--site", help="the host site the tail is mounted on (the pose is in its frame)"
-    )
-    mo.add_argument(
-        "--pose",
-        default="0 0 0",
-        help="the mount frame (the centre of the tail root's bolt-circle face, Z along the tail, "
-        "Y dorsal) in the body's or site's frame: \"x y z [roll pitch yaw]\", x y z in m, roll "
-        'pitch yaw in deg, fixed axes as URDF\'s rpy (default "0 0 0")',
-    )
-    mo.add_argument(
-        "--tail",
-        default="exports/bvsr",
-        help="the tail: an export folder of `bvsr build` or its robot/bvsr.xml (default "
-        "exports/bvsr)",
-    )
-    mo.add_argument("--prefix", default="tail_", help="put before every tail name (default tail_)")
-    mo.add_argument("-o", "--output", required=True, help="the combined scene to write (.xml)")
-    mo.set_defaults(func=cmd_mount)
-
-
 def cmd_mount(args) -> int:
-    from .exporters.mount import mount, parse_pose, write_mounted
+    from ..exporters.mount import mount, parse_pose, write_mounted
 
     pos_m, rpy_rad = parse_pose(args.pose)
     say = _progress(args.quiet or args.json)
@@ -698,6 +377,12 @@ def cmd_mount(args) -> int:
     for note in mounted.notes:
         print(f"note: {note}")
     return EXIT_OK
+
+
+def make_parser() -> argparse.ArgumentParser:
+    """The ``bvsr`` parser with this module's handlers, ``cmd_<command>``, as they are now
+    (:func:`bvsr_cad.cli.parser.make_parser`)."""
+    return parser.make_parser({name: globals()[f"cmd_{name}"] for name in COMMANDS})
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -729,14 +414,14 @@ def _bad_input_message(args, exc: Exception) -> str | None:
     """What ``bvsr`` prints for an error that is the input's (exit code 2): a
     :class:`~bvsr_cad.errors.BadInput` as it is, a generator's failure on parameters that loaded
     with the keys to change; None for a bug."""
-    from .parts.failure import generator_failure, raised_in_parts
+    from ..parts.failure import generator_failure, raised_in_parts
 
     if isinstance(exc, BadInput):
         return f"bvsr: error: {exc}"
     if isinstance(exc, GeneratorFailure) or (
         isinstance(exc, ValueError) and raised_in_parts(exc) is not None
     ):
-        published = " Nothing was published." if getattr(args, "func", None) is cmd_build else ""
+        published = " Nothing was published." if getattr(args, "command", None) == "build" else ""
         return generator_failure(exc, getattr(args, "params", None), published)
     return None
 
@@ -753,14 +438,6 @@ def _interrupted(exc: BaseException) -> bool:
         seen.add(id(cur))
         cur = cur.__cause__ or cur.__context__
     return False
-
-
-def _version() -> str:
-    """The installed version, looked up when printed: :mod:`importlib.metadata` takes tens of
-    milliseconds to import, and ``import bvsr_cad.cli`` is the start of every ``bvsr`` command."""
-    from . import __version__
-
-    return __version__
 
 
 def console() -> None:
@@ -787,5 +464,17 @@ def console() -> None:
     os._exit(code)
 
 
-if __name__ == "__main__":
-    console()
+#: The commands; each one's handler is ``cmd_<name>`` here.
+COMMANDS = (
+    "build",
+    "watch",
+    "show",
+    "init",
+    "check",
+    "simulate",
+    "calibrate",
+    "workspace",
+    "sweep",
+    "clearance",
+    "mount",
+)

@@ -195,6 +195,36 @@ def test_check_verdicts_follow_the_bytes_of_the_files_they_read(tmp_path):
     assert len(runs) == 3
 
 
+def test_a_writers_step_follows_its_inputs_and_the_bytes_of_its_files(tmp_path):
+    """The memo a build hands its writers (cache_memo): a step's files and value come back from the
+    cache while its inputs and its files' bytes are unchanged (a file rewritten with the same bytes
+    too), and the step runs again when either changes; its files are copied into the new ``dst``."""
+    from bvsr_cad.pipeline.runner import cache_memo
+
+    memo = cache_memo(ArtifactCache(tmp_path / "c"))
+    source = tmp_path / "part.stl"
+    source.write_bytes(b"solid a")
+    runs = []
+
+    def draw(dst: Path) -> int:
+        runs.append(1)
+        (dst / "pic.png").write_bytes(source.read_bytes() + b" drawn")
+        return len(runs)
+
+    def step(dst: Path, inputs: dict) -> tuple[int, bool]:
+        dst.mkdir(exist_ok=True)
+        return memo("picture", inputs, draw, dst, files=[source])
+
+    assert step(tmp_path / "one", {"view": 1}) == (1, False)
+    source.write_bytes(b"solid a")  # rewritten, same bytes
+    assert step(tmp_path / "two", {"view": 1}) == (1, True)
+    assert (tmp_path / "two" / "pic.png").read_bytes() == b"solid a drawn"
+    assert step(tmp_path / "three", {"view": 2}) == (2, False)
+    source.write_bytes(b"solid b")
+    assert step(tmp_path / "four", {"view": 2}) == (3, False)
+    assert (tmp_path / "four" / "pic.png").read_bytes() == b"solid b drawn"
+
+
 def test_two_exports_differ_by_their_files_not_by_the_manifests_volatile_section(tmp_path):
     a, b = tmp_path / "a", tmp_path / "b"
     for root, when in ((a, "10:00"), (b, "11:00")):

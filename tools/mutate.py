@@ -369,26 +369,26 @@ FAULTS: list[Fault] = [
     ),
     Fault(
         "mjcf_hinge_damping_halved",
-        "bvsr_cad/exporters/mjcf.py",
-        "axis: 2.0 * law.damping_n_s_per_m * a2 for axis, a2 in arms2.items()",
-        "axis: 1.0 * law.damping_n_s_per_m * a2 for axis, a2 in arms2.items()",
+        "bvsr_cad/models/reduced_chain.py",
+        "axis: 2.0 * damping_n_s_per_m * a2 for axis, a2 in arms2.items()",
+        "axis: 1.0 * damping_n_s_per_m * a2 for axis, a2 in arms2.items()",
         "the default MJCF's pivot hinges carry half the SOAs' damping",
         catchers=("tests/test_robot.py::test_default_mjcf_hinges_carry_the_soa_dampers_and_shear",),
     ),
     Fault(
         "mjcf_hinge_damping_lever_from_arc_start",
         "bvsr_cad/exporters/mjcf.py",
-        "m = np.array([0.0, 0.0, t_m + b.arc_length_m / 2])",
-        "m = np.array([0.0, 0.0, t_m])",
+        "pivot_mid_m=[0.0, 0.0, t_m + b.arc_length_m / 2],",
+        "pivot_mid_m=[0.0, 0.0, t_m],",
         "the SOAs' lever arms for the hinges' share taken about the arc's start, not the pivots' "
         "midpoint",
         catchers=("tests/test_robot.py::test_default_mjcf_hinges_carry_the_soa_dampers_and_shear",),
     ),
     Fault(
         "mjcf_shear_spring_counted_twice_in_the_bend",
-        "bvsr_cad/exporters/mjcf.py",
-        "soa_stiffness_offset_n_per_m=law.stiffness_offset_n_per_m - moved / mean2,",
-        "soa_stiffness_offset_n_per_m=law.stiffness_offset_n_per_m,",
+        "bvsr_cad/models/reduced_chain.py",
+        "soa_stiffness_offset_n_per_m=stiffness_offset_n_per_m - moved / mean2,",
+        "soa_stiffness_offset_n_per_m=stiffness_offset_n_per_m,",
         "the shear spring moved onto the default MJCF's hinges stiffens the bend too (the SOAs' "
         "springs keep all of n_a)",
         catchers=("tests/test_robot.py::test_default_mjcf_hinges_carry_the_soa_dampers_and_shear",),
@@ -529,6 +529,28 @@ FAULTS: list[Fault] = [
         'name = "cast polyurethane rubber, Shore 75-80A"\ndensity_g_cm3 = 1.15\n',
         "the SOA's polyurethane is 1.15 g/cm^3 (datasheets: 1.04-1.06): every SOA 10 % heavier",
         catchers=("tests/test_truth.py::test_soa_and_tail_masses_within_the_datasheets_densities",),
+    ),
+    # -- the memo: a step is reused only for the same inputs and file bytes ---------------------
+    Fault(
+        "memo_ignores_file_bytes",
+        "bvsr_cad/pipeline/runner.py",
+        "for f in files] if cache else []",
+        "for f in files][:0] if cache else []",
+        "a writer's cached step (the report's pictures, the 3MF layouts) is reused after the files "
+        "it reads changed",
+        catchers=(
+            "tests/test_cache.py::test_a_writers_step_follows_its_inputs_and_the_bytes_of_its_files",
+        ),
+    ),
+    Fault(
+        "check_memo_ignores_file_bytes",
+        "bvsr_cad/checks/memo.py",
+        '{"read_files": [(rel, self._sha[rel]) for rel in files], "values": values},',
+        '{"read_files": list(files), "values": values},',
+        "a check group's verdicts are reused after the files it reads changed",
+        catchers=(
+            "tests/test_cache.py::test_check_verdicts_follow_the_bytes_of_the_files_they_read",
+        ),
     ),
     # -- the simulation scene's cost -----------------------------------------------------------
     Fault(

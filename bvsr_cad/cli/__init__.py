@@ -18,7 +18,7 @@ from ..errors import BadInput, GeneratorFailure
 from ..pipeline.processes.worker import SecondProcess
 from ..process import library_imports, tune_process
 from . import parser
-from .parser import _number, _version  # noqa: F401 - _number: the docs read its bound off it
+from .parser import _version
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 

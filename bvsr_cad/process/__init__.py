@@ -11,7 +11,7 @@ Two kinds:
   collector paused while the libraries import) and :func:`kernel_threads` (OCCT's thread pool).
 
 Each setting stays because a quiet, alternated measurement showed it worth its place
-(benchmarks/RESULTS.md, "What each speed setting is worth").
+(benchmarks/RESULTS.md, the rebuild benchmark's process settings off against on).
 """
 
 from __future__ import annotations

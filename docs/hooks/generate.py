@@ -595,8 +595,9 @@ def cli_arguments(parser: Any) -> list[dict[str, str]]:
 
 
 def _takes(parse: Any) -> str:
-    """What an argument's type accepts: ``int``, ``float`` or one of ``bvsr_cad.cli._number``'s
-    checked numbers (its bound read from the closure), else text."""
+    """What an argument's type accepts: ``int``, ``float`` or one of
+    ``bvsr_cad.cli.parser._number``'s checked numbers (its bound read from the closure), else
+    text."""
     import inspect
 
     names = {int: "integer", float: "number"}

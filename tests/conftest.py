@@ -8,6 +8,8 @@ from pathlib import Path
 import pytest
 from hypothesis import settings
 
+from bvsr_cad.process import PROCESSES_VARIABLE
+
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / "params"
 
@@ -28,6 +30,10 @@ def pytest_configure(config):
     import os
     import tempfile
 
+    # A build in a test runs in one process (bvsr_cad.process.build_processes) unless the test is
+    # marked second_processes: the workers keep every core busy, so a second process has no core of
+    # its own and adds only its imports.
+    os.environ.setdefault(PROCESSES_VARIABLE, "1")
     if "BVSR_TEST_KEEP_CACHE" in os.environ:
         return
     if hasattr(config, "workerinput"):
@@ -68,6 +74,15 @@ def pytest_collection_modifyitems(config, items):
             or item.nodeid.split("::")[0] in SLOW
         ):
             item.add_marker(pytest.mark.slow)
+
+
+@pytest.fixture(autouse=True)
+def _second_processes(request, monkeypatch):
+    """A test marked ``second_processes`` gets builds that run their analyses and checks in second
+    processes, one a core as a user's do (the session's others run in one process,
+    :func:`pytest_configure`)."""
+    if request.node.get_closest_marker("second_processes"):
+        monkeypatch.delenv(PROCESSES_VARIABLE, raising=False)
 
 
 @pytest.fixture(scope="session")

@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from bvsr_cad.pipeline.cache import ArtifactCache, spec_without, stage_key
+from bvsr_cad.process import build_processes
 
 from .conftest import PARAMS, benchmark_script, built_once, script, write_toml
 
@@ -239,6 +240,7 @@ def test_two_exports_differ_by_their_files_not_by_the_manifests_volatile_section
     assert differences(a, b) == ["stl/rod.stl", "stl/soa.stl"]
 
 
+@pytest.mark.second_processes
 @pytest.mark.slow
 def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(
     small_tail, tmp_path, monkeypatch
@@ -293,7 +295,7 @@ def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(
     for summary in summaries:
         cpu = summary["cpu_seconds"]
         built = {s["stage"] for s in summary["stages"] if s["status"] == "built"}
-        expected = {"build"} | ({"analyses", "checks"} if (os.cpu_count() or 1) > 1 else set())
+        expected = {"build"} | ({"analyses", "checks"} if build_processes() > 1 else set())
         assert set(cpu) == (expected if "analyses" in built else expected - {"analyses"}), (
             cpu,
             built,
@@ -406,6 +408,7 @@ class _StageReached(Exception):
     """Raised where a test stops a build: at its first stage, the assembly."""
 
 
+@pytest.mark.second_processes
 @pytest.mark.slow
 def test_a_build_whose_analyses_are_cached_stops_its_standby_before_its_stages(
     bvsr_export, tmp_path, data, monkeypatch
@@ -438,6 +441,7 @@ def test_a_build_whose_analyses_are_cached_stops_its_standby_before_its_stages(
     assert seen == [False, True]
 
 
+@pytest.mark.second_processes
 @pytest.mark.slow
 def test_analyses_take_both_cores_when_the_geometry_is_cached(
     bvsr_export, tmp_path, data, monkeypatch

@@ -17,6 +17,7 @@ from bvsr_cad import cli
 from bvsr_cad.assembly.assemble import build_assembly
 from bvsr_cad.cli import main
 from bvsr_cad.parameters import paper
+from bvsr_cad.process import build_processes
 
 from .conftest import PARAMS, write_toml
 
@@ -122,6 +123,7 @@ def test_check_fails_on_a_broken_stl(bvsr_export, tmp_path, capsys):
     assert any(line.startswith("FAIL  stl_watertight:soa: ") for line in lines)
 
 
+@pytest.mark.second_processes
 def test_checks_started_early_see_a_file_changed_before_they_finish(bvsr_export, tmp_path):
     """A build runs the CAD files' checks before its analyses are in (Checks.start) and the rest
     after (Checks.finish): a file changed in between is checked again, so the verdicts are those of
@@ -139,6 +141,7 @@ def test_checks_started_early_see_a_file_changed_before_they_finish(bvsr_export,
     assert [r.to_json() for r in late] == [r.to_json() for r in run_checks(copy, parallel=False)]
 
 
+@pytest.mark.second_processes
 def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_changed(
     bvsr_export, tmp_path
 ):
@@ -146,11 +149,10 @@ def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_change
     (``meshes_beside``): unchanged, their verdicts come from there (none of them runs here); a
     part's STL changed after the start is checked again here, and the results are one run of every
     check's."""
-    import os
 
     from bvsr_cad.pipeline.processes.checks_process import run_checks, start_checks
 
-    if (os.cpu_count() or 1) < 2:
+    if build_processes() < 2:
         pytest.skip("one core: the checks never leave the process")
     said: list[str] = []
     checks = start_checks(bvsr_export, said.append, meshes_beside=True)
@@ -173,19 +175,19 @@ def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_change
     assert [r.to_json() for r in late] == [r.to_json() for r in run_checks(copy, parallel=False)]
 
 
+@pytest.mark.second_processes
 def test_mold_checks_in_the_second_process_see_a_mold_file_changed_before_they_finish(
     bvsr_export, tmp_path
 ):
     """The mold checks run in the printability process from Checks.start; a mold file changed before
     Checks.finish (whether that process had read it yet or not) is checked again, on the file as it
     is."""
-    import os
 
     from bvsr_cad.checks.export import Export
     from bvsr_cad.checks.molds import check_molds
     from bvsr_cad.pipeline.processes.checks_process import start_checks
 
-    if (os.cpu_count() or 1) < 2:
+    if build_processes() < 2:
         pytest.skip("one core: the mold checks never leave the process")
     copy = tmp_path / "copy"
     shutil.copytree(bvsr_export, copy)
@@ -212,12 +214,12 @@ def test_mold_checks_in_the_second_process_see_a_mold_file_changed_before_they_f
     assert {r.name for r in kept} >= names
 
 
+@pytest.mark.second_processes
 def test_checks_handed_the_manifest_need_no_manifest_file(bvsr_export, tmp_path):
     """A build hands its checks the manifest as its file will hold it and writes the file once, at
     the end: checks started, given the robot's and finished on a folder without manifest.json, the
     manifest handed to both processes, give the verdicts of one run of every check on the published
     export (which reads its file)."""
-    import os
 
     from bvsr_cad.pipeline.processes.checks_process import finish_checks, run_checks, start_checks
 
@@ -231,7 +233,7 @@ def test_checks_handed_the_manifest_need_no_manifest_file(bvsr_export, tmp_path)
     )
     checks.robot_ahead(manifest)
     got = finish_checks(checks, None, manifest)
-    if (os.cpu_count() or 1) >= 2:
+    if build_processes() >= 2:
         assert any(m.startswith("printability and molds: done in the second process") for m in said)
     assert not (copy / "manifest.json").exists()
     assert [r.to_json() for r in got] == [
@@ -298,6 +300,7 @@ def test_build_refuses_to_replace_a_foreign_folder(tmp_path, capsys):
     assert "refusing" in capsys.readouterr().err
 
 
+@pytest.mark.second_processes
 def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, monkeypatch):
     from bvsr_cad.parameters.load import ParamError
     from bvsr_cad.pipeline.processes import worker
@@ -332,6 +335,7 @@ def test_second_process_errors_come_back_and_a_lost_one_is_replaced(tmp_path, mo
     assert lost.cpu_s is None
 
 
+@pytest.mark.second_processes
 def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path, monkeypatch):
     """`bvsr build` starts the analyses' process before it imports the pipeline: given its work it
     answers as a process started with it (even from a working folder that is gone); closed without
@@ -367,6 +371,7 @@ def test_a_standby_second_process_takes_its_work_or_leaves(tmp_path, monkeypatch
     assert idle.proc is None
 
 
+@pytest.mark.second_processes
 def test_the_standby_head_start_is_used_only_for_the_bytes_it_was_built_from(tmp_path, monkeypatch):
     """`bvsr build` names the file to its standby analyses' process, which builds the assembly while
     the build reads its cache; the work that comes uses it only if it names the same file with the
@@ -396,6 +401,7 @@ def test_the_standby_head_start_is_used_only_for_the_bytes_it_was_built_from(tmp
     )
 
 
+@pytest.mark.second_processes
 def test_the_analyses_process_leaves_the_joint_limits_before_its_other_analyses(
     tmp_path, monkeypatch
 ):
@@ -466,6 +472,7 @@ def test_the_export_holds_the_robot_files_made_with_the_analyses_joint_limits(bv
     assert not list(bvsr_export.rglob(GEOMETRY_AHEAD_FILE + "*"))
 
 
+@pytest.mark.second_processes
 def test_the_robot_checks_run_once_in_whichever_process_claims_them(bvsr_export, tmp_path):
     """The build's robot checks come in two parts, each to whichever of its processes is free first
     (the checks' process, given them at its start, or the build's own, at its wait for the
@@ -492,6 +499,7 @@ def test_the_robot_checks_run_once_in_whichever_process_claims_them(bvsr_export,
     assert not any((bvsr_export / claim).exists() for claim in ROBOT_CLAIM_FILES)
 
 
+@pytest.mark.second_processes
 def test_the_analyses_process_is_told_where_to_draw_as_an_absolute_folder(tmp_path, monkeypatch):
     """The analyses' process draws their pictures into the build's temporary folder, working in
     another folder than the build's: a build into a relative output folder (``make exports``: ``-o
@@ -523,6 +531,7 @@ def test_the_analyses_process_is_told_where_to_draw_as_an_absolute_folder(tmp_pa
     assert Path(pictures).name.startswith(".bvsr.tmp-")
 
 
+@pytest.mark.second_processes
 @pytest.mark.parametrize("during", ["a command", "a C extension's import"])
 def test_ctrl_c_exits_130_with_one_line_not_a_traceback(monkeypatch, capsys, during):
     """Ctrl-C during OCP's import reaches Python as ``ImportError: initialization failed`` raised
@@ -585,6 +594,7 @@ def _sigint_reaches_children():
         signal.signal(signal.SIGINT, before)
 
 
+@pytest.mark.second_processes
 def test_ctrl_c_leaves_a_waiting_standby_process_quietly(tmp_path):
     """Ctrl-C reaches the standby analyses process too (same process group): it leaves with 130 and
     no KeyboardInterrupt traceback (from its wait on stdin) among the build's lines. Under a
@@ -753,6 +763,7 @@ def _interrupted_build(out: Path, cache: Path, after_s: float) -> str:
     return ""
 
 
+@pytest.mark.second_processes
 @pytest.mark.slow
 def test_ctrl_c_at_any_instant_of_a_loaded_build_stops_it_quietly(tmp_path):
     """Ctrl-C early in ``bvsr build``, at a spread of instants (:data:`INTERRUPT_AFTER_S`), while

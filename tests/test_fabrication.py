@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import csv
 import json
-import os
 import shutil
 import subprocess
 import sys
@@ -30,6 +29,7 @@ from bvsr_cad.checks.slicer import SLICER, check_slicing, slice_items, slice_stl
 from bvsr_cad.cli import main
 from bvsr_cad.pipeline.cache import ArtifactCache
 from bvsr_cad.pipeline.processes.checks_process import run_checks
+from bvsr_cad.process import build_processes
 
 
 @pytest.fixture(scope="module")
@@ -231,12 +231,13 @@ def test_check_slice_without_the_slicer_exits_2(bvsr_export, monkeypatch, tmp_pa
     ), err
 
 
+@pytest.mark.second_processes
 def test_printability_in_a_second_process_gives_the_same_results(bvsr_export):
     said: list[str] = []
     beside = run_checks(bvsr_export, said.append)
     alone = run_checks(bvsr_export, parallel=False)
     assert json.dumps([r.to_json() for r in beside]) == json.dumps([r.to_json() for r in alone])
-    if (os.cpu_count() or 1) >= 2:
+    if build_processes() >= 2:
         assert any(
             m.startswith("printability and molds: done in the second process") for m in said
         ), said
@@ -256,6 +257,7 @@ def test_a_relative_cache_is_where_the_user_stands_not_in_the_export(
     assert any((tmp_path / "relative_cache" / "artifacts").rglob(".done"))
 
 
+@pytest.mark.second_processes
 def test_a_second_process_in_another_folder_reads_the_slice_cache_the_user_names(
     monkeypatch, tmp_path
 ):
@@ -286,12 +288,13 @@ def test_a_second_process_in_another_folder_reads_the_slice_cache_the_user_names
     assert Path(there) == here
 
 
+@pytest.mark.second_processes
 def test_printability_runs_here_when_the_second_process_fails(bvsr_export, monkeypatch):
     from bvsr_cad.checks import run
     from bvsr_cad.pipeline.processes import worker
     from bvsr_cad.pipeline.processes.checks_process import beside
 
-    if (os.cpu_count() or 1) < 2:
+    if build_processes() < 2:
         pytest.skip("one core: the printability checks never leave the process")
     monkeypatch.setattr(
         worker.sys, "executable", shutil.which("false") or "/bin/false"

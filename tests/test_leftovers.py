@@ -46,6 +46,7 @@ def test_leftovers_of_dead_builds_are_removed_live_ones_kept(tmp_path):
     assert live.is_dir() and old_fresh.is_dir() and other.is_dir() and not dead.exists()
 
 
+@pytest.mark.second_processes
 @pytest.mark.slow
 def test_sigkill_leaves_no_second_process_and_the_next_build_cleans_up(tmp_path):
     out = tmp_path / "exp"

@@ -23,6 +23,8 @@ import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
+from ..errors import BadInput
+
 #: glibc's allocator settings of a ``bvsr`` process (:func:`tune_allocator`): (mallopt parameter,
 #: value). M_MMAP_THRESHOLD (-3) 64 MiB, M_TRIM_THRESHOLD (-1) 256 MiB, M_TOP_PAD (-2) 64 MiB.
 ALLOCATOR_SETTINGS = ((-3, 64 << 20), (-1, 256 << 20), (-2, 64 << 20))
@@ -147,6 +149,41 @@ def tune_process() -> None:
     no_mujoco_rendering()
     one_blas_thread()
     defer_sklearn_cluster()
+
+
+#: The environment variable that caps the processes one build runs at once (a whole number, 1 or
+#: more; unset: the cores, :func:`build_processes`).
+PROCESSES_VARIABLE = "BVSR_PROCESSES"
+
+
+def build_processes() -> int:
+    """How many processes one build runs at once: the cores this process may run on
+    (``os.sched_getaffinity``: ``taskset`` and container limits count; else ``os.cpu_count``), at
+    most ``BVSR_PROCESSES`` where it is set. Below two a build runs its analyses and checks in its
+    own process: on a machine already busy with other builds (a test suite's workers, a study's) a
+    second process takes no core of its own and adds only its imports, the same work costs less
+    CPU in one process (benchmarks/RESULTS.md, the test suite).
+
+    Raises:
+        BadInput: ``BVSR_PROCESSES`` is not a whole number of 1 or more.
+    """
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cores = os.cpu_count() or 1
+    text = os.environ.get(PROCESSES_VARIABLE, "").strip()
+    if not text:
+        return cores
+    try:
+        cap = int(text)
+    except ValueError:
+        cap = 0
+    if cap < 1:
+        raise BadInput(
+            f"{PROCESSES_VARIABLE}={text!r}: the most processes a build runs at once must be a "
+            "whole number, 1 or more (unset: one a core)"
+        )
+    return min(cores, cap)
 
 
 def kernel_threads(n: int) -> int:

@@ -38,7 +38,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from ...process import library_imports, tune_process
+from ...process import build_processes, library_imports, tune_process
 
 
 class WorkerLost(RuntimeError):
@@ -207,7 +207,7 @@ class SecondProcess:
         """``python -m bvsr_cad.pipeline.processes.worker module - *args`` (:func:`child_main`) in
         ``cwd``; each line of its stderr goes to ``progress`` (from a reader thread) or, without it,
         nowhere. ``standby``: see :meth:`standby`."""
-        if (os.cpu_count() or 1) < 2:
+        if build_processes() < 2:
             return None
         try:
             cmd = [

@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from bvsr_cad.pipeline.cache import ArtifactCache, spec_without, stage_key
-from bvsr_cad.process import build_processes
+from bvsr_cad.process import PROCESSES_VARIABLE, build_processes
 
 from .conftest import PARAMS, benchmark_script, built_once, script, write_toml
 
@@ -248,7 +248,8 @@ def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(
     """The CI-sized tail's cache holds its build: the same file again is one reused stage; the
     benchmark's rod-material edit, built by two command-line builds at once through that cache,
     equals file for file the same edit built with --no-cache (the manifest's volatile section
-    aside)."""
+    aside), built in one process (``BVSR_PROCESSES=1``) where the two commands run their second
+    processes."""
     from bvsr_cad.pipeline.stages import build_export
 
     monkeypatch.setenv("BVSR_CACHE", str(small_tail / "cache"))
@@ -307,6 +308,8 @@ def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(
         reported,
         counted,
     )  # rounded to 0.01 s each
+    # The fresh build in one process: a build's second processes change none of its files.
+    monkeypatch.setenv(PROCESSES_VARIABLE, "1")
     assert main_no_cache(edit, tmp_path / "fresh") == 0
     for i in (1, 2):
         assert differences(tmp_path / f"cached{i}", tmp_path / "fresh") == []

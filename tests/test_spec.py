@@ -454,3 +454,55 @@ def test_a_bvsr_process_runs_openblas_on_one_thread():
     assert threads("plain")[0] > 1  # OpenBLAS's default: a thread per core
     assert threads("entry", OPENBLAS_NUM_THREADS="2") == [2]
     assert threads("entry", OMP_NUM_THREADS="2") == [2]
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "two", "1.5"])
+def test_a_bad_process_count_exits_2_naming_the_variable_before_anything_is_written(
+    tmp_path, monkeypatch, capsys, value
+):
+    """``BVSR_PROCESSES`` must be a whole number, 1 or more: anything else is refused with exit code
+    2, the variable, its value and what it may be, and nothing written."""
+    monkeypatch.setenv("BVSR_PROCESSES", value)
+    assert main(["build", str(PARAMS / "bvsr.toml"), "-o", str(tmp_path / "out"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert f"BVSR_PROCESSES={value!r}" in err and "whole number, 1 or more" in err, err
+    assert "Traceback" not in err
+    assert not (tmp_path / "out").exists()
+
+
+_PROCESSES = """
+import os, sys
+os.sched_setaffinity(0, set(sorted(os.sched_getaffinity(0))[: int(sys.argv[1])]))
+from bvsr_cad.process import build_processes
+from bvsr_cad.pipeline.processes.worker import SecondProcess
+child = SecondProcess.start("bvsr_cad.pipeline.processes.analyses_process", [], os.getcwd())
+print(build_processes(), child is not None)
+if child is not None:
+    child.close()
+"""
+
+
+@pytest.mark.skipif(
+    not hasattr(os, "sched_setaffinity") or len(os.sched_getaffinity(0)) < 2,
+    reason="needs two cores this process may run on",
+)
+@pytest.mark.parametrize(
+    ("cores", "cap", "expected"), [(1, None, "1 False"), (2, None, "2 True"), (2, "1", "1 False")]
+)
+def test_a_build_starts_second_processes_only_on_cores_it_may_use(tmp_path, cores, cap, expected):
+    """A build's second processes go one a core this process may run on (its CPU affinity, as
+    ``taskset`` sets it), capped by ``BVSR_PROCESSES``: pinned to one core, or capped to one
+    process, it starts none."""
+    env = {k: v for k, v in os.environ.items() if k != "BVSR_PROCESSES"}
+    if cap is not None:
+        env["BVSR_PROCESSES"] = cap
+    out = subprocess.run(
+        [sys.executable, "-c", _PROCESSES, str(cores)],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.split("\n")[-2] == expected, out.stdout

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from bvsr_cad.checks.result import CheckResult, summary_lines
 from bvsr_cad.cli import main
 
@@ -73,3 +75,33 @@ def test_a_passing_default_export_reads_at_a_glance(bvsr_export, capsys):
     assert (
         len(capsys.readouterr().out.splitlines()) == len(checks) + 1
     )  # every check, then the total
+
+
+def test_check_takes_the_builds_verdicts_of_unchanged_files_and_no_cache_runs_every_check(
+    bvsr_export, tmp_path, capsys, monkeypatch
+):
+    """The build kept its check groups' verdicts in the session's artifact cache: `bvsr check` of
+    a copy of its export takes the mold checks' verdicts from there (the checks themselves, broken
+    here, never run) and gives the same JSON as `--no-cache`, which runs every check (and meets the
+    broken one); a mold file changed by one byte is checked again."""
+    import shutil
+
+    from bvsr_cad.checks import run
+
+    copy = tmp_path / "copy"
+    shutil.copytree(bvsr_export, copy)
+    assert main(["check", str(copy), "-q", "--json", "--no-cache"]) == 0
+    fresh = json.loads(capsys.readouterr().out)["checks"]
+
+    def broken(_exp):
+        raise AssertionError("the mold checks ran")
+
+    monkeypatch.setattr(run, "check_molds", broken)
+    assert main(["check", str(copy), "-q", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["checks"] == fresh
+    with pytest.raises(AssertionError, match="the mold checks ran"):
+        main(["check", str(copy), "-q", "--json", "--no-cache"])
+    mold = next((copy / "molds").rglob("*.stl"))
+    mold.write_bytes(mold.read_bytes() + b"\n")
+    with pytest.raises(AssertionError, match="the mold checks ran"):
+        main(["check", str(copy), "-q", "--json"])

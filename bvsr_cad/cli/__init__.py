@@ -174,9 +174,13 @@ def cmd_show(args) -> int:
 
 def cmd_check(args) -> int:
     with library_imports():
+        from ..pipeline.cache import ArtifactCache
         from ..pipeline.processes.checks_process import run_checks
 
-    results = run_checks(args.export, _progress(args.quiet or args.json), run_slicer=args.slice)
+    cache = None if args.no_cache else ArtifactCache()
+    results = run_checks(
+        args.export, _progress(args.quiet or args.json), run_slicer=args.slice, cache=cache
+    )
     return _print_results(results, args.json, verbose=args.verbose)
 
 

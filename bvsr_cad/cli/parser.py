@@ -169,6 +169,13 @@ def _add_check(sub, common: argparse.ArgumentParser, commands: Mapping[str, Call
         action="store_true",
         help="print every check (by default: one line per check group, failures in full)",
     )
+    c.add_argument(
+        "--no-cache",
+        action="store_true",
+        help="run every check anew (by default a check group whose files and values are byte for "
+        "byte those of an earlier run takes that run's verdicts from the artifact cache, as in "
+        "`bvsr build`)",
+    )
     c.set_defaults(func=commands["check"])
 
 

@@ -50,3 +50,31 @@ def run_now(
 ) -> tuple[T, bool]:
     """The memo of a writer or a check called alone: the step runs now, nothing is remembered."""
     return (make() if dst is None else make(dst)), False
+
+
+class InMemory:
+    """A memo held in memory for the life of its owner: each name's last value, given again for the
+    same inputs (values only: no ``dst``, no ``files``). Its one user,
+    :class:`bvsr_cad.checks.run.Checks`, keeps a check group run early while what it read is
+    unchanged (its inputs: the state of those reads)."""
+
+    def __init__(self) -> None:
+        #: ``name -> (inputs, value)`` of each name's last step.
+        self.kept: dict[str, tuple[Mapping[str, Any], Any]] = {}
+
+    def __call__(
+        self,
+        name: str,
+        inputs: Mapping[str, Any],
+        make: Callable[..., T],
+        dst: Path | None = None,
+        files: Sequence[Path] = (),
+    ) -> tuple[T, bool]:
+        if dst is not None or files:
+            raise ValueError("an in-memory memo keeps values, not files")
+        kept = self.kept.get(name)
+        if kept is not None and kept[0] == inputs:
+            return kept[1], True
+        value = make()
+        self.kept[name] = (inputs, value)
+        return value, False

@@ -226,6 +226,28 @@ def test_a_writers_step_follows_its_inputs_and_the_bytes_of_its_files(tmp_path):
     assert (tmp_path / "four" / "pic.png").read_bytes() == b"solid b drawn"
 
 
+def test_the_in_memory_memo_gives_a_value_again_only_for_the_same_inputs():
+    """memo.InMemory (the memo of the check groups a build runs early): a name's last value comes
+    back for the same inputs, a changed input runs the step again and is remembered; it keeps values
+    only."""
+    from bvsr_cad.memo import InMemory
+
+    memo, runs = InMemory(), []
+
+    def step(v: int) -> int:
+        runs.append(v)
+        return v
+
+    assert memo("g", {"reads": "a"}, lambda: step(1)) == (1, False)
+    assert memo("g", {"reads": "a"}, lambda: step(2)) == (1, True)
+    assert memo("g", {"reads": "b"}, lambda: step(3)) == (3, False)
+    assert memo("g", {"reads": "b"}, lambda: step(4)) == (3, True)
+    assert memo("h", {"reads": "b"}, lambda: step(5)) == (5, False)
+    assert runs == [1, 3, 5]
+    with pytest.raises(ValueError):
+        memo("g", {"reads": "b"}, lambda _dst: 0, Path("dst"))
+
+
 def test_two_exports_differ_by_their_files_not_by_the_manifests_volatile_section(tmp_path):
     a, b = tmp_path / "a", tmp_path / "b"
     for root, when in ((a, "10:00"), (b, "11:00")):

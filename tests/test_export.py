@@ -147,8 +147,9 @@ def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_change
 ):
     """A build sends the part meshes' and the masses' checks to the printability process too
     (``meshes_beside``): unchanged, their verdicts come from there (none of them runs here); a
-    part's STL changed after the start is checked again here, and the results are one run of every
-    check's."""
+    part's STL changed after that process read it is checked again here, and the results are one
+    run of every check's."""
+    import time
 
     from bvsr_cad.pipeline.processes.checks_process import run_checks, start_checks
 
@@ -166,8 +167,10 @@ def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_change
     shutil.copytree(bvsr_export, copy)
     said.clear()
     checks = start_checks(copy, said.append, meshes_beside=True)
+    while checks._printability.proc.running:  # until the second process has read every mesh
+        time.sleep(0.1)
     mesh = trimesh.load(copy / "stl" / "soa.stl")
-    mesh.update_faces(np.arange(len(mesh.faces)) % 50 != 0)  # punch holes after the start
+    mesh.update_faces(np.arange(len(mesh.faces)) % 50 != 0)  # punch holes after it read them
     mesh.export(copy / "stl" / "soa.stl")
     late = checks.finish()
     assert "mesh soa" in said and "mesh panel0" not in said

@@ -552,6 +552,17 @@ FAULTS: list[Fault] = [
             "tests/test_cache.py::test_check_verdicts_follow_the_bytes_of_the_files_they_read",
         ),
     ),
+    Fault(
+        "early_checks_ignore_their_reads",
+        "bvsr_cad/memo.py",
+        "if kept is not None and kept[0] == inputs:",
+        "if kept is not None:",
+        "a check group a build ran early keeps its verdicts after a file it read changed (the "
+        "in-memory memo gives a name's value again whatever its inputs)",
+        catchers=(
+            "tests/test_cache.py::test_the_in_memory_memo_gives_a_value_again_only_for_the_same_inputs",
+        ),
+    ),
     # -- the simulation scene's cost -----------------------------------------------------------
     Fault(
         "mjcf_idle_tendon_per_joint",

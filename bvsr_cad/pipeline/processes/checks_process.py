@@ -111,7 +111,8 @@ def _printability(
     bvsr_cad.pipeline.processes.checks_process --standby``, given ``[ROOT, SLICED, CACHE, MESHES,
     ROBOT, MANIFEST]`` on its input): :func:`bvsr_cad.checks.run.printability_groups` of the export
     at ``root`` whose manifest is ``manifest`` (JSON), the verdicts kept in the artifact cache at
-    ``cache_root`` (when given)."""
+    ``cache_root`` (when given): each group's verdicts with the state of its reads, which the
+    build's :class:`~bvsr_cad.checks.run.Checks` keeps while that state is unchanged."""
     exp = Export.open(root, json.loads(manifest))
     store = cache_memo(ArtifactCache(Path(cache_root))) if cache_root else None
     return printability_groups(

@@ -303,11 +303,14 @@ def test_printability_runs_here_when_the_second_process_fails(bvsr_export, monke
         run, "check_printability", lambda exp, sliced_now=(), memo=None: ["ran here"]
     )
     said: list[str] = []
-    group = run._Printability(Export.open(bvsr_export), (), said.append, beside(None))
-    assert group.proc is not None
-    assert group.results() == ["ran here"]
+    checks = run.Checks.start(bvsr_export, said.append, beside=beside(None))
+    proc = checks._printability.proc
+    assert proc is not None
+    results = checks.finish()
+    assert results.count("ran here") == 1
     assert any("without a result; running them here" in m for m in said), said
-    assert not group.proc.running
+    assert "printability" in said and "molds" in said  # each group it had taken, run here
+    assert not proc.running
 
 
 def test_min_hole_sections_agree_with_trimesh():

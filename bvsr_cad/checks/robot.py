@@ -545,12 +545,20 @@ def check_fk(exp: Export) -> list[CheckResult]:
     return out
 
 
+#: The folders under ``robot/`` that :func:`check_robot` never opens: the host scenes the build's
+#: quadruped stage writes after the robot checks may have run.
+NOT_READ = ("robot/quadruped/",)
+
+
 def robot_reads(exp: Export) -> tuple[list[str], object]:
-    """What :func:`check_robot` reads: every file under ``robot/`` and the parameter file, the
-    manifest's ``robot`` section, the tail's mass and the parameter file's name."""
+    """What :func:`check_robot` reads: every file under ``robot/`` but the quadruped scene's
+    folder (:data:`NOT_READ`, written later in a build) and the parameter file, the manifest's
+    ``robot`` section, the tail's mass and the parameter file's name."""
     root = exp.root
     files = sorted(
-        p.relative_to(root).as_posix() for p in (root / "robot").rglob("*") if p.is_file()
+        p.relative_to(root).as_posix()
+        for p in (root / "robot").rglob("*")
+        if p.is_file() and not p.relative_to(root).as_posix().startswith(NOT_READ)
     )
     params = exp.manifest.get("params_file")
     return files + ([params] if params else []), {

@@ -22,6 +22,7 @@
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -227,9 +228,7 @@ def chain_errors_mm(robot: RobotModel) -> dict[str, float]:
     thickness_mm = units.m_to_mm(robot.joints[0].T_parent_joint[2][3])
     limits = [b.theta_max_rad for b in robot.bending]
     mount = [
-        lambda theta, phi, length, order=mount_order(k): joint_transform_mount(
-            theta, phi, length, order
-        )
+        functools.partial(joint_transform_mount, order=mount_order(k))
         for k in range(1, len(robot.bending) + 1)
     ]
     return {

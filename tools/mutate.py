@@ -394,6 +394,23 @@ FAULTS: list[Fault] = [
         catchers=("tests/test_robot.py::test_default_mjcf_hinges_carry_the_soa_dampers_and_shear",),
     ),
     Fault(
+        "mount_pivot_at_a_third",
+        "bvsr_cad/models/kinematics.py",
+        "MOUNT_PIVOT_FRACTION = 0.5",
+        "MOUNT_PIVOT_FRACTION = 1.0 / 3.0",
+        "the mount variant's universal joint a third of the arc from its start, not at mid-arc",
+        catchers=("tests/test_robot.py::test_mount_variant_joint_error_is_its_closed_form",),
+    ),
+    Fault(
+        "mount_hinge_stiffness_doubled",
+        "bvsr_cad/models/reduced_chain.py",
+        "stiffness_nm_rad=rod_bending_stiffness_nm_rad,",
+        "stiffness_nm_rad=2.0 * rod_bending_stiffness_nm_rad,",
+        "the mount variant's hinges carry the default file's 2 E I / L (its two pivots' share), "
+        "not the one pivot's E I / L",
+        catchers=("tests/test_robot.py::test_mount_variant_follows_the_exact_chain",),
+    ),
+    Fault(
         "kinematics_xy_swapped",
         "bvsr_cad/models/kinematics.py",
         "trans = length_mm * np.stack([self.u * C, self.v * C, S], -1)",

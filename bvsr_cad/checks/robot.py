@@ -23,7 +23,10 @@ from ..extras import missing, skipped_note
 from ..models.kinematics import (
     TailKinematics,
     chord_length_mm,
+    joint_transform_mount,
     joint_transform_prb,
+    mount_angles,
+    mount_order,
     prb_angles,
     uv_from_theta_phi,
 )
@@ -268,7 +271,7 @@ def _quiet_cwd(path: Path):
 
 
 #: The robot description files :func:`check_mujoco` compiles and steps, in its order.
-MUJOCO_FILES = ("urdf", "mjcf", "mjcf_per_segment", "mjcf_exact")
+MUJOCO_FILES = ("urdf", "mjcf", "mjcf_per_segment", "mjcf_exact", "mjcf_mount")
 
 
 def check_mujoco(exp: Export, keys: tuple[str, ...] = MUJOCO_FILES) -> list[CheckResult]:
@@ -473,8 +476,9 @@ def check_pybullet(exp: Export) -> list[CheckResult]:
 
 def check_fk(exp: Export) -> list[CheckResult]:
     """MuJoCo's forward kinematics of the MJCF files against the kinematics module at random poses:
-    the exact chain's file against Eq 2, the default (reduced) file against its own closed form
-    (:func:`bvsr_cad.models.kinematics.joint_transform_prb`); how far that lies from Eq 2 is the
+    the exact chain's file against Eq 2, the default (reduced) file and the mount variant against
+    their own closed forms (:func:`bvsr_cad.models.kinematics.joint_transform_prb`,
+    :func:`~bvsr_cad.models.kinematics.joint_transform_mount`); how far those lie from Eq 2 is the
     manifest's ``chains`` entry."""
     import mujoco
 
@@ -491,9 +495,16 @@ def check_fk(exp: Export) -> list[CheckResult]:
     tz = np.eye(4)
     tz[2, 3] = spec.joint.panel_thickness_mm
     reduced = np.broadcast_to(np.eye(4), (FK_POSES, n + 1, 4, 4)).copy()
+    mounted = reduced.copy()
     for k in range(n):
         reduced[:, k + 1] = reduced[:, k] @ tz @ joint_transform_prb(theta[:, k], phi[:, k], L_mm)
+        mounted[:, k + 1] = (
+            mounted[:, k]
+            @ tz
+            @ joint_transform_mount(theta[:, k], phi[:, k], L_mm, mount_order(k + 1))
+        )
     a, b = prb_angles(theta, phi)
+    hinge = [mount_angles(theta[:, k], phi[:, k], mount_order(k + 1)) for k in range(n)]
 
     def exact_pose(d, p, k):
         j = f"j{k + 1}"
@@ -508,10 +519,15 @@ def check_fk(exp: Export) -> list[CheckResult]:
             d.joint(f"j{k + 1}_{pivot}x").qpos = a[p, k]
             d.joint(f"j{k + 1}_{pivot}y").qpos = b[p, k]
 
+    def mount_pose(d, p, k):
+        d.joint(f"j{k + 1}_x").qpos = hinge[k][0][p]
+        d.joint(f"j{k + 1}_y").qpos = hinge[k][1][p]
+
     out = []
     for key, name, pose, ref in (
         ("mjcf_exact", "fk_mujoco_vs_kinematics", exact_pose, frames),
         ("mjcf", "fk_mujoco_reduced_vs_kinematics", reduced_pose, reduced),
+        ("mjcf_mount_model", "fk_mujoco_mount_vs_kinematics", mount_pose, mounted),
     ):
         if key not in robot:
             continue

@@ -345,8 +345,8 @@ def _add_mount(sub, common: argparse.ArgumentParser, commands: Mapping[str, Call
     mo.add_argument(
         "--tail",
         default="exports/bvsr",
-        help="the tail: an export folder of `bvsr build` or its robot/bvsr.xml (default "
-        "exports/bvsr)",
+        help="the tail: an export folder of `bvsr build` (its mount variant, "
+        "robot/bvsr_mount.xml) or an MJCF file of it (default exports/bvsr)",
     )
     mo.add_argument("--prefix", default="tail_", help="put before every tail name (default tail_)")
     mo.add_argument("-o", "--output", required=True, help="the combined scene to write (.xml)")

@@ -76,10 +76,16 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..assembly.collision import Collision
-from ..assembly.robot import RobotModel, chord_joint_value, rest_pair
+from ..assembly.inertia import compose
+from ..assembly.robot import RobotModel, chord_joint_value, rest_pair, translation_m
 from ..models import reduced_chain
-from ..models.kinematics import PRB_PIVOT_FRACTION, PrbLimitPolygon
-from ..models.reduced_chain import HingeShare
+from ..models.kinematics import (
+    MOUNT_PIVOT_FRACTION,
+    PRB_PIVOT_FRACTION,
+    PrbLimitPolygon,
+    mount_order,
+)
+from ..models.reduced_chain import HingeShare, MountJoint
 from .xml import num as _f
 from .xml import quat_wxyz as _quat
 from .xml import vec as _vec
@@ -136,7 +142,12 @@ BEND_LIMIT_DIRECTIONS_PER_SEGMENT = 8
 #: rattles (joint speeds of 1-6 rad/s against the limit).
 LIMIT_SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)
 #: The chains an MJCF file can carry (``chain`` of :func:`mjcf_tree`).
-CHAINS = ("reduced", "exact")
+CHAINS = ("reduced", "exact", "mount")
+#: The mount variant's collision shapes: the panels alone. A ball, a floor or a host's leg meets a
+#: straight tail on its panels' rims (they stand out of the SOA and rod halves); bent, the halves
+#: stand out only on the convex side, away from whatever pushed the tail over. Each shape dropped is
+#: a geom fewer to place and bound in every step of the host's scene.
+MOUNT_COLLISION_COVERS = ("panel",)
 #: Per-segment model: the joints of a segment follow its first joint's (joint suffix, equality tag).
 SEGMENT_COUPLED = {
     "reduced": (("ax", "ay"), ("x", "y")),
@@ -184,15 +195,18 @@ def mjcf_tree(
     ``chain``: ``reduced``, the pseudo-rigid-body chain of the default files (see
     module docstring), stepped at :data:`REDUCED_CHAIN_TIMESTEP_S` (per segment
     :data:`REDUCED_PER_SEGMENT_TIMESTEP_S`); ``exact``, the URDF's chain with
-    its chord slide and couplings, stepped at ``robot.timestep_s``."""
+    its chord slide and couplings, stepped at ``robot.timestep_s``; ``mount``, the variant a host
+    carries (:func:`_mount_bodies`), stepped at :data:`REDUCED_CHAIN_TIMESTEP_S`."""
     if chain not in CHAINS:
         raise ValueError(f"chain {chain!r}: allowed {', '.join(CHAINS)}")
+    if chain == "mount" and per_segment:
+        raise ValueError("chain 'mount': one actuator per SOA only (per_segment=False)")
     act = robot.actuation
     model = f"{robot.name}_segments" if per_segment else robot.name
     root = ET.Element(
         "mujoco",
         model=f"{robot.name}{'_per_segment' if per_segment else ''}"
-        f"{'_exact' if chain == 'exact' else ''}",
+        f"{'_exact' if chain == 'exact' else ''}{'_mount' if chain == 'mount' else ''}",
     )
     ET.SubElement(root, "compiler", angle="radian", meshdir=mesh_dir, autolimits="true")
     timestep_s = (
@@ -205,6 +219,8 @@ def mjcf_tree(
     shares = None
     if chain == "reduced" and not per_segment:
         shares = {b.name: hinge_share(robot, k) for k, b in enumerate(robot.bending, 1)}
+    if chain == "mount":
+        shares = {b.name: mount_joint(robot, k) for k, b in enumerate(robot.bending, 1)}
     integrator = "Euler" if shares else "implicitfast"
     ET.SubElement(root, "option", timestep=_f(timestep_s), integrator=integrator)
     _mjcf_defaults(root, model)
@@ -215,12 +231,15 @@ def mjcf_tree(
     chord_err = _mjcf_equalities(root, robot, chain, per_segment, solref)
     tendon = ET.SubElement(root, "tendon")
     directions = BEND_LIMIT_DIRECTIONS_PER_SEGMENT if per_segment else BEND_LIMIT_DIRECTIONS
-    bend_overshoot = (
-        _mjcf_joint_tendons(tendon, robot, per_segment, solref, directions, shares)
-        if chain == "reduced"
-        else None
-    )
-    actuators = _mjcf_actuators(root, tendon, robot, per_segment, shares)
+    bend_overshoot = None
+    if chain == "reduced":
+        bend_overshoot = _mjcf_joint_tendons(tendon, robot, per_segment, solref, directions, shares)
+    elif chain == "mount":
+        bend_overshoot = _bend_limit_tendons(tendon, robot, solref, directions, mount=True)
+    if chain == "mount":
+        actuators = _mount_actuators(root, tendon, robot, shares)
+    else:
+        actuators = _mjcf_actuators(root, tendon, robot, per_segment, shares)
     ET.indent(root)
     lags = sorted(set(robot.supply_lag_s.values()))
     facts = {
@@ -240,9 +259,12 @@ def mjcf_tree(
         else {
             "faces": 2 * directions,
             "max_overshoot": bend_overshoot,
-            "tendons": "jk_bend_limit_<i>: cos(phi_i) (jk_ax + jk_bx) + sin(phi_i) (jk_ay + "
-            "jk_by), "
-            f"phi_i = 180 i / {directions} deg",
+            "tendons": (
+                "jk_bend_limit_<i>: cos(phi_i) jk_x + sin(phi_i) jk_y"
+                if chain == "mount"
+                else "jk_bend_limit_<i>: cos(phi_i) (jk_ax + jk_bx) + sin(phi_i) (jk_ay + jk_by)"
+            )
+            + f", phi_i = 180 i / {directions} deg",
         },
     }
     return ET.ElementTree(root), facts
@@ -309,6 +331,8 @@ def _mjcf_worldbody(
         for j in robot.joints:
             children.setdefault(j.parent, []).append(j)
         _exact_body(mount, robot, robot.root, None, children, sites_by_link)
+    elif chain == "mount":
+        _mount_bodies(mount, robot, sites_by_link, shares)
     else:
         root_body = ET.SubElement(mount, "body", name=robot.root)
         _link_contents(root_body, robot.links[robot.root], sites_by_link)
@@ -449,12 +473,119 @@ def _reduced_bodies(
         _reduced_bodies(panel, robot, k + 1, sites_by_link, shares)
 
 
+def _mount_bodies(
+    mount_el: ET.Element,
+    robot: RobotModel,
+    sites_by_link: dict[str, list],
+    joints: dict[str, MountJoint],
+) -> None:
+    """The mount variant's bodies: the panels alone, panel k turning on one universal joint at
+    mid-arc (:data:`~bvsr_cad.models.kinematics.MOUNT_PIVOT_FRACTION`; hinges ``jk_x`` and ``jk_y``
+    in :func:`~bvsr_cad.models.kinematics.mount_order`) with :class:`MountJoint`'s stiffness and
+    damping. Joint k's deformable body is split as the exact chain splits it: the half at the arc's
+    start rides on panel k-1, the half at its end on panel k, composed into each panel's one
+    inertial at rest (the mass and its centre at rest are the other files'). Its visual rides on
+    panel k-1; of the collision shapes, those of :data:`MOUNT_COLLISION_COVERS`."""
+    body = mount_el
+    for k in range(len(robot.bending) + 1):
+        panel = robot.links[robot.root if k == 0 else robot.bending[k - 1].tip_link]
+        parts = [panel.inertial]
+        visuals = [(v, 0.0) for v in panel.visuals]
+        if k == 0:
+            body = ET.SubElement(body, "body", name=robot.root)
+        else:
+            b = robot.bending[k - 1]
+            parts.append(robot.links[f"{b.name}_after_chord"].inertial)
+            body = ET.SubElement(
+                body,
+                "body",
+                name=b.tip_link,
+                pos=_vec((0, 0, _arc_start_m(robot, b) + b.arc_length_m)),
+            )
+            joint = joints[b.name]
+            for axis in mount_order(k):
+                ET.SubElement(
+                    body,
+                    "joint",
+                    name=f"{b.name}_{axis}",
+                    type="hinge",
+                    axis=_AXES[axis],
+                    pos=_vec((0, 0, -(1.0 - MOUNT_PIVOT_FRACTION) * b.arc_length_m)),
+                    stiffness=_f(joint.stiffness_nm_rad),
+                    damping=_f(joint.damping_nms[axis]),
+                )
+        if k < len(robot.bending):
+            b = robot.bending[k]
+            t_m = _arc_start_m(robot, b)
+            half_a = robot.links[f"{b.name}_after_theta_a"]
+            parts.append(half_a.inertial.transformed(translation_m(z=t_m)))
+            visuals += [(v, t_m) for v in half_a.visuals]
+        inertial = compose(parts)
+        I = inertial.inertia
+        ET.SubElement(
+            body,
+            "inertial",
+            pos=_vec(inertial.com),
+            mass=_f(inertial.mass_kg),
+            fullinertia=_vec((I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2])),
+        )
+        for v, z in visuals:
+            attrs = {"class": "visual", "mesh": v.name, "material": v.material}
+            if z:
+                attrs["pos"] = _vec((0, 0, z))
+            ET.SubElement(body, "geom", {**attrs, "name": f"{panel.name}_{v.name}_visual"})
+        for c in panel.collisions:
+            if c.covers in MOUNT_COLLISION_COVERS:
+                collision_geom(body, c)
+        for site in sites_by_link.get(panel.name, []):
+            ET.SubElement(body, "site", name=site.name, pos=_vec(site.pos_m))
+
+
+def _mount_actuators(
+    root: ET.Element, tendon: ET.Element, robot: RobotModel, joints: dict[str, MountJoint]
+) -> int:
+    """The mount variant's ``actuator`` section: one pressure actuator per SOA, named and
+    controlled as the default file's, on a fixed tendon ``<soa>_tendon`` = arm_x ``jk_x`` + arm_y
+    ``jk_y`` (the SOA's stretch l - l0 through its rest lever arms, :class:`MountJoint`): force =
+    P A - (m_a P + n_a)(l - l0), its damper on the hinges. Returns the number of actuators."""
+    act = robot.actuation
+    law = act.law
+    actuator = ET.SubElement(root, "actuator")
+    ctrl = _vec((act.pressure_min_pa, act.pressure_max_pa))
+    for k, b in enumerate(robot.bending, 1):
+        joint = joints[b.name]
+        for i, s in enumerate(s for s in robot.soas if s.joint == k):
+            fixed = ET.SubElement(tendon, "fixed", name=f"{s.name}_tendon")
+            for axis in "xy":
+                ET.SubElement(
+                    fixed, "joint", joint=f"{b.name}_{axis}", coef=_f(joint.arms_m[axis][i])
+                )
+            lag = robot.supply_lag_s.get(s.line)
+            dyn = {"dyntype": "filterexact", "dynprm": _vec((lag,))} if lag else {}
+            ET.SubElement(
+                actuator,
+                "general",
+                name=s.name,
+                tendon=f"{s.name}_tendon",
+                ctrllimited="true",
+                ctrlrange=ctrl,
+                **dyn,
+                gaintype="affine",
+                gainprm=_vec((law.area_m2, -law.stiffness_slope_n_per_m_per_pa, 0.0)),
+                biastype="affine",
+                biasprm=_vec((0.0, -law.stiffness_offset_n_per_m, 0.0)),
+            )
+    return len(robot.soas)
+
+
 def _mjcf_equalities(
     root: ET.Element, robot: RobotModel, chain: str, per_segment: bool, solref: str
 ) -> float:
     """The ``equality`` section: each joint's couplings (the reduced chain's two halves; the exact
     chain's theta_b, phi_b and chord), then a segment's joints to its first. Returns the chord
     polynomial's largest error, m (0 for the reduced chain)."""
+    if chain == "mount":  # one pivot a joint: nothing to couple
+        return 0.0
     eq = ET.SubElement(root, "equality")
     solimp = _vec(EQUALITY_SOLIMP)
     chord_err = 0.0
@@ -645,7 +776,7 @@ def shear_stiffness_nm_rad(robot: RobotModel) -> float:
 
 
 def _bend_limit_tendons(
-    tendon: ET.Element, robot: RobotModel, solref: str, directions: int
+    tendon: ET.Element, robot: RobotModel, solref: str, directions: int, mount: bool = False
 ) -> float:
     """Each reduced joint's bend limit theta <= theta_max, for every bending direction: fixed
     tendons ``jk_bend_limit_i`` = cos(phi_i) (``jk_ax`` + ``jk_bx``) + sin(phi_i) (``jk_ay`` +
@@ -653,25 +784,28 @@ def _bend_limit_tendons(
     faces of :class:`~bvsr_cad.models.kinematics.PrbLimitPolygon`: a polygon of 2 ``directions``
     faces circumscribing the exact limit. Limits on the pivots' hinges
     instead (a square) let a diagonal bend reach 1.39 theta_max, and they act on one pivot, whose
-    light shear mode lets it through. Returns the largest overshoot over the joints (theta /
-    theta_max - 1 at a vertex)."""
+    light shear mode lets it through. ``mount``: the mount variant's one pivot, whose hinges turn
+    the whole bend (cos theta = cos a cos b): the polygon of the limit 2 theta_max on a pivot of the
+    default file, on ``jk_x`` and ``jk_y`` alone. Returns the largest overshoot over the joints
+    (theta / theta_max - 1 at a vertex)."""
     solimp = _vec(LIMIT_SOLIMP)
     worst = 0.0
+    pivots, scale = (("",), 1.0) if mount else (("a", "b"), 2.0)
     for b in robot.bending:
-        poly = PrbLimitPolygon.make(b.theta_max_rad, directions)
+        poly = PrbLimitPolygon.make(b.theta_max_rad * (2.0 if mount else 1.0), directions)
         worst = max(worst, poly.overshoot)
         for i, (phi, half) in enumerate(zip(poly.direction_rad, poly.half_width_rad)):
             fixed = ET.SubElement(
                 tendon,
                 "fixed",
                 name=f"{b.name}_bend_limit_{i}",
-                range=_vec((-2 * half, 2 * half)),
+                range=_vec((-scale * half, scale * half)),
                 solreflimit=solref,
                 solimplimit=solimp,
             )
             for axis, coef in (("x", np.cos(phi)), ("y", np.sin(phi))):
                 if abs(coef) > 1e-12:
-                    for pivot in "ab":
+                    for pivot in pivots:
                         ET.SubElement(
                             fixed, "joint", joint=f"{b.name}_{pivot}{axis}", coef=_f(coef)
                         )
@@ -714,6 +848,16 @@ def hinge_share(robot: RobotModel, k: int) -> HingeShare:
         law.stiffness_offset_n_per_m,
         law.damping_n_s_per_m,
         shear_stiffness_nm_rad(robot),
+    )
+
+
+def mount_joint(robot: RobotModel, k: int) -> MountJoint:
+    """What the mount variant puts on bending joint k's universal joint (:class:`MountJoint`), its
+    SOAs' lever arms in :func:`soa_lever_arms_m`'s order (the SOAs of joint k in ``robot.soas``)."""
+    return MountJoint.of(
+        soa_lever_arms_m(robot, k),
+        robot.actuation.law.damping_n_s_per_m,
+        robot.actuation.rod_bending_stiffness_nm_rad,
     )
 
 

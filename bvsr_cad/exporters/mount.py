@@ -281,8 +281,9 @@ def _names(model: mujoco.MjModel, objtype, count: int) -> list[str]:
 
 
 def tail_model_path(export_or_xml: str | Path) -> Path:
-    """The tail's MJCF: the file itself, or an export folder's reduced-chain model (its manifest's
-    ``robot.mjcf_model``, else ``robot/bvsr.xml``).
+    """The tail's MJCF: the file itself, or the model an export folder has for a host: its mount
+    variant (the manifest's ``robot.mjcf_mount_model``, else ``robot/bvsr_mount.xml``), or an older
+    export's reduced chain (``robot.mjcf_model``, else ``robot/bvsr.xml``).
 
     Raises:
         MountError: neither a file nor an export folder holding the model.
@@ -291,10 +292,13 @@ def tail_model_path(export_or_xml: str | Path) -> Path:
 
     path = Path(export_or_xml)
     if path.is_dir():
-        rel = "robot/bvsr.xml"
+        robot = {}
         manifest = path / "manifest.json"
         if manifest.is_file():
-            rel = json.loads(manifest.read_text()).get("robot", {}).get("mjcf_model", rel)
+            robot = json.loads(manifest.read_text()).get("robot", {})
+        rel = robot.get("mjcf_mount_model", "robot/bvsr_mount.xml")
+        if not (path / rel).is_file():
+            rel = robot.get("mjcf_model", "robot/bvsr.xml")
         path = path / rel
     if not path.is_file():
         raise MountError(

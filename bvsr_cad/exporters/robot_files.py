@@ -10,6 +10,9 @@
 - ``robot/scene.xml``, ``robot/scene_segments.xml``: menagerie-style scenes that include them;
 - ``robot/bvsr_exact.xml``, ``robot/scene_exact.xml``: MJCF with the URDF's exact chain (a 0.2 ms
   step);
+- ``robot/bvsr_mount.xml``, ``robot/scene_mount.xml``: MJCF, the mount variant (one universal joint
+  per bending joint, the SOAs on fixed tendons): the file ``bvsr mount`` and the quadruped scene
+  attach to a host;
 - ``robot/scene_cart.xml``: the per-segment tail on the paper's hinged cart (Eq 20-22's
   experiment);
 - ``robot/meshes/*.stl``: visual meshes in metres, in their link's frame;
@@ -19,13 +22,20 @@
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from .. import units
 from ..assembly.robot import RobotModel, chord_joint_value
-from ..models.kinematics import chain_tip_error_mm, joint_transform_chain, joint_transform_prb
+from ..models.kinematics import (
+    chain_tip_error_mm,
+    joint_transform_chain,
+    joint_transform_mount,
+    joint_transform_prb,
+    mount_order,
+)
 from .mjcf import cart_scene_tree, mjcf_tree, scene_tree, write_mjcf
 from .robot_meshes import write_robot_meshes
 from .ros2_package import write_ros2_package
@@ -68,14 +78,16 @@ def write_robot(
 def _write_mjcf_models(
     robot: RobotModel, folder: Path, mesh_files: dict[str, str]
 ) -> dict[str, dict[str, Any]]:
-    """Write the three MJCF models (reduced chain, reduced chain per segment, exact chain), each
-    with the scene that includes it; returns each model's facts (:func:`mjcf_tree`) by file stem."""
+    """Write the four MJCF models (reduced chain, reduced chain per segment, exact chain, mount
+    variant), each with the scene that includes it; returns each model's facts (:func:`mjcf_tree`)
+    by file stem."""
     name = robot.name
     facts = {}
     for per_segment, stem, scene, chain in (
         (False, name, "scene.xml", "reduced"),
         (True, f"{name}_segments", "scene_segments.xml", "reduced"),
         (False, f"{name}_exact", "scene_exact.xml", "exact"),
+        (False, f"{name}_mount", "scene_mount.xml", "mount"),
     ):
         tree, facts[stem] = mjcf_tree(robot, mesh_files, per_segment, chain=chain)
         write_mjcf(folder / f"{stem}.xml", tree)
@@ -112,6 +124,8 @@ def _robot_section(
         "mjcf_per_segment": "robot/scene_segments.xml",
         "mjcf_exact": "robot/scene_exact.xml",
         "mjcf_exact_model": f"robot/{name}_exact.xml",
+        "mjcf_mount": "robot/scene_mount.xml",
+        "mjcf_mount_model": f"robot/{name}_mount.xml",
         "chains": _chain_entries(name, facts, error_mm),
         "mjcf_cart": "robot/scene_cart.xml" if has_cart else None,
         "mjcf_per_segment_model": f"robot/{name}_segments.xml",
@@ -213,7 +227,15 @@ def chain_errors_mm(robot: RobotModel) -> dict[str, float]:
     lengths_mm = [units.m_to_mm(b.arc_length_m) for b in robot.bending]
     thickness_mm = units.m_to_mm(robot.joints[0].T_parent_joint[2][3])
     limits = [b.theta_max_rad for b in robot.bending]
+    mount = [
+        functools.partial(joint_transform_mount, order=mount_order(k))
+        for k in range(1, len(robot.bending) + 1)
+    ]
     return {
         chain: chain_tip_error_mm(fn, lengths_mm, thickness_mm, limits)
-        for chain, fn in (("reduced", joint_transform_prb), ("exact", joint_transform_chain))
+        for chain, fn in (
+            ("reduced", joint_transform_prb),
+            ("exact", joint_transform_chain),
+            ("mount", mount),
+        )
     }

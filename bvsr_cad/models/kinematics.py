@@ -527,6 +527,74 @@ def joint_transform_prb(theta_rad: np.ndarray, phi_rad: np.ndarray, length_mm: f
     return tz @ _rx(a) @ _ry(b) @ mid @ _ry(b) @ _rx(a) @ tz
 
 
+#: The mount variant's joint (the tail file a host carries): one universal joint per bending joint
+#: on the arc's axis at mid-arc, L/2 from either end. Each panel keeps Eq 2's normal exactly; the
+#: arc's end lies on the chord's line, short of it by L (2 sin(theta/2) / theta - cos(theta/2))
+#: (:func:`mount_chord_error`), and the panel turns about its normal by a twist that a two-hinge
+#: joint cannot avoid off its hinge planes (:func:`mount_twist_rad`). Half-way is the one place
+#: without a first-order error: a pivot at p from the base and q = L - p from the end puts the arc's
+#: end (p - q) sin(theta/2) off the chord's line.
+MOUNT_PIVOT_FRACTION = 0.5
+#: The mount variant's hinge order on joint k (1-based): Rx then Ry on odd joints, Ry then Rx on
+#: even ones, so that the twists of two neighbours bent alike cancel to second order instead of
+#: adding up along the tail.
+MOUNT_ORDERS = ("xy", "yx")
+
+
+def mount_order(k: int) -> str:
+    """The hinge order of the mount variant's joint k (1-based): :data:`MOUNT_ORDERS`."""
+    return MOUNT_ORDERS[(k - 1) % 2]
+
+
+def mount_angles(
+    theta_rad: np.ndarray, phi_rad: np.ndarray, order: str = "xy"
+) -> tuple[np.ndarray, np.ndarray]:
+    """Hinge angles (about X, about Y) of the mount variant's universal joint that give the panel
+    Eq 2's normal (sin theta cos phi, sin theta sin phi, cos theta) at (theta, phi).
+
+    Rx(a) Ry(b) turns Z to (sin b, -sin a cos b, cos a cos b): sin b = sin theta cos phi, tan a =
+    -tan theta sin phi. Ry(b) Rx(a) turns it to (cos a sin b, -sin a, cos a cos b): sin a = -sin
+    theta sin phi, tan b = tan theta cos phi. Either way cos theta = cos a cos b."""
+    theta_rad = np.asarray(theta_rad, float)
+    s, c = np.sin(theta_rad), np.cos(theta_rad)
+    if order == "xy":
+        return np.arctan2(-s * np.sin(phi_rad), c), np.arcsin(s * np.cos(phi_rad))
+    if order == "yx":
+        return -np.arcsin(s * np.sin(phi_rad)), np.arctan2(s * np.cos(phi_rad), c)
+    raise ValueError(f"mount_angles: order {order!r}, allowed {', '.join(MOUNT_ORDERS)}")
+
+
+def joint_transform_mount(
+    theta_rad: np.ndarray, phi_rad: np.ndarray, length_mm: float, order: str = "xy"
+) -> np.ndarray:
+    """Tz(L/2) Rx(a) Ry(b) Tz(L/2) (order ``yx``: Ry(b) Rx(a)): the mount variant's end frame at
+    (theta, phi) (:func:`mount_angles`)."""
+    a, b = mount_angles(theta_rad, phi_rad, order)
+    half = np.eye(4)
+    half[2, 3] = MOUNT_PIVOT_FRACTION * length_mm
+    turn = _rx(a) @ _ry(b) if order == "xy" else _ry(b) @ _rx(a)
+    return half @ turn @ half
+
+
+def mount_chord_error(theta_rad: np.ndarray, length: float) -> np.ndarray:
+    """How far the mount variant's joint end falls short of the arc's end, along the chord (the
+    unit of ``length``): 2 r cos(theta/2) - 2 L sin(theta/2) / theta with r = L/2, as a positive
+    shortfall L (2 sin(theta/2) / theta - cos(theta/2)) = L (theta^2 / 12 - theta^4 / 480 + ...).
+
+    Both arms of the pivot are L/2, so the end lies on the bisector of the base and end normals,
+    the chord's direction, whatever the twist."""
+    half = np.abs(np.asarray(theta_rad, float)) / 2
+    return chord_length_mm(2 * half, length) - length * np.cos(half)
+
+
+def mount_twist_rad(a_rad: np.ndarray, b_rad: np.ndarray) -> np.ndarray:
+    """The twist about the panel's normal of the universal joint Rx(a) Ry(b), against Eq 2's
+    twist-free rotation with the same normal: 2 atan(tan(a/2) tan(b/2)) (the quaternion (cos a/2
+    cos b/2, sin a/2 cos b/2, cos a/2 sin b/2, sin a/2 sin b/2) split into a swing and a twist
+    about Z); about -ab/2 for Ry(b) Rx(a). Zero in the hinges' planes (a = 0 or b = 0)."""
+    return 2.0 * np.arctan(np.tan(np.asarray(a_rad) / 2) * np.tan(np.asarray(b_rad) / 2))
+
+
 def _rx(a: np.ndarray) -> np.ndarray:
     c, s = np.cos(a), np.sin(a)
     m = np.zeros(np.shape(a) + (4, 4))
@@ -539,9 +607,10 @@ def chain_tip_error_mm(
     joint_fn, lengths_mm, panel_thickness_mm: float, theta_max_rad, poses: int = 2000, seed: int = 0
 ) -> float:
     """Largest distance (mm) between the tip of a tail whose joints are ``joint_fn(theta, phi, L)``
-    (4x4 end frames, e.g. :func:`joint_transform_prb`) and Eq 2's tip, over the joint range:
-    ``poses`` random poses (theta uniform up to each joint's limit, phi uniform) and every joint at
-    its limit in one common plane (24 planes), where the errors add. The tip is the centre of the
+    (4x4 end frames, e.g. :func:`joint_transform_prb`; or a sequence of one such function per
+    joint) and Eq 2's tip, over the joint range: ``poses`` random poses (theta uniform up to each
+    joint's limit, phi uniform) and every joint at its limit in one common plane (24 planes), where
+    the errors add. The tip is the centre of the
     last panel's distal face; ``lengths_mm`` and ``theta_max_rad`` are per joint."""
     rng = np.random.default_rng(seed)
     lim = np.asarray(theta_max_rad, float)
@@ -556,9 +625,10 @@ def chain_tip_error_mm(
     tz = np.eye(4)
     tz[2, 3] = panel_thickness_mm
     tips = []
-    for fn in (joint_fn, joint_transform):
+    fns = list(joint_fn) if isinstance(joint_fn, (list, tuple)) else [joint_fn] * n
+    for chain in (fns, [joint_transform] * n):
         T = np.broadcast_to(np.eye(4), theta.shape[:1] + (4, 4))
         for k, length in enumerate(lengths_mm):
-            T = T @ tz @ fn(theta[:, k], phi[:, k], length)
+            T = T @ tz @ chain[k](theta[:, k], phi[:, k], length)
         tips.append(T[:, :3, 3] + panel_thickness_mm * T[:, :3, 2])
     return float(np.max(np.linalg.norm(tips[0] - tips[1], axis=-1)))

@@ -3,8 +3,11 @@ hinges and tendons so that it resists bending and shear as the real joint does.
 
 Each reduced joint is two pivots a and b, :data:`~bvsr_cad.models.kinematics.PRB_PIVOT_FRACTION` of
 the arc from either end, coupled by an equality; per axis the bend is u = a + b and the shear
-s = a - b. These functions take plain numbers and socket positions (m, in panel k-1's frame), so
-the writer only reads them off its robot model (:mod:`bvsr_cad.exporters.mjcf`).
+s = a - b. The mount variant (the file a host carries) has one universal joint per bending joint,
+at mid-arc (:data:`~bvsr_cad.models.kinematics.MOUNT_PIVOT_FRACTION`): no shear mode, and its SOAs
+act through their rest lever arms (:class:`MountJoint`). These functions take plain numbers and
+socket positions (m, in panel k-1's frame), so the writer only reads them off its robot model
+(:mod:`bvsr_cad.exporters.mjcf`).
 """
 
 from __future__ import annotations
@@ -116,4 +119,43 @@ class HingeShare:
             stiffness_nm_rad=2.0 * moved,
             soa_stiffness_offset_n_per_m=stiffness_offset_n_per_m - moved / mean2,
             shear_tendon_nm_rad=shear_nm_rad - moved,
+        )
+
+
+@dataclasses.dataclass(frozen=True)
+class MountJoint:
+    """What the mount variant puts on a bending joint's one universal joint (hinge angles a about
+    X and b about Y, the bend theta with cos theta = cos a cos b, so theta^2 = a^2 + b^2 to fourth
+    order).
+
+    - The rod: (1/2) (E I / L) theta^2 is E I / L on each hinge.
+    - Each SOA stretches by l - l0 = arm_x a + arm_y b, its rest lever arms about the pivot
+      (:func:`soa_lever_arms_m` with the pivot at mid-arc, which is where the default file's pivots'
+      midpoint sits): a fixed tendon with those coefficients, so Eq 3-4's force (P A - (m_a P +
+      n_a)(l - l0)) acts on both hinges through its first-order geometry. What that leaves out is
+      second order in theta: the chord's shortening under the sockets (L theta^2 / 24 against arm
+      theta, r about 23 mm, L 37 mm: 3 % of the stretch at theta = 0.5 rad).
+    - The SOA dampers: c (arm_x a' + arm_y b')^2 summed over the SOAs is c sum(arm_x^2) a'^2 + c
+      sum(arm_y^2) b'^2 (the cross sum vanishes for SOAs evenly round the rod), a damping of c
+      sum(arm^2) on each hinge, which MuJoCo's Euler step integrates implicitly."""
+
+    stiffness_nm_rad: float  # on each hinge
+    damping_nms: dict[str, float]  # on each hinge, about X and about Y
+    arms_m: dict[str, np.ndarray]  # each SOA's tendon coefficients on the two hinges, m/rad
+
+    @classmethod
+    def of(
+        cls,
+        arms_m: dict[str, np.ndarray],
+        damping_n_s_per_m: float,
+        rod_bending_stiffness_nm_rad: float,
+    ) -> MountJoint:
+        """The joint whose SOAs have lever arms ``arms_m`` (:func:`soa_lever_arms_m`), each a damper
+        c, and whose rod has E I / L = ``rod_bending_stiffness_nm_rad`` across the gap."""
+        return cls(
+            stiffness_nm_rad=rod_bending_stiffness_nm_rad,
+            damping_nms={
+                axis: damping_n_s_per_m * float(np.sum(a**2)) for axis, a in arms_m.items()
+            },
+            arms_m=arms_m,
         )

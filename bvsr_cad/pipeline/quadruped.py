@@ -20,7 +20,8 @@ def quadruped_section(folder: Path, tail_xml: Path, spec, say: Callable[[str], N
 
     Args:
         folder: the export being built.
-        tail_xml: its reduced-chain MJCF (``robot/<name>.xml``; the manifest is written last).
+        tail_xml: its MJCF for a host, the mount variant (``robot/<name>_mount.xml``; the
+            manifest is written last).
         spec: its parameters.
         say: progress.
 

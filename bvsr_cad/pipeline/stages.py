@@ -372,7 +372,7 @@ class _Build:
             run.run(
                 QUADRUPED,
                 lambda folder: quadruped_section(
-                    folder, folder / manifest["robot"]["mjcf_model"], self.spec, run.say
+                    folder, folder / manifest["robot"]["mjcf_mount_model"], self.spec, run.say
                 ),
             )
         )

@@ -186,7 +186,7 @@ class Scene:
 
 
 def _export_timestep_s(tail_xml: Path) -> float:
-    """The time step the export states for its reduced-chain MJCF (the manifest's
+    """The time step the export states for the tail's MJCF (the manifest's
     ``robot.chains``), else the file's own ``<option timestep>``."""
     import mujoco
 
@@ -285,7 +285,8 @@ def rigid_tail_tree(tail_xml: Path, rigid_xml: Path):
 
 
 def _tail_files(export: Path) -> tuple[Path, Path]:
-    """(the soft tail's reduced-chain MJCF, the rigid twin's MJCF) of an export folder.
+    """(the soft tail's MJCF for a host, its mount variant; the rigid twin's MJCF) of an export
+    folder.
 
     Raises:
         QuadrupedInputError: the folder holds neither (names what is missing).
@@ -296,7 +297,7 @@ def _tail_files(export: Path) -> tuple[Path, Path]:
         soft = tail_model_path(export)
     except MountError as exc:
         raise QuadrupedInputError(str(exc)) from None
-    rigid = soft.with_name(f"{soft.stem}_rigid.xml")
+    rigid = soft.with_name(f"{soft.stem.removesuffix('_mount')}_rigid.xml")
     return soft, rigid
 
 

@@ -38,9 +38,15 @@ MASS_TOLERANCE = 0.001  # robot mass vs the manifest's tail mass
 INERTIA_TOLERANCE = 0.01  # link inertia vs an independent computation from its meshes
 FK_TOLERANCE_M = 1e-6
 FK_POSES = 200
-SETTLE_QVEL_RAD_S = (
-    0.1  # 1 s after release under gravity the sag has died down (BVSR_L: 0.06 rad/s)
-)
+#: 1 s after release under gravity the sag has died down: the largest hinge speed of a file whose
+#: joints each bend on two pivots (the URDF's, the exact, reduced and per-segment chains; BVSR_L's
+#: exact chain 0.08 rad/s).
+SETTLE_QVEL_RAD_S = 0.1
+#: The files whose joints bend on one pivot, each hinge turning through the whole bend (the mount
+#: variant's universal joints): the same bend rate is twice the hinge speed of a two-pivot file, so
+#: their limit is twice :data:`SETTLE_QVEL_RAD_S` (released under gravity, BVSR_L's mount variant
+#: sags as far as its exact chain, 97 mm at the tip, at 1.9 times its hinge speeds).
+ONE_PIVOT_FILES = ("mjcf_mount",)
 #: Mimic / chord couplings held while stepping (rad or m). MuJoCo's equality
 #: constraints are soft; released under gravity the residual stays below this.
 EQUALITY_TOLERANCE = 1e-3
@@ -374,11 +380,12 @@ def _rest_result(key: str, rel: str, gravity: bool, d, drift: float) -> CheckRes
             "largest joint displacement after 1 s at rest without gravity",
         )
     qvel = float(np.max(np.abs(d.qvel)))
+    limit = SETTLE_QVEL_RAD_S * (2 if key in ONE_PIVOT_FILES else 1)
     return CheckResult(
         f"mujoco_settled_1s:{key}",
-        qvel <= SETTLE_QVEL_RAD_S,
+        qvel <= limit,
         qvel,
-        SETTLE_QVEL_RAD_S,
+        limit,
         "rad/s or m/s",
         rel,
         "largest joint speed 1 s after release under gravity",

@@ -362,8 +362,8 @@ FAULTS: list[Fault] = [
     Fault(
         "mjcf_soa_spring_sign",
         "bvsr_cad/exporters/mjcf.py",
-        "biasprm=_vec((n_a * l0, -n_a, -c))",
-        "biasprm=_vec((-n_a * l0, n_a, -c))",
+        "biasprm=_vec((n_a * l0_m, -n_a, -c))",
+        "biasprm=_vec((-n_a * l0_m, n_a, -c))",
         "the MJCF actuator's SOA spring pushes with the stretch (Eq 3 sign in MuJoCo)",
         catchers=("tests/test_truth.py::test_mujoco_soa_actuator_is_eq3_by_hand",),
     ),

@@ -487,7 +487,6 @@ def check_fk(exp: Export) -> list[CheckResult]:
     their own closed forms (:func:`bvsr_cad.models.kinematics.joint_transform_prb`,
     :func:`~bvsr_cad.models.kinematics.joint_transform_mount`); how far those lie from Eq 2 is the
     manifest's ``chains`` entry."""
-    import mujoco
 
     robot = exp.manifest["robot"]
     spec = load_spec(exp.root / exp.manifest["params_file"])
@@ -501,15 +500,18 @@ def check_fk(exp: Export) -> list[CheckResult]:
     L_mm = spec.joint.gap_mm
     tz = np.eye(4)
     tz[2, 3] = spec.joint.panel_thickness_mm
-    reduced = np.broadcast_to(np.eye(4), (FK_POSES, n + 1, 4, 4)).copy()
-    mounted = reduced.copy()
-    for k in range(n):
-        reduced[:, k + 1] = reduced[:, k] @ tz @ joint_transform_prb(theta[:, k], phi[:, k], L_mm)
-        mounted[:, k + 1] = (
-            mounted[:, k]
-            @ tz
-            @ joint_transform_mount(theta[:, k], phi[:, k], L_mm, mount_order(k + 1))
-        )
+
+    def composed(joint) -> np.ndarray:
+        """Each panel's frame, joint k's transform ``joint(k)`` after panel k-1's thickness."""
+        frames = np.broadcast_to(np.eye(4), (FK_POSES, n + 1, 4, 4)).copy()
+        for k in range(n):
+            frames[:, k + 1] = frames[:, k] @ tz @ joint(k)
+        return frames
+
+    reduced = composed(lambda k: joint_transform_prb(theta[:, k], phi[:, k], L_mm))
+    mounted = composed(
+        lambda k: joint_transform_mount(theta[:, k], phi[:, k], L_mm, mount_order(k + 1))
+    )
     a, b = prb_angles(theta, phi)
     hinge = [mount_angles(theta[:, k], phi[:, k], mount_order(k + 1)) for k in range(n)]
 
@@ -538,22 +540,7 @@ def check_fk(exp: Export) -> list[CheckResult]:
     ):
         if key not in robot:
             continue
-        with _quiet_cwd(exp.root):
-            m = mujoco.MjModel.from_xml_path(str(exp.root / robot[key]))
-        d = mujoco.MjData(m)
-        mount = m.body("bvsr_mount").id
-        worst = 0.0
-        for p in range(FK_POSES):
-            d.qpos[:] = m.qpos0
-            for k in range(n):
-                pose(d, p, k)
-            mujoco.mj_kinematics(m, d)
-            R0, p0 = d.xmat[mount].reshape(3, 3), d.xpos[mount]
-            for k in range(1, n + 1):
-                pos_tail_m = R0.T @ (d.xpos[m.body(f"panel{k}").id] - p0)
-                worst = max(
-                    worst, float(np.linalg.norm(pos_tail_m - ref[p, k, :3, 3] / units.MM_PER_M))
-                )
+        worst = _fk_worst_m(exp.root, robot[key], n, pose, ref)
         out.append(
             CheckResult(
                 name,
@@ -566,6 +553,29 @@ def check_fk(exp: Export) -> list[CheckResult]:
             )
         )
     return out
+
+
+def _fk_worst_m(root: Path, rel: str, n: int, pose, ref: np.ndarray) -> float:
+    """The farthest any panel origin of the MJCF ``rel`` (in the mount frame ``bvsr_mount``), posed
+    by ``pose(d, p, k)`` for each of :data:`FK_POSES` poses, lies from ``ref`` (poses x panels x
+    4 x 4, mm), m."""
+    import mujoco
+
+    with _quiet_cwd(root):
+        m = mujoco.MjModel.from_xml_path(str(root / rel))
+    d = mujoco.MjData(m)
+    mount = m.body("bvsr_mount").id
+    worst = 0.0
+    for p in range(FK_POSES):
+        d.qpos[:] = m.qpos0
+        for k in range(n):
+            pose(d, p, k)
+        mujoco.mj_kinematics(m, d)
+        R0, p0 = d.xmat[mount].reshape(3, 3), d.xpos[mount]
+        for k in range(1, n + 1):
+            pos_tail_m = R0.T @ (d.xpos[m.body(f"panel{k}").id] - p0)
+            worst = max(worst, float(np.linalg.norm(pos_tail_m - units.mm_to_m(ref[p, k, :3, 3]))))
+    return worst
 
 
 #: The folders under ``robot/`` that :func:`check_robot` never opens: the host scenes the build's

@@ -229,17 +229,10 @@ def mjcf_tree(
     # As stiff as the step allows (MuJoCo needs a time constant of at least two steps).
     solref = _vec((2.0 * timestep_s, 1.0))
     chord_err = _mjcf_equalities(root, robot, chain, per_segment, solref)
-    tendon = ET.SubElement(root, "tendon")
     directions = BEND_LIMIT_DIRECTIONS_PER_SEGMENT if per_segment else BEND_LIMIT_DIRECTIONS
-    bend_overshoot = None
-    if chain == "reduced":
-        bend_overshoot = _mjcf_joint_tendons(tendon, robot, per_segment, solref, directions, shares)
-    elif chain == "mount":
-        bend_overshoot = _bend_limit_tendons(tendon, robot, solref, directions, mount=True)
-    if chain == "mount":
-        actuators = _mount_actuators(root, tendon, robot, shares)
-    else:
-        actuators = _mjcf_actuators(root, tendon, robot, per_segment, shares)
+    bend_overshoot, actuators = _tendons_and_actuators(
+        root, robot, chain, per_segment, solref, directions, shares
+    )
     ET.indent(root)
     lags = sorted(set(robot.supply_lag_s.values()))
     facts = {
@@ -268,6 +261,29 @@ def mjcf_tree(
         },
     }
     return ET.ElementTree(root), facts
+
+
+def _tendons_and_actuators(
+    root: ET.Element,
+    robot: RobotModel,
+    chain: str,
+    per_segment: bool,
+    solref: str,
+    directions: int,
+    shares: dict | None,
+) -> tuple[float | None, int]:
+    """The ``tendon`` and ``actuator`` sections of ``chain``: the reduced chain's joint tendons
+    (bend limits of ``directions`` directions, shear, spread), the mount variant's bend limits, none
+    on the exact chain; each SOA's actuator. Returns the bend limit's largest overshoot (None
+    without one) and the number of actuators."""
+    tendon = ET.SubElement(root, "tendon")
+    if chain == "mount":
+        overshoot = _bend_limit_tendons(tendon, robot, solref, directions, mount=True)
+        return overshoot, _mount_actuators(root, tendon, robot, shares)
+    overshoot = None
+    if chain == "reduced":
+        overshoot = _mjcf_joint_tendons(tendon, robot, per_segment, solref, directions, shares)
+    return overshoot, _mjcf_actuators(root, tendon, robot, per_segment, shares)
 
 
 def _mjcf_defaults(root: ET.Element, model: str) -> None:
@@ -548,10 +564,8 @@ def _mount_actuators(
     controlled as the default file's, on a fixed tendon ``<soa>_tendon`` = arm_x ``jk_x`` + arm_y
     ``jk_y`` (the SOA's stretch l - l0 through its rest lever arms, :class:`MountJoint`): force =
     P A - (m_a P + n_a)(l - l0), its damper on the hinges. Returns the number of actuators."""
-    act = robot.actuation
-    law = act.law
+    law = robot.actuation.law
     actuator = ET.SubElement(root, "actuator")
-    ctrl = _vec((act.pressure_min_pa, act.pressure_max_pa))
     for k, b in enumerate(robot.bending, 1):
         joint = joints[b.name]
         for i, s in enumerate(s for s in robot.soas if s.joint == k):
@@ -560,20 +574,16 @@ def _mount_actuators(
                 ET.SubElement(
                     fixed, "joint", joint=f"{b.name}_{axis}", coef=_f(joint.arms_m[axis][i])
                 )
-            lag = robot.supply_lag_s.get(s.line)
-            dyn = {"dyntype": "filterexact", "dynprm": _vec((lag,))} if lag else {}
-            ET.SubElement(
+            # The fixed tendon is l - l0 itself (0 at rest); the damper is on the hinges.
+            _pressure_actuator(
                 actuator,
-                "general",
-                name=s.name,
-                tendon=f"{s.name}_tendon",
-                ctrllimited="true",
-                ctrlrange=ctrl,
-                **dyn,
-                gaintype="affine",
-                gainprm=_vec((law.area_m2, -law.stiffness_slope_n_per_m_per_pa, 0.0)),
-                biastype="affine",
-                biasprm=_vec((0.0, -law.stiffness_offset_n_per_m, 0.0)),
+                robot,
+                s.name,
+                s.line,
+                0.0,
+                law.stiffness_slope_n_per_m_per_pa,
+                law.stiffness_offset_n_per_m,
+                0.0,
             )
     return len(robot.soas)
 
@@ -697,7 +707,6 @@ def _mjcf_actuators(
     actuators."""
     act = robot.actuation
     actuator = ET.SubElement(root, "actuator")
-    ctrl = _vec((act.pressure_min_pa, act.pressure_max_pa))
     groups: dict[str, list] = {}
     for s in robot.soas:
         groups.setdefault(s.line if per_segment else s.name, []).append(s)
@@ -716,22 +725,39 @@ def _mjcf_actuators(
         c = law.damping_n_s_per_m * k_share
         if shares:
             n_a, c = shares[robot.bending[soas[0].joint - 1].name].soa_stiffness_offset_n_per_m, 0.0
-        lag = robot.supply_lag_s.get(soas[0].line)
-        dyn = {"dyntype": "filterexact", "dynprm": _vec((lag,))} if lag else {}
-        ET.SubElement(
-            actuator,
-            "general",
-            name=name,
-            tendon=f"{name}_tendon",
-            ctrllimited="true",
-            ctrlrange=ctrl,
-            **dyn,
-            gaintype="affine",
-            gainprm=_vec((law.area_m2 + m_a * l0, -m_a, 0.0)),
-            biastype="affine",
-            biasprm=_vec((n_a * l0, -n_a, -c)),
-        )
+        _pressure_actuator(actuator, robot, name, soas[0].line, l0, m_a, n_a, c)
     return len(groups)
+
+
+def _pressure_actuator(
+    actuator: ET.Element,
+    robot: RobotModel,
+    name: str,
+    line: str,
+    l0_m: float,
+    m_a: float,
+    n_a: float,
+    c: float,
+) -> None:
+    """One pressure actuator ``name`` on the tendon ``<name>_tendon`` of rest length ``l0_m``:
+    force = (A + m_a l0 - m_a l) P + n_a (l0 - l) - c dl/dt (Eq 3-4 and the damper), its control
+    the commanded gauge pressure of ``line`` (Pa, the chamber pressure its lagged activation)."""
+    act = robot.actuation
+    lag = robot.supply_lag_s.get(line)
+    dyn = {"dyntype": "filterexact", "dynprm": _vec((lag,))} if lag else {}
+    ET.SubElement(
+        actuator,
+        "general",
+        name=name,
+        tendon=f"{name}_tendon",
+        ctrllimited="true",
+        ctrlrange=_vec((act.pressure_min_pa, act.pressure_max_pa)),
+        **dyn,
+        gaintype="affine",
+        gainprm=_vec((act.law.area_m2 + m_a * l0_m, -m_a, 0.0)),
+        biastype="affine",
+        biasprm=_vec((n_a * l0_m, -n_a, -c)),
+    )
 
 
 def collision_mesh_name(c: Collision) -> str:

@@ -2,6 +2,7 @@ from __future__ import annotations
 
 import copy
 import importlib.util
+import os
 import tomllib
 from pathlib import Path
 
@@ -27,7 +28,6 @@ settings.load_profile("ci")
 def pytest_configure(config):
     """Every test session gets its own, empty artifact cache (never the user's ~/.cache/bvsr_cad): a
     test that means a cold build gets one, and tests cannot see a cache filled by other code."""
-    import os
     import tempfile
 
     # A build in a test runs in one process (bvsr_cad.process.build_processes) unless the test is
@@ -183,3 +183,66 @@ def write_toml(path: Path, data: dict) -> Path:
             lines += [f"{kk} = {scalar(vv)}" for kk, vv in v.items()]
     path.write_text("\n".join(lines) + "\n")
     return path
+
+
+#: The CI-sized tail of the cache's edit tests and the build-order test (tests/test_cache.py,
+#: tests/test_ocp_viewer.py): the default file with one segment (the segment-count edit then goes
+#: to two) and the schema's smallest workspace protocol and samples; the stages, their keys and
+#: their code are the default tail's. Measured: a build of it from scratch 17.6 s (29 CPU s)
+#: against 25.0 s (41) with two segments.
+SMALL_TAIL = (
+    ("", "segments", "1"),
+    ("analysis", "workspace_protocol_cycles", "10"),
+    ("analysis", "build_workspace_samples", "100"),
+    ("analysis", "build_clearance_poses", "100"),
+)
+
+#: The rebuild benchmark: its edits and its editor of parameter text (one source).
+REBUILD_BENCH = benchmark_script("rebuild_bench")
+
+
+@pytest.fixture(scope="session")
+def small_tail(request, tmp_path_factory) -> Path:
+    """A folder with ``params/base.toml`` (:data:`SMALL_TAIL`, its calibration data beside it) and
+    ``cache``, a cache of its own that holds that file's build, built once per session
+    (:func:`built_once`)."""
+    from bvsr_cad.pipeline.stages import build_export
+
+    def make(folder: Path) -> None:
+        (folder / "params").mkdir()
+        (folder / "data").mkdir()
+        text = (PARAMS / "bvsr.toml").read_text()
+        data_file = (PARAMS / tomllib.loads(text)["calibration"]["data_file"]).resolve()
+        (folder / "data" / data_file.name).write_bytes(data_file.read_bytes())
+        for table, key, value in SMALL_TAIL:
+            text = REBUILD_BENCH.edited(text, table, key, value)
+        base = folder / "params" / "base.toml"
+        base.write_text(text)
+        before = os.environ.get("BVSR_CACHE")
+        os.environ["BVSR_CACHE"] = str(folder / "cache")
+        try:
+            stages = build_export(base, folder / "base").stages
+        finally:
+            if before is None:
+                del os.environ["BVSR_CACHE"]
+            else:
+                os.environ["BVSR_CACHE"] = before
+        assert {s["status"] for s in stages} == {"built"}
+
+    return built_once(request, tmp_path_factory, "small-tail", make)
+
+
+@pytest.fixture(scope="session")
+def bvsr_verdicts(bvsr_export, tmp_path_factory, request) -> str:
+    """Every check of :func:`bvsr_export` run once in one process (``run_checks(parallel=False)``),
+    as the JSON text of their results: the reference that the tests of checks run early, beside or
+    from a manifest in memory compare with (as text: a NaN equals itself only there)."""
+    import json
+
+    from bvsr_cad.pipeline.processes.checks_process import run_checks
+
+    def make(folder: Path) -> None:
+        verdicts = [r.to_json() for r in run_checks(bvsr_export, parallel=False)]
+        (folder / "verdicts.json").write_text(json.dumps(verdicts))
+
+    return (built_once(request, tmp_path_factory, "verdicts", make) / "verdicts.json").read_text()

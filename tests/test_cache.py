@@ -18,7 +18,7 @@ import pytest
 from bvsr_cad.pipeline.cache import ArtifactCache, spec_without, stage_key
 from bvsr_cad.process import PROCESSES_VARIABLE, build_processes
 
-from .conftest import PARAMS, benchmark_script, built_once, script, write_toml
+from .conftest import PARAMS, REBUILD_BENCH, script, write_toml
 
 #: Two exports compared file for file, the manifest's volatile section aside (also
 #: tools/wheel_check.sh's).
@@ -134,7 +134,6 @@ def test_keys_follow_the_libraries_the_results_are_computed_with(monkeypatch):
     is in the code's fingerprint: another installed MuJoCo, or OCP, gives every stage another
     key."""
     import re
-    import tomllib
     from importlib import metadata
 
     from bvsr_cad.pipeline import cache
@@ -337,57 +336,12 @@ def test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build(
         assert differences(tmp_path / f"cached{i}", tmp_path / "fresh") == []
 
 
-#: The CI-sized tail of :func:`test_every_benchmark_edit_built_from_the_cache_equals_a_fresh_build`:
-#: the default file with one segment (its segment-count edit then goes to two) and the schema's
-#: smallest workspace protocol and samples; the stages, their keys and their code are the default
-#: tail's. Measured: a build of it from scratch 17.6 s (29 CPU s) against 25.0 s (41) with two
-#: segments.
-SMALL_TAIL = (
-    ("", "segments", "1"),
-    ("analysis", "workspace_protocol_cycles", "10"),
-    ("analysis", "build_workspace_samples", "100"),
-    ("analysis", "build_clearance_poses", "100"),
-)
-
-#: The rebuild benchmark: its edits and its editor of parameter text (one source).
-REBUILD_BENCH = benchmark_script("rebuild_bench")
 #: Its edits on the CI-sized tail: the segment count goes to two; the rod material is
 #: :func:`test_noop_rebuild_is_reused_and_a_cached_edit_equals_a_fresh_build`'s edit.
 SMALL_TAIL_EDITS = {
     **{k: v for k, v in REBUILD_BENCH.EDITS.items() if k != "rod material"},
     "segment count": ("", "segments", "2"),
 }
-
-
-@pytest.fixture(scope="session")
-def small_tail(request, tmp_path_factory) -> Path:
-    """A folder with ``params/base.toml`` (:data:`SMALL_TAIL`, its calibration data beside it) and
-    ``cache``, a cache of its own that holds that file's build, built once per session for every
-    edit's test (:func:`~tests.conftest.built_once`)."""
-    from bvsr_cad.pipeline.stages import build_export
-
-    def make(folder: Path) -> None:
-        (folder / "params").mkdir()
-        (folder / "data").mkdir()
-        text = (PARAMS / "bvsr.toml").read_text()
-        data_file = (PARAMS / tomllib.loads(text)["calibration"]["data_file"]).resolve()
-        (folder / "data" / data_file.name).write_bytes(data_file.read_bytes())
-        for table, key, value in SMALL_TAIL:
-            text = REBUILD_BENCH.edited(text, table, key, value)
-        base = folder / "params" / "base.toml"
-        base.write_text(text)
-        before = os.environ.get("BVSR_CACHE")
-        os.environ["BVSR_CACHE"] = str(folder / "cache")
-        try:
-            stages = build_export(base, folder / "base").stages
-        finally:
-            if before is None:
-                del os.environ["BVSR_CACHE"]
-            else:
-                os.environ["BVSR_CACHE"] = before
-        assert {s["status"] for s in stages} == {"built"}
-
-    return built_once(request, tmp_path_factory, "small-tail", make)
 
 
 @pytest.mark.slow

@@ -125,47 +125,42 @@ def test_the_standalone_viewer_receives_every_instance_named_and_coloured(viewer
 
 
 @pytest.mark.slow
-def test_a_build_hands_on_its_assembly_before_it_writes_the_part_files(tmp_path, monkeypatch):
+def test_a_build_hands_on_its_assembly_before_it_writes_the_part_files(
+    small_tail, tmp_path, monkeypatch
+):
     """`bvsr watch --show`'s hook (build_export's on_assembly): called once per build with the
     tail's assembly, before any part file is written, with the instances the published manifest
-    lists; an export the cache holds whole is published and its assembly still handed on. A CI-sized
-    tail."""
-    import tomllib
-
+    lists; an export the cache holds whole is published and its assembly still handed on. The
+    CI-sized tail: a build from scratch stopped by the hook, then the session's cache of it."""
     from bvsr_cad.pipeline.stages import build_export
 
-    from .conftest import benchmark_script
-    from .test_cache import SMALL_TAIL
+    class Seen(Exception):
+        """Raised by the hook once it has looked: the rest of the build adds nothing here."""
 
-    bench = benchmark_script("rebuild_bench")
-    monkeypatch.setenv("BVSR_CACHE", str(tmp_path / "cache"))
-    text = (PARAMS / "bvsr.toml").read_text()
-    data_file = (PARAMS / tomllib.loads(text)["calibration"]["data_file"]).resolve()
-    (tmp_path / "data").mkdir()
-    (tmp_path / "data" / data_file.name).write_bytes(data_file.read_bytes())
-    (tmp_path / "params").mkdir()
-    for table, key, value in SMALL_TAIL:
-        text = bench.edited(text, table, key, value)
-    params = tmp_path / "params" / "small.toml"
-    params.write_text(text)
-    out = tmp_path / "out"
+    params = small_tail / "params" / "base.toml"
+    listed = [
+        i["name"]
+        for i in json.loads((small_tail / "base" / "manifest.json").read_text())["assembly"][
+            "instances"
+        ]
+    ]
     seen = []
 
     def on_assembly(asm):
         seen.append(
             {
                 "names": [i.name for i in asm.instances],
-                "part_files": sorted(
-                    p.name for p in tmp_path.rglob("*.stl") if "cache" not in p.parts
-                ),
+                "part_files": sorted(p.name for p in tmp_path.rglob("*.stl")),
             }
         )
+        if len(seen) == 1:
+            raise Seen
 
-    build_export(params, out, on_assembly=on_assembly)
-    listed = [
-        i["name"] for i in json.loads((out / "manifest.json").read_text())["assembly"]["instances"]
-    ]
+    with pytest.raises(Seen):
+        build_export(params, tmp_path / "fresh", use_cache=False, on_assembly=on_assembly)
     assert len(seen) == 1 and seen[0]["names"] == listed and seen[0]["part_files"] == []
-    again = build_export(params, out, on_assembly=on_assembly)
+    assert not (tmp_path / "fresh").exists()  # stopped: nothing published
+    monkeypatch.setenv("BVSR_CACHE", str(small_tail / "cache"))
+    again = build_export(params, tmp_path / "cached", on_assembly=on_assembly)
     assert [s["status"] for s in again.stages] == ["reused"]
     assert len(seen) == 2 and seen[1]["names"] == listed

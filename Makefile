@@ -15,7 +15,7 @@ TEST_EXTRAS := test,gpu,cad,docs,lint
 CORE := $(VENV)/.installed-core
 TESTS := $(VENV)/.installed-test
 
-.PHONY: exports test test-deps check-l clean
+.PHONY: exports test test-long test-deps check-l clean
 
 # $(call install,EXTRAS[,UV_OPTIONS]): the package, editable, with EXTRAS, at the lock's versions.
 define install
@@ -61,9 +61,13 @@ test-deps: $(TESTS)
 
 # One worker per core (at most four); worksteal: a worker that runs out of tests takes some queued
 # on another, so the whole builds do not leave one core idle at the end. pytest reads more options
-# from PYTEST_ADDOPTS (CI: --durations=15, the 15 slowest tests).
+# from PYTEST_ADDOPTS (CI: --durations=15, the 15 slowest tests). The tests marked long (minutes of
+# CPU each: MJX compiling the tail on the quadruped) are left to make test-long, which CI runs too.
 test: $(TESTS)
-	$(BIN)/python -m pytest -q -n auto --maxprocesses 4 --dist worksteal
+	$(BIN)/python -m pytest -q -n auto --maxprocesses 4 --dist worksteal -m "not long"
+
+test-long: $(TESTS)
+	$(BIN)/python -m pytest -q -m long
 
 clean:
 	rm -rf $(VENV) exports

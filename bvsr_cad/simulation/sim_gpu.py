@@ -15,6 +15,9 @@ Shared by the tests (``tests/test_sim_gpu.py``) and the benchmark (``benchmarks/
 - :func:`mjx_batch` / :func:`warp_batch`: the batched model (those fields with one row per world)
   and data, with a step function; :func:`world_model` is the CPU MuJoCo model of one world, the
   reference each batch's world is checked against.
+- :func:`exclude_for_mjx`: MJX has no cylinder-box collision, so its ``put_model`` refuses the tail
+  mounted on a host with a box body (its panels against the Go1's trunk): the body pairs that hold
+  such geom pairs (:func:`mjx_uncollidable`) are excluded, and each exclusion is named.
 - :func:`warp_kernel_profile`: where a MuJoCo Warp step's GPU time goes, per kernel (CUDA only;
   ``benchmarks/sim_bench.py --profile``).
 
@@ -74,6 +77,52 @@ def compiler_options(device=None) -> dict:
     jax, _ = import_mjx()
     platform = (device if device is not None else jax.devices()[0]).platform
     return dict(CPU_COMPILER_OPTIONS) if platform == "cpu" else {}
+
+
+def mjx_uncollidable(model: mujoco.MjModel) -> list[tuple[int, int]]:
+    """The geom pairs of ``model`` that MJX would collide (its candidate pairs: contype and
+    conaffinity, welded and parent bodies, ``<exclude>`` and ``<pair>``, as CPU MuJoCo filters them)
+    but has no collision function for, so that its ``put_model`` refuses the model: on the tail
+    mounted on a legged host, the panels' cylinders against a box of the host's."""
+    import_mjx()
+    from mujoco.mjx._src import collision_driver, types  # MJX's own table of geom-type pairs
+
+    return [
+        (int(g1), int(g2))
+        for g1, g2, _ in collision_driver.geom_pairs(model)
+        if not collision_driver.has_collision_fn(
+            types.GeomType(model.geom_type[g1]), types.GeomType(model.geom_type[g2])
+        )
+    ]
+
+
+def exclude_for_mjx(spec: mujoco.MjSpec) -> list[str]:
+    """Adds to ``spec`` an ``<exclude>`` for each body pair that holds a geom pair MJX cannot
+    collide (:func:`mjx_uncollidable`), so that MJX takes the compiled model; returns one line per
+    body pair, naming the geoms and their types. The model compiled from ``spec`` then lacks those
+    contacts on CPU MuJoCo too: a batch is compared with CPU MuJoCo on the same model. An
+    ``<exclude>`` is MuJoCo's finest contact filter between two bodies, so their other geom pairs go
+    too; the lines say which."""
+    model = spec.compile()
+    by_bodies: dict[tuple[int, int], list[tuple[int, int]]] = {}
+    for g1, g2 in mjx_uncollidable(model):
+        pair = tuple(sorted((int(model.geom_bodyid[g1]), int(model.geom_bodyid[g2]))))
+        by_bodies.setdefault(pair, []).append((g1, g2))
+
+    def geom(g: int) -> str:
+        kind = mujoco.mjtGeom(model.geom_type[g]).name.removeprefix("mjGEOM_").lower()
+        name = model.geom(g).name or f"geom {g} of {model.body(model.geom_bodyid[g]).name}"
+        return f"{name} ({kind})"
+
+    lines = []
+    for (b1, b2), pairs in by_bodies.items():
+        names = model.body(b1).name, model.body(b2).name
+        spec.add_exclude(bodyname1=names[0], bodyname2=names[1])
+        lines.append(
+            f"MJX: contacts between bodies {names[0]} and {names[1]} excluded (no MJX collision "
+            f"function for {', '.join(f'{geom(g1)} - {geom(g2)}' for g1, g2 in pairs)})"
+        )
+    return lines
 
 
 def import_warp():

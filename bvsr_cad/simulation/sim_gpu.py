@@ -101,8 +101,8 @@ def exclude_for_mjx(spec: mujoco.MjSpec) -> list[str]:
     collide (:func:`mjx_uncollidable`), so that MJX takes the compiled model; returns one line per
     body pair, naming the geoms and their types. The model compiled from ``spec`` then lacks those
     contacts on CPU MuJoCo too: a batch is compared with CPU MuJoCo on the same model. An
-    ``<exclude>`` is MuJoCo's finest contact filter between two bodies, so their other geom pairs go
-    too; the lines say which."""
+    ``<exclude>`` acts on two bodies, MuJoCo's finest contact filter short of explicit ``<pair>``
+    lists, so any other geom pair of the same two bodies goes as well."""
     model = spec.compile()
     by_bodies: dict[tuple[int, int], list[tuple[int, int]]] = {}
     for g1, g2 in mjx_uncollidable(model):

@@ -153,6 +153,18 @@ def _agrees(batch, model, ctrl, fields, steps, tol):
     return worst
 
 
+def _mjx_agrees_extending(model, seconds: float, tol: float) -> None:
+    """Two randomised worlds under MJX with every joint's extension lines (SOAs 3 and 4) at full
+    pressure: after ``seconds`` each within ``tol`` of CPU MuJoCo (:func:`_agrees`)."""
+    fields = sim_gpu.randomised_fields(model, 2)
+    lines = np.array(
+        [model.actuator(i).name.rsplit("_", 1)[-1] in ("soa3", "soa4") for i in range(model.nu)]
+    )
+    ctrl = np.where(lines, model.actuator_ctrlrange[:, 1], 0.0)
+    steps = round(seconds / model.opt.timestep)
+    _agrees(sim_gpu.mjx_batch(model, ctrl, fields), model, ctrl, fields, steps, tol)
+
+
 def test_warp_batch_of_two_links_matches_cpu_per_world():
     _needs_warp()
     model = mujoco.MjModel.from_xml_string(TWO_LINKS)
@@ -184,19 +196,7 @@ def test_mjx_steps_the_exported_scene_like_cpu(scenes, jax_x64):
     compiling after 7 minutes of CPU."""
     model = scenes["scene.xml"]
     assert sim_gpu.compiler_options() == sim_gpu.CPU_COMPILER_OPTIONS
-    fields = sim_gpu.randomised_fields(model, 2)
-    lines = np.array(
-        [model.actuator(i).name.rsplit("_", 1)[-1] in ("soa3", "soa4") for i in range(model.nu)]
-    )
-    ctrl = np.where(lines, model.actuator_ctrlrange[:, 1], 0.0)
-    _agrees(
-        sim_gpu.mjx_batch(model, ctrl, fields),
-        model,
-        ctrl,
-        fields,
-        round(0.05 / model.opt.timestep),
-        1e-13,
-    )
+    _mjx_agrees_extending(model, 0.05, 1e-13)
 
 
 # --- the benchmark's per-kernel profile
@@ -318,16 +318,4 @@ def test_mjx_steps_the_tail_on_the_quadruped_like_cpu(bvsr_export, jax_x64):
         )
         for g1, g2 in uncollidable
     }
-    fields = sim_gpu.randomised_fields(model, 2)
-    lines_34 = np.array(
-        [model.actuator(i).name.rsplit("_", 1)[-1] in ("soa3", "soa4") for i in range(model.nu)]
-    )
-    ctrl = np.where(lines_34, model.actuator_ctrlrange[:, 1], 0.0)
-    _agrees(
-        sim_gpu.mjx_batch(model, ctrl, fields),
-        model,
-        ctrl,
-        fields,
-        round(0.02 / model.opt.timestep),
-        1e-7,
-    )
+    _mjx_agrees_extending(model, 0.02, 1e-7)

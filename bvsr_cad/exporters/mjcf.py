@@ -461,32 +461,31 @@ def _reduced_bodies(
     body = ET.SubElement(parent_el, "body", name=soft.name, pos=_vec((0, 0, t_m)))
     # No range: the joint's bend limit is the fixed tendons of _bend_limit_tendons.
     for axis in "xy":
-        ET.SubElement(
-            body,
-            "joint",
-            name=f"{b.name}_a{axis}",
-            type="hinge",
-            axis=_AXES[axis],
-            pos=_vec((0, 0, d)),
-            stiffness=_f(stiff_half),
-            **damped[axis],
-        )
+        _hinge(body, f"{b.name}_a{axis}", axis, d, stiff_half, damped[axis])
     _link_contents(body, soft, sites_by_link)
     panel = ET.SubElement(body, "body", name=b.tip_link, pos=_vec((0, 0, b.arc_length_m)))
     for axis in "yx":
-        ET.SubElement(
-            panel,
-            "joint",
-            name=f"{b.name}_b{axis}",
-            type="hinge",
-            axis=_AXES[axis],
-            pos=_vec((0, 0, -d)),
-            stiffness=_f(stiff_half),
-            **damped[axis],
-        )
+        _hinge(panel, f"{b.name}_b{axis}", axis, -d, stiff_half, damped[axis])
     _link_contents(panel, robot.links[b.tip_link], sites_by_link)
     if k < len(robot.bending):
         _reduced_bodies(panel, robot, k + 1, sites_by_link, shares)
+
+
+def _hinge(
+    body: ET.Element, name: str, axis: str, z_m: float, stiffness_nm_rad: float, damping: dict
+) -> None:
+    """A bending hinge of ``body`` about its ``axis`` ("x" or "y") at height ``z_m`` on the body's
+    Z, with its spring and (``damping``: the attribute, or none) its damper."""
+    ET.SubElement(
+        body,
+        "joint",
+        name=name,
+        type="hinge",
+        axis=_AXES[axis],
+        pos=_vec((0, 0, z_m)),
+        stiffness=_f(stiffness_nm_rad),
+        **damping,
+    )
 
 
 def _mount_bodies(
@@ -520,15 +519,13 @@ def _mount_bodies(
             )
             joint = joints[b.name]
             for axis in mount_order(k):
-                ET.SubElement(
+                _hinge(
                     body,
-                    "joint",
-                    name=f"{b.name}_{axis}",
-                    type="hinge",
-                    axis=_AXES[axis],
-                    pos=_vec((0, 0, -(1.0 - MOUNT_PIVOT_FRACTION) * b.arc_length_m)),
-                    stiffness=_f(joint.stiffness_nm_rad),
-                    damping=_f(joint.damping_nms[axis]),
+                    f"{b.name}_{axis}",
+                    axis,
+                    -(1.0 - MOUNT_PIVOT_FRACTION) * b.arc_length_m,
+                    joint.stiffness_nm_rad,
+                    {"damping": _f(joint.damping_nms[axis])},
                 )
         if k < len(robot.bending):
             b = robot.bending[k]

@@ -610,8 +610,8 @@ def chain_tip_error_mm(
     (4x4 end frames, e.g. :func:`joint_transform_prb`; or a sequence of one such function per
     joint) and Eq 2's tip, over the joint range: ``poses`` random poses (theta uniform up to each
     joint's limit, phi uniform) and every joint at its limit in one common plane (24 planes), where
-    the errors add. The tip is the centre of the
-    last panel's distal face; ``lengths_mm`` and ``theta_max_rad`` are per joint."""
+    the errors add. The tip is the centre of the last panel's distal face; ``lengths_mm`` and
+    ``theta_max_rad`` are per joint."""
     rng = np.random.default_rng(seed)
     lim = np.asarray(theta_max_rad, float)
     n = len(lim)

@@ -64,12 +64,13 @@ SLOW = frozenset(
 
 
 def pytest_collection_modifyitems(config, items):
-    """``slow``: a test that needs the full default build (``bvsr_export``, about 30 s or more) or
-    is named in :data:`SLOW`. ``pytest -m "not slow"`` stays a fast suite of in-memory tests, the
-    inner loop of docs/contributing.md (tools/mutate.py runs it per fault)."""
+    """``slow``: a test that needs a whole build (the default's, ``bvsr_export``, 30 s or more;
+    the CI-sized tail's, ``small_tail``, about 17 s) or is named in :data:`SLOW`. ``pytest -m "not
+    slow"`` stays a fast suite of in-memory tests, the inner loop of docs/contributing.md
+    (tools/mutate.py runs it per fault)."""
     for item in items:
         if (
-            "bvsr_export" in getattr(item, "fixturenames", ())
+            not {"bvsr_export", "small_tail"}.isdisjoint(getattr(item, "fixturenames", ()))
             or item.nodeid.split("[")[0] in SLOW
             or item.nodeid.split("::")[0] in SLOW
         ):
@@ -233,8 +234,16 @@ def small_tail(request, tmp_path_factory) -> Path:
 
 
 @pytest.fixture(scope="session")
-def bvsr_verdicts(bvsr_export, tmp_path_factory, request) -> str:
-    """Every check of :func:`bvsr_export` run once in one process (``run_checks(parallel=False)``),
+def small_export(small_tail) -> Path:
+    """The CI-sized tail's export (:func:`small_tail`'s ``base``), read-only: the export of the
+    tests of how the checks run (started early, beside in a second process, handed the manifest),
+    where the default's five segments would add only more instances of the same checks."""
+    return small_tail / "base"
+
+
+@pytest.fixture(scope="session")
+def small_verdicts(small_export, tmp_path_factory, request) -> str:
+    """Every check of :func:`small_export` run once in one process (``run_checks(parallel=False)``),
     as the JSON text of their results: the reference that the tests of checks run early, beside or
     from a manifest in memory compare with (as text: a NaN equals itself only there)."""
     import json
@@ -242,7 +251,7 @@ def bvsr_verdicts(bvsr_export, tmp_path_factory, request) -> str:
     from bvsr_cad.pipeline.processes.checks_process import run_checks
 
     def make(folder: Path) -> None:
-        verdicts = [r.to_json() for r in run_checks(bvsr_export, parallel=False)]
+        verdicts = [r.to_json() for r in run_checks(small_export, parallel=False)]
         (folder / "verdicts.json").write_text(json.dumps(verdicts))
 
     return (built_once(request, tmp_path_factory, "verdicts", make) / "verdicts.json").read_text()

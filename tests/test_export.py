@@ -124,14 +124,14 @@ def test_check_fails_on_a_broken_stl(bvsr_export, tmp_path, capsys):
 
 
 @pytest.mark.second_processes
-def test_checks_started_early_see_a_file_changed_before_they_finish(bvsr_export, tmp_path):
+def test_checks_started_early_see_a_file_changed_before_they_finish(small_export, tmp_path):
     """A build runs the CAD files' checks before its analyses are in (Checks.start) and the rest
     after (Checks.finish): a file changed in between is checked again, so the verdicts are those of
     the final export, the same as one run of every check."""
     from bvsr_cad.pipeline.processes.checks_process import run_checks, start_checks
 
     copy = tmp_path / "copy"
-    shutil.copytree(bvsr_export, copy)
+    shutil.copytree(small_export, copy)
     checks = start_checks(copy, parallel=False)
     mesh = trimesh.load(copy / "stl" / "soa.stl")
     mesh.update_faces(np.arange(len(mesh.faces)) % 50 != 0)  # punch holes after the start
@@ -143,7 +143,7 @@ def test_checks_started_early_see_a_file_changed_before_they_finish(bvsr_export,
 
 @pytest.mark.second_processes
 def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_changed(
-    bvsr_export, bvsr_verdicts, tmp_path
+    small_export, small_verdicts, tmp_path
 ):
     """A build sends the part meshes' and the masses' checks to the printability process too
     (``meshes_beside``): unchanged, their verdicts come from there (none of them runs here); a
@@ -156,13 +156,13 @@ def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_change
     if build_processes() < 2:
         pytest.skip("one core: the checks never leave the process")
     said: list[str] = []
-    checks = start_checks(bvsr_export, said.append, meshes_beside=True)
+    checks = start_checks(small_export, said.append, meshes_beside=True)
     assert checks._printability.proc is not None and not any(m.startswith("mesh ") for m in said)
     kept = checks.finish()
     assert not any(m.startswith("mesh ") or m == "masses" for m in said), said
-    assert json.dumps([r.to_json() for r in kept]) == bvsr_verdicts
+    assert json.dumps([r.to_json() for r in kept]) == small_verdicts
     copy = tmp_path / "copy"
-    shutil.copytree(bvsr_export, copy)
+    shutil.copytree(small_export, copy)
     said.clear()
     checks = start_checks(copy, said.append, meshes_beside=True)
     while checks._printability.proc.running:  # until the second process has read every mesh
@@ -178,7 +178,7 @@ def test_part_mesh_checks_beside_run_in_the_second_process_and_see_a_file_change
 
 @pytest.mark.second_processes
 def test_mold_checks_in_the_second_process_see_a_mold_file_changed_before_they_finish(
-    bvsr_export, tmp_path
+    small_export, tmp_path
 ):
     """The mold checks run in the printability process from Checks.start; a mold file changed before
     Checks.finish (whether that process had read it yet or not) is checked again, on the file as it
@@ -191,7 +191,7 @@ def test_mold_checks_in_the_second_process_see_a_mold_file_changed_before_they_f
     if build_processes() < 2:
         pytest.skip("one core: the mold checks never leave the process")
     copy = tmp_path / "copy"
-    shutil.copytree(bvsr_export, copy)
+    shutil.copytree(small_export, copy)
     said: list[str] = []
     checks = start_checks(copy, said.append)
     assert checks._printability.proc is not None
@@ -206,7 +206,7 @@ def test_mold_checks_in_the_second_process_see_a_mold_file_changed_before_they_f
     assert [r.to_json() for r in late if r.name in names] == [r.to_json() for r in molds]
     # Unchanged, the mold verdicts are the second process's.
     said.clear()
-    checks = start_checks(bvsr_export, said.append)
+    checks = start_checks(small_export, said.append)
     kept = checks.finish()
     assert any(m.startswith("printability and molds: done in the second process") for m in said), (
         said
@@ -216,7 +216,7 @@ def test_mold_checks_in_the_second_process_see_a_mold_file_changed_before_they_f
 
 
 @pytest.mark.second_processes
-def test_checks_handed_the_manifest_need_no_manifest_file(bvsr_export, bvsr_verdicts, tmp_path):
+def test_checks_handed_the_manifest_need_no_manifest_file(small_export, small_verdicts, tmp_path):
     """A build hands its checks the manifest as its file will hold it and writes the file once, at
     the end: checks started, given the robot's and finished on a folder without manifest.json, the
     manifest handed to both processes, give the verdicts of one run of every check on the published
@@ -225,7 +225,7 @@ def test_checks_handed_the_manifest_need_no_manifest_file(bvsr_export, bvsr_verd
     from bvsr_cad.pipeline.processes.checks_process import finish_checks, start_checks
 
     copy = tmp_path / "copy"
-    shutil.copytree(bvsr_export, copy)
+    shutil.copytree(small_export, copy)
     manifest = json.loads((copy / "manifest.json").read_text())
     (copy / "manifest.json").unlink()
     said: list[str] = []
@@ -237,7 +237,7 @@ def test_checks_handed_the_manifest_need_no_manifest_file(bvsr_export, bvsr_verd
     if build_processes() >= 2:
         assert any(m.startswith("printability and molds: done in the second process") for m in said)
     assert not (copy / "manifest.json").exists()
-    assert json.dumps([r.to_json() for r in got]) == bvsr_verdicts
+    assert json.dumps([r.to_json() for r in got]) == small_verdicts
 
 
 def test_check_moved_pocket_fails_the_pentagon(bvsr_export, tmp_path, capsys):

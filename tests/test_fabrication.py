@@ -232,10 +232,10 @@ def test_check_slice_without_the_slicer_exits_2(bvsr_export, monkeypatch, tmp_pa
 
 
 @pytest.mark.second_processes
-def test_printability_in_a_second_process_gives_the_same_results(bvsr_export, bvsr_verdicts):
+def test_printability_in_a_second_process_gives_the_same_results(small_export, small_verdicts):
     said: list[str] = []
-    beside = run_checks(bvsr_export, said.append)
-    assert json.dumps([r.to_json() for r in beside]) == bvsr_verdicts
+    beside = run_checks(small_export, said.append)
+    assert json.dumps([r.to_json() for r in beside]) == small_verdicts
     if build_processes() >= 2:
         assert any(
             m.startswith("printability and molds: done in the second process") for m in said

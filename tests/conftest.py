@@ -186,11 +186,12 @@ def write_toml(path: Path, data: dict) -> Path:
     return path
 
 
-#: The CI-sized tail of the cache's edit tests and the build-order test (tests/test_cache.py,
-#: tests/test_ocp_viewer.py): the default file with one segment (the segment-count edit then goes
-#: to two) and the schema's smallest workspace protocol and samples; the stages, their keys and
-#: their code are the default tail's. Measured: a build of it from scratch 17.6 s (29 CPU s)
-#: against 25.0 s (41) with two segments.
+#: The CI-sized tail of the cache's edit tests, the build-order test and, through its export
+#: (:func:`small_export`), the tests of how the checks run (tests/test_cache.py,
+#: tests/test_ocp_viewer.py, tests/test_export.py, tests/test_fabrication.py): the default file with
+#: one segment (the segment-count edit then goes to two) and the schema's smallest workspace
+#: protocol and samples; the stages, their keys and their code are the default tail's. Measured: a
+#: build of it from scratch 17.6 s (29 CPU s) against 25.0 s (41) with two segments.
 SMALL_TAIL = (
     ("", "segments", "1"),
     ("analysis", "workspace_protocol_cycles", "10"),

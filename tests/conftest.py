@@ -65,7 +65,7 @@ SLOW = frozenset(
 
 def pytest_collection_modifyitems(config, items):
     """``slow``: a test that needs a whole build (the default's, ``bvsr_export``, 30 s or more;
-    the CI-sized tail's, ``small_tail``, about 17 s) or is named in :data:`SLOW`. ``pytest -m "not
+    the CI-sized tail's, ``small_tail``, about 10 s) or is named in :data:`SLOW`. ``pytest -m "not
     slow"`` stays a fast suite of in-memory tests, the inner loop of docs/contributing.md
     (tools/mutate.py runs it per fault)."""
     for item in items:
@@ -188,12 +188,18 @@ def write_toml(path: Path, data: dict) -> Path:
 
 #: The CI-sized tail of the cache's edit tests, the build-order test and, through its export
 #: (:func:`small_export`), the tests of how the checks run (tests/test_cache.py,
-#: tests/test_ocp_viewer.py, tests/test_export.py, tests/test_fabrication.py): the default file with
-#: one segment (the segment-count edit then goes to two) and the schema's smallest workspace
-#: protocol and samples; the stages, their keys and their code are the default tail's. Measured: a
-#: build of it from scratch 17.6 s (29 CPU s) against 25.0 s (41) with two segments.
+#: tests/test_ocp_viewer.py, tests/test_export.py, tests/test_fabrication.py,
+#: tests/test_check_output.py): the default file with one segment of two joints, the schema's fewest
+#: (the segment-count edit then goes to two segments), and the schema's smallest workspace protocol
+#: and samples; the stages, their keys and their code are the default tail's, and every kind of
+#: panel (root, intermediate, tip) is in it. Its taper is fixed near the default's (``auto`` gives
+#: 0.29 deg over fifteen joints): over two joints ``auto`` would steepen it to reach the same tip,
+#: and the rigid twin's plates would come out under the 0.6 mm FDM minimum (0.58 mm), failing a
+#: check. Build times: benchmarks/RESULTS.md, "Test suite".
 SMALL_TAIL = (
     ("", "segments", "1"),
+    ("", "joints_per_segment", "2"),
+    ("taper", "half_angle_deg", "0.3"),
     ("analysis", "workspace_protocol_cycles", "10"),
     ("analysis", "build_workspace_samples", "100"),
     ("analysis", "build_clearance_poses", "100"),

@@ -78,18 +78,19 @@ def test_a_passing_default_export_reads_at_a_glance(bvsr_export, capsys):
 
 
 def test_check_takes_the_builds_verdicts_of_unchanged_files_and_no_cache_runs_every_check(
-    bvsr_export, tmp_path, capsys, monkeypatch
+    small_tail, small_export, tmp_path, capsys, monkeypatch
 ):
-    """The build kept its check groups' verdicts in the session's artifact cache: `bvsr check` of
-    a copy of its export takes the mold checks' verdicts from there (the checks themselves, broken
-    here, never run) and gives the same JSON as `--no-cache`, which runs every check (and meets the
-    broken one); a mold file changed by one byte is checked again."""
+    """The build kept its check groups' verdicts in its artifact cache (the CI-sized tail's):
+    `bvsr check` of a copy of its export takes the mold checks' verdicts from there (the checks
+    themselves, broken here, never run) and gives the same JSON as `--no-cache`, which runs every
+    check (and meets the broken one); a mold file changed by one byte is checked again."""
     import shutil
 
     from bvsr_cad.checks import run
 
+    monkeypatch.setenv("BVSR_CACHE", str(small_tail / "cache"))
     copy = tmp_path / "copy"
-    shutil.copytree(bvsr_export, copy)
+    shutil.copytree(small_export, copy)
     assert main(["check", str(copy), "-q", "--json", "--no-cache"]) == 0
     fresh = json.loads(capsys.readouterr().out)["checks"]
 

@@ -520,8 +520,9 @@ def test_every_dependent_range_names_keys_that_exist():
 
 # --- End to end: seeded files built whole.
 
-#: The CI-sized base of the end-to-end fuzz (as tests/test_cache.py's): one segment, the schema's
-#: smallest analyses. The draws leave these keys alone.
+#: The CI-sized base of the end-to-end fuzz: one segment, the schema's smallest analyses (the cache
+#: tests' tail, tests/conftest.py's SMALL_TAIL, has besides two joints at a fixed taper). The draws
+#: leave these keys alone.
 SMALL_TAIL = {
     "segments": 1,
     "analysis.workspace_protocol_cycles": 10,
